@@ -1,0 +1,51 @@
+"""The bare-metal runtime shipped with robosoc, and where its files are.
+
+Layout (all plain files inside the package):
+
+- ``link/hfriscv.ld``: linker script template, filled in by :mod:`robosoc.toolchain.linker_script`.
+- ``crt/crt0.S``: ``_start`` (stack, gp, .bss, IRQ_VECTOR, ``main``, exit trap).
+- ``crt/irq_entry.S``: interrupt/trap entry and the s11 return sequence.
+- ``crt/irq_default.c``: the weak default ``irq_handler``.
+- ``include/hfriscv.h``: SoC register addresses and inline helpers.
+- ``include/hf_print.h`` + ``lib/hf_print.c``: debug-port text output (host: stdout).
+- ``bench/matrix_bench.c``: the EKF-like 7x7 matrix workload of ``robosoc bench core``.
+"""
+
+from pathlib import Path
+
+FIRMWARE_DIR = Path(__file__).resolve().parent
+INCLUDE_DIR = FIRMWARE_DIR / "include"
+LINKER_SCRIPT_TEMPLATE = FIRMWARE_DIR / "link" / "hfriscv.ld"
+CRT_SOURCES: tuple[Path, ...] = (
+    FIRMWARE_DIR / "crt" / "crt0.S",
+    FIRMWARE_DIR / "crt" / "irq_entry.S",
+    FIRMWARE_DIR / "crt" / "irq_default.c",
+)
+LIB_SOURCES: tuple[Path, ...] = (FIRMWARE_DIR / "lib" / "hf_print.c",)
+MATRIX_BENCH_SOURCE = FIRMWARE_DIR / "bench" / "matrix_bench.c"
+
+#: Symbol of the interrupt entry: the one place allowed to write x27 (s11).
+IRQ_ENTRY_SYMBOL = "_irq_entry"
+
+
+def runtime_sources() -> tuple[Path, ...]:
+    """Sources linked into every RISC-V program: start-up code, interrupt entry, print library."""
+    return CRT_SOURCES + LIB_SOURCES
+
+
+def host_sources() -> tuple[Path, ...]:
+    """Runtime sources that also build for the host (the print library)."""
+    return LIB_SOURCES
+
+
+__all__ = [
+    "CRT_SOURCES",
+    "FIRMWARE_DIR",
+    "INCLUDE_DIR",
+    "IRQ_ENTRY_SYMBOL",
+    "LIB_SOURCES",
+    "LINKER_SCRIPT_TEMPLATE",
+    "MATRIX_BENCH_SOURCE",
+    "host_sources",
+    "runtime_sources",
+]

@@ -1,0 +1,94 @@
+"""Post-link check that only the interrupt entry writes x27 (s11).
+
+The interrupt return sequence loads the return address into s11 and jumps through it, so an
+interrupt taken while other code keeps a value in s11 destroys that value.  Programs are compiled
+with ``-ffixed-x27`` and compiler-rt with the ``reserve_x27`` CPU feature, so normally nothing
+else touches s11; hand-written assembly or foreign objects may.  This module decodes every word of
+the executable segments itself (no disassembler needed): in RV32I every format except S (stores)
+and B (branches) writes ``rd`` = bits 11:7.
+"""
+
+from dataclasses import dataclass
+from pathlib import Path
+
+from robosoc.chip.elf import Program, load_elf
+from robosoc.firmware import IRQ_ENTRY_SYMBOL
+
+X27 = 27
+
+#: Major opcodes (bits 6:0) whose instructions write rd; stores (0x23) and branches (0x63) do not.
+OPCODES_WRITING_RD: dict[int, str] = {
+    0x03: "load",
+    0x0F: "misc-mem",
+    0x13: "op-imm",
+    0x17: "auipc",
+    0x33: "op",
+    0x37: "lui",
+    0x67: "jalr",
+    0x6F: "jal",
+    0x73: "system",
+}
+
+
+@dataclass(frozen=True)
+class X27Write:
+    """One instruction that writes x27: where, in which function, and the word."""
+
+    addr: int
+    word: int
+    function: str
+    kind: str
+
+    def describe(self) -> str:
+        """``0x40000184 (__divdf3+0x34): op-imm 0x01e95d93``."""
+        return f"0x{self.addr:08x} ({self.function}): {self.kind} 0x{self.word:08x}"
+
+
+def writes_register(word: int, reg: int) -> bool:
+    """True when the 32-bit instruction ``word`` has ``rd == reg`` in a format that writes rd."""
+    if word & 0b11 != 0b11:  # not a 32-bit encoding (no C extension on this core)
+        return False
+    return (word & 0x7F) in OPCODES_WRITING_RD and (word >> 7) & 0x1F == reg
+
+
+def find_x27_writes(program: Program, allowed_function: str = IRQ_ENTRY_SYMBOL) -> list[X27Write]:
+    """Every instruction outside ``allowed_function`` in an executable segment that writes x27."""
+    allowed_range: tuple[int, int] | None = None
+    try:
+        entry = program.symbol(allowed_function)
+        allowed_range = (entry.addr, entry.addr + max(entry.size, 4))
+    except ValueError:
+        allowed_range = None
+    found: list[X27Write] = []
+    for seg in program.segment_info:
+        if not seg.executable:
+            continue
+        data = seg.data
+        for offset in range(0, len(data) - 3, 4):
+            word = int.from_bytes(data[offset : offset + 4], "little")
+            if not writes_register(word, X27):
+                continue
+            addr = seg.addr + offset
+            if allowed_range is not None and allowed_range[0] <= addr < allowed_range[1]:
+                continue
+            kind = OPCODES_WRITING_RD[word & 0x7F]
+            found.append(X27Write(addr, word, program.symbolize(addr), kind))
+    return found
+
+
+def check_x27(elf_path: Path, label: str | None = None) -> list[str]:
+    """Warning texts (one per offending function) for the ELF; empty when only the entry writes x27.
+
+    ``label`` names the program in the texts (default: the ELF path).
+    """
+    writes = find_x27_writes(load_elf(elf_path))
+    by_function: dict[str, list[X27Write]] = {}
+    for write in writes:
+        name = write.function.split("+", 1)[0]
+        by_function.setdefault(name, []).append(write)
+    return [
+        f"{label or elf_path}: {name} writes x27 (s11), which the interrupt return sequence owns; "
+        f"an interrupt taken while it runs corrupts s11 "
+        f"({len(ws)} instruction(s), first at {ws[0].describe()})"
+        for name, ws in by_function.items()
+    ]
