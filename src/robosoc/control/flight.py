@@ -1,0 +1,214 @@
+"""Closed-loop flight: a controller flies a scenario in the physics world, sample by sample.
+
+The loop runs at the sensor rate: at each sample time t the controller receives the sample taken
+at t and the setpoint of the flight plan at t, returns four PWM bytes that the motors hold from t
+until the next sample, and the world advances one sensor period.  The host controller has no
+compute latency; a controller with latency (the chip) will hold its previous command until its
+answer is ready.  Each row of the flight (truth, estimate, setpoint, PWM, wind) goes to the
+optional ``on_row`` callback as soon as it exists, so a log survives an interrupted flight.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+
+from robosoc.config.scenario import FlightPlan, ScenarioConfig
+from robosoc.config.vehicle import VehicleConfig
+from robosoc.control import quaternion as quat
+from robosoc.control.host import Estimate
+from robosoc.control.setpoint import Setpoint, setpoint_at
+from robosoc.physics import SensorSample, World
+
+ROW_FIELDS = (
+    "t",
+    "x",
+    "y",
+    "z",
+    "roll",
+    "pitch",
+    "yaw",
+    "qw",
+    "qx",
+    "qy",
+    "qz",
+    "est_roll",
+    "est_pitch",
+    "est_yaw",
+    "est_qw",
+    "est_qx",
+    "est_qy",
+    "est_qz",
+    "est_height",
+    "sp_roll",
+    "sp_pitch",
+    "sp_yaw",
+    "sp_height",
+    "armed",
+    "pwm0",
+    "pwm1",
+    "pwm2",
+    "pwm3",
+    "wind_x",
+    "wind_y",
+    "wind_z",
+)
+"""Columns of one flight row (angles in radians, lengths in metres, time in seconds)."""
+
+
+class Controller(Protocol):
+    """Anything that turns sensor samples and setpoints into PWM bytes."""
+
+    def reset(self) -> None:
+        """Start a new flight."""
+
+    def step(self, sample: SensorSample, setpoint: Setpoint) -> Sequence[int]:
+        """PWM bytes to apply from ``sample.time`` on."""
+
+    @property
+    def estimate(self) -> Estimate:
+        """The controller's current state estimate."""
+
+
+def fly(
+    scenario: ScenarioConfig,
+    vehicle: VehicleConfig,
+    controller: Controller,
+    seed: int,
+    on_row: Callable[[np.ndarray], None] | None = None,
+    on_sample: Callable[[World, int], None] | None = None,
+) -> np.ndarray:
+    """Fly ``scenario`` and return the flight as an array with the columns :data:`ROW_FIELDS`.
+
+    Args:
+        scenario: duration, sensors, wind and flight plan.
+        vehicle: the vehicle flown (its spawn pose is used as is).
+        controller: the flight controller.
+        seed: seeds every random number of the physics.
+        on_row: called with each row as soon as it is computed (logging).
+        on_sample: called with the world and the sample index after each row (progress, video).
+    """
+    world = World([vehicle], scenario.sensors, scenario.wind)
+    world.reset(seed)
+    quad = world.quadrotors[0]
+    controller.reset()
+    period = world.sensor_period
+    samples = round(scenario.duration_s / period)
+    rows = np.empty((samples, len(ROW_FIELDS)))
+    rest = vehicle.rest_height
+    for k in range(samples):
+        sample = quad.sensors()
+        t = sample.time
+        setpoint = setpoint_at(scenario.flight, rest, t)
+        pwm = controller.step(sample, setpoint)
+        quad.apply_pwm([int(v) for v in pwm])
+        truth = quad.truth()
+        est = controller.estimate
+        row = np.concatenate(
+            (
+                [t],
+                truth.position,
+                truth.euler,
+                truth.quaternion,
+                est.euler,
+                est.quaternion,
+                [est.height, setpoint.roll, setpoint.pitch, setpoint.yaw, setpoint.height, float(setpoint.armed)],
+                quad.pwm,
+                world.wind.velocity,
+            )
+        )
+        rows[k] = row
+        if on_row is not None:
+            on_row(row)
+        if on_sample is not None:
+            on_sample(world, k)
+        world.advance((k + 1) * period)
+    return rows
+
+
+def column(rows: np.ndarray, name: str) -> np.ndarray:
+    """One column of a flight array by name."""
+    return rows[:, ROW_FIELDS.index(name)]
+
+
+@dataclass(frozen=True)
+class FlightMetrics:
+    """Figures of merit of a flight (angles in degrees, lengths in metres)."""
+
+    hover_rms: float
+    """RMS of true height − height setpoint after the climb (+0.5 s settling)."""
+    hover_max: float
+    """Largest |true height − height setpoint| over the same span."""
+    tracking_rms: tuple[float, float, float]
+    """RMS of true − setpoint roll, pitch, yaw after the climb, leaving out 0.5 s after each step."""
+    step_rise: tuple[tuple[str, float, float], ...]
+    """(axis, step time, 90 % rise time [s] or nan) for every roll/pitch/yaw step of the plan."""
+    ekf_rms: float
+    """RMS of the attitude error angle (estimate vs truth) while armed."""
+    ekf_max: float
+    """Largest attitude error angle while armed."""
+    ekf_euler_rms: tuple[float, float, float]
+    """RMS of estimated − true roll, pitch, yaw while armed."""
+    height_estimate_rms: float
+    """RMS of estimated − true height while armed."""
+
+
+def _rms(values: np.ndarray) -> float:
+    return float(np.sqrt(np.mean(np.square(values)))) if values.size else math.nan
+
+
+def _wrap(values: np.ndarray) -> np.ndarray:
+    return (values + np.pi) % (2 * np.pi) - np.pi
+
+
+def flight_metrics(rows: np.ndarray, plan: FlightPlan, settle_s: float = 0.5) -> FlightMetrics:
+    """Hover, tracking and estimation errors of a flight array."""
+    t = column(rows, "t")
+    hover = t >= plan.hover_from_s + settle_s
+    height_error = column(rows, "z") - column(rows, "sp_height")
+    tracking = []
+    for axis in ("roll", "pitch", "yaw"):
+        mask = t >= plan.hover_from_s
+        for step in plan.steps:
+            if step.axis == axis:
+                mask &= ~((t >= step.time_s - 1e-9) & (t < step.time_s + settle_s))
+        err = _wrap(column(rows, axis) - column(rows, f"sp_{axis}"))
+        tracking.append(math.degrees(_rms(err[mask])))
+    rises = []
+    for step in sorted(plan.steps, key=lambda s: s.time_s):
+        if step.axis == "height":
+            continue
+        before = t < step.time_s - 1e-9
+        after = t >= step.time_s - 1e-9
+        truth = column(rows, step.axis)
+        old = float(column(rows, f"sp_{step.axis}")[before][-1]) if before.any() else 0.0
+        new = math.radians(step.value)
+        rise = math.nan
+        if abs(new - old) > 1e-9:
+            progress = (truth[after] - old) / (new - old)
+            hit = np.nonzero(progress >= 0.9)[0]
+            if hit.size:
+                rise = float(t[after][hit[0]] - step.time_s)
+        rises.append((step.axis, step.time_s, rise))
+    armed = column(rows, "armed") > 0.5
+    q_true = rows[:, [ROW_FIELDS.index(n) for n in ("qw", "qx", "qy", "qz")]]
+    q_est = rows[:, [ROW_FIELDS.index(n) for n in ("est_qw", "est_qx", "est_qy", "est_qz")]]
+    angle = np.array([quat.angle_between(a, b) for a, b in zip(q_est, q_true, strict=True)])
+    euler_err = [
+        math.degrees(_rms(_wrap(column(rows, f"est_{axis}") - column(rows, axis))[armed]))
+        for axis in ("roll", "pitch", "yaw")
+    ]
+    return FlightMetrics(
+        hover_rms=_rms(height_error[hover]),
+        hover_max=float(np.max(np.abs(height_error[hover]))) if hover.any() else math.nan,
+        tracking_rms=(tracking[0], tracking[1], tracking[2]),
+        step_rise=tuple(rises),
+        ekf_rms=math.degrees(_rms(angle[armed])),
+        ekf_max=math.degrees(float(np.max(angle[armed]))) if armed.any() else math.nan,
+        ekf_euler_rms=(euler_err[0], euler_err[1], euler_err[2]),
+        height_estimate_rms=_rms((column(rows, "est_height") - column(rows, "z"))[armed]),
+    )

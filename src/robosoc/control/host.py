@@ -1,0 +1,159 @@
+"""The reference flight controller run on the host: calibration, EKF, altitude filter, PID, mixer.
+
+Per sensor sample (the seed runs the whole chain once per sample):
+
+1. **Calibration** while ``setpoint.armed`` is false (the vehicle rests on flat ground, motors
+   off): average the gyroscope (its bias), the accelerometer and magnetometer (the initial
+   attitude, by TRIAD) and the barometer (its ground reference).  At the first armed sample both
+   filters restart from these averages, and the PID integrals are zeroed.
+2. **Attitude EKF** (:mod:`robosoc.control.ekf`): predict with the gyroscope, update with the
+   accelerometer and magnetometer.
+3. **Altitude filter** (:mod:`robosoc.control.altitude`): predict with the accelerometer rotated
+   by the EKF attitude, update with the barometer.
+4. **PID** (:mod:`robosoc.control.pid`): roll, pitch, yaw torques (equation 1) and total thrust
+   (equation 2), derivatives from the bias-corrected gyroscope and the estimated vertical velocity.
+5. **Mixer** (:mod:`robosoc.control.mixer`): equation 3, PWM bytes.
+
+Gains (see docs/physics.md for the tuning): roll/pitch are PD-dominant with K_p = 100·I_xx and
+K_d = 20·I_xx (hector's own attitude loop: natural frequency 10 rad/s, damping 1); yaw K_p = 0.3,
+K_d = 0.12 on I_zz = 0.0218 (about 3.7 rad/s: the yaw authority through rotor drag is small);
+height K_p = m·ω_n², K_d = 2·m·ω_n with ω_n = 3 rad/s (critically damped), K_i = 2 N/(m·s).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from robosoc.config.vehicle import VehicleConfig
+from robosoc.control import quaternion as quat
+from robosoc.control.altitude import AltitudeFilter, AltitudeParams
+from robosoc.control.ekf import AttitudeEkf, EkfParams
+from robosoc.control.mixer import Mixer
+from robosoc.control.pid import Pid, PidGains, euler_rates, height_thrust, wrap_angle
+from robosoc.control.setpoint import Setpoint
+
+GRAVITY = 9.8
+
+
+@dataclass(frozen=True)
+class ControllerGains:
+    """PID gains and limits of the four loops (torques in N·m, thrust in N)."""
+
+    roll: PidGains
+    pitch: PidGains
+    yaw: PidGains
+    height: PidGains
+    max_tilt_gain: float = 1.5
+    """Upper limit of 1/(cos α·cos β) in equation 2."""
+
+
+def default_gains(vehicle: VehicleConfig) -> ControllerGains:
+    """The tuned gains for ``vehicle`` (scaled by its mass and inertia)."""
+    ixx, iyy, izz = vehicle.inertia
+    m = vehicle.mass
+    wn_z = 3.0
+    return ControllerGains(
+        roll=PidGains(kp=100.0 * ixx, ki=20.0 * ixx, kd=20.0 * ixx, integral_limit=0.2, output_limit=1.5),
+        pitch=PidGains(kp=100.0 * iyy, ki=20.0 * iyy, kd=20.0 * iyy, integral_limit=0.2, output_limit=1.5),
+        yaw=PidGains(kp=0.3, ki=0.05, kd=0.12, integral_limit=0.5, output_limit=0.3),
+        height=PidGains(kp=m * wn_z**2, ki=2.0, kd=2.0 * m * wn_z, integral_limit=2.0, output_limit=10.0),
+    )
+
+
+@dataclass(frozen=True, slots=True)
+class Estimate:
+    """The controller's state estimate: attitude quaternion, Euler angles [rad], height [m], vertical velocity [m/s]."""
+
+    quaternion: np.ndarray
+    euler: np.ndarray
+    height: float
+    vertical_velocity: float
+
+
+class HostController:
+    """EKF + altitude filter + PID + mixer in float64, one step per sensor sample."""
+
+    def __init__(
+        self,
+        vehicle: VehicleConfig,
+        sample_period: float,
+        gains: ControllerGains | None = None,
+        ekf: EkfParams | None = None,
+        altitude: AltitudeParams | None = None,
+    ) -> None:
+        self.vehicle = vehicle
+        self.dt = sample_period
+        self.gains = gains or default_gains(vehicle)
+        self.t_gravity = vehicle.mass * GRAVITY
+        self.mixer = Mixer(vehicle.motor, vehicle.arm_length, self.t_gravity / 4.0)
+        self.ekf = AttitudeEkf(ekf)
+        self.altitude = AltitudeFilter(altitude)
+        self.pids = {
+            "roll": Pid(self.gains.roll),
+            "pitch": Pid(self.gains.pitch),
+            "yaw": Pid(self.gains.yaw),
+            "height": Pid(self.gains.height),
+        }
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget everything (a new flight)."""
+        self._sums = np.zeros(10)
+        self._count = 0
+        self._armed = False
+        self._started = False
+        self.ekf.reset(np.array([1.0, 0.0, 0.0, 0.0]))
+        self.altitude.reset(0.0, self.vehicle.rest_height)
+        for pid in self.pids.values():
+            pid.reset()
+        self.last_pwm = np.zeros(4, dtype=np.uint8)
+
+    @property
+    def estimate(self) -> Estimate:
+        """The current estimate (after the last :meth:`step`)."""
+        q = self.ekf.quaternion
+        return Estimate(q, quat.to_euler(q), self.altitude.height, self.altitude.velocity)
+
+    def _calibrate(self, sample) -> None:  # noqa: ANN001 (SensorSample, not imported: control does not depend on physics)
+        self._sums += np.concatenate((sample.gyro, sample.accel, sample.mag, [sample.baro_altitude]))
+        self._count += 1
+        mean = self._sums / self._count
+        q0 = quat.from_accel_mag(mean[3:6], mean[6:9])
+        self.ekf.reset(q0, bias=mean[0:3], bias_sigma=0.05 / np.sqrt(self._count))
+        self.altitude.reset(float(mean[9]), self.vehicle.rest_height)
+
+    def step(self, sample, setpoint: Setpoint) -> np.ndarray:  # noqa: ANN001
+        """Consume one sensor sample; return the four PWM bytes to apply now."""
+        if not setpoint.armed:
+            if self._armed:
+                self.reset()
+            self._calibrate(sample)
+            self.last_pwm = np.zeros(4, dtype=np.uint8)
+            return self.last_pwm
+        if not self._armed:
+            self._armed = True
+            for pid in self.pids.values():
+                pid.reset()
+        dt = self.dt
+        q = self.ekf.step(sample.gyro, sample.accel, sample.mag, dt)
+        rotation = quat.to_matrix(q)
+        height = self.altitude.step(rotation, sample.accel, sample.baro_altitude, dt)
+        roll, pitch, yaw = quat.to_euler(q)
+        rates = euler_rates(roll, pitch, tuple(np.asarray(sample.gyro) - self.ekf.gyro_bias))
+        u_roll = self.pids["roll"].step(setpoint.roll - roll, -rates[0], dt)
+        u_pitch = self.pids["pitch"].step(setpoint.pitch - pitch, -rates[1], dt)
+        u_yaw = self.pids["yaw"].step(wrap_angle(setpoint.yaw - yaw), -rates[2], dt)
+        u_z = height_thrust(
+            self.pids["height"],
+            setpoint.height - height,
+            -self.altitude.velocity,
+            dt,
+            self.t_gravity,
+            roll,
+            pitch,
+            self.gains.max_tilt_gain,
+        )
+        self.last_pwm = self.mixer.pwm(u_z, u_roll, u_pitch, u_yaw)
+        return self.last_pwm

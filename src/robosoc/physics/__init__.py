@@ -1,0 +1,11 @@
+"""Quadrotor physics on MuJoCo: vehicle model built in code, propulsion, drag, wind and sensors.
+
+Public API: :class:`World` (``reset``, ``step``, ``advance``) holding :class:`Quadrotor` s
+(``apply_pwm``, ``sensors``, ``truth``); :class:`SensorSample` and :class:`Truth` records.
+See ``docs/physics.md`` for the model.
+"""
+
+from robosoc.physics.sensors import SensorSample, Truth
+from robosoc.physics.world import Quadrotor, World
+
+__all__ = ["Quadrotor", "SensorSample", "Truth", "World"]

@@ -1,0 +1,70 @@
+"""Rotations for the physics side: unit quaternions (w, x, y, z, MuJoCo's order) and matrices.
+
+R(q) maps body vectors to world vectors.  These helpers are independent of the reference
+controllers' own quaternion code (:mod:`robosoc.control.quaternion`) so that tests comparing the
+two check something.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+
+def quat_to_matrix(w: float, x: float, y: float, z: float) -> tuple[float, ...]:
+    """Row-major body→world rotation matrix of a unit quaternion, as 9 floats."""
+    xx, yy, zz = x * x, y * y, z * z
+    xy, xz, yz = x * y, x * z, y * z
+    wx, wy, wz = w * x, w * y, w * z
+    return (
+        1.0 - 2.0 * (yy + zz),
+        2.0 * (xy - wz),
+        2.0 * (xz + wy),
+        2.0 * (xy + wz),
+        1.0 - 2.0 * (xx + zz),
+        2.0 * (yz - wx),
+        2.0 * (xz - wy),
+        2.0 * (yz + wx),
+        1.0 - 2.0 * (xx + yy),
+    )
+
+
+def quat_multiply(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Hamilton product a ⊗ b."""
+    aw, ax, ay, az = a
+    bw, bx, by, bz = b
+    return np.array(
+        [
+            aw * bw - ax * bx - ay * by - az * bz,
+            aw * bx + ax * bw + ay * bz - az * by,
+            aw * by - ax * bz + ay * bw + az * bx,
+            aw * bz + ax * by - ay * bx + az * bw,
+        ]
+    )
+
+
+def quat_conjugate(q: np.ndarray) -> np.ndarray:
+    """Inverse of a unit quaternion."""
+    return np.array([q[0], -q[1], -q[2], -q[3]])
+
+
+def rotation_vector(q: np.ndarray) -> np.ndarray:
+    """Axis·angle of a unit quaternion (shortest rotation, angle in [0, π])."""
+    w = float(q[0])
+    v = np.asarray(q[1:], dtype=float)
+    if w < 0:
+        w, v = -w, -v
+    s = float(np.linalg.norm(v))
+    if s < 1e-12:
+        return 2.0 * v
+    return (2.0 * math.atan2(s, w) / s) * v
+
+
+def euler_from_quat(q: np.ndarray) -> np.ndarray:
+    """Roll, pitch, yaw [rad] (Z-Y-X convention: R = Rz(yaw)·Ry(pitch)·Rx(roll))."""
+    w, x, y, z = (float(c) for c in q)
+    roll = math.atan2(2.0 * (w * x + y * z), 1.0 - 2.0 * (x * x + y * y))
+    pitch = math.asin(max(-1.0, min(1.0, 2.0 * (w * y - z * x))))
+    yaw = math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+    return np.array([roll, pitch, yaw])

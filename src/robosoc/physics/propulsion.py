@@ -1,0 +1,181 @@
+"""The hector quadrotor's propulsion: four DC motors with rotors, explicit Euler every physics step.
+
+Per motor i (quadrotor.md)::
+
+    U_i  = pwm_i · V_s / 255                        zero-order hold between commands
+    v1   = [w − l·q, w − l·p, w + l·q, w + l·p]     axial inflow at each rotor (body u, v, w, p, q, r)
+    F_i  = CT0s·ω_i² + CT1s·v1_i·ω_i + CT2s·v1_i²   thrust
+    T    = (U_i·beta_m − Psi·ω_i) / (2·R_A)
+    I_i  = T + sqrt(T² + U_i·alpha_m/R_A)           motor current
+    M_e  = Psi·I_i                                  electrical torque
+    ω_i ← ω_i + dt/J_M · (M_e − k_t·F_i − k_m·ω_i)
+
+Body wrench at the body origin: force (0, 0, ΣF); torque ((F3 − F1)·l, (F2 − F0)·l,
+M_e0 + M_e2 − M_e1 − M_e3).  Motor 0 front (+x), 1 right (−y), 2 rear (−x), 3 left (+y).
+
+The hot path works on Python floats: for four values, scalar arithmetic is several times cheaper
+than numpy calls (each of which costs about a microsecond of dispatch).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+from robosoc.config.vehicle import MotorConfig
+
+PWM_MAX = 255
+"""PWM commands are bytes."""
+
+
+class Propulsion:
+    """State and dynamics of the four motors of one vehicle."""
+
+    __slots__ = (
+        "_a_r",
+        "_alpha_over_r",
+        "_beta",
+        "_ct0",
+        "_ct1",
+        "_ct2",
+        "_dt_over_j",
+        "_inv_2r",
+        "_k_m",
+        "_k_t",
+        "_psi",
+        "arm",
+        "forces",
+        "motor",
+        "omega",
+        "torques",
+        "voltages",
+    )
+
+    def __init__(self, motor: MotorConfig, arm_length: float, dt: float) -> None:
+        self.motor = motor
+        self.arm = arm_length
+        self._psi = motor.psi
+        self._beta = motor.beta_m
+        self._inv_2r = 1.0 / (2.0 * motor.r_a)
+        self._alpha_over_r = motor.alpha_m / motor.r_a
+        self._a_r = motor.r_a
+        self._ct0 = motor.ct0s
+        self._ct1 = motor.ct1s
+        self._ct2 = motor.ct2s
+        self._k_t = motor.k_t
+        self._k_m = motor.k_m
+        self._dt_over_j = dt / motor.j_m
+        self.omega = [0.0, 0.0, 0.0, 0.0]
+        self.voltages = [0.0, 0.0, 0.0, 0.0]
+        self.forces = [0.0, 0.0, 0.0, 0.0]
+        self.torques = [0.0, 0.0, 0.0, 0.0]
+
+    def reset(self, omega: Sequence[float] = (0.0, 0.0, 0.0, 0.0)) -> None:
+        """Set the rotor speeds [rad/s] and zero the input voltages."""
+        self.omega = [float(w) for w in omega]
+        self.voltages = [0.0, 0.0, 0.0, 0.0]
+        self.forces = [0.0, 0.0, 0.0, 0.0]
+        self.torques = [0.0, 0.0, 0.0, 0.0]
+
+    def set_pwm(self, pwm: Sequence[int]) -> None:
+        """Latch four PWM bytes (held until the next call).
+
+        Raises:
+            ValueError: not four integers in 0..255.
+        """
+        if len(pwm) != 4:
+            raise ValueError(f"pwm: expected 4 values, got {len(pwm)}")
+        volts = []
+        for i, value in enumerate(pwm):
+            byte = int(value)
+            if byte != value or not 0 <= byte <= PWM_MAX:
+                raise ValueError(f"pwm[{i}]: must be an integer in 0..255, got {value!r}")
+            volts.append(byte * self.motor.supply_voltage / PWM_MAX)
+        self.voltages = volts
+
+    def step(self, w: float, p: float, q: float) -> tuple[float, float, float, float]:
+        """Advance the motors one step; return the body wrench (Fz, τx, τy, τz) at the origin.
+
+        Args:
+            w: body-frame vertical velocity [m/s] (axial inflow).
+            p: body roll rate [rad/s].
+            q: body pitch rate [rad/s].
+
+        The thrust and torque returned are those of the speeds at the start of the step (explicit
+        Euler), matching the original plugin.
+        """
+        arm = self.arm
+        lq = arm * q
+        lp = arm * p
+        inflow = (w - lq, w - lp, w + lq, w + lp)
+        omega = self.omega
+        volts = self.voltages
+        forces = self.forces
+        torques = self.torques
+        psi = self._psi
+        beta = self._beta
+        inv_2r = self._inv_2r
+        alpha_r = self._alpha_over_r
+        ct0 = self._ct0
+        ct1 = self._ct1
+        ct2 = self._ct2
+        k_t = self._k_t
+        k_m = self._k_m
+        dt_j = self._dt_over_j
+        sqrt = math.sqrt
+        for i in range(4):
+            om = omega[i]
+            u = volts[i]
+            v1 = inflow[i]
+            force = ct0 * om * om + ct1 * v1 * om + ct2 * v1 * v1
+            t = (u * beta - psi * om) * inv_2r
+            torque = psi * (t + sqrt(t * t + u * alpha_r))
+            omega[i] = om + dt_j * (torque - k_t * force - k_m * om)
+            forces[i] = force
+            torques[i] = torque
+        return (
+            forces[0] + forces[1] + forces[2] + forces[3],
+            (forces[3] - forces[1]) * arm,
+            (forces[2] - forces[0]) * arm,
+            torques[0] + torques[2] - torques[1] - torques[3],
+        )
+
+
+def steady_state(motor: MotorConfig, pwm: float, inflow: float = 0.0) -> tuple[float, float, float]:
+    """Equilibrium of one motor at a constant (possibly fractional) PWM: (ω, thrust, M_e).
+
+    Solves dω/dt = 0 by bisection on ω (the net torque falls monotonically with ω above the
+    idle equilibrium).  Used by tests and documentation; not on the hot path.
+    """
+    u = pwm * motor.supply_voltage / PWM_MAX
+
+    def net(om: float) -> float:
+        force = motor.ct0s * om * om + motor.ct1s * inflow * om + motor.ct2s * inflow * inflow
+        t = (u * motor.beta_m - motor.psi * om) / (2 * motor.r_a)
+        torque = motor.psi * (t + math.sqrt(t * t + u * motor.alpha_m / motor.r_a))
+        return torque - motor.k_t * force - motor.k_m * om
+
+    lo, hi = 1e-6, 1e5
+    for _ in range(200):
+        mid = 0.5 * (lo + hi)
+        if net(mid) > 0:
+            lo = mid
+        else:
+            hi = mid
+    om = 0.5 * (lo + hi)
+    force = motor.ct0s * om * om + motor.ct1s * inflow * om
+    t = (u * motor.beta_m - motor.psi * om) / (2 * motor.r_a)
+    torque = motor.psi * (t + math.sqrt(t * t + u * motor.alpha_m / motor.r_a))
+    return om, force, torque
+
+
+def hover_pwm(motor: MotorConfig, mass: float, gravity: float) -> float:
+    """Fractional PWM at which four motors at rest in still air carry ``mass`` (bisection)."""
+    lo, hi = 0.0, float(PWM_MAX)
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        if 4.0 * steady_state(motor, mid)[1] < mass * gravity:
+            lo = mid
+        else:
+            hi = mid
+    return 0.5 * (lo + hi)
