@@ -8,6 +8,7 @@ Layout (all plain files inside the package):
 - ``crt/irq_default.c``: the weak default ``irq_handler``.
 - ``include/hfriscv.h``: SoC register addresses and inline helpers.
 - ``include/hf_print.h`` + ``lib/hf_print.c``: debug-port text output (host: stdout).
+- ``libc/include/string.h`` + ``libc/string.c``: memcpy, memset, strlen, ... for core builds.
 - ``bench/matrix_bench.c``: the EKF-like 7x7 matrix workload of ``robosoc bench core``.
 """
 
@@ -22,6 +23,9 @@ CRT_SOURCES: tuple[Path, ...] = (
     FIRMWARE_DIR / "crt" / "irq_default.c",
 )
 LIB_SOURCES: tuple[Path, ...] = (FIRMWARE_DIR / "lib" / "hf_print.c",)
+#: Headers only core builds see (``string.h``; host builds use the host's libc).
+LIBC_INCLUDE_DIR = FIRMWARE_DIR / "libc" / "include"
+LIBC_SOURCES: tuple[Path, ...] = (FIRMWARE_DIR / "libc" / "string.c",)
 MATRIX_BENCH_SOURCE = FIRMWARE_DIR / "bench" / "matrix_bench.c"
 
 #: Symbol of the interrupt entry: the one place allowed to write x27 (s11).
@@ -30,7 +34,7 @@ IRQ_ENTRY_SYMBOL = "_irq_entry"
 
 def runtime_sources() -> tuple[Path, ...]:
     """Sources linked into every RISC-V program: start-up code, interrupt entry, print library."""
-    return CRT_SOURCES + LIB_SOURCES
+    return CRT_SOURCES + LIB_SOURCES + LIBC_SOURCES
 
 
 def host_sources() -> tuple[Path, ...]:
@@ -43,6 +47,8 @@ __all__ = [
     "FIRMWARE_DIR",
     "INCLUDE_DIR",
     "IRQ_ENTRY_SYMBOL",
+    "LIBC_INCLUDE_DIR",
+    "LIBC_SOURCES",
     "LIB_SOURCES",
     "LINKER_SCRIPT_TEMPLATE",
     "MATRIX_BENCH_SOURCE",

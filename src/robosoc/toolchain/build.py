@@ -9,7 +9,7 @@ import warnings
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
-from robosoc.firmware import INCLUDE_DIR, runtime_sources
+from robosoc.firmware import INCLUDE_DIR, LIBC_INCLUDE_DIR, runtime_sources
 from robosoc.toolchain.cache import build_key, entry_dir, file_digest, header_digests, zig_cache_dir
 from robosoc.toolchain.errors import CompileError, CompilerWarning, FixedRegisterWarning, ToolchainError
 from robosoc.toolchain.linker_script import (
@@ -103,7 +103,7 @@ def build_elf(
         mul=mul,
         opt=normalize_opt(opt),
         defines=tuple(define_flags(defines)),
-        include_dirs=tuple(str(d) for d in (*incs, INCLUDE_DIR)),
+        include_dirs=tuple(str(d) for d in (*incs, INCLUDE_DIR, LIBC_INCLUDE_DIR)),
         sram_base=sram_base,
         sram_size=sram_size,
         stack_min=stack_min,
@@ -119,7 +119,7 @@ def build_elf(
             "flags": options.compiler_flags(),
             "linker_script": linker_script,
             "sources": [(str(s), file_digest(s)) for s in all_sources],
-            "headers": header_digests([*incs, INCLUDE_DIR, *{s.parent for s in srcs}]),
+            "headers": header_digests([*incs, INCLUDE_DIR, LIBC_INCLUDE_DIR, *{s.parent for s in srcs}]),
         }
     )
     entry = entry_dir("elf", key)

@@ -31,10 +31,17 @@ static int hf_put_u64(uint64_t v, unsigned base, int width, char pad, int upper)
     const char *digits = upper ? "0123456789ABCDEF" : "0123456789abcdef";
     char buf[24];
     int n = 0;
-    do {
-        buf[n++] = digits[v % base];
-        v /= base;
-    } while (v != 0u);
+    if (base == 16u) { /* shifts only: no 64-bit division for hex output */
+        do {
+            buf[n++] = digits[(uint32_t)v & 0xfu];
+            v >>= 4;
+        } while (v != 0u);
+    } else {
+        do {
+            buf[n++] = digits[v % base];
+            v /= base;
+        } while (v != 0u);
+    }
     int written = 0;
     for (int i = n; i < width; i++) {
         hf_putchar(pad);
