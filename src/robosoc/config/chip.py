@@ -1,0 +1,233 @@
+"""Platform configuration of the MPSoC: mesh size, I/O tile, powered-off tiles, per-tile options, NoC.
+
+Everything is a frozen dataclass checked in ``__post_init__`` (errors are ``ValueError("field: reason")``)
+and loadable from TOML through :func:`load_chip_config`, whose errors name the file and the dotted field::
+
+    width = 4
+    height = 4
+    io_tile = [0, 0]
+    powered_off = [[3, 3]]
+
+    [tile]                 # defaults for every tile
+    clock_period_ns = 4.0
+
+    [[tiles]]              # per-tile overrides
+    x = 1
+    y = 2
+    multiplier = false
+
+    [noc]
+    buffer_depth = 16
+    routing_latency = 6
+
+Coordinates are ``(x, y)`` with ``0 <= x < width`` and ``0 <= y < height``; ``y`` grows northwards. The
+NoC address of a tile is ``(x << 4) | y`` (ORCA packet format), hence at most 16 tiles per side.
+
+Default routing latency: platform.md §4 says the Hermes RTL spends about 5 to 7 cycles per hop before a
+header is switched through, and the original Hermes paper counts a routing time per router plus the
+packet length. We take the middle of that range: a header waits :data:`HERMES_ROUTING_LATENCY` = 6 cycles
+at the head of an input buffer and crosses the switch and link in the 7th, so an uncontended header
+advances one router every 7 cycles, while body flits stream at 1 flit per cycle (credit-based Hermes).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from robosoc.config.validate import load_toml
+
+__all__ = [
+    "HERMES_ROUTING_LATENCY",
+    "ChipConfig",
+    "NocConfig",
+    "TileConfig",
+    "TileOverride",
+    "load_chip_config",
+]
+
+#: Cycles a header waits at the head of an input buffer before it may be switched (see module docstring).
+HERMES_ROUTING_LATENCY = 6
+#: Size of the NI send and receive memories in flits (128 bytes of 16-bit flits, ORCA).
+NI_MEMORY_FLITS = 64
+MAX_MESH_SIDE = 16
+
+
+def _check_sram(name: str, value: int) -> None:
+    if value % 4 != 0 or not 4096 <= value <= 1 << 30:
+        raise ValueError(f"{name}: must be a multiple of 4 between 4096 and 2**30 bytes, got {value}")
+
+
+def _check_period(name: str, value: float) -> None:
+    if not value > 0.0:
+        raise ValueError(f"{name}: must be > 0 ns, got {value}")
+
+
+@dataclass(frozen=True)
+class TileConfig:
+    """Options of one tile (the defaults apply to every tile not overridden).
+
+    Attributes:
+        multiplier: the core has the hardware multiplier (M extension subset of HF-RISCV).
+        sram_bytes: size of the tile's SRAM (2 MiB in the paper).
+        clock_period_ns: core clock period (4 ns = 250 MHz).
+    """
+
+    multiplier: bool = True
+    sram_bytes: int = 2 * 1024 * 1024
+    clock_period_ns: float = 4.0
+
+    def __post_init__(self) -> None:
+        _check_sram("sram_bytes", self.sram_bytes)
+        _check_period("clock_period_ns", self.clock_period_ns)
+
+
+@dataclass(frozen=True)
+class TileOverride:
+    """Per-tile override: fields left at ``None`` keep the chip-wide :class:`TileConfig` value."""
+
+    x: int
+    y: int
+    multiplier: bool | None = None
+    sram_bytes: int | None = None
+    clock_period_ns: float | None = None
+
+    def __post_init__(self) -> None:
+        if self.x < 0:
+            raise ValueError(f"x: must be >= 0, got {self.x}")
+        if self.y < 0:
+            raise ValueError(f"y: must be >= 0, got {self.y}")
+        if self.sram_bytes is not None:
+            _check_sram("sram_bytes", self.sram_bytes)
+        if self.clock_period_ns is not None:
+            _check_period("clock_period_ns", self.clock_period_ns)
+
+
+@dataclass(frozen=True)
+class NocConfig:
+    """Hermes router and packet parameters.
+
+    Attributes:
+        buffer_depth: flits per router input buffer (ORCA default 8, the paper 16). At least 2: with
+            one-slot buffers and a one-cycle credit loop a connection moves only one flit every 2 cycles.
+        flit_bits: flit width; the ORCA packet format uses 16-bit flits.
+        max_packet_flits: longest packet including the destination and size flits; at most the
+            64-flit NI memories.
+        routing_latency: cycles a header waits at the head of an input buffer before it may be switched
+            (the per-hop header cost is ``routing_latency + 1``).
+    """
+
+    buffer_depth: int = 16
+    flit_bits: int = 16
+    max_packet_flits: int = NI_MEMORY_FLITS
+    routing_latency: int = HERMES_ROUTING_LATENCY
+
+    def __post_init__(self) -> None:
+        if not 2 <= self.buffer_depth <= 256:
+            raise ValueError(f"buffer_depth: must be between 2 and 256 flits, got {self.buffer_depth}")
+        if self.flit_bits not in (16, 32):
+            raise ValueError(f"flit_bits: must be 16 (ORCA) or 32, got {self.flit_bits}")
+        if not 2 <= self.max_packet_flits <= NI_MEMORY_FLITS:
+            raise ValueError(
+                f"max_packet_flits: must be between 2 and {NI_MEMORY_FLITS} (the NI memories), "
+                f"got {self.max_packet_flits}"
+            )
+        if not 0 <= self.routing_latency <= 64:
+            raise ValueError(f"routing_latency: must be between 0 and 64 cycles, got {self.routing_latency}")
+
+
+@dataclass(frozen=True)
+class ChipConfig:
+    """The whole MPSoC: a ``width`` × ``height`` mesh of tiles.
+
+    Attributes:
+        width: tiles along x (1..16).
+        height: tiles along y (1..16).
+        io_tile: the tile bridging the NoC to the outside world (no core).
+        powered_off: tiles whose core, memory and network interface are off. Their router keeps
+            forwarding transit traffic (XY routes would otherwise be cut); a packet addressed to them
+            is an error.
+        tile: defaults for every tile.
+        tiles: per-tile overrides.
+        noc: router and packet parameters.
+    """
+
+    width: int = 2
+    height: int = 2
+    io_tile: tuple[int, int] = (0, 0)
+    powered_off: tuple[tuple[int, int], ...] = ()
+    tile: TileConfig = field(default_factory=TileConfig)
+    tiles: tuple[TileOverride, ...] = ()
+    noc: NocConfig = field(default_factory=NocConfig)
+
+    def __post_init__(self) -> None:
+        for name in ("width", "height"):
+            value = getattr(self, name)
+            if not 1 <= value <= MAX_MESH_SIDE:
+                raise ValueError(f"{name}: must be between 1 and {MAX_MESH_SIDE}, got {value}")
+        if self.width * self.height < 2:
+            raise ValueError("width: a mesh needs at least 2 tiles")
+        if not self.contains(self.io_tile):
+            raise ValueError(f"io_tile: {self.io_tile} is outside the {self.width}x{self.height} mesh")
+        seen: set[tuple[int, int]] = set()
+        for i, xy in enumerate(self.powered_off):
+            if not self.contains(xy):
+                raise ValueError(f"powered_off[{i}]: {xy} is outside the {self.width}x{self.height} mesh")
+            if xy in seen:
+                raise ValueError(f"powered_off[{i}]: {xy} is listed twice")
+            if xy == self.io_tile:
+                raise ValueError(f"powered_off[{i}]: {xy} is the I/O tile")
+            seen.add(xy)
+        overridden: set[tuple[int, int]] = set()
+        for i, over in enumerate(self.tiles):
+            xy = (over.x, over.y)
+            if not self.contains(xy):
+                raise ValueError(f"tiles[{i}]: {xy} is outside the {self.width}x{self.height} mesh")
+            if xy in overridden:
+                raise ValueError(f"tiles[{i}]: {xy} is overridden twice")
+            overridden.add(xy)
+
+    @property
+    def n_tiles(self) -> int:
+        """Number of tiles, powered or not."""
+        return self.width * self.height
+
+    def contains(self, xy: tuple[int, int]) -> bool:
+        """Whether ``xy`` is a tile of the mesh."""
+        x, y = xy
+        return 0 <= x < self.width and 0 <= y < self.height
+
+    def tile_index(self, xy: tuple[int, int]) -> int:
+        """Row-major tile index ``y * width + x`` used by the kernels."""
+        if not self.contains(xy):
+            raise ValueError(f"tile {xy} is outside the {self.width}x{self.height} mesh")
+        return xy[1] * self.width + xy[0]
+
+    def tile_xy(self, index: int) -> tuple[int, int]:
+        """Inverse of :meth:`tile_index`."""
+        return index % self.width, index // self.width
+
+    def is_powered(self, xy: tuple[int, int]) -> bool:
+        """Whether the tile's core, memory and NI are on."""
+        return tuple(xy) not in set(self.powered_off)
+
+    def tile_config(self, xy: tuple[int, int]) -> TileConfig:
+        """The effective options of tile ``xy`` (chip defaults with its override applied)."""
+        base = self.tile
+        for over in self.tiles:
+            if (over.x, over.y) == tuple(xy):
+                return TileConfig(
+                    multiplier=base.multiplier if over.multiplier is None else over.multiplier,
+                    sram_bytes=base.sram_bytes if over.sram_bytes is None else over.sram_bytes,
+                    clock_period_ns=base.clock_period_ns if over.clock_period_ns is None else over.clock_period_ns,
+                )
+        return base
+
+
+def load_chip_config(path: str | Path, section: str | None = None) -> ChipConfig:
+    """Read a :class:`ChipConfig` from TOML (optionally from one top-level table).
+
+    Raises:
+        robosoc.config.ConfigError: naming the file and the dotted field.
+    """
+    return load_toml(ChipConfig, path, section)

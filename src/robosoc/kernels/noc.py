@@ -1,0 +1,604 @@
+"""Hermes-style mesh NoC with per-tile network-interface datapath, as numba kernels over integer arrays.
+
+Model (see docs/noc.md for the full description and the latency formula):
+
+* A ``width`` × ``height`` mesh of 5-port routers (ports EAST, WEST, NORTH, SOUTH, LOCAL, Hermes order),
+  an input FIFO of ``depth`` flits per port, XY routing, wormhole switching, credit flow control and
+  one round-robin arbiter per output port.
+* Two-phase semantics: :func:`noc_step` first decides every request, grant and flit move from the state
+  at the start of the cycle, then commits all moves (the cycle edge). A flit moves at most one hop per
+  cycle and the result does not depend on the order in which routers are evaluated (``cfg[C_REVERSE]``
+  flips that order, for tests).
+* Per tile, an NI with a 64-flit send memory (injected into the router's local input at 1 flit/cycle
+  when credits allow) and a 64-flit receive memory (filled from the local output at 1 flit/cycle; when
+  a packet is complete a delivery event is recorded and the memory is held until freed).
+
+State: eight arrays, bundled in :class:`NocState` (a NamedTuple, so ``noc_step(*state, cycle)`` works
+and :func:`noc_snapshot` / :func:`noc_restore` copy it). Column indices are the module constants below.
+
+======  ===============================  ===================================================
+array   shape, dtype                     contents
+======  ===============================  ===================================================
+cfg     (CFG_SIZE,) int64                constants: C_WIDTH, C_HEIGHT, C_DEPTH, C_RLAT, ...
+glob    (GLOB_SIZE,) int64               G_CYCLE (next cycle), G_STATUS, G_ERR_*, counters
+buf     (tiles, 5, depth) int64          input FIFOs, circular
+port    (tiles, 5, PORT_COLS) int64      per port: FIFO head/count, input routing state, output
+                                         owner/round-robin/credits, scratch, energy counters
+tile    (tiles, TILE_COLS) int64         per tile: router flit count, NI send and receive state
+mem     (tiles, 2, 64) int64             NI send memory ``[t, SEND]``, receive memory ``[t, RECV]``
+ev      (capacity, EV_COLS) int64        delivery events: tile, cycle, length, first cycle, flits
+queue   (rows, Q_COLS) int64             optional per-tile packet queue feeding the send memory
+======  ===============================  ===================================================
+
+Tile index ``t = y * width + x``; NoC address ``(x << 4) | y``; NORTH is ``y + 1``.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+from numba import njit
+
+# ports (Hermes order)
+EAST, WEST, NORTH, SOUTH, LOCAL = 0, 1, 2, 3, 4
+NPORTS = 5
+PORT_NAMES = ("east", "west", "north", "south", "local")
+MEM_FLITS = 64
+SEND, RECV = 0, 1
+NONE = -1
+BIG = 1 << 62
+
+# cfg: constants
+C_WIDTH, C_HEIGHT, C_NTILES, C_DEPTH, C_RLAT, C_MAXPKT, C_FLITMASK, C_REVERSE = range(8)
+CFG_SIZE = 8
+
+# glob: scalars that change
+G_CYCLE = 0  # next cycle to simulate
+G_STATUS = 1  # first error (STATUS_*), 0 if none; sticky until the caller clears it
+G_ERR_TILE = 2
+G_ERR_CYCLE = 3
+G_NEV = 4  # rows used in ev
+G_INFLIGHT = 5  # flits in router buffers
+G_SENDING = 6  # NIs currently injecting
+G_DELIVERED = 7  # packets delivered (all time)
+G_HOPS = 8  # router-to-router flit moves (all time)
+G_INJECTED = 9  # flits injected by NIs (all time)
+G_EJECTED = 10  # flits written into receive memories (all time)
+G_CYCLE0 = 11  # cycle at which the counters started
+GLOB_SIZE = 12
+
+# port columns; an index p is both input port p and output port p of the router
+P_HEAD = 0  # input FIFO head slot
+P_COUNT = 1  # input FIFO occupancy
+P_WAIT = 2  # cycles the header at the head has waited for routing
+P_CONN = 3  # output port this input is connected to, or NONE
+P_SENT = 4  # flits of the current packet already forwarded by this input
+P_TOTAL = 5  # flits of the current packet (known once flit 1 has passed), BIG before
+P_REQ = 6  # scratch: output requested this cycle, or NONE
+P_OWNER = 7  # input port holding this output, or NONE
+P_RR = 8  # round-robin pointer of this output: first input considered at the next grant
+P_CREDIT = 9  # free slots in the downstream buffer as known to this output
+P_MOVE = 10  # scratch: this output moves a flit this cycle
+P_FLITS_IN = 11  # energy: flits written into this input buffer
+P_FLITS_OUT = 12  # energy: flits sent through this output
+P_BUSY = 13  # energy: cycles this input buffer held at least one flit at the cycle start
+PORT_COLS = 14
+
+# tile columns
+T_POWERED = 0  # core, memory and NI on (the router is always on)
+T_RFLITS = 1  # flits in this router's input buffers
+T_MOVES = 2  # scratch: some output of this router moves a flit this cycle
+T_BUSY = 3  # energy: cycles the router held at least one flit at the cycle start (control logic active)
+T_SEND_STATE = 4  # SEND_IDLE, SEND_PENDING, SEND_ACTIVE
+T_SEND_LEN = 5
+T_SEND_POS = 6  # next send-memory flit to inject
+T_SEND_START = 7  # first cycle the NI may inject
+T_SEND_ROW = 8  # queue row being sent, or NONE
+T_NI_CREDIT = 9  # free slots in the router's local input buffer as known to the NI
+T_NI_MOVE = 10  # scratch: the NI injects a flit this cycle
+T_RX_STATE = 11  # RX_ACCEPT or RX_HELD
+T_RX_COUNT = 12  # flits in the receive memory
+T_RX_TOTAL = 13  # length of the packet being received (BIG until flit 1 arrived)
+T_RX_FIRST = 14  # cycle flit 0 of the packet being received was written
+T_RX_AUTO = 15  # NONE: software frees the receive memory; d >= 0: freed automatically d cycles later
+T_RX_FREE_AT = 16  # cycle from which an automatically freed memory accepts again, or NONE
+T_Q_HEAD = 17  # next queue row to load into the send memory, or NONE
+T_Q_TAIL = 18  # last queue row of this tile (for appending), or NONE
+T_SENT_PKTS = 19
+T_RECV_PKTS = 20
+T_SEND_FIRST = 21  # cycle the first flit of the last started packet entered the router
+TILE_COLS = 22
+
+SEND_IDLE, SEND_PENDING, SEND_ACTIVE = 0, 1, 2
+RX_ACCEPT, RX_HELD = 0, 1
+
+# queue rows (a per-tile linked list, in the order the NI sends them)
+Q_TILE, Q_READY, Q_LEN, Q_NEXT, Q_START, Q_END = range(6)
+Q_FLITS = 6
+Q_COLS = Q_FLITS + MEM_FLITS
+
+# delivery events
+EV_TILE, EV_CYCLE, EV_LEN, EV_FIRST = range(4)
+EV_FLITS = 4
+EV_COLS = EV_FLITS + MEM_FLITS
+
+# status codes
+STATUS_OK = 0
+STATUS_DEST_OFF = 1  # destination tile is powered off
+STATUS_DEST_SELF = 2  # destination is the sending tile
+STATUS_DEST_OUTSIDE = 3  # destination address is not a tile of the mesh
+STATUS_BAD_LENGTH = 4  # size flit inconsistent with the send length, or too long / too short
+STATUS_SRC_OFF = 5  # the sending tile is powered off
+STATUS_NI_BUSY = 6  # send requested while the NI is still sending
+STATUS_EVENTS_FULL = 7  # a delivery event was lost: the ev array was full
+STATUS_TEXT = {
+    STATUS_OK: "ok",
+    STATUS_DEST_OFF: "destination tile is powered off",
+    STATUS_DEST_SELF: "packet addressed to its own tile",
+    STATUS_DEST_OUTSIDE: "destination address is outside the mesh",
+    STATUS_BAD_LENGTH: "size flit does not match the packet length",
+    STATUS_SRC_OFF: "sending tile is powered off",
+    STATUS_NI_BUSY: "network interface is still sending",
+    STATUS_EVENTS_FULL: "delivery event buffer overflowed",
+}
+
+
+class NocState(NamedTuple):
+    """The complete NoC state; pass it to the kernels as ``*state``."""
+
+    cfg: np.ndarray
+    glob: np.ndarray
+    buf: np.ndarray
+    port: np.ndarray
+    tile: np.ndarray
+    mem: np.ndarray
+    ev: np.ndarray
+    queue: np.ndarray
+
+
+def noc_alloc(
+    width: int,
+    height: int,
+    depth: int,
+    routing_latency: int,
+    max_packet_flits: int = MEM_FLITS,
+    flit_bits: int = 16,
+    powered: np.ndarray | None = None,
+    event_capacity: int = 1024,
+    queue_rows: int = 0,
+    rx_auto_free: int = NONE,
+    reverse: bool = False,
+) -> NocState:
+    """Allocate an empty, idle NoC at cycle 0 (plain numpy; parameters are checked by ChipConfig).
+
+    Args:
+        powered: bool per tile index (default all on).
+        event_capacity: rows of the delivery-event array.
+        queue_rows: rows of the packet queue (0 if the caller drives the send memories itself).
+        rx_auto_free: NONE to let software free receive memories, else the delay in cycles.
+        reverse: evaluate routers in reverse index order (test hook; results must not change).
+    """
+    n = width * height
+    cfg = np.zeros(CFG_SIZE, np.int64)
+    cfg[C_WIDTH], cfg[C_HEIGHT], cfg[C_NTILES] = width, height, n
+    cfg[C_DEPTH], cfg[C_RLAT], cfg[C_MAXPKT] = depth, routing_latency, max_packet_flits
+    cfg[C_FLITMASK] = (1 << flit_bits) - 1
+    cfg[C_REVERSE] = int(reverse)
+    glob = np.zeros(GLOB_SIZE, np.int64)
+    buf = np.zeros((n, NPORTS, depth), np.int64)
+    port = np.zeros((n, NPORTS, PORT_COLS), np.int64)
+    port[:, :, P_CONN] = NONE
+    port[:, :, P_TOTAL] = BIG
+    port[:, :, P_REQ] = NONE
+    port[:, :, P_OWNER] = NONE
+    port[:, :, P_CREDIT] = depth
+    tile = np.zeros((n, TILE_COLS), np.int64)
+    tile[:, T_POWERED] = 1 if powered is None else np.asarray(powered, dtype=np.int64)
+    tile[:, T_SEND_ROW] = NONE
+    tile[:, T_NI_CREDIT] = depth
+    tile[:, T_RX_TOTAL] = BIG
+    tile[:, T_RX_FIRST] = NONE
+    tile[:, T_RX_AUTO] = rx_auto_free
+    tile[:, T_RX_FREE_AT] = NONE
+    tile[:, T_Q_HEAD] = NONE
+    tile[:, T_Q_TAIL] = NONE
+    tile[:, T_SEND_FIRST] = NONE
+    mem = np.zeros((n, 2, MEM_FLITS), np.int64)
+    ev = np.zeros((max(event_capacity, 1), EV_COLS), np.int64)
+    queue = np.zeros((queue_rows, Q_COLS), np.int64)
+    return NocState(cfg, glob, buf, port, tile, mem, ev, queue)
+
+
+def noc_snapshot(state: NocState) -> NocState:
+    """A deep copy of the state (a few ``memcpy``s)."""
+    return NocState(*(a.copy() for a in state))
+
+
+def noc_restore(state: NocState, snapshot: NocState) -> None:
+    """Copy ``snapshot`` back into ``state`` in place (arrays keep their identity)."""
+    for dst, src in zip(state, snapshot, strict=True):
+        np.copyto(dst, src)
+
+
+@njit(cache=True)
+def noc_address(width, t):
+    """NoC address ``(x << 4) | y`` of tile index ``t``."""
+    return ((t % width) << 4) | (t // width)
+
+
+@njit(cache=True)
+def _route(width, t, dest):
+    """XY routing: output port at router ``t`` for a header addressed to ``dest``."""
+    x = t % width
+    y = t // width
+    dx = (dest >> 4) & 0xF
+    dy = dest & 0xF
+    if dx > x:
+        return EAST
+    if dx < x:
+        return WEST
+    if dy > y:
+        return NORTH
+    if dy < y:
+        return SOUTH
+    return LOCAL
+
+
+@njit(cache=True)
+def _neighbour(width, t, p):
+    """Tile on the other side of port ``p`` of router ``t`` (never LOCAL)."""
+    if p == EAST:
+        return t + 1
+    if p == WEST:
+        return t - 1
+    if p == NORTH:
+        return t + width
+    return t - width
+
+
+@njit(cache=True)
+def _opposite(p):
+    """The input port of the neighbour that output ``p`` feeds (EAST <-> WEST, NORTH <-> SOUTH)."""
+    return p ^ 1
+
+
+@njit(cache=True)
+def noc_check_packet(cfg, tile, mem, t, length):
+    """Validate the packet in tile ``t``'s send memory; returns a STATUS_* code (0 if it may be sent)."""
+    if tile[t, T_POWERED] == 0:
+        return STATUS_SRC_OFF
+    if length < 2 or length > cfg[C_MAXPKT] or mem[t, SEND, 1] + 2 != length:
+        return STATUS_BAD_LENGTH
+    dest = mem[t, SEND, 0]
+    dx = dest >> 4
+    dy = dest & 0xF
+    if dest < 0 or dx >= cfg[C_WIDTH] or dy >= cfg[C_HEIGHT]:
+        return STATUS_DEST_OUTSIDE
+    d = dy * cfg[C_WIDTH] + dx
+    if d == t:
+        return STATUS_DEST_SELF
+    if tile[d, T_POWERED] == 0:
+        return STATUS_DEST_OFF
+    return STATUS_OK
+
+
+@njit(cache=True)
+def _report(glob, code, t, cycle):
+    if glob[G_STATUS] == STATUS_OK:
+        glob[G_STATUS] = code
+        glob[G_ERR_TILE] = t
+        glob[G_ERR_CYCLE] = cycle
+
+
+@njit(cache=True)
+def noc_send(cfg, glob, tile, mem, t, length, start_cycle):
+    """Arm tile ``t``'s NI to inject the ``length`` flits already in ``mem[t, SEND]`` from ``start_cycle``.
+
+    Returns a STATUS_* code; on error nothing is armed (the caller decides, e.g. a bus error).
+    """
+    if tile[t, T_SEND_STATE] != SEND_IDLE:
+        return STATUS_NI_BUSY
+    code = noc_check_packet(cfg, tile, mem, t, length)
+    if code != STATUS_OK:
+        return code
+    tile[t, T_SEND_STATE] = SEND_PENDING
+    tile[t, T_SEND_LEN] = length
+    tile[t, T_SEND_POS] = 0
+    tile[t, T_SEND_START] = start_cycle
+    tile[t, T_SEND_ROW] = NONE
+    return STATUS_OK
+
+
+@njit(cache=True)
+def noc_rx_free(tile, t):
+    """Software has copied the received packet: tile ``t``'s receive memory accepts flits again."""
+    tile[t, T_RX_STATE] = RX_ACCEPT
+    tile[t, T_RX_COUNT] = 0
+    tile[t, T_RX_TOTAL] = BIG
+    tile[t, T_RX_FIRST] = NONE
+    tile[t, T_RX_FREE_AT] = NONE
+
+
+@njit(cache=True)
+def _ni_start_of_cycle(cfg, glob, tile, mem, queue, t, cycle):
+    """Changes scheduled for the edge before ``cycle`` at tile ``t``'s NI; decides its injection."""
+    if tile[t, T_RX_STATE] == RX_HELD and tile[t, T_RX_FREE_AT] != NONE and tile[t, T_RX_FREE_AT] <= cycle:
+        noc_rx_free(tile, t)
+    state = tile[t, T_SEND_STATE]
+    if state == SEND_IDLE:
+        row = tile[t, T_Q_HEAD]
+        if row != NONE and queue[row, Q_READY] <= cycle:
+            tile[t, T_Q_HEAD] = queue[row, Q_NEXT]
+            if queue[row, Q_NEXT] == NONE:
+                tile[t, T_Q_TAIL] = NONE
+            length = queue[row, Q_LEN]
+            for k in range(length):
+                mem[t, SEND, k] = queue[row, Q_FLITS + k]
+            code = noc_check_packet(cfg, tile, mem, t, length)
+            if code != STATUS_OK:
+                _report(glob, code, t, cycle)
+                queue[row, Q_START] = NONE
+                queue[row, Q_END] = NONE
+            else:
+                tile[t, T_SEND_STATE] = SEND_ACTIVE
+                tile[t, T_SEND_LEN] = length
+                tile[t, T_SEND_POS] = 0
+                tile[t, T_SEND_START] = cycle
+                tile[t, T_SEND_ROW] = row
+                glob[G_SENDING] += 1
+    elif state == SEND_PENDING and tile[t, T_SEND_START] <= cycle:
+        tile[t, T_SEND_STATE] = SEND_ACTIVE
+        glob[G_SENDING] += 1
+    tile[t, T_NI_MOVE] = 0
+    if tile[t, T_SEND_STATE] == SEND_ACTIVE and tile[t, T_NI_CREDIT] > 0:
+        tile[t, T_NI_MOVE] = 1
+
+
+@njit(cache=True)
+def _router_decide(cfg, buf, port, tile, t):
+    """Phase 1 at router ``t``: routing waits, requests, per-output round-robin grants, move decisions.
+
+    Reads only router ``t``'s own state and credits as they were at the cycle start.
+    """
+    tile[t, T_MOVES] = 0
+    if tile[t, T_RFLITS] == 0:
+        return
+    rlat = cfg[C_RLAT]
+    width = cfg[C_WIDTH]
+    tile[t, T_BUSY] += 1
+    for p in range(NPORTS):
+        port[t, p, P_REQ] = NONE
+        if port[t, p, P_COUNT] > 0:
+            port[t, p, P_BUSY] += 1
+            if port[t, p, P_CONN] == NONE:
+                if port[t, p, P_WAIT] < rlat:
+                    port[t, p, P_WAIT] += 1
+                else:
+                    port[t, p, P_REQ] = _route(width, t, buf[t, p, port[t, p, P_HEAD]])
+    for o in range(NPORTS):
+        port[t, o, P_MOVE] = 0
+        owner = port[t, o, P_OWNER]
+        if owner == NONE:
+            first = port[t, o, P_RR]
+            for k in range(NPORTS):
+                p = first + k
+                if p >= NPORTS:
+                    p -= NPORTS
+                if port[t, p, P_REQ] == o:
+                    owner = p
+                    port[t, o, P_OWNER] = p
+                    port[t, p, P_CONN] = o
+                    port[t, o, P_RR] = p + 1 if p + 1 < NPORTS else 0
+                    break
+        if owner != NONE and port[t, owner, P_COUNT] > 0:
+            if o == LOCAL:
+                ok = tile[t, T_RX_STATE] == RX_ACCEPT and tile[t, T_RX_COUNT] < MEM_FLITS
+            else:
+                ok = port[t, o, P_CREDIT] > 0
+            if ok:
+                port[t, o, P_MOVE] = 1
+                tile[t, T_MOVES] = 1
+
+
+@njit(cache=True)
+def _ni_commit(cfg, glob, buf, port, tile, mem, queue, t, cycle):
+    """Phase 2 at tile ``t``'s NI: the decided injection of one send-memory flit into the local input."""
+    depth = cfg[C_DEPTH]
+    k = tile[t, T_SEND_POS]
+    tail = port[t, LOCAL, P_HEAD] + port[t, LOCAL, P_COUNT]
+    if tail >= depth:
+        tail -= depth
+    buf[t, LOCAL, tail] = mem[t, SEND, k]
+    port[t, LOCAL, P_COUNT] += 1
+    port[t, LOCAL, P_FLITS_IN] += 1
+    tile[t, T_RFLITS] += 1
+    tile[t, T_NI_CREDIT] -= 1
+    glob[G_INFLIGHT] += 1
+    glob[G_INJECTED] += 1
+    row = tile[t, T_SEND_ROW]
+    if k == 0:
+        tile[t, T_SEND_FIRST] = cycle
+        if row != NONE:
+            queue[row, Q_START] = cycle
+    k += 1
+    tile[t, T_SEND_POS] = k
+    if k == tile[t, T_SEND_LEN]:
+        tile[t, T_SEND_STATE] = SEND_IDLE
+        tile[t, T_SENT_PKTS] += 1
+        glob[G_SENDING] -= 1
+        if row != NONE:
+            queue[row, Q_END] = cycle
+        tile[t, T_SEND_ROW] = NONE
+
+
+@njit(cache=True)
+def _deliver(glob, tile, mem, ev, t, cycle):
+    """The last flit of a packet reached tile ``t``'s receive memory: record it and hold the memory."""
+    tile[t, T_RX_STATE] = RX_HELD
+    tile[t, T_RECV_PKTS] += 1
+    glob[G_DELIVERED] += 1
+    length = tile[t, T_RX_COUNT]
+    n = glob[G_NEV]
+    if n < ev.shape[0]:
+        ev[n, EV_TILE] = t
+        ev[n, EV_CYCLE] = cycle
+        ev[n, EV_LEN] = length
+        ev[n, EV_FIRST] = tile[t, T_RX_FIRST]
+        for k in range(length):
+            ev[n, EV_FLITS + k] = mem[t, RECV, k]
+        for k in range(length, MEM_FLITS):
+            ev[n, EV_FLITS + k] = 0
+        glob[G_NEV] = n + 1
+    else:
+        _report(glob, STATUS_EVENTS_FULL, t, cycle)
+    if tile[t, T_RX_AUTO] != NONE:
+        tile[t, T_RX_FREE_AT] = cycle + 1 + tile[t, T_RX_AUTO]
+
+
+@njit(cache=True)
+def _router_commit(cfg, glob, buf, port, tile, mem, ev, t, cycle):
+    """Phase 2 at router ``t``: perform the decided moves (pop, push downstream, credits, packet tails).
+
+    Every buffer sees at most one pop (its own connection) and one push (its single upstream), and the
+    push was allowed by the credits at the cycle start, so commits of different routers commute.
+    """
+    depth = cfg[C_DEPTH]
+    width = cfg[C_WIDTH]
+    for o in range(NPORTS):
+        if port[t, o, P_MOVE] == 0:
+            continue
+        p = port[t, o, P_OWNER]
+        head = port[t, p, P_HEAD]
+        f = buf[t, p, head]
+        head += 1
+        if head == depth:
+            head = 0
+        port[t, p, P_HEAD] = head
+        port[t, p, P_COUNT] -= 1
+        tile[t, T_RFLITS] -= 1
+        port[t, o, P_FLITS_OUT] += 1
+        # credit back to the feeder of input p
+        if p == LOCAL:
+            tile[t, T_NI_CREDIT] += 1
+        else:
+            port[_neighbour(width, t, p), _opposite(p), P_CREDIT] += 1
+        # push downstream
+        if o == LOCAL:
+            k = tile[t, T_RX_COUNT]
+            mem[t, RECV, k] = f
+            tile[t, T_RX_COUNT] = k + 1
+            glob[G_INFLIGHT] -= 1
+            glob[G_EJECTED] += 1
+            if k == 0:
+                tile[t, T_RX_FIRST] = cycle
+            elif k == 1:
+                tile[t, T_RX_TOTAL] = f + 2
+            if k + 1 == tile[t, T_RX_TOTAL]:
+                _deliver(glob, tile, mem, ev, t, cycle)
+        else:
+            n = _neighbour(width, t, o)
+            q = _opposite(o)
+            tail = port[n, q, P_HEAD] + port[n, q, P_COUNT]
+            if tail >= depth:
+                tail -= depth
+            buf[n, q, tail] = f
+            port[n, q, P_COUNT] += 1
+            port[n, q, P_FLITS_IN] += 1
+            tile[n, T_RFLITS] += 1
+            port[t, o, P_CREDIT] -= 1
+            glob[G_HOPS] += 1
+        # wormhole bookkeeping at input p: release the connection after the tail flit
+        sent = port[t, p, P_SENT]
+        if sent == 1:
+            port[t, p, P_TOTAL] = f + 2
+        sent += 1
+        if sent == port[t, p, P_TOTAL]:
+            port[t, o, P_OWNER] = NONE
+            port[t, p, P_CONN] = NONE
+            port[t, p, P_TOTAL] = BIG
+            port[t, p, P_WAIT] = 0
+            sent = 0
+        port[t, p, P_SENT] = sent
+
+
+@njit(cache=True)
+def noc_step(cfg, glob, buf, port, tile, mem, ev, queue, cycle):
+    """Simulate one NoC cycle ``cycle`` (two-phase: decide everything, then commit at the edge).
+
+    Returns ``glob[G_STATUS]`` (0 unless an error was reported, now or earlier).
+    """
+    n = cfg[C_NTILES]
+    reverse = cfg[C_REVERSE] != 0
+    # phase 0 + 1: NI start-of-cycle changes and all decisions, from the cycle-start state
+    for i in range(n):
+        t = n - 1 - i if reverse else i
+        _ni_start_of_cycle(cfg, glob, tile, mem, queue, t, cycle)
+        _router_decide(cfg, buf, port, tile, t)
+    # phase 2: commit at the cycle edge
+    for i in range(n):
+        t = n - 1 - i if reverse else i
+        if tile[t, T_NI_MOVE] != 0:
+            _ni_commit(cfg, glob, buf, port, tile, mem, queue, t, cycle)
+        if tile[t, T_MOVES] != 0:
+            _router_commit(cfg, glob, buf, port, tile, mem, ev, t, cycle)
+    glob[G_CYCLE] = cycle + 1
+    return glob[G_STATUS]
+
+
+@njit(cache=True)
+def noc_next_activity(cfg, glob, tile, queue):
+    """First cycle >= ``glob[G_CYCLE]`` at which the NoC state can change, or BIG if never by itself.
+
+    Returns ``glob[G_CYCLE]`` whenever a flit is in a router or an NI is injecting.
+    """
+    now = glob[G_CYCLE]
+    if glob[G_INFLIGHT] != 0 or glob[G_SENDING] != 0:
+        return now
+    best = BIG
+    for t in range(cfg[C_NTILES]):
+        state = tile[t, T_SEND_STATE]
+        if state == SEND_PENDING:
+            c = tile[t, T_SEND_START]
+        elif state == SEND_IDLE and tile[t, T_Q_HEAD] != NONE:
+            c = queue[tile[t, T_Q_HEAD], Q_READY]
+        else:
+            c = BIG
+        if c < best:
+            best = c
+        if tile[t, T_RX_STATE] == RX_HELD and tile[t, T_RX_FREE_AT] != NONE and tile[t, T_RX_FREE_AT] < best:
+            best = tile[t, T_RX_FREE_AT]
+    if best < now:
+        best = now
+    return best
+
+
+@njit(cache=True)
+def noc_idle(cfg, glob, buf, port, tile, mem, ev, queue):
+    """No flit anywhere and nothing pending: the NoC will not change until someone sends or frees."""
+    return noc_next_activity(cfg, glob, tile, queue) == BIG
+
+
+@njit(cache=True)
+def noc_run(cfg, glob, buf, port, tile, mem, ev, queue, until_cycle, max_events):
+    """Advance from ``glob[G_CYCLE]`` up to (not including) ``until_cycle``, skipping idle time for free.
+
+    Stops early after the cycle in which the ``max_events``-th delivery of this call happened, when an
+    error is reported, or when fewer than ``tiles`` rows are left in ``ev`` (drain it: set
+    ``glob[G_NEV] = 0``). Returns ``glob[G_STATUS]``; ``glob[G_CYCLE]`` is the next cycle to simulate.
+    """
+    n = cfg[C_NTILES]
+    target = glob[G_DELIVERED] + max_events
+    cycle = glob[G_CYCLE]
+    while cycle < until_cycle:
+        if glob[G_STATUS] != STATUS_OK or glob[G_DELIVERED] >= target or ev.shape[0] - glob[G_NEV] < n:
+            break
+        if glob[G_INFLIGHT] == 0 and glob[G_SENDING] == 0:
+            nxt = noc_next_activity(cfg, glob, tile, queue)
+            if nxt > cycle:
+                cycle = nxt if nxt < until_cycle else until_cycle
+                glob[G_CYCLE] = cycle
+                continue
+        noc_step(cfg, glob, buf, port, tile, mem, ev, queue, cycle)
+        cycle += 1
+    return glob[G_STATUS]
