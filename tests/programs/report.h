@@ -55,6 +55,18 @@ static inline double u2d(uint64_t u)
     return d;
 }
 
+/* Result bits with every NaN as the canonical quiet NaN: IEEE 754 leaves the sign and payload of
+ * a generated NaN open, and x86 (0xffc00000) and RISC-V (0x7fc00000) differ there. */
+static inline uint32_t fres(float f)
+{
+    return f != f ? 0x7fc00000u : f2u(f);
+}
+
+static inline uint64_t dres(double d)
+{
+    return d != d ? 0x7ff8000000000000ull : d2u(d);
+}
+
 static inline void report32(const char *op, uint32_t a, uint32_t b, uint32_t r)
 {
     hf_puts(op);

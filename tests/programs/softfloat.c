@@ -57,16 +57,16 @@ int main(void)
         for (uint32_t j = 0; j < N_F; j++) {
             float a = u2f(opaque32(fvalues[i]));
             float b = u2f(opaque32(fvalues[j]));
-            report32("fadd", f2u(a), f2u(b), f2u(a + b));
-            report32("fsub", f2u(a), f2u(b), f2u(a - b));
-            report32("fmul", f2u(a), f2u(b), f2u(a * b));
+            report32("fadd", f2u(a), f2u(b), fres(a + b));
+            report32("fsub", f2u(a), f2u(b), fres(a - b));
+            report32("fmul", f2u(a), f2u(b), fres(a * b));
             if (b != 0.0f) {
-                report32("fdiv", f2u(a), f2u(b), f2u(a / b));
+                report32("fdiv", f2u(a), f2u(b), fres(a / b));
             }
             report32("flt", f2u(a), f2u(b), a < b);
         }
         float a = u2f(opaque32(fvalues[i]));
-        report64("f2d", f2u(a), 0u, d2u((double)a));
+        report64("f2d", f2u(a), 0u, dres((double)a));
         if (a > 0.0f && a < 1e30f) {
             report32("fsqrt", f2u(a), 0u, f2u(newton_sqrtf(a)));
         }
@@ -78,15 +78,15 @@ int main(void)
         for (uint32_t j = 0; j < N_D; j++) {
             double a = u2d(opaque64(dvalues[i]));
             double b = u2d(opaque64(dvalues[j]));
-            report64("dadd", d2u(a), d2u(b), d2u(a + b));
-            report64("dsub", d2u(a), d2u(b), d2u(a - b));
-            report64("dmul", d2u(a), d2u(b), d2u(a * b));
+            report64("dadd", d2u(a), d2u(b), dres(a + b));
+            report64("dsub", d2u(a), d2u(b), dres(a - b));
+            report64("dmul", d2u(a), d2u(b), dres(a * b));
             if (b != 0.0) {
-                report64("ddiv", d2u(a), d2u(b), d2u(a / b));
+                report64("ddiv", d2u(a), d2u(b), dres(a / b));
             }
         }
         double a = u2d(opaque64(dvalues[i]));
-        report64("d2f", d2u(a), 0u, f2u((float)a));
+        report64("d2f", d2u(a), 0u, fres((float)a));
         if (a > 0.0 && a < 1e300) {
             report64("dsqrt", d2u(a), 0u, d2u(newton_sqrt(a)));
         }
