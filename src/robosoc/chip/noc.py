@@ -26,7 +26,8 @@ class NocError(RuntimeError):
         self.code = code
         self.tile = tile
         self.cycle = cycle
-        super().__init__(f"NoC error at cycle {cycle}, tile {tile}: {k.STATUS_TEXT.get(code, code)} (code {code})")
+        reason = k.STATUS_TEXT.get(code, "unknown error")
+        super().__init__(f"NoC error at cycle {cycle}, tile {tile}: {reason} (code {code})")
 
 
 @dataclass(frozen=True)
@@ -185,8 +186,9 @@ class Mesh:
         return (hops + 1) * (self.routing_latency + 1) + length - 1
 
     # ----------------------------------------------------------------- injection
-    def inject(self, src: tuple[int, int], dst: tuple[int, int], payload: list[int] | tuple[int, ...],
-               at_cycle: int) -> int:
+    def inject(
+        self, src: tuple[int, int], dst: tuple[int, int], payload: list[int] | tuple[int, ...], at_cycle: int
+    ) -> int:
         """Queue a packet at ``src``'s NI, to be sent from ``at_cycle`` on (after earlier-ready packets).
 
         The packet on the wire is ``[(x << 4) | y, size, *payload]`` (plus the tag when tagging).

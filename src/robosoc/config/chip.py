@@ -32,6 +32,7 @@ advances one router every 7 cycles, while body flits stream at 1 flit per cycle 
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -216,11 +217,12 @@ class ChipConfig:
         base = self.tile
         for over in self.tiles:
             if (over.x, over.y) == tuple(xy):
-                return TileConfig(
-                    multiplier=base.multiplier if over.multiplier is None else over.multiplier,
-                    sram_bytes=base.sram_bytes if over.sram_bytes is None else over.sram_bytes,
-                    clock_period_ns=base.clock_period_ns if over.clock_period_ns is None else over.clock_period_ns,
-                )
+                changes = {
+                    name: getattr(over, name)
+                    for name in ("multiplier", "sram_bytes", "clock_period_ns")
+                    if getattr(over, name) is not None
+                }
+                return dataclasses.replace(base, **changes)
         return base
 
 
