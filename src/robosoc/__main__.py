@@ -1,0 +1,3 @@
+from robosoc.cli import main
+
+main()

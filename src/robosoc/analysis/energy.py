@@ -1,0 +1,97 @@
+"""Energy from event counts: Σ count × coefficient, with coefficients read from a TOML file.
+
+The default file (``energy_coefficients.toml`` beside this module) carries ORCA's published
+per-instruction-class figures and, marked ``assumed``, our reasoning for what no source gives.
+"""
+
+from __future__ import annotations
+
+import tomllib
+from dataclasses import dataclass
+from importlib import resources
+from pathlib import Path
+
+from robosoc.config import ConfigError
+
+INSTRUCTION_CLASSES = ("jump", "branch", "memory", "add", "logic", "other", "mul", "system")
+STALL_KINDS = ("branch_cycle", "memory_cycle", "mul_cycle", "entry_cycle")
+
+
+@dataclass(frozen=True)
+class Coefficient:
+    pj: float
+    status: str
+    source: str
+
+
+@dataclass(frozen=True)
+class EnergyModel:
+    """Coefficients in pJ: per instruction of each class and per stall cycle of each kind."""
+
+    instruction: dict[str, Coefficient]
+    stall: dict[str, Coefficient]
+    clock_ns: float
+    path: str
+
+    @classmethod
+    def load(cls, path: str | Path | None = None) -> EnergyModel:
+        """Read a coefficient file (the packaged default when ``path`` is None).
+
+        Raises:
+            ConfigError: naming the file and the missing or malformed key.
+        """
+        if path is None:
+            ref = resources.files("robosoc.analysis").joinpath("energy_coefficients.toml")
+            text, where = ref.read_text(), "robosoc/analysis/energy_coefficients.toml"
+        else:
+            where = str(path)
+            try:
+                text = Path(path).read_text()
+            except OSError as exc:
+                raise ConfigError(where, "", f"cannot read: {exc.strerror}") from exc
+        try:
+            data = tomllib.loads(text)
+        except tomllib.TOMLDecodeError as exc:
+            raise ConfigError(where, "", f"invalid TOML: {exc}") from exc
+
+        def table(section: str, keys: tuple[str, ...]) -> dict[str, Coefficient]:
+            got = data.get(section)
+            if not isinstance(got, dict):
+                raise ConfigError(where, section, "missing table")
+            out = {}
+            for key in keys:
+                entry = got.get(key)
+                field = f"{section}.{key}"
+                if not isinstance(entry, dict):
+                    raise ConfigError(where, field, "missing entry")
+                pj = entry.get("pj")
+                if isinstance(pj, bool) or not isinstance(pj, int | float) or pj < 0:
+                    raise ConfigError(where, f"{field}.pj", f"expected a non-negative number, got {pj!r}")
+                status = entry.get("status", "")
+                if status not in ("published", "assumed", "measured"):
+                    raise ConfigError(where, f"{field}.status", "must be 'published', 'measured' or 'assumed'")
+                source = entry.get("source")
+                if not isinstance(source, str) or not source.strip():
+                    raise ConfigError(where, f"{field}.source", "every coefficient needs its provenance")
+                out[key] = Coefficient(float(pj), status, source)
+            unknown = sorted(set(got) - set(keys))
+            if unknown:
+                raise ConfigError(where, f"{section}.{unknown[0]}", "unknown entry")
+            return out
+
+        clock = data.get("clock_ns", 4.0)
+        if isinstance(clock, bool) or not isinstance(clock, int | float) or clock <= 0:
+            raise ConfigError(where, "clock_ns", "expected a positive number")
+        return cls(table("instruction", INSTRUCTION_CLASSES), table("stall", STALL_KINDS), float(clock), where)
+
+    def breakdown_pj(self, counts: dict[str, int]) -> dict[str, float]:
+        """Energy per counter name in pJ, for counters named ``<class>`` or ``<kind>`` (see keys)."""
+        out: dict[str, float] = {}
+        for key, coeff in self.instruction.items():
+            out[key] = counts.get(key, 0) * coeff.pj
+        for key, coeff in self.stall.items():
+            out[key] = counts.get(key, 0) * coeff.pj
+        return out
+
+    def total_nj(self, counts: dict[str, int]) -> float:
+        return sum(self.breakdown_pj(counts).values()) / 1000.0

@@ -1,0 +1,206 @@
+"""The single-core HF-RISCV SoC (platform.md §2): one core, its SRAM and devices, run from an ELF.
+
+soc = SingleCoreSoC(mul=True)
+soc.load(load_elf("prog.elf", soc.regions()))
+result = soc.run(max_cycles=10**9, on_output=sys.stdout.buffer.write)
+"""
+
+from __future__ import annotations
+
+import time
+import warnings
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from robosoc.chip.core_state import DEFAULT_SRAM_SIZE, SRAM_BASE, CoreState
+from robosoc.chip.counters import counters_dict
+from robosoc.chip.elf import Program, Region, load_elf
+from robosoc.isa.disasm import disassemble
+from robosoc.kernels.core import run_core
+from robosoc.kernels.core_layout import (
+    ERROR_TEXT,
+    RUN_ERROR,
+    RUN_EXIT,
+    RUN_MAX_CYCLES,
+    S_CYCLE,
+    S_ERR,
+    S_ERR_ADDR,
+    S_ERR_INSN,
+    S_ERR_PC,
+    S_EXIT_CODE,
+    S_MAX_CYCLES,
+    S_MULHSU_COUNT,
+    S_MULHSU_PC,
+    S_OUT_LEN,
+)
+
+CHUNK_CYCLES = 1 << 24  # host returns between slices: output is flushed, Ctrl-C is seen
+
+
+class MulhsuErratum(UserWarning):
+    """The program used MULHSU, which the HF-RISCV RTL computes as MULHU."""
+
+
+class CoreError(RuntimeError):
+    """The program did something the hardware cannot do; the message names pc, symbol and instruction."""
+
+    def __init__(self, message: str, *, kind: str, pc: int, addr: int | None, word: int, cycle: int) -> None:
+        super().__init__(message)
+        self.kind = kind
+        self.pc = pc
+        self.addr = addr
+        self.word = word
+        self.cycle = cycle
+
+
+class CycleBudgetExceeded(RuntimeError):
+    """The program did not exit within the cycle budget."""
+
+    def __init__(self, message: str, *, pc: int, cycle: int) -> None:
+        super().__init__(message)
+        self.pc = pc
+        self.cycle = cycle
+
+
+@dataclass
+class RunResult:
+    exit_code: int
+    output: bytes
+    counters: dict[str, int]
+    host_seconds: float
+    warnings: list[str] = field(default_factory=list)
+
+    @property
+    def cycles(self) -> int:
+        return self.counters["cycles"]
+
+    @property
+    def instructions(self) -> int:
+        return self.counters["instructions"]
+
+
+class SingleCoreSoC:
+    """One HF-RISCV core with its SRAM at 0x40000000 and the SoC devices."""
+
+    def __init__(self, *, mul: bool = True, sram_size: int = DEFAULT_SRAM_SIZE) -> None:
+        self.mul = mul
+        self.state = CoreState.new(mul=mul, sram_size=sram_size, base=SRAM_BASE)
+        self.program: Program | None = None
+
+    def regions(self) -> list[Region]:
+        return [Region(SRAM_BASE, self.state.size, "SRAM")]
+
+    def load(self, program: Program) -> None:
+        for addr, data in program.segments:
+            self.state.write(addr, data)
+        self.state.pc = program.entry
+        self.program = program
+
+    def symbolize(self, pc: int) -> str:
+        if self.program is None:
+            return f"0x{pc:08x}"
+        return self.program.symbolize(pc)
+
+    @property
+    def cycle(self) -> int:
+        return int(self.state.st[S_CYCLE])
+
+    def counters(self) -> dict[str, int]:
+        return counters_dict(self.state.ctr, self.state.opc, self.cycle)
+
+    def step_until(self, until: int) -> int:
+        """Run the kernel to cycle ``until`` (or an event); returns its RUN_* status."""
+        s = self.state
+        return run_core(s.st, s.ctr, s.opc, s.regs, s.m8, s.m16, s.m32, s.dec, s.decb, s.out, until)
+
+    def drain_output(self) -> bytes:
+        n = int(self.state.st[S_OUT_LEN])
+        data = self.state.out[:n].tobytes()
+        self.state.st[S_OUT_LEN] = 0
+        return data
+
+    def _error(self) -> CoreError:
+        st = self.state.st
+        code = int(st[S_ERR])
+        pc = int(st[S_ERR_PC])
+        word = int(st[S_ERR_INSN]) & 0xFFFFFFFF
+        addr = int(st[S_ERR_ADDR]) & 0xFFFFFFFF
+        text = ERROR_TEXT.get(code, f"error {code}")
+        has_addr = "load" in text or "store" in text or "fetch" in text or "jump" in text
+        where = f"at pc 0x{pc:08x} ({self.symbolize(pc)})"
+        if "fetch outside" in text and addr == pc:
+            detail = f"{text}: pc 0x{pc:08x} is not in SRAM 0x{SRAM_BASE:08x}..0x{SRAM_BASE + self.state.size:08x}"
+            return CoreError(detail + f", cycle {self.cycle}", kind=text, pc=pc, addr=addr, word=0, cycle=self.cycle)
+        insn = f"instruction 0x{word:08x} `{disassemble(word, pc)}`"
+        target = f" address 0x{addr:08x}" if has_addr else ""
+        msg = f"{text}{target} {where}: {insn}, cycle {self.cycle}"
+        return CoreError(msg, kind=text, pc=pc, addr=addr if has_addr else None, word=word, cycle=self.cycle)
+
+    def run(
+        self,
+        max_cycles: int | None = None,
+        on_output: Callable[[bytes], object] | None = None,
+        chunk: int = CHUNK_CYCLES,
+    ) -> RunResult:
+        """Run until the program exits.
+
+        Raises:
+            CoreError: illegal/unsupported instruction, bad access or fetch (with pc and symbol).
+            CycleBudgetExceeded: ``max_cycles`` reached before the exit.
+        """
+        st = self.state.st
+        st[S_MAX_CYCLES] = -1 if max_cycles is None else max_cycles
+        output = bytearray()
+        start = time.perf_counter()
+        try:
+            while True:
+                status = self.step_until(self.cycle + chunk)
+                data = self.drain_output()
+                if data:
+                    output += data
+                    if on_output is not None:
+                        on_output(data)
+                if status == RUN_EXIT:
+                    break
+                if status == RUN_ERROR:
+                    raise self._error()
+                if status == RUN_MAX_CYCLES:
+                    pc = self.state.pc
+                    raise CycleBudgetExceeded(
+                        f"cycle budget of {max_cycles} cycles exhausted at pc 0x{pc:08x} ({self.symbolize(pc)}): "
+                        "the program did not exit (raise --max-cycles if it is just slow)",
+                        pc=pc,
+                        cycle=self.cycle,
+                    )
+        finally:
+            elapsed = time.perf_counter() - start
+        notes = []
+        if st[S_MULHSU_COUNT]:
+            pc = int(st[S_MULHSU_PC])
+            note = (
+                f"MULHSU executed {int(st[S_MULHSU_COUNT])} times (first at pc 0x{pc:08x}, {self.symbolize(pc)}): "
+                "robosoc computes the RISC-V result, the HF-RISCV RTL returns the MULHU result (erratum)"
+            )
+            notes.append(note)
+            warnings.warn(note, MulhsuErratum, stacklevel=2)
+        return RunResult(
+            exit_code=int(st[S_EXIT_CODE]),
+            output=bytes(output),
+            counters=self.counters(),
+            host_seconds=elapsed,
+            warnings=notes,
+        )
+
+
+def run_elf(
+    path: str | Path,
+    mul: bool = True,
+    max_cycles: int | None = None,
+    sram_size: int = DEFAULT_SRAM_SIZE,
+    on_output: Callable[[bytes], object] | None = None,
+) -> RunResult:
+    """Load an ELF into a fresh single-core SoC and run it to its exit."""
+    soc = SingleCoreSoC(mul=mul, sram_size=sram_size)
+    soc.load(load_elf(path, soc.regions()))
+    return soc.run(max_cycles=max_cycles, on_output=on_output)

@@ -1,0 +1,29 @@
+"""``robosoc bench ...``: each benchmark lives in :mod:`robosoc.benchmarks` and prints its figures."""
+
+from typing import Annotated
+
+import typer
+
+from robosoc.cli.app import bench_app
+
+
+@bench_app.command("core")
+def bench_core(
+    runs: Annotated[int, typer.Option(help="Timed runs after the JIT warm-up.")] = 7,
+    mul: Annotated[bool, typer.Option("--mul/--no-mul", help="Build the workload with the multiplier.")] = True,
+) -> None:
+    """Simulated MIPS of one core on an EKF-like workload (7x7 matrix inverse and multiply)."""
+    from robosoc.benchmarks.core import run_core_benchmark
+
+    run_core_benchmark(runs=runs, mul=mul)
+
+
+@bench_app.command("physics")
+def bench_physics(
+    seconds: Annotated[float, typer.Option(help="Simulated seconds per run.")] = 10.0,
+    runs: Annotated[int, typer.Option(help="Timed runs.")] = 5,
+) -> None:
+    """Real-time factor of the quadrotor physics alone (no controller)."""
+    from robosoc.benchmarks.physics import run_physics_benchmark
+
+    run_physics_benchmark(seconds=seconds, runs=runs)

@@ -1,0 +1,608 @@
+"""The HF-RISCV core: predecoded RV32I(+M multiply) interpreter with exact cycle timing.
+
+Instruction words are decoded lazily into ``dec`` (one row per memory word: op, rd, rs1, rs2,
+imm) the first time they execute; a store into memory clears the row of the word it touches, so
+self-modifying code stays correct.  The row after the last word holds OP_FETCH_FAULT so that
+running off the end of memory is caught without a bounds check per instruction.
+
+Registers live in ``regs`` (int32, 33 entries): x0..x31 and a sink at index 32 that the decoder
+substitutes for rd = x0, so x0 is never written and no per-instruction reset is needed.
+
+Timing (platform.md §1): 1 cycle for ALU, LUI, AUIPC, FENCE and not-taken branches; 3 for loads,
+stores, taken branches, JAL and JALR; 5 + steps(rs2) for multiplies.  Devices, timers and the
+interrupt controller are in :mod:`robosoc.kernels.soc_devices`; the loop only looks at them when
+the cycle reaches the next scheduled event, so an instruction costs one comparison for them.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from robosoc.isa.table import INSTRUCTIONS, OP, OP_FETCH_FAULT, OP_ILLEGAL, Fmt
+from robosoc.kernels.core_layout import (
+    C_ENTRY_STALL,
+    C_IRQ,
+    C_MMIO,
+    C_MUL_STALL,
+    C_TAKEN,
+    C_TRAP,
+    ERR_FETCH,
+    ERR_FETCH_MISALIGNED,
+    ERR_ILLEGAL,
+    ERR_LOAD_MISALIGNED,
+    ERR_LOAD_UNMAPPED,
+    ERR_NO_MUL,
+    ERR_STORE_MISALIGNED,
+    ERR_STORE_READONLY,
+    ERR_STORE_UNMAPPED,
+    ERR_UNSUPPORTED,
+    OUT_CAPACITY,
+    PH_TRAP,
+    RUN_CHUNK,
+    RUN_ERROR,
+    RUN_EXIT,
+    RUN_MAX_CYCLES,
+    RUN_OUTPUT,
+    S_CYCLE,
+    S_ERR,
+    S_ERR_ADDR,
+    S_ERR_INSN,
+    S_ERR_PC,
+    S_IRQ_CHECK,
+    S_IRQ_EPC,
+    S_IRQ_PHASE,
+    S_IRQ_STATUS,
+    S_MAX_CYCLES,
+    S_MEM_BASE,
+    S_MEM_SIZE,
+    S_MUL,
+    S_MULHSU_COUNT,
+    S_MULHSU_PC,
+    S_OUT_LEN,
+    S_PC,
+    S_RUN,
+)
+from robosoc.kernels.soc_devices import (
+    ST_EXIT,
+    ST_IRQ_CHANGED,
+    ST_READONLY,
+    irq_event,
+    mmio_load,
+    mmio_store,
+)
+
+# The encoding table as arrays for the decoder.
+_MATCH = np.array([i.match for i in INSTRUCTIONS], dtype=np.int64)
+_MASK = np.array([i.mask for i in INSTRUCTIONS], dtype=np.int64)
+_FMT = np.array([int(i.fmt) for i in INSTRUCTIONS], dtype=np.int64)
+_UNSUPPORTED = np.array([1 if i.unsupported else 0 for i in INSTRUCTIONS], dtype=np.int64)
+
+# Operation numbers are compile-time constants for the dispatch below.
+LUI, AUIPC, JAL, JALR = OP["lui"], OP["auipc"], OP["jal"], OP["jalr"]
+BEQ, BNE, BLT, BGE, BLTU, BGEU = OP["beq"], OP["bne"], OP["blt"], OP["bge"], OP["bltu"], OP["bgeu"]
+LB, LH, LW, LBU, LHU, SB, SH, SW = OP["lb"], OP["lh"], OP["lw"], OP["lbu"], OP["lhu"], OP["sb"], OP["sh"], OP["sw"]
+ADDI, SLTI, SLTIU, XORI, ORI, ANDI = OP["addi"], OP["slti"], OP["sltiu"], OP["xori"], OP["ori"], OP["andi"]
+SLLI, SRLI, SRAI = OP["slli"], OP["srli"], OP["srai"]
+ADD, SUB, SLL, SLT, SLTU, XOR, SRL, SRA, OR, AND = (
+    OP["add"], OP["sub"], OP["sll"], OP["slt"], OP["sltu"], OP["xor"], OP["srl"], OP["sra"], OP["or"], OP["and"],
+)  # fmt: skip
+MUL, MULH, MULHSU, MULHU = OP["mul"], OP["mulh"], OP["mulhsu"], OP["mulhu"]
+FENCE = OP["fence"]
+FIRST_SYSTEM = OP["ecall"]
+FETCH_FAULT = OP_FETCH_FAULT
+ILLEGAL = OP_ILLEGAL
+
+F_I, F_SHIFT, F_LOAD, F_S = int(Fmt.I), int(Fmt.SHIFT), int(Fmt.LOAD), int(Fmt.S)
+F_B, F_U, F_J, F_JALR = int(Fmt.B), int(Fmt.U), int(Fmt.J), int(Fmt.JALR)
+
+SINK = 32  # register index that stands in for rd = x0
+UNSUPPORTED_BIT = 0x80
+U1 = np.uint64(1)
+U2 = np.uint64(2)
+U3 = np.uint64(3)
+U8 = np.uint64(8)
+U16 = np.uint64(16)
+U24 = np.uint64(24)
+U255 = np.uint64(255)
+M32 = 0xFFFFFFFF
+
+
+@njit(cache=True, inline="always")
+def _sext(v: int, bits: int) -> int:
+    sign = np.int64(1) << (bits - 1)
+    v &= (np.int64(1) << bits) - 1
+    return (v ^ sign) - sign
+
+
+@njit(cache=True)
+def decode_word(w: int, dec: np.ndarray, i: int) -> None:
+    """Fill row ``i`` of ``dec`` for instruction word ``w``.
+
+    A row is two int32: ``op | rd << 8 | rs1 << 16 | rs2 << 24`` and the immediate.  Encodings
+    the hardware lacks (DIV/REM) get ``op | UNSUPPORTED_BIT``; words matching no row get ILLEGAL.
+    """
+    w &= M32
+    op = ILLEGAL
+    fmt = -1
+    for k in range(_MATCH.shape[0]):
+        if (w & _MASK[k]) == _MATCH[k]:
+            op = k + 1
+            fmt = _FMT[k]
+            break
+    rd = (w >> 7) & 31
+    if rd == 0:
+        rd = SINK
+    imm = 0
+    if fmt == F_I or fmt == F_LOAD or fmt == F_JALR:
+        imm = _sext(w >> 20, 12)
+    elif fmt == F_SHIFT:
+        imm = (w >> 20) & 31
+    elif fmt == F_S:
+        imm = _sext(((w >> 25) << 5) | ((w >> 7) & 31), 12)
+    elif fmt == F_B:
+        imm = _sext(
+            ((w >> 31) << 12) | (((w >> 7) & 1) << 11) | (((w >> 25) & 0x3F) << 5) | (((w >> 8) & 0xF) << 1), 13
+        )
+    elif fmt == F_U:
+        imm = _sext(w & 0xFFFFF000, 32)
+    elif fmt == F_J:
+        imm = _sext(
+            ((w >> 31) << 20) | (((w >> 12) & 0xFF) << 12) | (((w >> 20) & 1) << 11) | (((w >> 21) & 0x3FF) << 1), 21
+        )
+    if op != ILLEGAL and _UNSUPPORTED[op - 1] != 0:
+        op |= UNSUPPORTED_BIT
+    dec[2 * i] = op | (rd << 8) | (((w >> 15) & 31) << 16) | (((w >> 20) & 31) << 24)
+    dec[2 * i + 1] = imm
+
+
+def _multiplier_chunk_table() -> np.ndarray:
+    """Steps of the multiplier's counter across one byte of rs2, for table-driven latency.
+
+    Inside the loop the counter c moves by 1 when bits c..c+3 of rs2 are not all zero, else by 4
+    (platform.md §1).  Entry ``[off, w]`` gives, for a counter entering a byte at offset ``off``
+    (0..3) and the 11 bits ``w`` from the byte's first bit, ``steps * 16 + exit_offset`` where
+    the counter leaves the byte at ``8 + exit_offset``.
+    """
+    table = np.zeros((4, 2048), dtype=np.int64)
+    for off in range(4):
+        for w in range(2048):
+            c, steps = off, 0
+            while c < 8:
+                c += 1 if (w >> c) & 15 else 4
+                steps += 1
+            table[off, w] = steps * 16 + (c - 8)
+    return table
+
+
+_MUL_CHUNK = _multiplier_chunk_table()
+
+
+@njit(cache=True, inline="always")
+def mul_latency(b: int) -> int:
+    """Cycles of a multiply: 5 + steps of the iterative multiplier over rs2 (platform.md §1)."""
+    steps = 0
+    c = 0
+    for k in range(3):  # bits 0..23 by table, while the counter is below 24
+        e = _MUL_CHUNK[c - 8 * k, (b >> (8 * k)) & 2047]
+        steps += e >> 4
+        c = 8 * (k + 1) + (e & 15)
+    while c < 28:
+        c += 1 if (b >> c) & 15 else 4
+        steps += 1
+    # from c to 31 one step per bit, then the last step at c == 31
+    return 5 + steps + (31 - c) + 1
+
+
+@njit(cache=True)
+def run_core(
+    st: np.ndarray,
+    ctr: np.ndarray,
+    opc: np.ndarray,
+    regs: np.ndarray,
+    m8: np.ndarray,
+    m16: np.ndarray,
+    m32: np.ndarray,
+    dec: np.ndarray,
+    decb: np.ndarray,
+    out: np.ndarray,
+    until: int,
+) -> int:
+    """Run until cycle ``until``, an exit, an error, the cycle budget or a full output buffer.
+
+    ``opc[op]`` counts executed instructions per operation; ``dec`` is the predecode table
+    (int32, two per memory word) and ``decb`` its uint8 view.  Returns the RUN_* status (also in
+    ``st[S_RUN]``).  All state stays in the arrays, so the call can be repeated to continue.
+    """
+    base = st[S_MEM_BASE]
+    size = st[S_MEM_SIZE]
+    has_mul = st[S_MUL] != 0
+    pc = st[S_PC]
+    cyc = st[S_CYCLE]
+    budget = st[S_MAX_CYCLES]
+    stop = until if budget < 0 else min(until, budget)
+    out_limit = OUT_CAPACITY - 8
+    n_taken = ctr[C_TAKEN]
+    n_mulstall = ctr[C_MUL_STALL]
+
+    status = RUN_CHUNK
+    err = 0
+    err_addr = 0
+    next_event = min(st[S_IRQ_CHECK], stop)
+
+    while True:
+        if cyc >= next_event:
+            if cyc >= st[S_IRQ_CHECK]:
+                pc, cyc, entered = irq_event(st, pc, cyc)
+                if entered == 1:
+                    ctr[C_TRAP] += 1
+                    ctr[C_ENTRY_STALL] += 2
+                elif entered == 2:
+                    ctr[C_IRQ] += 1
+                    ctr[C_ENTRY_STALL] += 2
+            if cyc >= stop:
+                status = RUN_MAX_CYCLES if (budget >= 0 and cyc >= budget) else RUN_CHUNK
+                break
+            if st[S_OUT_LEN] >= out_limit:
+                status = RUN_OUTPUT
+                break
+            next_event = min(st[S_IRQ_CHECK], stop)
+            if next_event <= cyc:
+                next_event = cyc + 1
+
+        i = np.uint64(pc - base) >> U2
+        j = i << U1
+        w0 = np.uint64(np.uint32(dec[j]))
+        op = w0 & U255
+        rd = (w0 >> U8) & U255
+        rs1 = (w0 >> U16) & U255
+        rs2 = w0 >> U24
+        imm = np.int64(dec[j + U1])
+        opc[op] += 1
+
+        if op == ADDI:
+            regs[rd] = regs[rs1] + imm
+            cyc += 1
+            pc += 4
+        elif op == LW:
+            addr = (regs[rs1] + imm) & M32
+            off = addr - base
+            if off & 3:
+                err = ERR_LOAD_MISALIGNED
+                err_addr = addr
+                break
+            if (off & M32) < size:
+                regs[rd] = m32[np.uint64(off) >> U2]
+            else:
+                v, ok = mmio_load(st, addr, cyc)
+                if not ok:
+                    err = ERR_LOAD_UNMAPPED
+                    err_addr = addr
+                    break
+                ctr[C_MMIO] += 1
+                regs[rd] = v
+            cyc += 3
+            pc += 4
+        elif op == SW:
+            addr = (regs[rs1] + imm) & M32
+            off = addr - base
+            if off & 3:
+                err = ERR_STORE_MISALIGNED
+                err_addr = addr
+                break
+            if (off & M32) < size:
+                wi = np.uint64(off) >> U2
+                m32[wi] = regs[rs2]
+                dec[wi << U1] = 0
+            else:
+                r = mmio_store(st, out, addr, regs[rs2], cyc)
+                ctr[C_MMIO] += 1
+                if r < 0:
+                    err = ERR_STORE_READONLY if r == ST_READONLY else ERR_STORE_UNMAPPED
+                    err_addr = addr
+                    break
+                if r == ST_EXIT:
+                    cyc += 3
+                    pc += 4
+                    status = RUN_EXIT
+                    break
+                if r == ST_IRQ_CHANGED:
+                    st[S_IRQ_CHECK] = min(st[S_IRQ_CHECK], cyc + 3)
+                next_event = cyc + 3
+            cyc += 3
+            pc += 4
+        elif op == ADD:
+            regs[rd] = regs[rs1] + regs[rs2]
+            cyc += 1
+            pc += 4
+        elif op == BNE:
+            if regs[rs1] != regs[rs2]:
+                target = (pc + imm) & M32
+                if (target - base) & M32 >= size or target & 3:
+                    err = ERR_FETCH_MISALIGNED if target & 3 else ERR_FETCH
+                    err_addr = target
+                    break
+                pc = target
+                cyc += 3
+                n_taken += 1
+            else:
+                pc += 4
+                cyc += 1
+        elif op == BEQ:
+            if regs[rs1] == regs[rs2]:
+                target = (pc + imm) & M32
+                if (target - base) & M32 >= size or target & 3:
+                    err = ERR_FETCH_MISALIGNED if target & 3 else ERR_FETCH
+                    err_addr = target
+                    break
+                pc = target
+                cyc += 3
+                n_taken += 1
+            else:
+                pc += 4
+                cyc += 1
+        elif op == BLT:
+            if regs[rs1] < regs[rs2]:
+                target = (pc + imm) & M32
+                if (target - base) & M32 >= size or target & 3:
+                    err = ERR_FETCH_MISALIGNED if target & 3 else ERR_FETCH
+                    err_addr = target
+                    break
+                pc = target
+                cyc += 3
+                n_taken += 1
+            else:
+                pc += 4
+                cyc += 1
+        elif op == BGE:
+            if regs[rs1] >= regs[rs2]:
+                target = (pc + imm) & M32
+                if (target - base) & M32 >= size or target & 3:
+                    err = ERR_FETCH_MISALIGNED if target & 3 else ERR_FETCH
+                    err_addr = target
+                    break
+                pc = target
+                cyc += 3
+                n_taken += 1
+            else:
+                pc += 4
+                cyc += 1
+        elif op == BLTU:
+            if (regs[rs1] & M32) < (regs[rs2] & M32):
+                target = (pc + imm) & M32
+                if (target - base) & M32 >= size or target & 3:
+                    err = ERR_FETCH_MISALIGNED if target & 3 else ERR_FETCH
+                    err_addr = target
+                    break
+                pc = target
+                cyc += 3
+                n_taken += 1
+            else:
+                pc += 4
+                cyc += 1
+        elif op == BGEU:
+            if (regs[rs1] & M32) >= (regs[rs2] & M32):
+                target = (pc + imm) & M32
+                if (target - base) & M32 >= size or target & 3:
+                    err = ERR_FETCH_MISALIGNED if target & 3 else ERR_FETCH
+                    err_addr = target
+                    break
+                pc = target
+                cyc += 3
+                n_taken += 1
+            else:
+                pc += 4
+                cyc += 1
+        elif op == SLLI:
+            regs[rd] = regs[rs1] << imm
+            cyc += 1
+            pc += 4
+        elif op == SRLI:
+            regs[rd] = (regs[rs1] & M32) >> imm
+            cyc += 1
+            pc += 4
+        elif op == SRAI:
+            regs[rd] = regs[rs1] >> imm
+            cyc += 1
+            pc += 4
+        elif op == ANDI:
+            regs[rd] = regs[rs1] & imm
+            cyc += 1
+            pc += 4
+        elif op == ORI:
+            regs[rd] = regs[rs1] | imm
+            cyc += 1
+            pc += 4
+        elif op == XORI:
+            regs[rd] = regs[rs1] ^ imm
+            cyc += 1
+            pc += 4
+        elif op == SUB:
+            regs[rd] = regs[rs1] - regs[rs2]
+            cyc += 1
+            pc += 4
+        elif op == AND:
+            regs[rd] = regs[rs1] & regs[rs2]
+            cyc += 1
+            pc += 4
+        elif op == OR:
+            regs[rd] = regs[rs1] | regs[rs2]
+            cyc += 1
+            pc += 4
+        elif op == XOR:
+            regs[rd] = regs[rs1] ^ regs[rs2]
+            cyc += 1
+            pc += 4
+        elif op == SLL:
+            regs[rd] = regs[rs1] << (regs[rs2] & 31)
+            cyc += 1
+            pc += 4
+        elif op == SRL:
+            regs[rd] = (regs[rs1] & M32) >> (regs[rs2] & 31)
+            cyc += 1
+            pc += 4
+        elif op == SRA:
+            regs[rd] = regs[rs1] >> (regs[rs2] & 31)
+            cyc += 1
+            pc += 4
+        elif op == SLT:
+            regs[rd] = 1 if regs[rs1] < regs[rs2] else 0
+            cyc += 1
+            pc += 4
+        elif op == SLTU:
+            regs[rd] = 1 if (regs[rs1] & M32) < (regs[rs2] & M32) else 0
+            cyc += 1
+            pc += 4
+        elif op == SLTI:
+            regs[rd] = 1 if regs[rs1] < imm else 0
+            cyc += 1
+            pc += 4
+        elif op == SLTIU:
+            regs[rd] = 1 if (regs[rs1] & M32) < (imm & M32) else 0
+            cyc += 1
+            pc += 4
+        elif op == LUI:
+            regs[rd] = imm
+            cyc += 1
+            pc += 4
+        elif op == AUIPC:
+            regs[rd] = pc + imm
+            cyc += 1
+            pc += 4
+        elif op == JAL or op == JALR:
+            target = (pc + imm) & M32 if op == JAL else (regs[rs1] + imm) & 0xFFFFFFFE
+            if (target - base) & M32 >= size or target & 3:
+                err = ERR_FETCH_MISALIGNED if target & 3 else ERR_FETCH
+                err_addr = target
+                break
+            regs[rd] = pc + 4
+            pc = target
+            cyc += 3
+        elif op == LBU or op == LB or op == LHU or op == LH:
+            addr = (regs[rs1] + imm) & M32
+            off = addr - base
+            if (op == LHU or op == LH) and (off & 1):
+                err = ERR_LOAD_MISALIGNED
+                err_addr = addr
+                break
+            if (off & M32) < size:
+                if op == LBU:
+                    v = np.int64(m8[np.uint64(off)])
+                elif op == LB:
+                    v = _sext(np.int64(m8[np.uint64(off)]), 8)
+                elif op == LHU:
+                    v = np.int64(m16[np.uint64(off) >> U1])
+                else:
+                    v = _sext(np.int64(m16[np.uint64(off) >> U1]), 16)
+            else:
+                w, ok = mmio_load(st, addr, cyc)
+                if not ok:
+                    err = ERR_LOAD_UNMAPPED
+                    err_addr = addr
+                    break
+                ctr[C_MMIO] += 1
+                sh = (addr & 3) * 8
+                if op == LBU:
+                    v = (w >> sh) & 0xFF
+                elif op == LB:
+                    v = _sext((w >> sh) & 0xFF, 8)
+                elif op == LHU:
+                    v = (w >> sh) & 0xFFFF
+                else:
+                    v = _sext((w >> sh) & 0xFFFF, 16)
+            regs[rd] = v
+            cyc += 3
+            pc += 4
+        elif op == SB or op == SH:
+            addr = (regs[rs1] + imm) & M32
+            off = addr - base
+            if op == SH and (off & 1):
+                err = ERR_STORE_MISALIGNED
+                err_addr = addr
+                break
+            if (off & M32) < size:
+                if op == SB:
+                    m8[np.uint64(off)] = regs[rs2]
+                else:
+                    m16[np.uint64(off) >> U1] = regs[rs2]
+                dec[(np.uint64(off) >> U2) << U1] = 0
+            else:
+                value = regs[rs2] & 0xFF if op == SB else regs[rs2] & 0xFFFF
+                r = mmio_store(st, out, addr, value, cyc)
+                ctr[C_MMIO] += 1
+                if r < 0:
+                    err = ERR_STORE_READONLY if r == ST_READONLY else ERR_STORE_UNMAPPED
+                    err_addr = addr
+                    break
+                if r == ST_EXIT:
+                    cyc += 3
+                    pc += 4
+                    status = RUN_EXIT
+                    break
+                if r == ST_IRQ_CHANGED:
+                    st[S_IRQ_CHECK] = min(st[S_IRQ_CHECK], cyc + 3)
+                next_event = cyc + 3
+            cyc += 3
+            pc += 4
+        elif op == MUL or op == MULH or op == MULHU or op == MULHSU:
+            if not has_mul:
+                err = ERR_NO_MUL
+                break
+            a = np.int64(regs[rs1])
+            b = np.int64(regs[rs2])
+            p = a * b
+            if op == MUL:
+                regs[rd] = p
+            elif op == MULH:
+                regs[rd] = p >> 32
+            elif op == MULHU:
+                regs[rd] = (p >> 32) + (b if a < 0 else 0) + (a if b < 0 else 0)
+            else:
+                regs[rd] = (p >> 32) + (a if b < 0 else 0)
+                st[S_MULHSU_COUNT] += 1
+                if st[S_MULHSU_PC] < 0:
+                    st[S_MULHSU_PC] = pc
+            lat = mul_latency(b & M32)
+            n_mulstall += lat - 1
+            cyc += lat
+            pc += 4
+        elif op == FENCE:
+            cyc += 1
+            pc += 4
+        elif op == 0:
+            opc[0] -= 1
+            decode_word(m32[i], dec, i)
+        elif op >= FIRST_SYSTEM and op < ILLEGAL:
+            # SYSTEM opcode: trap.  EPC = trap + 8; the instruction at trap + 8 executes first.
+            st[S_IRQ_EPC] = (pc + 8) & M32
+            st[S_IRQ_STATUS] &= 0xFE
+            st[S_IRQ_PHASE] = PH_TRAP
+            cyc += 1
+            pc += 8
+            st[S_IRQ_CHECK] = cyc + 1
+            next_event = cyc + 1
+        elif op == FETCH_FAULT:
+            err = ERR_FETCH
+            err_addr = pc
+            break
+        elif op & UNSUPPORTED_BIT:
+            err = ERR_UNSUPPORTED
+            break
+        else:
+            err = ERR_ILLEGAL
+            break
+
+    if err != 0:
+        status = RUN_ERROR
+        st[S_ERR] = err
+        st[S_ERR_PC] = pc
+        st[S_ERR_ADDR] = err_addr
+        wi = (pc - base) >> 2
+        st[S_ERR_INSN] = m32[wi] & M32 if 0 <= wi < size >> 2 else 0
+
+    st[S_PC] = pc & M32
+    st[S_CYCLE] = cyc
+    st[S_RUN] = status
+    ctr[C_TAKEN] = n_taken
+    ctr[C_MUL_STALL] = n_mulstall
+    return status

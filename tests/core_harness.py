@@ -1,0 +1,29 @@
+"""Running hand-assembled words on a fresh single-core SoC (tests only)."""
+
+from __future__ import annotations
+
+import rv32_asm as A
+from robosoc.chip.core_state import SRAM_BASE
+from robosoc.chip.single import RunResult, SingleCoreSoC
+
+EXIT_SEQUENCE_CYCLES = 1 + 1 + 3  # lui + addi + sw
+
+
+def exit_with(reg: int) -> list[int]:
+    """Store ``reg`` to the exit trap (t6 is clobbered)."""
+    return [*A.li(31, 0xE0000000), A.store("sw", reg, 31, 0)]
+
+
+def make_soc(words: list[int], mul: bool = True, sram_size: int = 64 * 1024) -> SingleCoreSoC:
+    soc = SingleCoreSoC(mul=mul, sram_size=sram_size)
+    soc.state.write(SRAM_BASE, A.words_to_bytes(words))
+    soc.state.pc = SRAM_BASE
+    return soc
+
+
+def run_words(
+    words: list[int], mul: bool = True, max_cycles: int | None = 1_000_000
+) -> tuple[SingleCoreSoC, RunResult]:
+    soc = make_soc(words, mul)
+    result = soc.run(max_cycles=max_cycles)
+    return soc, result
