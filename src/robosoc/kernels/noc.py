@@ -389,6 +389,7 @@ def _router_decide(cfg, buf, port, tile, t):
                     owner = p
                     port[t, o, P_OWNER] = p
                     port[t, p, P_CONN] = o
+                    port[t, p, P_REQ] = NONE  # scratch left clean: an empty router is skipped
                     port[t, o, P_RR] = p + 1 if p + 1 < NPORTS else 0
                     break
         if owner != NONE and port[t, owner, P_COUNT] > 0:
@@ -468,6 +469,7 @@ def _router_commit(cfg, glob, buf, port, tile, mem, ev, t, cycle):
     for o in range(NPORTS):
         if port[t, o, P_MOVE] == 0:
             continue
+        port[t, o, P_MOVE] = 0  # scratch left clean: an empty router is skipped
         p = port[t, o, P_OWNER]
         head = port[t, p, P_HEAD]
         f = buf[t, p, head]
