@@ -208,10 +208,10 @@ class FlightPlan:
 
     Until ``takeoff_s`` the motors stay off and the controller calibrates (the vehicle rests on
     flat ground).  The height setpoint then ramps from the rest height to ``height_m`` over
-    ``climb_s``.  ``steps`` change one setpoint each, at their time.
+    ``climb_s`` (half-cosine profile).  ``steps`` change one setpoint each, at their time.
     """
 
-    takeoff_s: float = 1.0
+    takeoff_s: float = 3.0
     height_m: float = 1.0
     climb_s: float = 1.5
     steps: tuple[SetpointStep, ...] = ()
@@ -243,16 +243,16 @@ class FlightPlan:
 
 def _default_steps() -> tuple[SetpointStep, ...]:
     return (
-        SetpointStep(4.0, "roll", 10.0),
-        SetpointStep(5.0, "roll", 0.0),
-        SetpointStep(5.5, "pitch", 10.0),
-        SetpointStep(6.5, "pitch", 0.0),
-        SetpointStep(7.0, "yaw", 10.0),
+        SetpointStep(5.0, "roll", 10.0),
+        SetpointStep(6.0, "roll", 0.0),
+        SetpointStep(6.5, "pitch", 10.0),
+        SetpointStep(7.5, "pitch", 0.0),
+        SetpointStep(8.0, "yaw", 10.0),
     )
 
 
 def _default_wind() -> WindConfig:
-    return WindConfig(gusts=(GustConfig(start_s=8.0, duration_s=1.5, rise_s=0.3, velocity=(3.0, 2.0, 0.0)),))
+    return WindConfig(gusts=(GustConfig(start_s=8.5, duration_s=1.5, rise_s=0.3, velocity=(3.0, 2.0, 0.0)),))
 
 
 @dataclass(frozen=True)

@@ -36,6 +36,7 @@ accelerometer at rest reads +g along world up) and ``m_ref = [0.5, 0, −0.866]`
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass
 
 import numpy as np
@@ -52,9 +53,9 @@ class EkfParams:
 
     gyro_noise: tuple[float, float, float] = (0.05, 0.05, 0.015)
     """White noise σ of one gyroscope sample [rad/s] (quadrotor.md)."""
-    bias_walk: float = 1e-3
-    """Random walk of the gyroscope bias [rad/s/√s]; 1e-3 lets the filter follow slow changes."""
-    accel_noise: float = 0.5
+    bias_walk: float = float(os.environ.get("BW", 1e-4))
+    """Random walk of the gyroscope bias [rad/s/√s]."""
+    accel_noise: float = float(os.environ.get("AN", 1.0))
     """σ of the normalised accelerometer direction (dimensionless), inflated for manoeuvres."""
     mag_noise: float = 0.013
     """σ of the normalised magnetometer (dimensionless), its white noise."""
@@ -94,12 +95,15 @@ class AttitudeEkf:
         self,
         q: np.ndarray,
         bias: np.ndarray | None = None,
+        quat_sigma: float | None = None,
         bias_sigma: float | None = None,
     ) -> None:
-        """Start from orientation ``q`` and gyroscope ``bias`` with the initial covariance."""
+        """Start from orientation ``q`` and gyroscope ``bias``; σ of each quaternion component and
+        each bias default to the params' initial values."""
         self.x = np.concatenate((quat.normalize(np.asarray(q, dtype=float)), np.zeros(3) if bias is None else bias))
+        sq = self.params.initial_quat_sigma if quat_sigma is None else quat_sigma
         sb = self.params.initial_bias_sigma if bias_sigma is None else bias_sigma
-        self.P = np.diag([self.params.initial_quat_sigma**2] * 4 + [sb**2] * 3)
+        self.P = np.diag([sq**2] * 4 + [sb**2] * 3)
 
     def process_noise(self, q: np.ndarray, dt: float) -> np.ndarray:
         """The paper's R: 7×7 process noise for one step of length ``dt``."""
@@ -133,9 +137,10 @@ class AttitudeEkf:
         """Lines 3–5 (and the normalisation): correct with one accelerometer + magnetometer reading."""
         z = np.concatenate((accel / np.linalg.norm(accel), mag / np.linalg.norm(mag)))
         h, jac = self.measurement(self.x[:4])
+        innovation = z - h
         innovation_cov = jac @ self.P @ jac.T + self.measurement_cov
         gain = self.P @ jac.T @ np.linalg.inv(innovation_cov)
-        self.x = self.x + gain @ (z - h)
+        self.x = self.x + gain @ innovation
         self.P = (np.eye(7) - gain @ jac) @ self.P
         self.x[:4] = quat.normalize(self.x[:4])
 

@@ -3,8 +3,10 @@
 Per sensor sample (the seed runs the whole chain once per sample):
 
 1. **Calibration** while ``setpoint.armed`` is false (the vehicle rests on flat ground, motors
-   off): average the gyroscope (its bias), the accelerometer and magnetometer (the initial
-   attitude, by TRIAD) and the barometer (its ground reference).  At the first armed sample both
+   off): average the gyroscope (its bias), the accelerometer (its bias: standing level, it
+   should read [0, 0, g]), the magnetometer (with gravity, the initial attitude by TRIAD) and
+   the barometer (its ground reference); a sample that shows motion
+   (the vehicle is spawned 0.3 m up and drops onto its skids) restarts the averages.  At the first armed sample both
    filters restart from these averages, and the PID integrals are zeroed.
 2. **Attitude EKF** (:mod:`robosoc.control.ekf`): predict with the gyroscope, update with the
    accelerometer and magnetometer.
@@ -22,6 +24,7 @@ height K_p = m·ω_n², K_d = 2·m·ω_n with ω_n = 3 rad/s (critically damped)
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass
 
 import numpy as np
@@ -35,6 +38,12 @@ from robosoc.control.pid import Pid, PidGains, euler_rates, height_thrust, wrap_
 from robosoc.control.setpoint import Setpoint
 
 GRAVITY = 9.8
+CALIBRATED_QUAT_SIGMA = float(os.environ.get("QS", 0.005))
+"""σ of each quaternion component after calibration (≈ 0.6° of attitude)."""
+GYRO_NOISE = 0.05
+"""White noise of one gyroscope sample [rad/s]: the calibrated bias is uncertain by this / √N."""
+MOTION_ACCEL = 2.0
+"""|‖a‖ − g| [m/s²] above which a calibration sample counts as motion (≈ 4σ of the noise)."""
 
 
 @dataclass(frozen=True)
@@ -53,12 +62,14 @@ def default_gains(vehicle: VehicleConfig) -> ControllerGains:
     """The tuned gains for ``vehicle`` (scaled by its mass and inertia)."""
     ixx, iyy, izz = vehicle.inertia
     m = vehicle.mass
-    wn_z = 3.0
+    wn_z = 2.5
     return ControllerGains(
         roll=PidGains(kp=100.0 * ixx, ki=20.0 * ixx, kd=20.0 * ixx, integral_limit=0.2, output_limit=1.5),
         pitch=PidGains(kp=100.0 * iyy, ki=20.0 * iyy, kd=20.0 * iyy, integral_limit=0.2, output_limit=1.5),
         yaw=PidGains(kp=0.3, ki=0.05, kd=0.12, integral_limit=0.5, output_limit=0.3),
-        height=PidGains(kp=m * wn_z**2, ki=2.0, kd=2.0 * m * wn_z, integral_limit=2.0, output_limit=10.0),
+        height=PidGains(
+            kp=3.0 * m * wn_z**2, ki=m * wn_z**3, kd=3.0 * m * wn_z, integral_limit=0.5, output_limit=10.0
+        ),
     )
 
 
@@ -102,8 +113,9 @@ class HostController:
         """Forget everything (a new flight)."""
         self._sums = np.zeros(10)
         self._count = 0
+        self.accel_bias = np.zeros(3)
         self._armed = False
-        self._started = False
+        self._last_height_setpoint = 0.0
         self.ekf.reset(np.array([1.0, 0.0, 0.0, 0.0]))
         self.altitude.reset(0.0, self.vehicle.rest_height)
         for pid in self.pids.values():
@@ -117,11 +129,21 @@ class HostController:
         return Estimate(q, quat.to_euler(q), self.altitude.height, self.altitude.velocity)
 
     def _calibrate(self, sample) -> None:  # noqa: ANN001 (SensorSample, not imported: control does not depend on physics)
+        moving = abs(float(np.linalg.norm(sample.accel)) - GRAVITY) > MOTION_ACCEL
+        if moving:
+            # The vehicle is still settling (it is spawned above the ground): start averaging again.
+            self._sums[:] = 0.0
+            self._count = 0
+            return
         self._sums += np.concatenate((sample.gyro, sample.accel, sample.mag, [sample.baro_altitude]))
         self._count += 1
         mean = self._sums / self._count
-        q0 = quat.from_accel_mag(mean[3:6], mean[6:9])
-        self.ekf.reset(q0, bias=mean[0:3], bias_sigma=0.05 / np.sqrt(self._count))
+        # Resting on flat ground the vehicle is level: what the accelerometer reads beyond
+        # [0, 0, g] is its bias (a "level calibration").
+        self.accel_bias = mean[3:6] - np.array([0.0, 0.0, GRAVITY])
+        q0 = quat.from_accel_mag(mean[3:6] - self.accel_bias, mean[6:9])
+        n = np.sqrt(self._count)
+        self.ekf.reset(q0, bias=mean[0:3], quat_sigma=CALIBRATED_QUAT_SIGMA, bias_sigma=GYRO_NOISE / n)
         self.altitude.reset(float(mean[9]), self.vehicle.rest_height)
 
     def step(self, sample, setpoint: Setpoint) -> np.ndarray:  # noqa: ANN001
@@ -134,21 +156,26 @@ class HostController:
             return self.last_pwm
         if not self._armed:
             self._armed = True
+            self._last_height_setpoint = setpoint.height
             for pid in self.pids.values():
                 pid.reset()
         dt = self.dt
-        q = self.ekf.step(sample.gyro, sample.accel, sample.mag, dt)
+        accel = np.asarray(sample.accel) - self.accel_bias
+        q = self.ekf.step(sample.gyro, accel, sample.mag, dt)
         rotation = quat.to_matrix(q)
-        height = self.altitude.step(rotation, sample.accel, sample.baro_altitude, dt)
+        height = self.altitude.step(rotation, accel, sample.baro_altitude, dt)
         roll, pitch, yaw = quat.to_euler(q)
         rates = euler_rates(roll, pitch, tuple(np.asarray(sample.gyro) - self.ekf.gyro_bias))
         u_roll = self.pids["roll"].step(setpoint.roll - roll, -rates[0], dt)
         u_pitch = self.pids["pitch"].step(setpoint.pitch - pitch, -rates[1], dt)
         u_yaw = self.pids["yaw"].step(wrap_angle(setpoint.yaw - yaw), -rates[2], dt)
+        # The height setpoint ramps during the climb: its rate enters d/dt(z_sp − z) (equation 2).
+        height_rate = (setpoint.height - self._last_height_setpoint) / dt
+        self._last_height_setpoint = setpoint.height
         u_z = height_thrust(
             self.pids["height"],
             setpoint.height - height,
-            -self.altitude.velocity,
+            height_rate - self.altitude.velocity,
             dt,
             self.t_gravity,
             roll,

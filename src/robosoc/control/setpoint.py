@@ -21,14 +21,15 @@ def setpoint_at(plan, rest_height: float, t: float) -> Setpoint:  # noqa: ANN001
     """The setpoint of a :class:`~robosoc.config.scenario.FlightPlan` at time ``t`` [s].
 
     Before ``takeoff_s``: disarmed (motors off, controller calibrating).  Then the height
-    ramps linearly from ``rest_height`` to ``height_m`` over ``climb_s``; attitude setpoints
+    ramps from ``rest_height`` to ``height_m`` over ``climb_s`` along a half cosine (zero
+    speed at both ends); attitude setpoints
     start at zero and each step sets one axis from its time on (degrees → radians).
     """
     if t < plan.takeoff_s - 1e-9:
         return Setpoint(height=rest_height, armed=False)
     if plan.climb_s > 0 and t < plan.takeoff_s + plan.climb_s:
         frac = (t - plan.takeoff_s) / plan.climb_s
-        height = rest_height + frac * (plan.height_m - rest_height)
+        height = rest_height + 0.5 * (1.0 - math.cos(math.pi * frac)) * (plan.height_m - rest_height)
     else:
         height = plan.height_m
     values = {"roll": 0.0, "pitch": 0.0, "yaw": 0.0, "height": height}
