@@ -133,7 +133,9 @@ class SingleCoreSoC:
             detail = f"{text}: pc 0x{pc:08x} is not in SRAM 0x{SRAM_BASE:08x}..0x{SRAM_BASE + self.state.size:08x}"
             return CoreError(detail + f", cycle {self.cycle}", kind=text, pc=pc, addr=addr, word=0, cycle=self.cycle)
         insn = f"instruction 0x{word:08x} `{disassemble(word, pc)}`"
-        target = f" address 0x{addr:08x}" if has_addr else ""
+        target = ""
+        if has_addr:
+            target = f" 0x{addr:08x}" if text.endswith("address") else f" (address 0x{addr:08x})"
         msg = f"{text}{target} {where}: {insn}, cycle {self.cycle}"
         return CoreError(msg, kind=text, pc=pc, addr=addr if has_addr else None, word=word, cycle=self.cycle)
 

@@ -1,1 +1,36 @@
-"""The only numba code in robosoc: the core step and (later) the NoC cycle, arrays in, arrays out."""
+"""The only numba code in robosoc: the core step and the NoC cycle, arrays in, arrays out.
+
+numba's on-disk cache is keyed on the source file of each compiled function only, so a change in
+a function it calls from another file (or in the instruction table whose numbers are baked in as
+constants) would leave a stale compiled kernel behind.  Importing this package therefore points
+numba's cache at a folder named after a digest of every kernel source and the instruction table:
+any change there compiles afresh, and unchanged sources start in about a second.  Setting
+``NUMBA_CACHE_DIR`` yourself overrides this.
+"""
+
+import hashlib
+import os
+from pathlib import Path
+
+import numba
+
+_SOURCES = [*sorted(Path(__file__).parent.glob("*.py")), Path(__file__).parent.parent / "isa" / "table.py"]
+
+
+def kernel_digest() -> str:
+    """Digest of the sources whose compiled form numba caches."""
+    h = hashlib.sha256(numba.__version__.encode())
+    for path in _SOURCES:
+        h.update(path.name.encode())
+        h.update(path.read_bytes())
+    return h.hexdigest()[:16]
+
+
+def _numba_cache_dir() -> Path:
+    env = os.environ.get("ROBOSOC_CACHE")
+    root = Path(env) if env else Path.home() / ".cache" / "robosoc"
+    return root.expanduser() / "numba" / kernel_digest()
+
+
+if not os.environ.get("NUMBA_CACHE_DIR"):
+    numba.config.CACHE_DIR = str(_numba_cache_dir())

@@ -41,6 +41,7 @@ S_T1_PRE = 37
 S_T1_CTC = 38
 S_T1_OCR = 39
 S_UART_DIV = 40
+S_T1_HIST = 41  # 41..43: TIMER1 value | flag << 16 | OCR << 17 in cycles S_T1_REF-3 .. S_T1_REF-1
 ST_SIZE = 48
 
 # run status

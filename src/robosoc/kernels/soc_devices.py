@@ -24,9 +24,9 @@ Register map (platform.md §2):
 0xf00000d0  DEBUG         store: print a byte
 ==========  ============  ====================================================================
 
-Timing conventions: TIMER0 in cycle x is x.  TIMER1 advances on a pulse in cycle y when
-(y - 1) is a multiple of the prescaler period P (TIMER0 bit b toggled, seen through two
-registers); the new value holds from y + 1.  Device reads return the value of the cycle before
+Timing conventions: TIMER0 in cycle x is x.  TIMER1 advances on a pulse in cycle y >= 2 when
+(y - 1) is a multiple of the prescaler period P (TIMER0 bit b differs between cycles y - 1 and
+y - 2, seen through two registers that reset to 0); the new value holds from y + 1.  Device reads return the value of the cycle before
 the load starts; a store's write takes effect when the store instruction has completed.
 """
 
@@ -54,6 +54,7 @@ from robosoc.kernels.core_layout import (
     S_OUT_LEN,
     S_T1_CTC,
     S_T1_FLAG,
+    S_T1_HIST,
     S_T1_OCR,
     S_T1_PRE,
     S_T1_REF,
@@ -110,6 +111,11 @@ def t1_pulses(st: np.ndarray, x0: int, x1: int) -> int:
     """Number of TIMER1 pulses in cycles [x0, x1)."""
     if x1 <= x0:
         return 0
+    # the selected TIMER0 bit is compared through two reset-to-zero registers: the first pulse
+    # can come in cycle 2 (the bit's value in cycle 1 against cycle 0)
+    x0 = max(x0, 2)
+    if x1 <= x0:
+        return 0
     p = t1_period(st)
     # pulse in cycle y  <=>  (y - 1) % p == 0: count multiples of p in [x0 - 1, x1 - 1)
     return _ceil_div(x1 - 1, p) - _ceil_div(x0 - 1, p)
@@ -131,16 +137,70 @@ def t1_advance(val: int, flag: int, ctc: int, k: int) -> tuple[int, int]:
 
 @njit(cache=True)
 def t1_at(st: np.ndarray, x: int) -> tuple[int, int]:
-    """TIMER1 value and compare flag during cycle ``x`` (x >= the reference cycle)."""
-    k = t1_pulses(st, st[S_T1_REF], x)
+    """TIMER1 value and compare flag during cycle ``x`` (x >= the reference cycle - 3)."""
+    ref = st[S_T1_REF]
+    if x < ref:
+        h = st[S_T1_HIST + 3 - min(ref - x, 3)]
+        return h & 0xFFFF, (h >> 16) & 1
+    k = t1_pulses(st, ref, x)
     return t1_advance(st[S_T1_VAL], st[S_T1_FLAG], st[S_T1_CTC], k)
 
 
 @njit(cache=True)
-def t1_rebase(st: np.ndarray, x: int) -> None:
-    """Move TIMER1's reference to cycle ``x`` (before a configuration change that takes effect then)."""
-    v, f = t1_at(st, x)
-    st[S_T1_REF] = x
+def _ocr_at(st: np.ndarray, x: int) -> int:
+    ref = st[S_T1_REF]
+    if x < ref:
+        return st[S_T1_HIST + 3 - min(ref - x, 3)] >> 17
+    return st[S_T1_OCR]
+
+
+@njit(cache=True, inline="always")
+def _sel_bit(n: int, pre: int) -> int:
+    """The prescaler's TIMER0 bit in cycle n (the sampling registers read 0 before reset)."""
+    return 0 if n < 0 else (n >> (2 * pre)) & 1
+
+
+@njit(cache=True, inline="always")
+def _t1_count(v: int, f: int, ctc: int) -> tuple[int, int]:
+    if v != ctc:
+        return (v + 1) & 0xFFFF, f
+    return 0, f ^ 1
+
+
+@njit(cache=True)
+def t1_write(st: np.ndarray, w: int, reg: int, value: int) -> None:
+    """Apply a bus write to the TIMER1 block at the end of cycle w - 1.
+
+    The cycles around a write follow the two-register sampling of the prescaler bit: the pulses
+    of cycles w - 1 and w still compare bits selected by the old prescaler, the pulse of cycle
+    w + 1 compares the new selection (cycle w) with the old one (cycle w - 1).  The values of
+    cycles w - 1, w and w + 1 are kept so that loads and the interrupt controller see them, and
+    the closed form restarts at cycle w + 2.
+    """
+    old_pre = st[S_T1_PRE]
+    v_prev, f_prev = t1_at(st, w - 1)
+    ocr_prev = _ocr_at(st, w - 1)
+    v, f = t1_at(st, w)  # includes the pulse of cycle w - 1 (old prescaler, old CTC)
+    if reg == TIMER1:
+        if _sel_bit(w - 2, old_pre) == _sel_bit(w - 3, old_pre):
+            v = value & 0xFFFF  # no pulse in the write cycle: the write lands
+    elif reg == TIMER1_PRE:
+        st[S_T1_PRE] = value & 7
+    elif reg == TIMER1_CTC:
+        st[S_T1_CTC] = value & 0xFFFF
+    else:
+        st[S_T1_OCR] = value & 0xFFFF
+    new_pre = st[S_T1_PRE]
+    ctc = st[S_T1_CTC]
+    ocr = st[S_T1_OCR]
+    st[S_T1_HIST] = v_prev | (f_prev << 16) | (ocr_prev << 17)
+    st[S_T1_HIST + 1] = v | (f << 16) | (ocr << 17)
+    if _sel_bit(w - 1, old_pre) != _sel_bit(w - 2, old_pre):  # pulse in cycle w
+        v, f = _t1_count(v, f, ctc)
+    st[S_T1_HIST + 2] = v | (f << 16) | (ocr << 17)
+    if _sel_bit(w, new_pre) != _sel_bit(w - 1, old_pre):  # pulse in cycle w + 1
+        v, f = _t1_count(v, f, ctc)
+    st[S_T1_REF] = w + 2
     st[S_T1_VAL] = v
     st[S_T1_FLAG] = f
 
@@ -151,7 +211,7 @@ def timer_cause(st: np.ndarray, x: int) -> int:
     cause = (x >> 16) & 1
     cause |= ((x >> 18) & 1) << 1
     cause |= f << 2
-    cause |= (1 if v < st[S_T1_OCR] else 0) << 3
+    cause |= (1 if v < _ocr_at(st, x) else 0) << 3
     cause |= ((v >> 15) & 1) << 4
     return cause
 
@@ -196,7 +256,9 @@ def next_cause_change(st: np.ndarray, x: int) -> int:
         best = min(best, ((x >> 16) + 1) << 16)
     if mask & 2:
         best = min(best, ((x >> 18) + 1) << 18)
-    if mask & 0x1C:
+    if mask & 0x1C and x < st[S_T1_REF]:
+        best = min(best, x + 1)  # inside the hand-stepped cycles around a timer write
+    elif mask & 0x1C:
         val, _ = t1_at(st, x)
         ctc = st[S_T1_CTC]
         k = NEVER
@@ -208,7 +270,7 @@ def next_cause_change(st: np.ndarray, x: int) -> int:
                 k = min(k, s)
         if k < NEVER:
             p = t1_period(st)
-            first = 1 + _ceil_div(x - 1, p) * p  # first pulse cycle >= x
+            first = 1 + _ceil_div(max(x, 2) - 1, p) * p  # first pulse cycle >= x
             best = min(best, first + (k - 1) * p + 1)
     return best
 
@@ -278,7 +340,7 @@ def mmio_load(st: np.ndarray, addr: int, c: int) -> tuple[int, bool]:
     if a == TIMER0:
         return x & 0xFFFFFFFF, True
     if a == TIMER1:
-        return t1_at(st, max(x, st[S_T1_REF]))[0], True
+        return t1_at(st, x)[0], True
     if a == TIMER1_PRE:
         return st[S_T1_PRE], True
     if a == TIMER1_CTC:
@@ -286,17 +348,17 @@ def mmio_load(st: np.ndarray, addr: int, c: int) -> tuple[int, bool]:
     if a == TIMER1_OCR:
         return st[S_T1_OCR], True
     if a == TIMERCAUSE:
-        return timer_cause(st, max(x, st[S_T1_REF])), True
+        return timer_cause(st, x), True
     if a == TIMERCAUSE_INV:
         return st[S_TINV], True
     if a == TIMERMASK:
         return st[S_TMASK], True
     if a == S0CAUSE:
-        return s0_cause(st, max(x, st[S_T1_REF])), True
+        return s0_cause(st, x), True
     if a == IRQ_VECTOR:
         return st[S_IRQ_VECTOR], True
     if a == IRQ_CAUSE:
-        return irq_cause(st, max(x, st[S_T1_REF])), True
+        return irq_cause(st, x), True
     if a == IRQ_MASK:
         return st[S_IRQ_MASK], True
     if a == IRQ_STATUS:
@@ -353,24 +415,8 @@ def mmio_store(st: np.ndarray, out: np.ndarray, addr: int, value: int, s: int) -
     if a == TIMERCAUSE_INV:
         st[S_TINV] = v & 0x1F
         return ST_IRQ_CHANGED
-    if a == TIMER1:
-        p = t1_period(st)
-        if (w - 2) % p == 0:
-            return ST_OK  # a count pulse in the write cycle wins: the write is lost
-        st[S_T1_REF] = w
-        st[S_T1_VAL] = v & 0xFFFF
-        return ST_IRQ_CHANGED
-    if a == TIMER1_PRE:
-        t1_rebase(st, w)
-        st[S_T1_PRE] = v & 7
-        return ST_IRQ_CHANGED
-    if a == TIMER1_CTC:
-        t1_rebase(st, w)
-        st[S_T1_CTC] = v & 0xFFFF
-        return ST_IRQ_CHANGED
-    if a == TIMER1_OCR:
-        t1_rebase(st, w)
-        st[S_T1_OCR] = v & 0xFFFF
+    if a == TIMER1 or a == TIMER1_PRE or a == TIMER1_CTC or a == TIMER1_OCR:
+        t1_write(st, w, a, v)
         return ST_IRQ_CHANGED
     if a == UART0_DIV:
         st[S_UART_DIV] = v
