@@ -5,6 +5,7 @@ sequence of instructions costing K cycles gives a difference of K + 3 (the first
 """
 
 import pytest
+
 import rv32_asm as A
 from core_harness import exit_with, run_words
 
@@ -22,7 +23,7 @@ def measure(seq: list[int], setup: list[int] | None = None, mul: bool = True) ->
 
 def test_pipeline_fill_first_instruction_executes_in_cycle_3():
     # lui t0 executes in cycle 3, the load starts in cycle 4 and reads 3
-    soc, result = run_words([A.lui(T0, TIMER0 >> 12), A.load("lw", 10, T0, 0), *exit_with(10)])
+    _, result = run_words([A.lui(T0, TIMER0 >> 12), A.load("lw", 10, T0, 0), *exit_with(10)])
     assert result.exit_code == 3
     # lui(3) lw(4..6) lui(7) addi(8) sw(9..11): the run ends after cycle 11
     assert result.cycles == 12

@@ -150,7 +150,7 @@ def test_system_instructions_trap_with_shadow():
         A.jalr(0, 27, 0),
     ]
     words = body + [A.NOP] * (0x100 - len(body)) + handler
-    soc, result, regs = run_program(words)
+    _, result, regs = run_program(words)
     assert result.counters["traps"] == 1
     assert regs[A3] == e + 8
     assert regs[A1] == 1, "the shadow instruction executed before the handler"

@@ -26,8 +26,9 @@ Register map (platform.md §2):
 
 Timing conventions: TIMER0 in cycle x is x.  TIMER1 advances on a pulse in cycle y >= 2 when
 (y - 1) is a multiple of the prescaler period P (TIMER0 bit b differs between cycles y - 1 and
-y - 2, seen through two registers that reset to 0); the new value holds from y + 1.  Device reads return the value of the cycle before
-the load starts; a store's write takes effect when the store instruction has completed.
+y - 2, seen through two registers that reset to 0); the new value holds from y + 1.  Device
+reads return the value of the cycle before the load starts; a store's write takes effect at the
+end of its last cycle.
 """
 
 from __future__ import annotations
