@@ -4,9 +4,9 @@ the instruction (platform.md §1 errata are reported, not imitated)."""
 import textwrap
 
 import pytest
+
 import rv32_asm as A
 from core_harness import exit_with, make_soc
-
 from robosoc.chip.single import CoreError, CycleBudgetExceeded, MulhsuErratum, run_elf
 
 SRAM = 0x40000000

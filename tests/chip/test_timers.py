@@ -10,6 +10,7 @@ every value read must equal the reference's value in the cycle before the load s
 import random
 
 import pytest
+
 import rv32_asm as A
 from core_harness import exit_with, make_soc
 
