@@ -180,6 +180,7 @@ static void multiply_q(q16_t a[N][N], q16_t b[N][N], q16_t out[N][N])
     }
 }
 
+#ifndef BENCH_QUIET
 static uint32_t float_bits(float f)
 {
     union {
@@ -189,7 +190,6 @@ static uint32_t float_bits(float f)
     return v.u;
 }
 
-#ifndef BENCH_QUIET
 static void print_matrix_f(const char *name, float m[N][N])
 {
     for (int i = 0; i < N; i++) {
