@@ -27,3 +27,20 @@ def bench_physics(
     from robosoc.benchmarks.physics import run_physics_benchmark
 
     run_physics_benchmark(seconds=seconds, runs=runs)
+
+
+@bench_app.command("noc")
+def bench_noc(
+    size: Annotated[str, typer.Option(help="Mesh WxH.")] = "8x8",
+    cycles: Annotated[int, typer.Option(help="Simulated cycles per injection rate.")] = 10_000,
+    plot: Annotated[str | None, typer.Option(help="Write latency against injection rate to this PNG.")] = None,
+    seed: Annotated[int, typer.Option(help="Seed of the random traffic.")] = 1,
+) -> None:
+    """NoC alone under uniform random traffic: flits per host second and latency against load."""
+    from robosoc.benchmarks.noc import run_noc_benchmark
+
+    try:
+        width, height = (int(v) for v in size.lower().split("x"))
+    except ValueError as exc:
+        raise typer.BadParameter(f"expected WxH, got {size!r}", param_hint="--size") from exc
+    run_noc_benchmark(width=width, height=height, cycles=cycles, seed=seed, plot_path=plot)

@@ -1,0 +1,94 @@
+"""``robosoc run``: output, exit code, summary line and the stats file, on a real compiled program."""
+
+import json
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import pytest
+from typer.testing import CliRunner
+
+from robosoc.analysis.energy import EnergyModel
+from robosoc.cli import app
+from robosoc.toolchain import build_elf
+
+PROGRAM = """
+#include "hf_print.h"
+int main(void) {
+    volatile unsigned a = 1234, b = 5678;
+    hf_printf("product %u\\n", a * b);
+    return 42;
+}
+"""
+
+
+@pytest.fixture(scope="module")
+def elf(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    src = tmp_path_factory.mktemp("prog") / "prog.c"
+    src.write_text(PROGRAM)
+    return build_elf([src], mul=True)
+
+
+def test_run_prints_output_and_returns_the_exit_code(elf: Path, tmp_path: Path):
+    stats = tmp_path / "stats.json"
+    result = CliRunner().invoke(app, ["run", str(elf), "--stats", str(stats)])
+    assert result.exit_code == 42
+    assert "product 7006652" in result.stdout
+    record = json.loads(stats.read_text())
+    c = record["counters"]
+    assert record["exit_code"] == 42 and record["error"] is None
+    assert c["instructions"] == sum(
+        c[k] for k in ("jump", "branch", "memory", "add", "logic", "other", "mul", "system")
+    )
+    model = EnergyModel.load()
+    assert record["energy_nj"] == pytest.approx(model.total_nj(c))
+    assert record["energy_nj"] > 0
+
+
+def test_summary_line_goes_to_stderr(elf: Path):
+    proc = subprocess.run(
+        [sys.executable, "-m", "robosoc", "run", str(elf)], capture_output=True, text=True, timeout=120
+    )
+    assert proc.returncode == 42
+    assert proc.stdout == "product 7006652\n"
+    assert "cycles" in proc.stderr and "CPI" in proc.stderr and "nJ" in proc.stderr and "MIPS" in proc.stderr
+
+
+def test_running_a_mul_program_on_a_core_without_multiplier_fails_clearly(elf: Path, tmp_path: Path):
+    stats = tmp_path / "stats.json"
+    result = CliRunner().invoke(app, ["run", str(elf), "--no-mul", "--stats", str(stats)])
+    assert result.exit_code == 3
+    assert "without the multiplier" in result.stderr and "main+0x" in result.stderr
+    assert "without the multiplier" in json.loads(stats.read_text())["error"]
+
+
+def test_cycle_budget(elf: Path):
+    result = CliRunner().invoke(app, ["run", str(elf), "--max-cycles", "50"])
+    assert result.exit_code == 3 and "cycle budget of 50 cycles" in result.stderr
+
+
+def test_bad_files_are_named(tmp_path: Path):
+    missing = tmp_path / "missing.elf"
+    result = CliRunner().invoke(app, ["run", str(missing)])
+    assert result.exit_code == 2 and "missing.elf" in result.stderr
+    text = tmp_path / "text.elf"
+    text.write_text("not an elf")
+    result = CliRunner().invoke(app, ["run", str(text)])
+    assert result.exit_code == 2 and "text.elf" in result.stderr
+
+
+def test_custom_energy_file_is_used_and_validated(elf: Path, tmp_path: Path):
+    default = Path(EnergyModel.load().path)
+    source = (Path(__file__).parents[2] / "src" / default).read_text() if not default.exists() else default.read_text()
+    doubled = tmp_path / "doubled.toml"
+    doubled.write_text(source.replace("pj = 43.15", "pj = 86.30"))
+    out_a, out_b = tmp_path / "a.json", tmp_path / "b.json"
+    CliRunner().invoke(app, ["run", str(elf), "--stats", str(out_a)])
+    CliRunner().invoke(app, ["run", str(elf), "--stats", str(out_b), "--energy", str(doubled)])
+    a, b = json.loads(out_a.read_text()), json.loads(out_b.read_text())
+    assert b["energy_pj"]["memory"] == pytest.approx(2 * a["energy_pj"]["memory"])
+    broken = tmp_path / "broken.toml"
+    broken.write_text(textwrap.dedent(source.replace('source = "ORCA HF-RISCV characterisation: loads', 'x = "')))
+    result = CliRunner().invoke(app, ["run", str(elf), "--energy", str(broken)])
+    assert result.exit_code == 2 and "broken.toml" in result.stderr and "instruction.memory.source" in result.stderr
