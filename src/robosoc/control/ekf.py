@@ -29,14 +29,13 @@ accelerometer at rest reads +g along world up) and ``m_ref = [0.5, 0, −0.866]`
 - measurement Q: diagonal.  The magnetometer's σ is its white noise (0.013 of a unit field).  The
   accelerometer's direction noise is set far above its white noise (0.35/9.8 ≈ 0.036):
   in flight it measures thrust plus drag, not gravity, so its direction is off by the
-  vehicle's horizontal acceleration (about 10° during a 10° attitude step).  σ_a = 0.5 makes
+  vehicle's horizontal acceleration (about 10° during a 10° attitude step).  σ_a = 1.0 makes
   gravity a weak, long-term reference, while the magnetometer (unaffected by acceleration) pins
   every axis except rotations about the field itself.
 """
 
 from __future__ import annotations
 
-import os
 from dataclasses import dataclass
 
 import numpy as np
@@ -53,9 +52,9 @@ class EkfParams:
 
     gyro_noise: tuple[float, float, float] = (0.05, 0.05, 0.015)
     """White noise σ of one gyroscope sample [rad/s] (quadrotor.md)."""
-    bias_walk: float = float(os.environ.get("BW", 1e-4))
+    bias_walk: float = 1e-4
     """Random walk of the gyroscope bias [rad/s/√s]."""
-    accel_noise: float = float(os.environ.get("AN", 1.0))
+    accel_noise: float = 1.0
     """σ of the normalised accelerometer direction (dimensionless), inflated for manoeuvres."""
     mag_noise: float = 0.013
     """σ of the normalised magnetometer (dimensionless), its white noise."""

@@ -24,7 +24,6 @@ height K_p = m·ω_n², K_d = 2·m·ω_n with ω_n = 3 rad/s (critically damped)
 
 from __future__ import annotations
 
-import os
 from dataclasses import dataclass
 
 import numpy as np
@@ -38,7 +37,7 @@ from robosoc.control.pid import Pid, PidGains, euler_rates, height_thrust, wrap_
 from robosoc.control.setpoint import Setpoint
 
 GRAVITY = 9.8
-CALIBRATED_QUAT_SIGMA = float(os.environ.get("QS", 0.005))
+CALIBRATED_QUAT_SIGMA = 0.005
 """σ of each quaternion component after calibration (≈ 0.6° of attitude)."""
 GYRO_NOISE = 0.05
 """White noise of one gyroscope sample [rad/s]: the calibrated bias is uncertain by this / √N."""
@@ -60,16 +59,14 @@ class ControllerGains:
 
 def default_gains(vehicle: VehicleConfig) -> ControllerGains:
     """The tuned gains for ``vehicle`` (scaled by its mass and inertia)."""
-    ixx, iyy, izz = vehicle.inertia
+    ixx, iyy, _ = vehicle.inertia
     m = vehicle.mass
     wn_z = 2.5
     return ControllerGains(
         roll=PidGains(kp=100.0 * ixx, ki=20.0 * ixx, kd=20.0 * ixx, integral_limit=0.2, output_limit=1.5),
         pitch=PidGains(kp=100.0 * iyy, ki=20.0 * iyy, kd=20.0 * iyy, integral_limit=0.2, output_limit=1.5),
         yaw=PidGains(kp=0.3, ki=0.05, kd=0.12, integral_limit=0.5, output_limit=0.3),
-        height=PidGains(
-            kp=3.0 * m * wn_z**2, ki=m * wn_z**3, kd=3.0 * m * wn_z, integral_limit=0.5, output_limit=10.0
-        ),
+        height=PidGains(kp=3.0 * m * wn_z**2, ki=m * wn_z**3, kd=3.0 * m * wn_z, integral_limit=0.5, output_limit=10.0),
     )
 
 
@@ -128,7 +125,7 @@ class HostController:
         q = self.ekf.quaternion
         return Estimate(q, quat.to_euler(q), self.altitude.height, self.altitude.velocity)
 
-    def _calibrate(self, sample) -> None:  # noqa: ANN001 (SensorSample, not imported: control does not depend on physics)
+    def _calibrate(self, sample) -> None:
         moving = abs(float(np.linalg.norm(sample.accel)) - GRAVITY) > MOTION_ACCEL
         if moving:
             # The vehicle is still settling (it is spawned above the ground): start averaging again.
@@ -146,7 +143,7 @@ class HostController:
         self.ekf.reset(q0, bias=mean[0:3], quat_sigma=CALIBRATED_QUAT_SIGMA, bias_sigma=GYRO_NOISE / n)
         self.altitude.reset(float(mean[9]), self.vehicle.rest_height)
 
-    def step(self, sample, setpoint: Setpoint) -> np.ndarray:  # noqa: ANN001
+    def step(self, sample, setpoint: Setpoint) -> np.ndarray:
         """Consume one sensor sample; return the four PWM bytes to apply now."""
         if not setpoint.armed:
             if self._armed:

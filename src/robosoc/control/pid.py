@@ -69,7 +69,14 @@ def euler_rates(roll: float, pitch: float, body_rate: tuple[float, float, float]
 
 
 def height_thrust(
-    pid: Pid, error: float, error_rate: float, dt: float, t_gravity: float, roll: float, pitch: float, max_tilt_gain: float
+    pid: Pid,
+    error: float,
+    error_rate: float,
+    dt: float,
+    t_gravity: float,
+    roll: float,
+    pitch: float,
+    max_tilt_gain: float,
 ) -> float:
     """Equation 2: total thrust [N] for a height error, T_gravity and the tilt compensation.
 

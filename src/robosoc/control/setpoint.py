@@ -17,7 +17,7 @@ class Setpoint:
     armed: bool = False
 
 
-def setpoint_at(plan, rest_height: float, t: float) -> Setpoint:  # noqa: ANN001 (config.scenario.FlightPlan)
+def setpoint_at(plan, rest_height: float, t: float) -> Setpoint:
     """The setpoint of a :class:`~robosoc.config.scenario.FlightPlan` at time ``t`` [s].
 
     Before ``takeoff_s``: disarmed (motors off, controller calibrating).  Then the height

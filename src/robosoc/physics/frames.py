@@ -30,37 +30,6 @@ def quat_to_matrix(w: float, x: float, y: float, z: float) -> tuple[float, ...]:
     )
 
 
-def quat_multiply(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Hamilton product a ⊗ b."""
-    aw, ax, ay, az = a
-    bw, bx, by, bz = b
-    return np.array(
-        [
-            aw * bw - ax * bx - ay * by - az * bz,
-            aw * bx + ax * bw + ay * bz - az * by,
-            aw * by - ax * bz + ay * bw + az * bx,
-            aw * bz + ax * by - ay * bx + az * bw,
-        ]
-    )
-
-
-def quat_conjugate(q: np.ndarray) -> np.ndarray:
-    """Inverse of a unit quaternion."""
-    return np.array([q[0], -q[1], -q[2], -q[3]])
-
-
-def rotation_vector(q: np.ndarray) -> np.ndarray:
-    """Axis·angle of a unit quaternion (shortest rotation, angle in [0, π])."""
-    w = float(q[0])
-    v = np.asarray(q[1:], dtype=float)
-    if w < 0:
-        w, v = -w, -v
-    s = float(np.linalg.norm(v))
-    if s < 1e-12:
-        return 2.0 * v
-    return (2.0 * math.atan2(s, w) / s) * v
-
-
 def euler_from_quat(q: np.ndarray) -> np.ndarray:
     """Roll, pitch, yaw [rad] (Z-Y-X convention: R = Rz(yaw)·Ry(pitch)·Rx(roll))."""
     w, x, y, z = (float(c) for c in q)

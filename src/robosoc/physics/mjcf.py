@@ -46,7 +46,7 @@ def vehicle_xml(vehicle: VehicleConfig) -> str:
     visual = 'contype="0" conaffinity="0" group="1" mass="0"'
     parts = [
         f'<body name={quoteattr(body_name(vehicle))} pos="{_v(vehicle.spawn_position)}" quat="{_v(quat)}">',
-        f'  <freejoint name={quoteattr(n + "/root")}/>',
+        f"  <freejoint name={quoteattr(n + '/root')}/>",
         f'  <inertial pos="{_v(vehicle.com)}" mass="{vehicle.mass:.10g}" diaginertia="{_v(vehicle.inertia)}"/>',
         f'  <geom name={quoteattr(n + "/hull")} type="box" size="{_v(vehicle.body_half_extents)}" '
         'material="hull" mass="0"/>',
@@ -70,9 +70,7 @@ def vehicle_xml(vehicle: VehicleConfig) -> str:
             f'pos="{_v((mx, my, 0.02))}" material="{material}" {visual}/>'
         )
     if vehicle.variant == "laser":
-        parts.append(
-            f'  <geom type="cylinder" size="0.03 0.03" pos="0 0 -0.07" material="laser" {visual}/>'
-        )
+        parts.append(f'  <geom type="cylinder" size="0.03 0.03" pos="0 0 -0.07" material="laser" {visual}/>')
     parts.append("</body>")
     return "\n".join(parts)
 

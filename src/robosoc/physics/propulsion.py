@@ -107,11 +107,8 @@ class Propulsion:
         arm = self.arm
         lq = arm * q
         lp = arm * p
-        inflow = (w - lq, w - lp, w + lq, w + lp)
-        omega = self.omega
-        volts = self.voltages
-        forces = self.forces
-        torques = self.torques
+        o0, o1, o2, o3 = self.omega
+        u0, u1, u2, u3 = self.voltages
         psi = self._psi
         beta = self._beta
         inv_2r = self._inv_2r
@@ -123,22 +120,32 @@ class Propulsion:
         k_m = self._k_m
         dt_j = self._dt_over_j
         sqrt = math.sqrt
-        for i in range(4):
-            om = omega[i]
-            u = volts[i]
-            v1 = inflow[i]
-            force = ct0 * om * om + ct1 * v1 * om + ct2 * v1 * v1
-            t = (u * beta - psi * om) * inv_2r
-            torque = psi * (t + sqrt(t * t + u * alpha_r))
-            omega[i] = om + dt_j * (torque - k_t * force - k_m * om)
-            forces[i] = force
-            torques[i] = torque
-        return (
-            forces[0] + forces[1] + forces[2] + forces[3],
-            (forces[3] - forces[1]) * arm,
-            (forces[2] - forces[0]) * arm,
-            torques[0] + torques[2] - torques[1] - torques[3],
-        )
+        # Unrolled over the four motors (a loop with indexing costs about a third more here).
+        v = w - lq
+        f0 = (ct0 * o0 + ct1 * v) * o0 + ct2 * v * v
+        t = (u0 * beta - psi * o0) * inv_2r
+        m0 = psi * (t + sqrt(t * t + u0 * alpha_r))
+        v = w - lp
+        f1 = (ct0 * o1 + ct1 * v) * o1 + ct2 * v * v
+        t = (u1 * beta - psi * o1) * inv_2r
+        m1 = psi * (t + sqrt(t * t + u1 * alpha_r))
+        v = w + lq
+        f2 = (ct0 * o2 + ct1 * v) * o2 + ct2 * v * v
+        t = (u2 * beta - psi * o2) * inv_2r
+        m2 = psi * (t + sqrt(t * t + u2 * alpha_r))
+        v = w + lp
+        f3 = (ct0 * o3 + ct1 * v) * o3 + ct2 * v * v
+        t = (u3 * beta - psi * o3) * inv_2r
+        m3 = psi * (t + sqrt(t * t + u3 * alpha_r))
+        self.omega = [
+            o0 + dt_j * (m0 - k_t * f0 - k_m * o0),
+            o1 + dt_j * (m1 - k_t * f1 - k_m * o1),
+            o2 + dt_j * (m2 - k_t * f2 - k_m * o2),
+            o3 + dt_j * (m3 - k_t * f3 - k_m * o3),
+        ]
+        self.forces = [f0, f1, f2, f3]
+        self.torques = [m0, m1, m2, m3]
+        return (f0 + f1 + f2 + f3, (f3 - f1) * arm, (f2 - f0) * arm, m0 + m2 - m1 - m3)
 
 
 def steady_state(motor: MotorConfig, pwm: float, inflow: float = 0.0) -> tuple[float, float, float]:

@@ -31,7 +31,6 @@ import numpy as np
 from robosoc.config.scenario import PHYSICS_DT_S, SensorConfig, WindConfig
 from robosoc.config.vehicle import VehicleConfig
 from robosoc.physics.drag import Drag
-from robosoc.physics.frames import quat_to_matrix
 from robosoc.physics.mjcf import body_name, world_xml
 from robosoc.physics.propulsion import Propulsion
 from robosoc.physics.sensors import SensorModel, SensorSample, Truth
@@ -99,17 +98,29 @@ class Quadrotor:
         self._take_sample(0.0, window=0.0)
 
     def _take_sample(self, time: float, window: float) -> None:
-        truth = self.truth()
-        self._sample = self.sensor_model.sample(time, truth.position, truth.quaternion, truth.velocity, window)
+        data = self.world.data
+        a, d = self._qpos, self._dof
+        self._sample = self.sensor_model.sample(
+            time, float(data.qpos[a + 2]), data.qpos[a + 3 : a + 7].tolist(), data.qvel[d : d + 3].tolist(), window
+        )
 
     def _apply_wrench(
         self, qpos: list[float], qvel: list[float], xfrc: np.ndarray, wind: tuple[float, float, float]
     ) -> None:
         """Advance the motors one step and write this step's world-frame wrench at the CoM."""
         a, d = self._qpos, self._dof
-        r00, r01, r02, r10, r11, r12, r20, r21, r22 = quat_to_matrix(qpos[a + 3], qpos[a + 4], qpos[a + 5], qpos[a + 6])
-        vx, vy, vz = qvel[d], qvel[d + 1], qvel[d + 2]
-        p, q, r = qvel[d + 3], qvel[d + 4], qvel[d + 5]
+        # R(q), inlined (this runs every step): row-major body→world.
+        w, x, y, z = qpos[a + 3 : a + 7]
+        r00 = 1.0 - 2.0 * (y * y + z * z)
+        r01 = 2.0 * (x * y - w * z)
+        r02 = 2.0 * (x * z + w * y)
+        r10 = 2.0 * (x * y + w * z)
+        r11 = 1.0 - 2.0 * (x * x + z * z)
+        r12 = 2.0 * (y * z - w * x)
+        r20 = 2.0 * (x * z - w * y)
+        r21 = 2.0 * (y * z + w * x)
+        r22 = 1.0 - 2.0 * (x * x + y * y)
+        vx, vy, vz, p, q, r = qvel[d : d + 6]
         # Rotor inflow uses the body-frame velocity (w = third row of Rᵀ·v).
         w_body = r02 * vx + r12 * vy + r22 * vz
         fz, tx, ty, tz = self.propulsion.step(w_body, p, q)
@@ -225,5 +236,5 @@ class World:
         """Step until simulated time reaches ``until`` [s] (rounded to the nearest whole step)."""
         target = round(until / self.dt)
         step = self.step
-        while self.steps < target:
+        for _ in range(target - self.steps):
             step()

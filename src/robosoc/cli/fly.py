@@ -1,0 +1,153 @@
+"""``robosoc fly``: fly a scenario closed-loop and print hover, tracking and estimation errors."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from robosoc.cli.app import app
+
+VIDEO_FPS = 25.0
+
+
+def _fmt(value: float, unit: str, digits: int = 2) -> str:
+    return "n/a" if math.isnan(value) else f"{value:.{digits}f} {unit}"
+
+
+@app.command("fly")
+def fly_command(
+    controller: Annotated[str, typer.Option(help="Who flies: host (float64 Python) or chip.")] = "host",
+    seconds: Annotated[float | None, typer.Option(help="Flight length in seconds (default: the scenario's).")] = None,
+    seed: Annotated[int, typer.Option(help="Seeds every random number (noise, biases, gusts).")] = 1,
+    scenario: Annotated[Path | None, typer.Option(help="Scenario TOML file (default: built-in).")] = None,
+    vehicle: Annotated[str | None, typer.Option(help="default or laser (default: the scenario's).")] = None,
+    out: Annotated[
+        Path | None, typer.Option(help="Folder for flight.csv (written as it flies) and flight.png.")
+    ] = None,
+    video: Annotated[Path | None, typer.Option(help="Render to FILE.mp4, or to a folder of PNG frames.")] = None,
+) -> None:
+    """Fly the scenario (default: take off to 1 m, hover, 10° roll/pitch/yaw steps, a gust; 10 s)."""
+    from rich.console import Console
+    from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
+
+    from robosoc.config.scenario import ScenarioConfig
+    from robosoc.config.validate import ConfigError, load_toml, replace_checked
+    from robosoc.config.vehicle import vehicle_preset
+    from robosoc.control.flight import flight_metrics, fly
+    from robosoc.control.flight_log import CsvFlightLog
+    from robosoc.control.flight_plot import plot_flight
+    from robosoc.control.host import HostController
+
+    console = Console()
+    if controller == "chip":
+        console.print("[red]the chip controller is not available yet[/red] (use --controller host)")
+        raise typer.Exit(2)
+    if controller != "host":
+        console.print(f"[red]--controller: must be host or chip, got {controller!r}[/red]")
+        raise typer.Exit(2)
+    try:
+        config = load_toml(ScenarioConfig, scenario) if scenario else ScenarioConfig()
+        if seconds is not None:
+            config = replace_checked(config, duration_s=seconds)
+        if vehicle is not None:
+            config = replace_checked(config, vehicle=vehicle)
+        craft = vehicle_preset(config.vehicle)
+    except (ConfigError, ValueError) as exc:
+        console.print(f"[red]{exc}[/red]")
+        raise typer.Exit(2) from exc
+
+    pilot = HostController(craft, config.sensors.period_steps * 0.001)
+    log = CsvFlightLog(out / "flight.csv") if out else None
+    renderer = sink = None
+    if video is not None:
+        renderer, sink = _open_video(console, video)
+    samples = round(config.duration_s * config.sensors.rate_hz)
+    frame_every = max(1, round(config.sensors.rate_hz / VIDEO_FPS))
+    state = {"renderer": renderer}
+
+    def on_sample(world, k: int) -> None:
+        progress.update(task, completed=k + 1)
+        if state["renderer"] is None or k % frame_every:
+            return
+        if not isinstance(state["renderer"], tuple):
+            state["renderer"] = _start_renderer(console, world, state["renderer"])
+            if state["renderer"] is None:
+                return
+        sink.add(state["renderer"][0].render(world.data))
+
+    console.print(
+        f"flying scenario [bold]{config.name}[/bold] for {config.duration_s:g} s, vehicle {config.vehicle}, "
+        f"controller host, seed {seed}, sensors at {config.sensors.rate_hz:g} Hz"
+    )
+    try:
+        with Progress(
+            TextColumn("flight"),
+            BarColumn(),
+            TextColumn("{task.percentage:>3.0f}%"),
+            TimeRemainingColumn(),
+            console=console,
+            transient=True,
+        ) as progress:
+            task = progress.add_task("fly", total=samples)
+            rows = fly(config, craft, pilot, seed, on_row=log.write if log else None, on_sample=on_sample)
+    except KeyboardInterrupt:
+        console.print("[yellow]interrupted[/yellow]" + (f"; the log so far is in {log.path}" if log else ""))
+        raise typer.Exit(130) from None
+    finally:
+        if log:
+            log.close()
+        if isinstance(state["renderer"], tuple):
+            state["renderer"][0].close()
+        if sink is not None:
+            sink.close()
+
+    m = flight_metrics(rows, config.flight)
+    console.print(
+        f"hover height error (RMS, after the climb): {_fmt(m.hover_rms * 100, 'cm')}"
+        f"  (max {_fmt(m.hover_max * 100, 'cm')})"
+    )
+    console.print(
+        "attitude tracking error (RMS, 0.5 s after steps excluded): "
+        f"roll {_fmt(m.tracking_rms[0], 'deg')}, pitch {_fmt(m.tracking_rms[1], 'deg')}, "
+        f"yaw {_fmt(m.tracking_rms[2], 'deg')}"
+    )
+    for axis, at, rise in m.step_rise:
+        console.print(f"  {axis} step at {at:g} s: 90 % reached after {_fmt(rise * 1000, 'ms', 0)}")
+    console.print(
+        f"EKF attitude error vs truth (RMS while flying): {_fmt(m.ekf_rms, 'deg')} (max {_fmt(m.ekf_max, 'deg')}; "
+        f"roll {m.ekf_euler_rms[0]:.2f}, pitch {m.ekf_euler_rms[1]:.2f}, yaw {m.ekf_euler_rms[2]:.2f} deg)"
+    )
+    console.print(f"height estimate error (RMS while flying): {_fmt(m.height_estimate_rms * 100, 'cm')}")
+    if out:
+        plot_flight(rows, out / "flight.png", title=f"{config.name}, seed {seed}")
+        console.print(f"log: {out / 'flight.csv'}  plot: {out / 'flight.png'}")
+    if sink is not None and sink.frames:
+        console.print(f"video: {sink.path} ({sink.frames} frames at {VIDEO_FPS:g} fps)")
+
+
+def _open_video(console, video: Path):
+    """Find a GL backend and open the frame sink; on failure say why and fly without video."""
+    from robosoc.physics.render import FrameSink, RenderUnavailable, find_backend
+
+    try:
+        backend = find_backend()
+        sink = FrameSink(video, VIDEO_FPS)
+    except RenderUnavailable as exc:
+        console.print(f"[yellow]no video: {exc}[/yellow]")
+        return None, None
+    return backend, sink
+
+
+def _start_renderer(console, world, backend: str):
+    from robosoc.physics.mjcf import RENDER_SIZE
+    from robosoc.physics.render import OffscreenRenderer, RenderUnavailable
+
+    try:
+        width, height = RENDER_SIZE
+        return (OffscreenRenderer(world.model, world.quadrotors[0].body_id, width, height, backend),)
+    except RenderUnavailable as exc:
+        console.print(f"[yellow]no video: {exc}[/yellow]")
+        return None
