@@ -17,13 +17,20 @@ for _k, _ins in enumerate(INSTRUCTIONS):
         _OP_CLASS[_k + 1] = int(_ins.cls)
 
 
+def op_totals(opc: np.ndarray) -> np.ndarray:
+    """Instructions per operation number (the kernel counts in two banks per operation)."""
+    return opc[0::2] + opc[1::2]
+
+
 def per_operation(opc: np.ndarray) -> dict[str, int]:
     """Executed instructions per mnemonic (only those that executed)."""
-    return {ins.name: int(opc[k + 1]) for k, ins in enumerate(INSTRUCTIONS) if opc[k + 1]}
+    ops = op_totals(opc)
+    return {ins.name: int(ops[k + 1]) for k, ins in enumerate(INSTRUCTIONS) if ops[k + 1]}
 
 
 def counters_dict(ctr: np.ndarray, opc: np.ndarray, cycles: int) -> dict[str, int]:
     """All counters by name: instruction classes, stall cycles by kind, events, totals."""
+    opc = op_totals(opc)
     by_class = np.zeros(len(CLASS_NAMES), dtype=np.int64)
     valid = _OP_CLASS >= 0
     np.add.at(by_class, _OP_CLASS[valid], opc[valid])

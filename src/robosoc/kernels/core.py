@@ -210,7 +210,7 @@ def run_core(
 ) -> int:
     """Run until cycle ``until``, an exit, an error, the cycle budget or a full output buffer.
 
-    ``opc[op]`` counts executed instructions per operation; ``dec`` is the predecode table
+    ``opc[2 * op + (word index & 1)]`` counts executed instructions per operation; ``dec`` is the predecode table
     (int32, two per memory word) and ``decb`` its uint8 view.  Returns the RUN_* status (also in
     ``st[S_RUN]``).  All state stays in the arrays, so the call can be repeated to continue.
     """
@@ -258,7 +258,7 @@ def run_core(
         rs1 = (w0 >> U16) & U255
         rs2 = w0 >> U24
         imm = np.int64(dec[j + U1])
-        opc[op] += 1
+        opc[(op << U1) | (i & U1)] += 1  # two banks by word parity: no store-to-load chain
 
         if op == ADDI:
             regs[rd] = regs[rs1] + imm
@@ -570,7 +570,7 @@ def run_core(
             cyc += 1
             pc += 4
         elif op == 0:
-            opc[0] -= 1
+            opc[i & U1] -= 1
             decode_word(m32[i], dec, i)
         elif op >= FIRST_SYSTEM and op < ILLEGAL:
             # SYSTEM opcode: trap.  EPC = trap + 8; the instruction at trap + 8 executes first.

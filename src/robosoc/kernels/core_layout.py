@@ -93,7 +93,7 @@ C_TRAP = 3  # SYSTEM traps taken
 C_ENTRY_STALL = 4  # vector fetch bubbles of interrupt and trap entry (2 each)
 C_MMIO = 5  # loads and stores that went to device registers
 CTR_SIZE = 8
-OPC_SIZE = 256  # per-operation counters (operation numbers are bytes)
+OPC_SIZE = 512  # per-operation counters, two banks each (operation numbers are bytes)
 
 PIPELINE_FILL = 3  # the first instruction after reset executes in cycle 3
 OUT_CAPACITY = 1 << 16
