@@ -115,7 +115,7 @@ class AttitudeEkf:
 
     def predict(self, gyro: np.ndarray, dt: float) -> None:
         """Lines 1–2: propagate with the bias-corrected gyroscope reading over ``dt`` [s]."""
-        q = self.x[:4]
+        q = self.x[:4].copy()
         rate = np.asarray(gyro, dtype=float) - self.x[4:]
         transition = np.eye(4) + 0.5 * dt * quat.omega_matrix(rate)
         jacobian = np.eye(7)

@@ -1,0 +1,104 @@
+"""Motor model invariants from quadrotor.md: hover, full thrust, idle speed, step response, signs."""
+
+import math
+
+import pytest
+
+from robosoc.config.vehicle import MotorConfig, default_vehicle
+from robosoc.physics.propulsion import Propulsion, hover_pwm, steady_state
+
+MOTOR = MotorConfig()
+DT = 0.001
+
+
+def test_hover_needs_pwm_121_2_for_1_478_kg() -> None:
+    pwm = hover_pwm(MOTOR, 1.478, 9.8)
+    assert pwm == pytest.approx(121.2, abs=0.1)
+    omega, force, _ = steady_state(MOTOR, pwm)
+    assert omega == pytest.approx(485.0, abs=2.0)
+    assert force == pytest.approx(3.62, abs=0.01)
+    assert 4 * force == pytest.approx(1.478 * 9.8, rel=1e-6)
+
+
+def test_full_pwm_gives_38_3_newtons() -> None:
+    assert 4 * steady_state(MOTOR, 255)[1] == pytest.approx(38.3, abs=0.05)
+
+
+def _run(prop: Propulsion, seconds: float) -> list[float]:
+    trace = []
+    for _ in range(round(seconds / DT)):
+        prop.step(0.0, 0.0, 0.0)
+        trace.append(prop.omega[0])
+    return trace
+
+
+def test_any_positive_pwm_spins_up_to_idle_297() -> None:
+    prop = Propulsion(MOTOR, 0.275, DT)
+    prop.reset([1.0, 1.0, 1.0, 1.0])
+    prop.set_pwm([1, 1, 1, 1])
+    _run(prop, 8.0)
+    assert prop.omega[0] == pytest.approx(297.0, abs=3.0)
+    assert steady_state(MOTOR, 0.0)[0] == pytest.approx(297.5, abs=1.0)
+
+
+def test_pwm_zero_does_not_stop_a_spinning_rotor() -> None:
+    prop = Propulsion(MOTOR, 0.275, DT)
+    prop.reset([485.0] * 4)
+    prop.set_pwm([0, 0, 0, 0])
+    _run(prop, 8.0)
+    assert prop.omega[0] == pytest.approx(297.5, abs=2.0)
+    assert prop.forces[0] == pytest.approx(1.36, abs=0.02)
+
+
+def test_step_121_to_140_reaches_63_percent_in_about_66_ms() -> None:
+    start = steady_state(MOTOR, 121)[0]
+    end = steady_state(MOTOR, 140)[0]
+    prop = Propulsion(MOTOR, 0.275, DT)
+    prop.reset([start] * 4)
+    prop.set_pwm([140] * 4)
+    trace = _run(prop, 1.0)
+    target = start + 0.632 * (end - start)
+    crossing_ms = next(i + 1 for i, w in enumerate(trace) if w >= target)
+    assert 60 <= crossing_ms <= 72
+    assert trace[-1] == pytest.approx(end, rel=1e-3)
+
+
+def test_wrench_signs_follow_the_plus_layout() -> None:
+    prop = Propulsion(MOTOR, 0.275, DT)
+    base = steady_state(MOTOR, 121)[0]
+    # Motor 3 (left, +y) faster rolls right-side down: +τx.  Motor 2 (rear) faster: +τy.
+    prop.reset([base, base, base, base + 50])
+    fz, tx, ty, tz = prop.step(0.0, 0.0, 0.0)
+    assert tx > 0 and ty == pytest.approx(0.0) and fz > 4 * 3.6
+    prop.reset([base, base, base + 50, base])
+    _, tx, ty, _ = prop.step(0.0, 0.0, 0.0)
+    assert ty > 0 and tx == pytest.approx(0.0)
+    # Front/rear spin clockwise: more voltage on 0 and 2 yaws the body anticlockwise (+z).
+    prop.reset([base] * 4)
+    prop.set_pwm([150, 121, 150, 121])
+    _, _, _, tz = prop.step(0.0, 0.0, 0.0)
+    assert tz > 0
+
+
+def test_inflow_reduces_thrust_when_climbing() -> None:
+    prop = Propulsion(MOTOR, 0.275, DT)
+    prop.reset([485.0] * 4)
+    hover = prop.step(0.0, 0.0, 0.0)[0]
+    prop.reset([485.0] * 4)
+    climbing = prop.step(2.0, 0.0, 0.0)[0]
+    # F = CT0s·ω² + CT1s·v1·ω with CT1s < 0: 4 · 2.5224e-4 · 2 · 485 less.
+    assert hover - climbing == pytest.approx(4 * 2.5224e-4 * 2.0 * 485.0, rel=1e-9)
+
+
+@pytest.mark.parametrize("pwm", [[256, 0, 0, 0], [-1, 0, 0, 0], [1, 2, 3], [1.5, 0, 0, 0]])
+def test_bad_pwm_is_rejected(pwm: list) -> None:
+    prop = Propulsion(MOTOR, 0.275, DT)
+    with pytest.raises(ValueError, match="pwm"):
+        prop.set_pwm(pwm)
+
+
+def test_voltage_is_pwm_times_supply_over_255() -> None:
+    prop = Propulsion(default_vehicle().motor, 0.275, DT)
+    prop.set_pwm([255, 128, 1, 0])
+    assert prop.voltages == [14.8, 128 * 14.8 / 255, 14.8 / 255, 0.0]
+    assert math.isclose(prop.voltages[1], 7.4290196, rel_tol=1e-6)
