@@ -54,7 +54,7 @@ HANDLER_RECORD = [
 def run_program(words: list[int], mul: bool = True):
     soc = make_soc(words, mul=mul)
     result = soc.run(max_cycles=200_000)
-    regs = [int(v) & 0xFFFFFFFF for v in soc.state.regs]
+    regs = [int(v) & 0xFFFFFFFF for v in soc.regs]
     return soc, result, regs
 
 

@@ -97,7 +97,7 @@ def test_timer_reads_match_the_cycle_by_cycle_reference(seed: int):
     for which, reg, start in reads:
         t1, cause = ref.history[start - 1]
         want = t1 if which == "t1" else cause
-        got = int(soc.state.regs[reg]) & 0xFFFFFFFF
+        got = int(soc.regs[reg]) & 0xFFFFFFFF
         assert got == want, f"{which} read starting in cycle {start}: core {got}, reference {want}"
 
 
@@ -106,7 +106,7 @@ def test_timer0_read_returns_previous_cycle():
     words = [*A.li(T0, TIMER0), A.load("lw", 10, T0, 0), *[A.NOP] * 10, A.load("lw", 11, T0, 0), *exit_with(0)]
     soc = make_soc(words)
     soc.run()
-    assert int(soc.state.regs[10]) == 4 and int(soc.state.regs[11]) == 17
+    assert int(soc.regs[10]) == 4 and int(soc.regs[11]) == 17
 
 
 def test_timer1_write_is_lost_with_the_undivided_prescaler():
@@ -114,4 +114,4 @@ def test_timer1_write_is_lost_with_the_undivided_prescaler():
     soc = make_soc([*words, *exit_with(0)])
     soc.run()
     # the load starts in cycle 10 and reads TIMER1 of cycle 9: 7 pulses (cycles 2..8), not 1000
-    assert int(soc.state.regs[10]) == 7
+    assert int(soc.regs[10]) == 7

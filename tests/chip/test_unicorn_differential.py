@@ -87,9 +87,9 @@ def test_random_programs_match_unicorn(seed: int, mul: bool):
 
     soc = make_soc([*body, *exit_with(0)], mul=mul, sram_size=0x20000)
     soc.state.write(DATA, data)
-    soc.state.regs[1:32] = np.array(regs[1:32], dtype=np.uint32).view(np.int32)
+    soc.regs[1:32] = np.array(regs[1:32], dtype=np.uint32).view(np.int32)
     soc.run(max_cycles=100_000)
-    got_regs = [0] + [int(v) & 0xFFFFFFFF for v in soc.state.regs[1:32]]
+    got_regs = [0] + [int(v) & 0xFFFFFFFF for v in soc.regs[1:32]]
     got_regs[31] = want_regs[31]  # t6 is the exit helper in robosoc's run only
     for r in range(32):
         assert got_regs[r] == want_regs[r], f"x{r}: robosoc 0x{got_regs[r]:08x}, unicorn 0x{want_regs[r]:08x}"

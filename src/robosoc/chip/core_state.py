@@ -10,12 +10,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from robosoc.isa.table import OP_FETCH_FAULT
+from robosoc.kernels.soc_devices import NEVER
 from robosoc.kernels.core_layout import (
     CTR_SIZE,
     OPC_SIZE,
     OUT_CAPACITY,
     PIPELINE_FILL,
     S_CYCLE,
+    S_EXT_RISE,
     S_IRQ_RISE,
     S_MAX_CYCLES,
     S_MEM_BASE,
@@ -33,7 +35,12 @@ DEFAULT_SRAM_SIZE = 2 * 1024 * 1024
 
 @dataclass
 class CoreState:
-    """Arrays of one core. ``m8``, ``m16`` and ``m32`` are views of the same SRAM bytes, ``decb`` of ``dec``."""
+    """Arrays of a set of cores, one row per core (tile).
+
+    ``m8``, ``m16`` and ``m32`` are views of the same SRAM bytes, ``decb`` of ``dec``.  The
+    single-core SoC uses one row; the MPSoC one per tile.  Accessors without a tile argument
+    refer to row 0.
+    """
 
     st: np.ndarray
     ctr: np.ndarray
@@ -47,66 +54,75 @@ class CoreState:
     out: np.ndarray
 
     @classmethod
-    def new(cls, *, mul: bool, sram_size: int = DEFAULT_SRAM_SIZE, base: int = SRAM_BASE) -> CoreState:
+    def new(
+        cls, *, mul: bool | list[bool], sram_size: int = DEFAULT_SRAM_SIZE, base: int = SRAM_BASE, tiles: int = 1
+    ) -> CoreState:
+        """Fresh cores after reset; ``mul`` may be given per tile."""
         if sram_size <= 0 or sram_size % 4:
             raise ValueError(f"sram_size: must be a positive multiple of 4 bytes, got {sram_size}")
-        m8 = np.zeros(sram_size, dtype=np.uint8)
-        st = np.zeros(ST_SIZE, dtype=np.int64)
-        st[S_MEM_BASE] = base
-        st[S_MEM_SIZE] = sram_size
-        st[S_MUL] = 1 if mul else 0
-        st[S_CYCLE] = PIPELINE_FILL
-        st[S_MAX_CYCLES] = -1
-        st[S_IRQ_RISE] = -1
-        st[S_MULHSU_PC] = -1
-        st[S_T1_CTC] = 0xFFFF
+        muls = mul if isinstance(mul, list) else [mul] * tiles
+        m8 = np.zeros((tiles, sram_size), dtype=np.uint8)
+        st = np.zeros((tiles, ST_SIZE), dtype=np.int64)
+        st[:, S_MEM_BASE] = base
+        st[:, S_MEM_SIZE] = sram_size
+        st[:, S_MUL] = [1 if m else 0 for m in muls]
+        st[:, S_CYCLE] = PIPELINE_FILL
+        st[:, S_MAX_CYCLES] = -1
+        st[:, S_IRQ_RISE] = -1
+        st[:, S_EXT_RISE] = NEVER
+        st[:, S_MULHSU_PC] = -1
+        st[:, S_T1_CTC] = 0xFFFF
         # predecode: two int32 per memory word, plus a sentinel row past the end of memory
-        dec = np.zeros(2 * (sram_size // 4 + 1), dtype=np.int32)
-        dec[-2] = OP_FETCH_FAULT
+        dec = np.zeros((tiles, 2 * (sram_size // 4 + 1)), dtype=np.int32)
+        dec[:, -2] = OP_FETCH_FAULT
         return cls(
             st=st,
-            ctr=np.zeros(CTR_SIZE, dtype=np.int64),
-            opc=np.zeros(OPC_SIZE, dtype=np.int64),
-            regs=np.zeros(33, dtype=np.int32),
+            ctr=np.zeros((tiles, CTR_SIZE), dtype=np.int64),
+            opc=np.zeros((tiles, OPC_SIZE), dtype=np.int64),
+            regs=np.zeros((tiles, 33), dtype=np.int32),
             m8=m8,
             m16=m8.view(np.uint16),
             m32=m8.view(np.int32),
             dec=dec,
             decb=dec.view(np.uint8),
-            out=np.zeros(OUT_CAPACITY, dtype=np.uint8),
+            out=np.zeros((tiles, OUT_CAPACITY), dtype=np.uint8),
         )
 
     @property
+    def tiles(self) -> int:
+        return int(self.st.shape[0])
+
+    @property
     def base(self) -> int:
-        return int(self.st[S_MEM_BASE])
+        return int(self.st[0, S_MEM_BASE])
 
     @property
     def size(self) -> int:
-        return int(self.st[S_MEM_SIZE])
+        return int(self.st[0, S_MEM_SIZE])
 
     @property
     def pc(self) -> int:
-        return int(self.st[S_PC])
+        return int(self.st[0, S_PC])
 
     @pc.setter
     def pc(self, value: int) -> None:
-        self.st[S_PC] = value & 0xFFFFFFFF
+        self.st[0, S_PC] = value & 0xFFFFFFFF
 
-    def write(self, addr: int, data: bytes) -> None:
-        """Copy bytes into SRAM (and forget any predecoded instructions there)."""
+    def write(self, addr: int, data: bytes, tile: int = 0) -> None:
+        """Copy bytes into a tile's SRAM (and forget any predecoded instructions there)."""
         off = addr - self.base
         if off < 0 or off + len(data) > self.size:
             raise ValueError(
                 f"address 0x{addr:08x}+{len(data)} is outside SRAM 0x{self.base:08x}..0x{self.base + self.size:08x}"
             )
-        self.m8[off : off + len(data)] = np.frombuffer(data, dtype=np.uint8)
-        self.dec[2 * (off // 4) : 2 * ((off + len(data) + 3) // 4)] = 0
+        self.m8[tile, off : off + len(data)] = np.frombuffer(data, dtype=np.uint8)
+        self.dec[tile, 2 * (off // 4) : 2 * ((off + len(data) + 3) // 4)] = 0
 
-    def read(self, addr: int, length: int) -> bytes:
+    def read(self, addr: int, length: int, tile: int = 0) -> bytes:
         off = addr - self.base
         if off < 0 or off + length > self.size:
             raise ValueError(f"address 0x{addr:08x}+{length} is outside SRAM")
-        return self.m8[off : off + length].tobytes()
+        return self.m8[tile, off : off + length].tobytes()
 
-    def word(self, addr: int) -> int:
-        return int.from_bytes(self.read(addr, 4), "little")
+    def word(self, addr: int, tile: int = 0) -> int:
+        return int.from_bytes(self.read(addr, 4, tile), "little")

@@ -13,11 +13,13 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import numpy as np
+
 from robosoc.chip.core_state import DEFAULT_SRAM_SIZE, SRAM_BASE, CoreState
 from robosoc.chip.counters import counters_dict
 from robosoc.chip.elf import Program, Region, load_elf
 from robosoc.isa.disasm import disassemble
-from robosoc.kernels.core import run_core
+from robosoc.kernels.core import run_cores
 from robosoc.kernels.core_layout import (
     ERROR_TEXT,
     RUN_ERROR,
@@ -33,9 +35,11 @@ from robosoc.kernels.core_layout import (
     S_MULHSU_COUNT,
     S_MULHSU_PC,
     S_OUT_LEN,
+    S_RUN,
 )
 
-CHUNK_CYCLES = 1 << 24  # host returns between slices: output is flushed, Ctrl-C is seen
+CHUNK_CYCLES = 1 << 24
+_TILE0 = np.zeros(1, dtype=np.int64)  # host returns between slices: output is flushed, Ctrl-C is seen
 
 
 class MulhsuErratum(UserWarning):
@@ -103,25 +107,31 @@ class SingleCoreSoC:
         return self.program.symbolize(pc)
 
     @property
+    def regs(self) -> np.ndarray:
+        """The register file x0..x31 (a view: writes change the core)."""
+        return self.state.regs[0, :32]
+
+    @property
     def cycle(self) -> int:
-        return int(self.state.st[S_CYCLE])
+        return int(self.state.st[0, S_CYCLE])
 
     def counters(self) -> dict[str, int]:
-        return counters_dict(self.state.ctr, self.state.opc, self.cycle)
+        return counters_dict(self.state.ctr[0], self.state.opc[0], self.cycle)
 
     def step_until(self, until: int) -> int:
         """Run the kernel to cycle ``until`` (or an event); returns its RUN_* status."""
         s = self.state
-        return run_core(s.st, s.ctr, s.opc, s.regs, s.m8, s.m16, s.m32, s.dec, s.decb, s.out, until)
+        run_cores(s.st, s.ctr, s.opc, s.regs, s.m8, s.m16, s.m32, s.dec, s.decb, s.out, _TILE0, until)
+        return int(s.st[0, S_RUN])
 
     def drain_output(self) -> bytes:
-        n = int(self.state.st[S_OUT_LEN])
-        data = self.state.out[:n].tobytes()
-        self.state.st[S_OUT_LEN] = 0
+        n = int(self.state.st[0, S_OUT_LEN])
+        data = self.state.out[0, :n].tobytes()
+        self.state.st[0, S_OUT_LEN] = 0
         return data
 
     def _error(self) -> CoreError:
-        st = self.state.st
+        st = self.state.st[0]
         code = int(st[S_ERR])
         pc = int(st[S_ERR_PC])
         word = int(st[S_ERR_INSN]) & 0xFFFFFFFF
@@ -151,7 +161,7 @@ class SingleCoreSoC:
             CoreError: illegal/unsupported instruction, bad access or fetch (with pc and symbol).
             CycleBudgetExceeded: ``max_cycles`` reached before the exit.
         """
-        st = self.state.st
+        st = self.state.st[0]
         st[S_MAX_CYCLES] = -1 if max_cycles is None else max_cycles
         output = bytearray()
         start = time.perf_counter()

@@ -43,6 +43,7 @@ from robosoc.kernels.core_layout import (
     RUN_ERROR,
     RUN_EXIT,
     RUN_MAX_CYCLES,
+    RUN_NI,
     RUN_OUTPUT,
     S_CYCLE,
     S_ERR,
@@ -64,6 +65,9 @@ from robosoc.kernels.core_layout import (
     S_RUN,
 )
 from robosoc.kernels.soc_devices import (
+    LD_NI,
+    LD_OK,
+    ST_NI,
     ST_EXIT,
     ST_IRQ_CHANGED,
     ST_READONLY,
@@ -195,7 +199,7 @@ def mul_latency(b: int) -> int:
 
 
 @njit(cache=True)
-def run_core(
+def run_cores(
     st: np.ndarray,
     ctr: np.ndarray,
     opc: np.ndarray,
@@ -206,403 +210,426 @@ def run_core(
     dec: np.ndarray,
     decb: np.ndarray,
     out: np.ndarray,
+    tiles: np.ndarray,
     until: int,
-) -> int:
-    """Run until cycle ``until``, an exit, an error, the cycle budget or a full output buffer.
+) -> None:
+    """Run each core in ``tiles`` until cycle ``until`` or until it must stop.
 
-    ``opc[2 * op + (word index & 1)]`` counts executed instructions per operation; ``dec`` is the predecode table
-    (int32, two per memory word) and ``decb`` its uint8 view.  Returns the RUN_* status (also in
-    ``st[S_RUN]``).  All state stays in the arrays, so the call can be repeated to continue.
+    Every array has one row per core (tile).  A core stops at ``until``, at its exit, an error,
+    its cycle budget, a full output buffer, or just before an access to its network-interface
+    registers (RUN_NI: the chip simulator performs that access in global time order).  The
+    reason is left in ``st[t, S_RUN]``; all state stays in the arrays, so calls can be repeated.
+
+    ``opc[t, 2 * op + (word index & 1)]`` counts executed instructions per operation (two banks,
+    so that consecutive instructions never wait on the same counter); ``dec`` is the predecode
+    table (int32, two per memory word) and ``decb`` its uint8 view.
     """
-    base = st[S_MEM_BASE]
-    size = st[S_MEM_SIZE]
-    has_mul = st[S_MUL] != 0
-    pc = st[S_PC]
-    cyc = st[S_CYCLE]
-    budget = st[S_MAX_CYCLES]
-    stop = until if budget < 0 else min(until, budget)
-    out_limit = OUT_CAPACITY - 8
-    n_taken = ctr[C_TAKEN]
-    n_mulstall = ctr[C_MUL_STALL]
+    for k in range(tiles.shape[0]):
+        t = tiles[k]
+        base = st[t, S_MEM_BASE]
+        size = st[t, S_MEM_SIZE]
+        has_mul = st[t, S_MUL] != 0
+        pc = st[t, S_PC]
+        cyc = st[t, S_CYCLE]
+        budget = st[t, S_MAX_CYCLES]
+        stop = until if budget < 0 else min(until, budget)
+        out_limit = OUT_CAPACITY - 8
+        n_taken = ctr[t, C_TAKEN]
+        n_mulstall = ctr[t, C_MUL_STALL]
 
-    status = RUN_CHUNK
-    err = 0
-    err_addr = 0
-    next_event = min(st[S_IRQ_CHECK], stop)
+        status = RUN_CHUNK
+        err = 0
+        err_addr = 0
+        next_event = min(st[t, S_IRQ_CHECK], stop)
 
-    while True:
-        if cyc >= next_event:
-            if cyc >= st[S_IRQ_CHECK]:
-                pc, cyc, entered = irq_event(st, pc, cyc)
-                if entered == 1:
-                    ctr[C_TRAP] += 1
-                    ctr[C_ENTRY_STALL] += 2
-                elif entered == 2:
-                    ctr[C_IRQ] += 1
-                    ctr[C_ENTRY_STALL] += 2
-            if cyc >= stop:
-                status = RUN_MAX_CYCLES if (budget >= 0 and cyc >= budget) else RUN_CHUNK
-                break
-            if st[S_OUT_LEN] >= out_limit:
-                status = RUN_OUTPUT
-                break
-            next_event = min(st[S_IRQ_CHECK], stop)
-            if next_event <= cyc:
+        while True:
+            if cyc >= next_event:
+                if cyc >= st[t, S_IRQ_CHECK]:
+                    pc, cyc, entered = irq_event(st[t], pc, cyc)
+                    if entered == 1:
+                        ctr[t, C_TRAP] += 1
+                        ctr[t, C_ENTRY_STALL] += 2
+                    elif entered == 2:
+                        ctr[t, C_IRQ] += 1
+                        ctr[t, C_ENTRY_STALL] += 2
+                if cyc >= stop:
+                    status = RUN_MAX_CYCLES if (budget >= 0 and cyc >= budget) else RUN_CHUNK
+                    break
+                if st[t, S_OUT_LEN] >= out_limit:
+                    status = RUN_OUTPUT
+                    break
+                next_event = min(st[t, S_IRQ_CHECK], stop)
+                if next_event <= cyc:
+                    next_event = cyc + 1
+
+            i = np.uint64(pc - base) >> U2
+            j = i << U1
+            w0 = np.uint64(np.uint32(dec[t, j]))
+            op = w0 & U255
+            rd = (w0 >> U8) & U255
+            rs1 = (w0 >> U16) & U255
+            rs2 = w0 >> U24
+            imm = np.int64(dec[t, j + U1])
+            opc[t, (op << U1) | (i & U1)] += 1  # two banks by word parity: no store-to-load chain
+
+            if op == ADDI:
+                regs[t, rd] = regs[t, rs1] + imm
+                cyc += 1
+                pc += 4
+            elif op == LW:
+                addr = (regs[t, rs1] + imm) & M32
+                off = addr - base
+                if off & 3:
+                    err = ERR_LOAD_MISALIGNED
+                    err_addr = addr
+                    break
+                if (off & M32) < size:
+                    regs[t, rd] = m32[t, np.uint64(off) >> U2]
+                else:
+                    v, code = mmio_load(st[t], addr, cyc)
+                    if code == LD_NI:
+                        opc[t, (op << U1) | (i & U1)] -= 1
+                        status = RUN_NI
+                        break
+                    if code != LD_OK:
+                        err = ERR_LOAD_UNMAPPED
+                        err_addr = addr
+                        break
+                    ctr[t, C_MMIO] += 1
+                    regs[t, rd] = v
+                cyc += 3
+                pc += 4
+            elif op == SW:
+                addr = (regs[t, rs1] + imm) & M32
+                off = addr - base
+                if off & 3:
+                    err = ERR_STORE_MISALIGNED
+                    err_addr = addr
+                    break
+                if (off & M32) < size:
+                    wi = np.uint64(off) >> U2
+                    m32[t, wi] = regs[t, rs2]
+                    dec[t, wi << U1] = 0
+                else:
+                    r = mmio_store(st[t], out[t], addr, regs[t, rs2], cyc)
+                    if r == ST_NI:
+                        opc[t, (op << U1) | (i & U1)] -= 1
+                        status = RUN_NI
+                        break
+                    ctr[t, C_MMIO] += 1
+                    if r < 0:
+                        err = ERR_STORE_READONLY if r == ST_READONLY else ERR_STORE_UNMAPPED
+                        err_addr = addr
+                        break
+                    if r == ST_EXIT:
+                        cyc += 3
+                        pc += 4
+                        status = RUN_EXIT
+                        break
+                    if r == ST_IRQ_CHANGED:
+                        st[t, S_IRQ_CHECK] = min(st[t, S_IRQ_CHECK], cyc + 3)
+                    next_event = cyc + 3
+                cyc += 3
+                pc += 4
+            elif op == ADD:
+                regs[t, rd] = regs[t, rs1] + regs[t, rs2]
+                cyc += 1
+                pc += 4
+            elif op == BNE:
+                if regs[t, rs1] != regs[t, rs2]:
+                    target = (pc + imm) & M32
+                    if (target - base) & M32 >= size or target & 3:
+                        err = ERR_FETCH_MISALIGNED if target & 3 else ERR_FETCH
+                        err_addr = target
+                        break
+                    pc = target
+                    cyc += 3
+                    n_taken += 1
+                else:
+                    pc += 4
+                    cyc += 1
+            elif op == BEQ:
+                if regs[t, rs1] == regs[t, rs2]:
+                    target = (pc + imm) & M32
+                    if (target - base) & M32 >= size or target & 3:
+                        err = ERR_FETCH_MISALIGNED if target & 3 else ERR_FETCH
+                        err_addr = target
+                        break
+                    pc = target
+                    cyc += 3
+                    n_taken += 1
+                else:
+                    pc += 4
+                    cyc += 1
+            elif op == BLT:
+                if regs[t, rs1] < regs[t, rs2]:
+                    target = (pc + imm) & M32
+                    if (target - base) & M32 >= size or target & 3:
+                        err = ERR_FETCH_MISALIGNED if target & 3 else ERR_FETCH
+                        err_addr = target
+                        break
+                    pc = target
+                    cyc += 3
+                    n_taken += 1
+                else:
+                    pc += 4
+                    cyc += 1
+            elif op == BGE:
+                if regs[t, rs1] >= regs[t, rs2]:
+                    target = (pc + imm) & M32
+                    if (target - base) & M32 >= size or target & 3:
+                        err = ERR_FETCH_MISALIGNED if target & 3 else ERR_FETCH
+                        err_addr = target
+                        break
+                    pc = target
+                    cyc += 3
+                    n_taken += 1
+                else:
+                    pc += 4
+                    cyc += 1
+            elif op == BLTU:
+                if (regs[t, rs1] & M32) < (regs[t, rs2] & M32):
+                    target = (pc + imm) & M32
+                    if (target - base) & M32 >= size or target & 3:
+                        err = ERR_FETCH_MISALIGNED if target & 3 else ERR_FETCH
+                        err_addr = target
+                        break
+                    pc = target
+                    cyc += 3
+                    n_taken += 1
+                else:
+                    pc += 4
+                    cyc += 1
+            elif op == BGEU:
+                if (regs[t, rs1] & M32) >= (regs[t, rs2] & M32):
+                    target = (pc + imm) & M32
+                    if (target - base) & M32 >= size or target & 3:
+                        err = ERR_FETCH_MISALIGNED if target & 3 else ERR_FETCH
+                        err_addr = target
+                        break
+                    pc = target
+                    cyc += 3
+                    n_taken += 1
+                else:
+                    pc += 4
+                    cyc += 1
+            elif op == SLLI:
+                regs[t, rd] = regs[t, rs1] << imm
+                cyc += 1
+                pc += 4
+            elif op == SRLI:
+                regs[t, rd] = (regs[t, rs1] & M32) >> imm
+                cyc += 1
+                pc += 4
+            elif op == SRAI:
+                regs[t, rd] = regs[t, rs1] >> imm
+                cyc += 1
+                pc += 4
+            elif op == ANDI:
+                regs[t, rd] = regs[t, rs1] & imm
+                cyc += 1
+                pc += 4
+            elif op == ORI:
+                regs[t, rd] = regs[t, rs1] | imm
+                cyc += 1
+                pc += 4
+            elif op == XORI:
+                regs[t, rd] = regs[t, rs1] ^ imm
+                cyc += 1
+                pc += 4
+            elif op == SUB:
+                regs[t, rd] = regs[t, rs1] - regs[t, rs2]
+                cyc += 1
+                pc += 4
+            elif op == AND:
+                regs[t, rd] = regs[t, rs1] & regs[t, rs2]
+                cyc += 1
+                pc += 4
+            elif op == OR:
+                regs[t, rd] = regs[t, rs1] | regs[t, rs2]
+                cyc += 1
+                pc += 4
+            elif op == XOR:
+                regs[t, rd] = regs[t, rs1] ^ regs[t, rs2]
+                cyc += 1
+                pc += 4
+            elif op == SLL:
+                regs[t, rd] = regs[t, rs1] << (regs[t, rs2] & 31)
+                cyc += 1
+                pc += 4
+            elif op == SRL:
+                regs[t, rd] = (regs[t, rs1] & M32) >> (regs[t, rs2] & 31)
+                cyc += 1
+                pc += 4
+            elif op == SRA:
+                regs[t, rd] = regs[t, rs1] >> (regs[t, rs2] & 31)
+                cyc += 1
+                pc += 4
+            elif op == SLT:
+                regs[t, rd] = 1 if regs[t, rs1] < regs[t, rs2] else 0
+                cyc += 1
+                pc += 4
+            elif op == SLTU:
+                regs[t, rd] = 1 if (regs[t, rs1] & M32) < (regs[t, rs2] & M32) else 0
+                cyc += 1
+                pc += 4
+            elif op == SLTI:
+                regs[t, rd] = 1 if regs[t, rs1] < imm else 0
+                cyc += 1
+                pc += 4
+            elif op == SLTIU:
+                regs[t, rd] = 1 if (regs[t, rs1] & M32) < (imm & M32) else 0
+                cyc += 1
+                pc += 4
+            elif op == LUI:
+                regs[t, rd] = imm
+                cyc += 1
+                pc += 4
+            elif op == AUIPC:
+                regs[t, rd] = pc + imm
+                cyc += 1
+                pc += 4
+            elif op == JAL or op == JALR:
+                target = (pc + imm) & M32 if op == JAL else (regs[t, rs1] + imm) & 0xFFFFFFFE
+                if (target - base) & M32 >= size or target & 3:
+                    err = ERR_FETCH_MISALIGNED if target & 3 else ERR_FETCH
+                    err_addr = target
+                    break
+                regs[t, rd] = pc + 4
+                pc = target
+                cyc += 3
+            elif op == LBU or op == LB or op == LHU or op == LH:
+                addr = (regs[t, rs1] + imm) & M32
+                off = addr - base
+                if (op == LHU or op == LH) and (off & 1):
+                    err = ERR_LOAD_MISALIGNED
+                    err_addr = addr
+                    break
+                if (off & M32) < size:
+                    if op == LBU:
+                        v = np.int64(m8[t, np.uint64(off)])
+                    elif op == LB:
+                        v = _sext(np.int64(m8[t, np.uint64(off)]), 8)
+                    elif op == LHU:
+                        v = np.int64(m16[t, np.uint64(off) >> U1])
+                    else:
+                        v = _sext(np.int64(m16[t, np.uint64(off) >> U1]), 16)
+                else:
+                    w, code = mmio_load(st[t], addr, cyc)
+                    if code == LD_NI:
+                        opc[t, (op << U1) | (i & U1)] -= 1
+                        status = RUN_NI
+                        break
+                    if code != LD_OK:
+                        err = ERR_LOAD_UNMAPPED
+                        err_addr = addr
+                        break
+                    ctr[t, C_MMIO] += 1
+                    sh = (addr & 3) * 8
+                    if op == LBU:
+                        v = (w >> sh) & 0xFF
+                    elif op == LB:
+                        v = _sext((w >> sh) & 0xFF, 8)
+                    elif op == LHU:
+                        v = (w >> sh) & 0xFFFF
+                    else:
+                        v = _sext((w >> sh) & 0xFFFF, 16)
+                regs[t, rd] = v
+                cyc += 3
+                pc += 4
+            elif op == SB or op == SH:
+                addr = (regs[t, rs1] + imm) & M32
+                off = addr - base
+                if op == SH and (off & 1):
+                    err = ERR_STORE_MISALIGNED
+                    err_addr = addr
+                    break
+                if (off & M32) < size:
+                    if op == SB:
+                        m8[t, np.uint64(off)] = regs[t, rs2]
+                    else:
+                        m16[t, np.uint64(off) >> U1] = regs[t, rs2]
+                    dec[t, (np.uint64(off) >> U2) << U1] = 0
+                else:
+                    value = regs[t, rs2] & 0xFF if op == SB else regs[t, rs2] & 0xFFFF
+                    r = mmio_store(st[t], out[t], addr, value, cyc)
+                    if r == ST_NI:
+                        opc[t, (op << U1) | (i & U1)] -= 1
+                        status = RUN_NI
+                        break
+                    ctr[t, C_MMIO] += 1
+                    if r < 0:
+                        err = ERR_STORE_READONLY if r == ST_READONLY else ERR_STORE_UNMAPPED
+                        err_addr = addr
+                        break
+                    if r == ST_EXIT:
+                        cyc += 3
+                        pc += 4
+                        status = RUN_EXIT
+                        break
+                    if r == ST_IRQ_CHANGED:
+                        st[t, S_IRQ_CHECK] = min(st[t, S_IRQ_CHECK], cyc + 3)
+                    next_event = cyc + 3
+                cyc += 3
+                pc += 4
+            elif op == MUL or op == MULH or op == MULHU or op == MULHSU:
+                if not has_mul:
+                    err = ERR_NO_MUL
+                    break
+                a = np.int64(regs[t, rs1])
+                b = np.int64(regs[t, rs2])
+                p = a * b
+                if op == MUL:
+                    regs[t, rd] = p
+                elif op == MULH:
+                    regs[t, rd] = p >> 32
+                elif op == MULHU:
+                    regs[t, rd] = (p >> 32) + (b if a < 0 else 0) + (a if b < 0 else 0)
+                else:
+                    regs[t, rd] = (p >> 32) + (a if b < 0 else 0)
+                    st[t, S_MULHSU_COUNT] += 1
+                    if st[t, S_MULHSU_PC] < 0:
+                        st[t, S_MULHSU_PC] = pc
+                lat = mul_latency(b & M32)
+                n_mulstall += lat - 1
+                cyc += lat
+                pc += 4
+            elif op == FENCE:
+                cyc += 1
+                pc += 4
+            elif op == 0:
+                opc[t, i & U1] -= 1
+                decode_word(m32[t, i], dec[t], i)
+            elif op >= FIRST_SYSTEM and op < ILLEGAL:
+                # SYSTEM opcode: trap.  EPC = trap + 8; the instruction at trap + 8 executes first.
+                st[t, S_IRQ_EPC] = (pc + 8) & M32
+                st[t, S_IRQ_STATUS] &= 0xFE
+                st[t, S_IRQ_PHASE] = PH_TRAP
+                cyc += 1
+                pc += 8
+                st[t, S_IRQ_CHECK] = cyc + 1
                 next_event = cyc + 1
+            elif op == FETCH_FAULT:
+                err = ERR_FETCH
+                err_addr = pc
+                break
+            elif op & UNSUPPORTED_BIT:
+                err = ERR_UNSUPPORTED
+                break
+            else:
+                err = ERR_ILLEGAL
+                break
 
-        i = np.uint64(pc - base) >> U2
-        j = i << U1
-        w0 = np.uint64(np.uint32(dec[j]))
-        op = w0 & U255
-        rd = (w0 >> U8) & U255
-        rs1 = (w0 >> U16) & U255
-        rs2 = w0 >> U24
-        imm = np.int64(dec[j + U1])
-        opc[(op << U1) | (i & U1)] += 1  # two banks by word parity: no store-to-load chain
+        if err != 0:
+            status = RUN_ERROR
+            st[t, S_ERR] = err
+            st[t, S_ERR_PC] = pc
+            st[t, S_ERR_ADDR] = err_addr
+            wi = (pc - base) >> 2
+            st[t, S_ERR_INSN] = m32[t, wi] & M32 if 0 <= wi < size >> 2 else 0
 
-        if op == ADDI:
-            regs[rd] = regs[rs1] + imm
-            cyc += 1
-            pc += 4
-        elif op == LW:
-            addr = (regs[rs1] + imm) & M32
-            off = addr - base
-            if off & 3:
-                err = ERR_LOAD_MISALIGNED
-                err_addr = addr
-                break
-            if (off & M32) < size:
-                regs[rd] = m32[np.uint64(off) >> U2]
-            else:
-                v, ok = mmio_load(st, addr, cyc)
-                if not ok:
-                    err = ERR_LOAD_UNMAPPED
-                    err_addr = addr
-                    break
-                ctr[C_MMIO] += 1
-                regs[rd] = v
-            cyc += 3
-            pc += 4
-        elif op == SW:
-            addr = (regs[rs1] + imm) & M32
-            off = addr - base
-            if off & 3:
-                err = ERR_STORE_MISALIGNED
-                err_addr = addr
-                break
-            if (off & M32) < size:
-                wi = np.uint64(off) >> U2
-                m32[wi] = regs[rs2]
-                dec[wi << U1] = 0
-            else:
-                r = mmio_store(st, out, addr, regs[rs2], cyc)
-                ctr[C_MMIO] += 1
-                if r < 0:
-                    err = ERR_STORE_READONLY if r == ST_READONLY else ERR_STORE_UNMAPPED
-                    err_addr = addr
-                    break
-                if r == ST_EXIT:
-                    cyc += 3
-                    pc += 4
-                    status = RUN_EXIT
-                    break
-                if r == ST_IRQ_CHANGED:
-                    st[S_IRQ_CHECK] = min(st[S_IRQ_CHECK], cyc + 3)
-                next_event = cyc + 3
-            cyc += 3
-            pc += 4
-        elif op == ADD:
-            regs[rd] = regs[rs1] + regs[rs2]
-            cyc += 1
-            pc += 4
-        elif op == BNE:
-            if regs[rs1] != regs[rs2]:
-                target = (pc + imm) & M32
-                if (target - base) & M32 >= size or target & 3:
-                    err = ERR_FETCH_MISALIGNED if target & 3 else ERR_FETCH
-                    err_addr = target
-                    break
-                pc = target
-                cyc += 3
-                n_taken += 1
-            else:
-                pc += 4
-                cyc += 1
-        elif op == BEQ:
-            if regs[rs1] == regs[rs2]:
-                target = (pc + imm) & M32
-                if (target - base) & M32 >= size or target & 3:
-                    err = ERR_FETCH_MISALIGNED if target & 3 else ERR_FETCH
-                    err_addr = target
-                    break
-                pc = target
-                cyc += 3
-                n_taken += 1
-            else:
-                pc += 4
-                cyc += 1
-        elif op == BLT:
-            if regs[rs1] < regs[rs2]:
-                target = (pc + imm) & M32
-                if (target - base) & M32 >= size or target & 3:
-                    err = ERR_FETCH_MISALIGNED if target & 3 else ERR_FETCH
-                    err_addr = target
-                    break
-                pc = target
-                cyc += 3
-                n_taken += 1
-            else:
-                pc += 4
-                cyc += 1
-        elif op == BGE:
-            if regs[rs1] >= regs[rs2]:
-                target = (pc + imm) & M32
-                if (target - base) & M32 >= size or target & 3:
-                    err = ERR_FETCH_MISALIGNED if target & 3 else ERR_FETCH
-                    err_addr = target
-                    break
-                pc = target
-                cyc += 3
-                n_taken += 1
-            else:
-                pc += 4
-                cyc += 1
-        elif op == BLTU:
-            if (regs[rs1] & M32) < (regs[rs2] & M32):
-                target = (pc + imm) & M32
-                if (target - base) & M32 >= size or target & 3:
-                    err = ERR_FETCH_MISALIGNED if target & 3 else ERR_FETCH
-                    err_addr = target
-                    break
-                pc = target
-                cyc += 3
-                n_taken += 1
-            else:
-                pc += 4
-                cyc += 1
-        elif op == BGEU:
-            if (regs[rs1] & M32) >= (regs[rs2] & M32):
-                target = (pc + imm) & M32
-                if (target - base) & M32 >= size or target & 3:
-                    err = ERR_FETCH_MISALIGNED if target & 3 else ERR_FETCH
-                    err_addr = target
-                    break
-                pc = target
-                cyc += 3
-                n_taken += 1
-            else:
-                pc += 4
-                cyc += 1
-        elif op == SLLI:
-            regs[rd] = regs[rs1] << imm
-            cyc += 1
-            pc += 4
-        elif op == SRLI:
-            regs[rd] = (regs[rs1] & M32) >> imm
-            cyc += 1
-            pc += 4
-        elif op == SRAI:
-            regs[rd] = regs[rs1] >> imm
-            cyc += 1
-            pc += 4
-        elif op == ANDI:
-            regs[rd] = regs[rs1] & imm
-            cyc += 1
-            pc += 4
-        elif op == ORI:
-            regs[rd] = regs[rs1] | imm
-            cyc += 1
-            pc += 4
-        elif op == XORI:
-            regs[rd] = regs[rs1] ^ imm
-            cyc += 1
-            pc += 4
-        elif op == SUB:
-            regs[rd] = regs[rs1] - regs[rs2]
-            cyc += 1
-            pc += 4
-        elif op == AND:
-            regs[rd] = regs[rs1] & regs[rs2]
-            cyc += 1
-            pc += 4
-        elif op == OR:
-            regs[rd] = regs[rs1] | regs[rs2]
-            cyc += 1
-            pc += 4
-        elif op == XOR:
-            regs[rd] = regs[rs1] ^ regs[rs2]
-            cyc += 1
-            pc += 4
-        elif op == SLL:
-            regs[rd] = regs[rs1] << (regs[rs2] & 31)
-            cyc += 1
-            pc += 4
-        elif op == SRL:
-            regs[rd] = (regs[rs1] & M32) >> (regs[rs2] & 31)
-            cyc += 1
-            pc += 4
-        elif op == SRA:
-            regs[rd] = regs[rs1] >> (regs[rs2] & 31)
-            cyc += 1
-            pc += 4
-        elif op == SLT:
-            regs[rd] = 1 if regs[rs1] < regs[rs2] else 0
-            cyc += 1
-            pc += 4
-        elif op == SLTU:
-            regs[rd] = 1 if (regs[rs1] & M32) < (regs[rs2] & M32) else 0
-            cyc += 1
-            pc += 4
-        elif op == SLTI:
-            regs[rd] = 1 if regs[rs1] < imm else 0
-            cyc += 1
-            pc += 4
-        elif op == SLTIU:
-            regs[rd] = 1 if (regs[rs1] & M32) < (imm & M32) else 0
-            cyc += 1
-            pc += 4
-        elif op == LUI:
-            regs[rd] = imm
-            cyc += 1
-            pc += 4
-        elif op == AUIPC:
-            regs[rd] = pc + imm
-            cyc += 1
-            pc += 4
-        elif op == JAL or op == JALR:
-            target = (pc + imm) & M32 if op == JAL else (regs[rs1] + imm) & 0xFFFFFFFE
-            if (target - base) & M32 >= size or target & 3:
-                err = ERR_FETCH_MISALIGNED if target & 3 else ERR_FETCH
-                err_addr = target
-                break
-            regs[rd] = pc + 4
-            pc = target
-            cyc += 3
-        elif op == LBU or op == LB or op == LHU or op == LH:
-            addr = (regs[rs1] + imm) & M32
-            off = addr - base
-            if (op == LHU or op == LH) and (off & 1):
-                err = ERR_LOAD_MISALIGNED
-                err_addr = addr
-                break
-            if (off & M32) < size:
-                if op == LBU:
-                    v = np.int64(m8[np.uint64(off)])
-                elif op == LB:
-                    v = _sext(np.int64(m8[np.uint64(off)]), 8)
-                elif op == LHU:
-                    v = np.int64(m16[np.uint64(off) >> U1])
-                else:
-                    v = _sext(np.int64(m16[np.uint64(off) >> U1]), 16)
-            else:
-                w, ok = mmio_load(st, addr, cyc)
-                if not ok:
-                    err = ERR_LOAD_UNMAPPED
-                    err_addr = addr
-                    break
-                ctr[C_MMIO] += 1
-                sh = (addr & 3) * 8
-                if op == LBU:
-                    v = (w >> sh) & 0xFF
-                elif op == LB:
-                    v = _sext((w >> sh) & 0xFF, 8)
-                elif op == LHU:
-                    v = (w >> sh) & 0xFFFF
-                else:
-                    v = _sext((w >> sh) & 0xFFFF, 16)
-            regs[rd] = v
-            cyc += 3
-            pc += 4
-        elif op == SB or op == SH:
-            addr = (regs[rs1] + imm) & M32
-            off = addr - base
-            if op == SH and (off & 1):
-                err = ERR_STORE_MISALIGNED
-                err_addr = addr
-                break
-            if (off & M32) < size:
-                if op == SB:
-                    m8[np.uint64(off)] = regs[rs2]
-                else:
-                    m16[np.uint64(off) >> U1] = regs[rs2]
-                dec[(np.uint64(off) >> U2) << U1] = 0
-            else:
-                value = regs[rs2] & 0xFF if op == SB else regs[rs2] & 0xFFFF
-                r = mmio_store(st, out, addr, value, cyc)
-                ctr[C_MMIO] += 1
-                if r < 0:
-                    err = ERR_STORE_READONLY if r == ST_READONLY else ERR_STORE_UNMAPPED
-                    err_addr = addr
-                    break
-                if r == ST_EXIT:
-                    cyc += 3
-                    pc += 4
-                    status = RUN_EXIT
-                    break
-                if r == ST_IRQ_CHANGED:
-                    st[S_IRQ_CHECK] = min(st[S_IRQ_CHECK], cyc + 3)
-                next_event = cyc + 3
-            cyc += 3
-            pc += 4
-        elif op == MUL or op == MULH or op == MULHU or op == MULHSU:
-            if not has_mul:
-                err = ERR_NO_MUL
-                break
-            a = np.int64(regs[rs1])
-            b = np.int64(regs[rs2])
-            p = a * b
-            if op == MUL:
-                regs[rd] = p
-            elif op == MULH:
-                regs[rd] = p >> 32
-            elif op == MULHU:
-                regs[rd] = (p >> 32) + (b if a < 0 else 0) + (a if b < 0 else 0)
-            else:
-                regs[rd] = (p >> 32) + (a if b < 0 else 0)
-                st[S_MULHSU_COUNT] += 1
-                if st[S_MULHSU_PC] < 0:
-                    st[S_MULHSU_PC] = pc
-            lat = mul_latency(b & M32)
-            n_mulstall += lat - 1
-            cyc += lat
-            pc += 4
-        elif op == FENCE:
-            cyc += 1
-            pc += 4
-        elif op == 0:
-            opc[i & U1] -= 1
-            decode_word(m32[i], dec, i)
-        elif op >= FIRST_SYSTEM and op < ILLEGAL:
-            # SYSTEM opcode: trap.  EPC = trap + 8; the instruction at trap + 8 executes first.
-            st[S_IRQ_EPC] = (pc + 8) & M32
-            st[S_IRQ_STATUS] &= 0xFE
-            st[S_IRQ_PHASE] = PH_TRAP
-            cyc += 1
-            pc += 8
-            st[S_IRQ_CHECK] = cyc + 1
-            next_event = cyc + 1
-        elif op == FETCH_FAULT:
-            err = ERR_FETCH
-            err_addr = pc
-            break
-        elif op & UNSUPPORTED_BIT:
-            err = ERR_UNSUPPORTED
-            break
-        else:
-            err = ERR_ILLEGAL
-            break
-
-    if err != 0:
-        status = RUN_ERROR
-        st[S_ERR] = err
-        st[S_ERR_PC] = pc
-        st[S_ERR_ADDR] = err_addr
-        wi = (pc - base) >> 2
-        st[S_ERR_INSN] = m32[wi] & M32 if 0 <= wi < size >> 2 else 0
-
-    st[S_PC] = pc & M32
-    st[S_CYCLE] = cyc
-    st[S_RUN] = status
-    ctr[C_TAKEN] = n_taken
-    ctr[C_MUL_STALL] = n_mulstall
-    return status
+        st[t, S_PC] = pc & M32
+        st[t, S_CYCLE] = cyc
+        st[t, S_RUN] = status
+        ctr[t, C_TAKEN] = n_taken
+        ctr[t, C_MUL_STALL] = n_mulstall

@@ -21,6 +21,7 @@ S_MUL = 11  # 1 when the multiplier is present
 S_MULHSU_COUNT = 12
 S_MULHSU_PC = 13
 S_MAX_CYCLES = 14  # -1: no budget
+S_NI = 15  # 1 when the tile has network-interface registers (MPSoC tile)
 # interrupt controller
 S_IRQ_VECTOR = 16
 S_IRQ_MASK = 17
@@ -31,6 +32,7 @@ S_IRQ_RISE = 21  # cycle the pending condition became true, -1 if not pending
 S_IRQ_ARMED = 22  # start cycle of the instruction during which the ack may happen
 S_IRQ_CHECK = 23  # next cycle at which the interrupt state must be re-evaluated
 S_EXT_IRQ = 24  # IRQ_CAUSE bits 1..7 driven by devices outside the core SoC (network interface)
+S_EXT_RISE = 25  # cycle from which IRQ_CAUSE bit 1 (packet received) is set, NEVER if not scheduled
 # timers
 S_TMASK = 32
 S_TINV = 33
@@ -50,6 +52,7 @@ RUN_EXIT = 1  # the program stored its exit code
 RUN_ERROR = 2
 RUN_MAX_CYCLES = 3
 RUN_OUTPUT = 4  # the output buffer is full: drain it and call again
+RUN_NI = 5  # stopped before an access to the network-interface registers
 
 # interrupt controller phases
 PH_NONE = 0

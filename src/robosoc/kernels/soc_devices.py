@@ -44,6 +44,7 @@ from robosoc.kernels.core_layout import (
     PH_TRAP,
     S_EXIT_CODE,
     S_EXT_IRQ,
+    S_EXT_RISE,
     S_IRQ_ARMED,
     S_IRQ_CHECK,
     S_IRQ_EPC,
@@ -52,6 +53,7 @@ from robosoc.kernels.core_layout import (
     S_IRQ_RISE,
     S_IRQ_STATUS,
     S_IRQ_VECTOR,
+    S_NI,
     S_OUT_LEN,
     S_T1_CTC,
     S_T1_FLAG,
@@ -84,14 +86,22 @@ IRQ_MASK = 0xF0000020
 IRQ_STATUS = 0xF0000030
 IRQ_EPC = 0xF0000040
 DEBUG = 0xF00000D0
+NI_BASE = 0xE1040000  # network interface, task id and sleep registers of an MPSoC tile (kernels/chip.py)
+NI_END = 0xE1040040
 
 NEVER = np.int64(1) << 62
+
+# load results
+LD_OK = 0
+LD_UNMAPPED = 1
+LD_NI = 2
 
 # store results
 ST_OK = 0
 ST_IRQ_CHANGED = 1  # interrupt-relevant state changed: re-evaluate the controller
 ST_EXIT = 2
 ST_OUTPUT = 3  # a byte was output (the buffer may need draining)
+ST_NI = 4  # a network-interface register: the chip simulator performs the access
 ST_UNMAPPED = -1
 ST_READONLY = -2
 
@@ -225,7 +235,10 @@ def s0_cause(st: np.ndarray, x: int) -> int:
 
 @njit(cache=True)
 def irq_cause(st: np.ndarray, x: int) -> int:
-    return (1 if s0_cause(st, x) != 0 else 0) | (st[S_EXT_IRQ] & 0xFE)
+    ext = st[S_EXT_IRQ] & 0xFE
+    if x >= st[S_EXT_RISE]:
+        ext |= 2
+    return (1 if s0_cause(st, x) != 0 else 0) | ext
 
 
 @njit(cache=True)
@@ -249,10 +262,14 @@ def _t1_steps_to(val: int, target: int, ctc: int) -> int:
 @njit(cache=True)
 def next_cause_change(st: np.ndarray, x: int) -> int:
     """Earliest cycle > x at which an unmasked timer cause bit may change (NEVER if none can)."""
-    if (st[S_IRQ_STATUS] & 1) == 0 or (st[S_IRQ_MASK] & 1) == 0:
+    if (st[S_IRQ_STATUS] & 1) == 0:
         return NEVER
-    mask = st[S_TMASK]
     best = NEVER
+    if (st[S_IRQ_MASK] & 2) != 0 and st[S_EXT_RISE] > x:
+        best = st[S_EXT_RISE]
+    if (st[S_IRQ_MASK] & 1) == 0:
+        return best
+    mask = st[S_TMASK]
     if mask & 1:
         best = min(best, ((x >> 16) + 1) << 16)
     if mask & 2:
@@ -334,45 +351,51 @@ def irq_event(st: np.ndarray, pc: int, cyc: int) -> tuple[int, int, int]:
 
 
 @njit(cache=True)
-def mmio_load(st: np.ndarray, addr: int, c: int) -> tuple[int, bool]:
-    """Read a device register with a load that starts in cycle ``c`` (value of cycle c - 1)."""
+def mmio_load(st: np.ndarray, addr: int, c: int) -> tuple[int, int]:
+    """Read a device register with a load that starts in cycle ``c`` (value of cycle c - 1).
+
+    Returns (value, LD_OK), (0, LD_UNMAPPED), or (0, LD_NI) for a network-interface register,
+    which the chip simulator reads itself in global time order.
+    """
     a = addr & 0xFFFFFFFC
     x = c - 1
+    if NI_BASE <= a < NI_END:
+        return 0, LD_NI if st[S_NI] != 0 else LD_UNMAPPED
     if a == TIMER0:
-        return x & 0xFFFFFFFF, True
+        return x & 0xFFFFFFFF, LD_OK
     if a == TIMER1:
-        return t1_at(st, x)[0], True
+        return t1_at(st, x)[0], LD_OK
     if a == TIMER1_PRE:
-        return st[S_T1_PRE], True
+        return st[S_T1_PRE], LD_OK
     if a == TIMER1_CTC:
-        return st[S_T1_CTC], True
+        return st[S_T1_CTC], LD_OK
     if a == TIMER1_OCR:
-        return st[S_T1_OCR], True
+        return st[S_T1_OCR], LD_OK
     if a == TIMERCAUSE:
-        return timer_cause(st, x), True
+        return timer_cause(st, x), LD_OK
     if a == TIMERCAUSE_INV:
-        return st[S_TINV], True
+        return st[S_TINV], LD_OK
     if a == TIMERMASK:
-        return st[S_TMASK], True
+        return st[S_TMASK], LD_OK
     if a == S0CAUSE:
-        return s0_cause(st, x), True
+        return s0_cause(st, x), LD_OK
     if a == IRQ_VECTOR:
-        return st[S_IRQ_VECTOR], True
+        return st[S_IRQ_VECTOR], LD_OK
     if a == IRQ_CAUSE:
-        return irq_cause(st, x), True
+        return irq_cause(st, x), LD_OK
     if a == IRQ_MASK:
-        return st[S_IRQ_MASK], True
+        return st[S_IRQ_MASK], LD_OK
     if a == IRQ_STATUS:
-        return st[S_IRQ_STATUS], True
+        return st[S_IRQ_STATUS], LD_OK
     if a == IRQ_EPC:
-        return st[S_IRQ_EPC], True
+        return st[S_IRQ_EPC], LD_OK
     if a == UARTCAUSE:
-        return 0, True
+        return 0, LD_OK
     if a == UART0_DIV:
-        return st[S_UART_DIV], True
+        return st[S_UART_DIV], LD_OK
     if a == UART0 or a == DEBUG:
-        return 0, True
-    return 0, False
+        return 0, LD_OK
+    return 0, LD_UNMAPPED
 
 
 @njit(cache=True)
@@ -393,6 +416,8 @@ def mmio_store(st: np.ndarray, out: np.ndarray, addr: int, value: int, s: int) -
     a = addr & 0xFFFFFFFC
     v = value & 0xFFFFFFFF
     w = s + 3
+    if NI_BASE <= a < NI_END:
+        return ST_NI if st[S_NI] != 0 else ST_UNMAPPED
     if a == DEBUG or a == UART0:
         return _emit(st, out, v)
     if a == EXIT_ADDR:
