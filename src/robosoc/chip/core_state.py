@@ -10,7 +10,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from robosoc.isa.table import OP_FETCH_FAULT
-from robosoc.kernels.soc_devices import NEVER
 from robosoc.kernels.core_layout import (
     CTR_SIZE,
     OPC_SIZE,
@@ -28,6 +27,7 @@ from robosoc.kernels.core_layout import (
     S_T1_CTC,
     ST_SIZE,
 )
+from robosoc.kernels.soc_devices import NEVER
 
 SRAM_BASE = 0x40000000
 DEFAULT_SRAM_SIZE = 2 * 1024 * 1024

@@ -67,9 +67,9 @@ from robosoc.kernels.core_layout import (
 from robosoc.kernels.soc_devices import (
     LD_NI,
     LD_OK,
-    ST_NI,
     ST_EXIT,
     ST_IRQ_CHANGED,
+    ST_NI,
     ST_READONLY,
     irq_event,
     mmio_load,
@@ -226,81 +226,91 @@ def run_cores(
     """
     for k in range(tiles.shape[0]):
         t = tiles[k]
-        base = st[t, S_MEM_BASE]
-        size = st[t, S_MEM_SIZE]
-        has_mul = st[t, S_MUL] != 0
-        pc = st[t, S_PC]
-        cyc = st[t, S_CYCLE]
-        budget = st[t, S_MAX_CYCLES]
+        st_t = st[t]
+        ctr_t = ctr[t]
+        opc_t = opc[t]
+        regs_t = regs[t]
+        m8_t = m8[t]
+        m16_t = m16[t]
+        m32_t = m32[t]
+        dec_t = dec[t]
+        decb_t = decb[t]
+        out_t = out[t]
+        base = st_t[S_MEM_BASE]
+        size = st_t[S_MEM_SIZE]
+        has_mul = st_t[S_MUL] != 0
+        pc = st_t[S_PC]
+        cyc = st_t[S_CYCLE]
+        budget = st_t[S_MAX_CYCLES]
         stop = until if budget < 0 else min(until, budget)
         out_limit = OUT_CAPACITY - 8
-        n_taken = ctr[t, C_TAKEN]
-        n_mulstall = ctr[t, C_MUL_STALL]
+        n_taken = ctr_t[C_TAKEN]
+        n_mulstall = ctr_t[C_MUL_STALL]
 
         status = RUN_CHUNK
         err = 0
         err_addr = 0
-        next_event = min(st[t, S_IRQ_CHECK], stop)
+        next_event = min(st_t[S_IRQ_CHECK], stop)
 
         while True:
             if cyc >= next_event:
-                if cyc >= st[t, S_IRQ_CHECK]:
-                    pc, cyc, entered = irq_event(st[t], pc, cyc)
+                if cyc >= st_t[S_IRQ_CHECK]:
+                    pc, cyc, entered = irq_event(st_t, pc, cyc)
                     if entered == 1:
-                        ctr[t, C_TRAP] += 1
-                        ctr[t, C_ENTRY_STALL] += 2
+                        ctr_t[C_TRAP] += 1
+                        ctr_t[C_ENTRY_STALL] += 2
                     elif entered == 2:
-                        ctr[t, C_IRQ] += 1
-                        ctr[t, C_ENTRY_STALL] += 2
+                        ctr_t[C_IRQ] += 1
+                        ctr_t[C_ENTRY_STALL] += 2
                 if cyc >= stop:
                     status = RUN_MAX_CYCLES if (budget >= 0 and cyc >= budget) else RUN_CHUNK
                     break
-                if st[t, S_OUT_LEN] >= out_limit:
+                if st_t[S_OUT_LEN] >= out_limit:
                     status = RUN_OUTPUT
                     break
-                next_event = min(st[t, S_IRQ_CHECK], stop)
+                next_event = min(st_t[S_IRQ_CHECK], stop)
                 if next_event <= cyc:
                     next_event = cyc + 1
 
             i = np.uint64(pc - base) >> U2
             j = i << U1
-            w0 = np.uint64(np.uint32(dec[t, j]))
+            w0 = np.uint64(np.uint32(dec_t[j]))
             op = w0 & U255
             rd = (w0 >> U8) & U255
             rs1 = (w0 >> U16) & U255
             rs2 = w0 >> U24
-            imm = np.int64(dec[t, j + U1])
-            opc[t, (op << U1) | (i & U1)] += 1  # two banks by word parity: no store-to-load chain
+            imm = np.int64(dec_t[j + U1])
+            opc_t[(op << U1) | (i & U1)] += 1  # two banks by word parity: no store-to-load chain
 
             if op == ADDI:
-                regs[t, rd] = regs[t, rs1] + imm
+                regs_t[rd] = regs_t[rs1] + imm
                 cyc += 1
                 pc += 4
             elif op == LW:
-                addr = (regs[t, rs1] + imm) & M32
+                addr = (regs_t[rs1] + imm) & M32
                 off = addr - base
                 if off & 3:
                     err = ERR_LOAD_MISALIGNED
                     err_addr = addr
                     break
                 if (off & M32) < size:
-                    regs[t, rd] = m32[t, np.uint64(off) >> U2]
+                    regs_t[rd] = m32_t[np.uint64(off) >> U2]
                 else:
-                    v, code = mmio_load(st[t], addr, cyc)
+                    v, code = mmio_load(st_t, addr, cyc)
                     if code == LD_NI:
-                        opc[t, (op << U1) | (i & U1)] -= 1
+                        opc_t[(op << U1) | (i & U1)] -= 1
                         status = RUN_NI
                         break
                     if code != LD_OK:
                         err = ERR_LOAD_UNMAPPED
                         err_addr = addr
                         break
-                    ctr[t, C_MMIO] += 1
-                    regs[t, rd] = v
+                    ctr_t[C_MMIO] += 1
+                    regs_t[rd] = v
                 cyc += 3
                 pc += 4
             elif op == SW:
-                addr = (regs[t, rs1] + imm) & M32
+                addr = (regs_t[rs1] + imm) & M32
                 off = addr - base
                 if off & 3:
                     err = ERR_STORE_MISALIGNED
@@ -308,15 +318,15 @@ def run_cores(
                     break
                 if (off & M32) < size:
                     wi = np.uint64(off) >> U2
-                    m32[t, wi] = regs[t, rs2]
-                    dec[t, wi << U1] = 0
+                    m32_t[wi] = regs_t[rs2]
+                    dec_t[wi << U1] = 0
                 else:
-                    r = mmio_store(st[t], out[t], addr, regs[t, rs2], cyc)
+                    r = mmio_store(st_t, out_t, addr, regs_t[rs2], cyc)
                     if r == ST_NI:
-                        opc[t, (op << U1) | (i & U1)] -= 1
+                        opc_t[(op << U1) | (i & U1)] -= 1
                         status = RUN_NI
                         break
-                    ctr[t, C_MMIO] += 1
+                    ctr_t[C_MMIO] += 1
                     if r < 0:
                         err = ERR_STORE_READONLY if r == ST_READONLY else ERR_STORE_UNMAPPED
                         err_addr = addr
@@ -327,16 +337,16 @@ def run_cores(
                         status = RUN_EXIT
                         break
                     if r == ST_IRQ_CHANGED:
-                        st[t, S_IRQ_CHECK] = min(st[t, S_IRQ_CHECK], cyc + 3)
+                        st_t[S_IRQ_CHECK] = min(st_t[S_IRQ_CHECK], cyc + 3)
                     next_event = cyc + 3
                 cyc += 3
                 pc += 4
             elif op == ADD:
-                regs[t, rd] = regs[t, rs1] + regs[t, rs2]
+                regs_t[rd] = regs_t[rs1] + regs_t[rs2]
                 cyc += 1
                 pc += 4
             elif op == BNE:
-                if regs[t, rs1] != regs[t, rs2]:
+                if regs_t[rs1] != regs_t[rs2]:
                     target = (pc + imm) & M32
                     if (target - base) & M32 >= size or target & 3:
                         err = ERR_FETCH_MISALIGNED if target & 3 else ERR_FETCH
@@ -349,7 +359,7 @@ def run_cores(
                     pc += 4
                     cyc += 1
             elif op == BEQ:
-                if regs[t, rs1] == regs[t, rs2]:
+                if regs_t[rs1] == regs_t[rs2]:
                     target = (pc + imm) & M32
                     if (target - base) & M32 >= size or target & 3:
                         err = ERR_FETCH_MISALIGNED if target & 3 else ERR_FETCH
@@ -362,7 +372,7 @@ def run_cores(
                     pc += 4
                     cyc += 1
             elif op == BLT:
-                if regs[t, rs1] < regs[t, rs2]:
+                if regs_t[rs1] < regs_t[rs2]:
                     target = (pc + imm) & M32
                     if (target - base) & M32 >= size or target & 3:
                         err = ERR_FETCH_MISALIGNED if target & 3 else ERR_FETCH
@@ -375,7 +385,7 @@ def run_cores(
                     pc += 4
                     cyc += 1
             elif op == BGE:
-                if regs[t, rs1] >= regs[t, rs2]:
+                if regs_t[rs1] >= regs_t[rs2]:
                     target = (pc + imm) & M32
                     if (target - base) & M32 >= size or target & 3:
                         err = ERR_FETCH_MISALIGNED if target & 3 else ERR_FETCH
@@ -388,7 +398,7 @@ def run_cores(
                     pc += 4
                     cyc += 1
             elif op == BLTU:
-                if (regs[t, rs1] & M32) < (regs[t, rs2] & M32):
+                if (regs_t[rs1] & M32) < (regs_t[rs2] & M32):
                     target = (pc + imm) & M32
                     if (target - base) & M32 >= size or target & 3:
                         err = ERR_FETCH_MISALIGNED if target & 3 else ERR_FETCH
@@ -401,7 +411,7 @@ def run_cores(
                     pc += 4
                     cyc += 1
             elif op == BGEU:
-                if (regs[t, rs1] & M32) >= (regs[t, rs2] & M32):
+                if (regs_t[rs1] & M32) >= (regs_t[rs2] & M32):
                     target = (pc + imm) & M32
                     if (target - base) & M32 >= size or target & 3:
                         err = ERR_FETCH_MISALIGNED if target & 3 else ERR_FETCH
@@ -414,92 +424,92 @@ def run_cores(
                     pc += 4
                     cyc += 1
             elif op == SLLI:
-                regs[t, rd] = regs[t, rs1] << imm
+                regs_t[rd] = regs_t[rs1] << imm
                 cyc += 1
                 pc += 4
             elif op == SRLI:
-                regs[t, rd] = (regs[t, rs1] & M32) >> imm
+                regs_t[rd] = (regs_t[rs1] & M32) >> imm
                 cyc += 1
                 pc += 4
             elif op == SRAI:
-                regs[t, rd] = regs[t, rs1] >> imm
+                regs_t[rd] = regs_t[rs1] >> imm
                 cyc += 1
                 pc += 4
             elif op == ANDI:
-                regs[t, rd] = regs[t, rs1] & imm
+                regs_t[rd] = regs_t[rs1] & imm
                 cyc += 1
                 pc += 4
             elif op == ORI:
-                regs[t, rd] = regs[t, rs1] | imm
+                regs_t[rd] = regs_t[rs1] | imm
                 cyc += 1
                 pc += 4
             elif op == XORI:
-                regs[t, rd] = regs[t, rs1] ^ imm
+                regs_t[rd] = regs_t[rs1] ^ imm
                 cyc += 1
                 pc += 4
             elif op == SUB:
-                regs[t, rd] = regs[t, rs1] - regs[t, rs2]
+                regs_t[rd] = regs_t[rs1] - regs_t[rs2]
                 cyc += 1
                 pc += 4
             elif op == AND:
-                regs[t, rd] = regs[t, rs1] & regs[t, rs2]
+                regs_t[rd] = regs_t[rs1] & regs_t[rs2]
                 cyc += 1
                 pc += 4
             elif op == OR:
-                regs[t, rd] = regs[t, rs1] | regs[t, rs2]
+                regs_t[rd] = regs_t[rs1] | regs_t[rs2]
                 cyc += 1
                 pc += 4
             elif op == XOR:
-                regs[t, rd] = regs[t, rs1] ^ regs[t, rs2]
+                regs_t[rd] = regs_t[rs1] ^ regs_t[rs2]
                 cyc += 1
                 pc += 4
             elif op == SLL:
-                regs[t, rd] = regs[t, rs1] << (regs[t, rs2] & 31)
+                regs_t[rd] = regs_t[rs1] << (regs_t[rs2] & 31)
                 cyc += 1
                 pc += 4
             elif op == SRL:
-                regs[t, rd] = (regs[t, rs1] & M32) >> (regs[t, rs2] & 31)
+                regs_t[rd] = (regs_t[rs1] & M32) >> (regs_t[rs2] & 31)
                 cyc += 1
                 pc += 4
             elif op == SRA:
-                regs[t, rd] = regs[t, rs1] >> (regs[t, rs2] & 31)
+                regs_t[rd] = regs_t[rs1] >> (regs_t[rs2] & 31)
                 cyc += 1
                 pc += 4
             elif op == SLT:
-                regs[t, rd] = 1 if regs[t, rs1] < regs[t, rs2] else 0
+                regs_t[rd] = 1 if regs_t[rs1] < regs_t[rs2] else 0
                 cyc += 1
                 pc += 4
             elif op == SLTU:
-                regs[t, rd] = 1 if (regs[t, rs1] & M32) < (regs[t, rs2] & M32) else 0
+                regs_t[rd] = 1 if (regs_t[rs1] & M32) < (regs_t[rs2] & M32) else 0
                 cyc += 1
                 pc += 4
             elif op == SLTI:
-                regs[t, rd] = 1 if regs[t, rs1] < imm else 0
+                regs_t[rd] = 1 if regs_t[rs1] < imm else 0
                 cyc += 1
                 pc += 4
             elif op == SLTIU:
-                regs[t, rd] = 1 if (regs[t, rs1] & M32) < (imm & M32) else 0
+                regs_t[rd] = 1 if (regs_t[rs1] & M32) < (imm & M32) else 0
                 cyc += 1
                 pc += 4
             elif op == LUI:
-                regs[t, rd] = imm
+                regs_t[rd] = imm
                 cyc += 1
                 pc += 4
             elif op == AUIPC:
-                regs[t, rd] = pc + imm
+                regs_t[rd] = pc + imm
                 cyc += 1
                 pc += 4
             elif op == JAL or op == JALR:
-                target = (pc + imm) & M32 if op == JAL else (regs[t, rs1] + imm) & 0xFFFFFFFE
+                target = (pc + imm) & M32 if op == JAL else (regs_t[rs1] + imm) & 0xFFFFFFFE
                 if (target - base) & M32 >= size or target & 3:
                     err = ERR_FETCH_MISALIGNED if target & 3 else ERR_FETCH
                     err_addr = target
                     break
-                regs[t, rd] = pc + 4
+                regs_t[rd] = pc + 4
                 pc = target
                 cyc += 3
             elif op == LBU or op == LB or op == LHU or op == LH:
-                addr = (regs[t, rs1] + imm) & M32
+                addr = (regs_t[rs1] + imm) & M32
                 off = addr - base
                 if (op == LHU or op == LH) and (off & 1):
                     err = ERR_LOAD_MISALIGNED
@@ -507,24 +517,24 @@ def run_cores(
                     break
                 if (off & M32) < size:
                     if op == LBU:
-                        v = np.int64(m8[t, np.uint64(off)])
+                        v = np.int64(m8_t[np.uint64(off)])
                     elif op == LB:
-                        v = _sext(np.int64(m8[t, np.uint64(off)]), 8)
+                        v = _sext(np.int64(m8_t[np.uint64(off)]), 8)
                     elif op == LHU:
-                        v = np.int64(m16[t, np.uint64(off) >> U1])
+                        v = np.int64(m16_t[np.uint64(off) >> U1])
                     else:
-                        v = _sext(np.int64(m16[t, np.uint64(off) >> U1]), 16)
+                        v = _sext(np.int64(m16_t[np.uint64(off) >> U1]), 16)
                 else:
-                    w, code = mmio_load(st[t], addr, cyc)
+                    w, code = mmio_load(st_t, addr, cyc)
                     if code == LD_NI:
-                        opc[t, (op << U1) | (i & U1)] -= 1
+                        opc_t[(op << U1) | (i & U1)] -= 1
                         status = RUN_NI
                         break
                     if code != LD_OK:
                         err = ERR_LOAD_UNMAPPED
                         err_addr = addr
                         break
-                    ctr[t, C_MMIO] += 1
+                    ctr_t[C_MMIO] += 1
                     sh = (addr & 3) * 8
                     if op == LBU:
                         v = (w >> sh) & 0xFF
@@ -534,11 +544,11 @@ def run_cores(
                         v = (w >> sh) & 0xFFFF
                     else:
                         v = _sext((w >> sh) & 0xFFFF, 16)
-                regs[t, rd] = v
+                regs_t[rd] = v
                 cyc += 3
                 pc += 4
             elif op == SB or op == SH:
-                addr = (regs[t, rs1] + imm) & M32
+                addr = (regs_t[rs1] + imm) & M32
                 off = addr - base
                 if op == SH and (off & 1):
                     err = ERR_STORE_MISALIGNED
@@ -546,18 +556,18 @@ def run_cores(
                     break
                 if (off & M32) < size:
                     if op == SB:
-                        m8[t, np.uint64(off)] = regs[t, rs2]
+                        m8_t[np.uint64(off)] = regs_t[rs2]
                     else:
-                        m16[t, np.uint64(off) >> U1] = regs[t, rs2]
-                    dec[t, (np.uint64(off) >> U2) << U1] = 0
+                        m16_t[np.uint64(off) >> U1] = regs_t[rs2]
+                    dec_t[(np.uint64(off) >> U2) << U1] = 0
                 else:
-                    value = regs[t, rs2] & 0xFF if op == SB else regs[t, rs2] & 0xFFFF
-                    r = mmio_store(st[t], out[t], addr, value, cyc)
+                    value = regs_t[rs2] & 0xFF if op == SB else regs_t[rs2] & 0xFFFF
+                    r = mmio_store(st_t, out_t, addr, value, cyc)
                     if r == ST_NI:
-                        opc[t, (op << U1) | (i & U1)] -= 1
+                        opc_t[(op << U1) | (i & U1)] -= 1
                         status = RUN_NI
                         break
-                    ctr[t, C_MMIO] += 1
+                    ctr_t[C_MMIO] += 1
                     if r < 0:
                         err = ERR_STORE_READONLY if r == ST_READONLY else ERR_STORE_UNMAPPED
                         err_addr = addr
@@ -568,7 +578,7 @@ def run_cores(
                         status = RUN_EXIT
                         break
                     if r == ST_IRQ_CHANGED:
-                        st[t, S_IRQ_CHECK] = min(st[t, S_IRQ_CHECK], cyc + 3)
+                        st_t[S_IRQ_CHECK] = min(st_t[S_IRQ_CHECK], cyc + 3)
                     next_event = cyc + 3
                 cyc += 3
                 pc += 4
@@ -576,20 +586,20 @@ def run_cores(
                 if not has_mul:
                     err = ERR_NO_MUL
                     break
-                a = np.int64(regs[t, rs1])
-                b = np.int64(regs[t, rs2])
+                a = np.int64(regs_t[rs1])
+                b = np.int64(regs_t[rs2])
                 p = a * b
                 if op == MUL:
-                    regs[t, rd] = p
+                    regs_t[rd] = p
                 elif op == MULH:
-                    regs[t, rd] = p >> 32
+                    regs_t[rd] = p >> 32
                 elif op == MULHU:
-                    regs[t, rd] = (p >> 32) + (b if a < 0 else 0) + (a if b < 0 else 0)
+                    regs_t[rd] = (p >> 32) + (b if a < 0 else 0) + (a if b < 0 else 0)
                 else:
-                    regs[t, rd] = (p >> 32) + (a if b < 0 else 0)
-                    st[t, S_MULHSU_COUNT] += 1
-                    if st[t, S_MULHSU_PC] < 0:
-                        st[t, S_MULHSU_PC] = pc
+                    regs_t[rd] = (p >> 32) + (a if b < 0 else 0)
+                    st_t[S_MULHSU_COUNT] += 1
+                    if st_t[S_MULHSU_PC] < 0:
+                        st_t[S_MULHSU_PC] = pc
                 lat = mul_latency(b & M32)
                 n_mulstall += lat - 1
                 cyc += lat
@@ -598,16 +608,16 @@ def run_cores(
                 cyc += 1
                 pc += 4
             elif op == 0:
-                opc[t, i & U1] -= 1
-                decode_word(m32[t, i], dec[t], i)
+                opc_t[i & U1] -= 1
+                decode_word(m32_t[i], dec_t, i)
             elif op >= FIRST_SYSTEM and op < ILLEGAL:
                 # SYSTEM opcode: trap.  EPC = trap + 8; the instruction at trap + 8 executes first.
-                st[t, S_IRQ_EPC] = (pc + 8) & M32
-                st[t, S_IRQ_STATUS] &= 0xFE
-                st[t, S_IRQ_PHASE] = PH_TRAP
+                st_t[S_IRQ_EPC] = (pc + 8) & M32
+                st_t[S_IRQ_STATUS] &= 0xFE
+                st_t[S_IRQ_PHASE] = PH_TRAP
                 cyc += 1
                 pc += 8
-                st[t, S_IRQ_CHECK] = cyc + 1
+                st_t[S_IRQ_CHECK] = cyc + 1
                 next_event = cyc + 1
             elif op == FETCH_FAULT:
                 err = ERR_FETCH
@@ -622,14 +632,14 @@ def run_cores(
 
         if err != 0:
             status = RUN_ERROR
-            st[t, S_ERR] = err
-            st[t, S_ERR_PC] = pc
-            st[t, S_ERR_ADDR] = err_addr
+            st_t[S_ERR] = err
+            st_t[S_ERR_PC] = pc
+            st_t[S_ERR_ADDR] = err_addr
             wi = (pc - base) >> 2
-            st[t, S_ERR_INSN] = m32[t, wi] & M32 if 0 <= wi < size >> 2 else 0
+            st_t[S_ERR_INSN] = m32_t[wi] & M32 if 0 <= wi < size >> 2 else 0
 
-        st[t, S_PC] = pc & M32
-        st[t, S_CYCLE] = cyc
-        st[t, S_RUN] = status
-        ctr[t, C_TAKEN] = n_taken
-        ctr[t, C_MUL_STALL] = n_mulstall
+        st_t[S_PC] = pc & M32
+        st_t[S_CYCLE] = cyc
+        st_t[S_RUN] = status
+        ctr_t[C_TAKEN] = n_taken
+        ctr_t[C_MUL_STALL] = n_mulstall
