@@ -108,7 +108,8 @@ T_Q_TAIL = 18  # last queue row of this tile (for appending), or NONE
 T_SENT_PKTS = 19
 T_RECV_PKTS = 20
 T_SEND_FIRST = 21  # cycle the first flit of the last started packet entered the router
-TILE_COLS = 22
+T_SEND_DONE = 22  # first cycle after the last flit of the last packet entered the router
+TILE_COLS = 23
 
 SEND_IDLE, SEND_PENDING, SEND_ACTIVE = 0, 1, 2
 RX_ACCEPT, RX_HELD = 0, 1
@@ -470,6 +471,7 @@ def noc_step(cfg, glob, buf, port, tile, mem, ev, queue, cycle):
             tile[t, T_SEND_POS] = k
             if k == tile[t, T_SEND_LEN]:
                 tile[t, T_SEND_STATE] = SEND_IDLE
+                tile[t, T_SEND_DONE] = cycle + 1
                 tile[t, T_SENT_PKTS] += 1
                 glob[G_SENDING] -= 1
                 if row != NONE:

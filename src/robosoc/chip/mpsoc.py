@@ -1,0 +1,378 @@
+"""The MPSoC: a mesh of HF-RISCV tiles, their network interfaces, the Hermes NoC and the I/O tile.
+
+    chip = MPSoC(ChipConfig(width=2, height=2, powered_off=((1, 1),)))
+    chip.load_all(load_elf("ping.elf", chip.regions()))       # or chip.load((x, y), program)
+    result = chip.run(on_output=lambda tile, data: print(tile, data))
+
+Everything runs in :func:`robosoc.kernels.chip.run_chip`; this class holds the arrays, loads
+programs, talks to the I/O tile and turns counters into per-tile and per-task reports.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from robosoc.chip.core_state import SRAM_BASE, CoreState
+from robosoc.chip.counters import counters_dict
+from robosoc.chip.elf import Program, Region
+from robosoc.chip.single import CoreError
+from robosoc.config.chip import ChipConfig
+from robosoc.isa.disasm import disassemble
+from robosoc.isa.table import OP_FETCH_FAULT
+from robosoc.kernels import chip as kc
+from robosoc.kernels import noc as nk
+from robosoc.kernels.core_layout import (
+    CTR_SIZE,
+    ERROR_TEXT,
+    OPC_SIZE,
+    S_CYCLE,
+    S_ERR,
+    S_ERR_ADDR,
+    S_ERR_INSN,
+    S_ERR_PC,
+    S_MEM_SIZE,
+    S_NI,
+    S_PC,
+)
+
+XOUT_CAPACITY = 1 << 20
+IO_ROWS = 4096
+
+NI_ERRORS = {
+    kc.CE_WIDTH: "network-interface registers take word loads and stores only",
+    kc.CE_UNKNOWN_REG: "no network-interface register at this address",
+    kc.CE_SEND_BUSY: "SEND while the previous packet is still in the send memory (poll NI_STATUS bit 0 first)",
+    kc.CE_NO_PACKET: "RECV with no packet waiting (poll NI_STATUS bit 1 or wait for the interrupt)",
+    kc.CE_BAD_PACKET: "the packet cannot be sent",
+    kc.CE_DMA_RANGE: "DMA address or size outside SRAM (or odd address)",
+    kc.CE_TASK_RANGE: f"task id out of range (0..{kc.NTASKS - 1})",
+    kc.CE_BAD_COMMAND: "unknown NI_CMD value (1 = SEND, 2 = RECV)",
+    kc.CE_READONLY: "store to a read-only network-interface register",
+}
+
+
+class ChipError(RuntimeError):
+    """A tile failed, or the chip cannot make progress; the message names the tile."""
+
+    def __init__(self, message: str, tile: tuple[int, int] | None) -> None:
+        super().__init__(message)
+        self.tile = tile
+
+
+@dataclass
+class ChipResult:
+    cycles: int
+    exit_codes: dict[tuple[int, int], int]
+    output: dict[tuple[int, int], bytes]
+    host_seconds: float
+    io_received: list[tuple[int, list[int]]] = field(default_factory=list)
+
+
+class MPSoC:
+    """A mesh of tiles built from a :class:`ChipConfig`."""
+
+    def __init__(self, config: ChipConfig) -> None:
+        periods = {config.tile_config(config.tile_xy(t)).clock_period_ns for t in range(config.n_tiles)}
+        if len(periods) > 1:
+            raise ValueError("tiles: different clock periods per tile are not supported yet (one global clock)")
+        self.config = config
+        self.clock_ns = periods.pop()
+        n = config.n_tiles
+        sizes = [config.tile_config(config.tile_xy(t)).sram_bytes for t in range(n)]
+        muls = [config.tile_config(config.tile_xy(t)).multiplier for t in range(n)]
+        self.cores = CoreState.new(mul=muls, sram_size=max(sizes), base=SRAM_BASE, tiles=n)
+        for t, size in enumerate(sizes):
+            self.cores.st[t, S_MEM_SIZE] = size
+            self.cores.dec[t, 2 * (size // 4)] = OP_FETCH_FAULT
+        self.cores.st[:, S_NI] = 1
+        powered = np.array([config.is_powered(config.tile_xy(t)) for t in range(n)], dtype=bool)
+        noc = config.noc
+        self.noc = nk.noc_alloc(
+            config.width, config.height, noc.buffer_depth, noc.routing_latency, noc.max_packet_flits,
+            noc.flit_bits, powered, event_capacity=4 * n + 64, queue_rows=IO_ROWS,
+        )  # fmt: skip
+        self.io = config.tile_index(config.io_tile)
+        self.noc.tile[self.io, nk.T_RX_AUTO] = 0  # the outside world takes packets as they come
+        self.cst = np.zeros((n, kc.CST_SIZE), dtype=np.int64)
+        self.cst[:, kc.K_WAKE] = nk.BIG
+        self.cst[:, kc.K_RX_READY] = nk.BIG
+        self.cst[:, kc.K_RX_FREE_AT] = nk.BIG
+        self.cst[self.io, kc.K_STATE] = kc.K_IO
+        self.powered = powered
+        self.acc = np.zeros((n, kc.NTASKS, kc.ACC_SIZE), dtype=np.int64)
+        self.snap = np.zeros((n, kc.ACC_SIZE), dtype=np.int64)
+        self.gst = np.zeros(kc.GST_SIZE, dtype=np.int64)
+        self.gst[kc.G_IO_TILE] = self.io
+        r = noc.routing_latency
+        self.gst[kc.G_LOOK_IDLE] = 2 * r + 8
+        self.gst[kc.G_LOOK_ACTIVE] = 5
+        self.xout = np.zeros((n, XOUT_CAPACITY), dtype=np.uint8)
+        self.io_out = np.zeros((IO_ROWS, kc.IO_COLS), dtype=np.int64)
+        self.programs: dict[int, Program] = {}
+        self._queue_next = 0
+        self._io_received: list[tuple[int, list[int]]] = []
+
+    # --- geometry --------------------------------------------------------------------------
+    def regions(self, xy: tuple[int, int] | None = None) -> list[Region]:
+        t = 0 if xy is None else self.config.tile_index(xy)
+        return [Region(SRAM_BASE, int(self.cores.st[t, S_MEM_SIZE]), "SRAM")]
+
+    def core_tiles(self) -> list[tuple[int, int]]:
+        """Tiles with a powered core (every tile but the I/O tile and powered-off ones)."""
+        return [self.config.tile_xy(t) for t in range(self.config.n_tiles) if self.powered[t] and t != self.io]
+
+    @property
+    def cycle(self) -> int:
+        return int(self.gst[kc.G_TIME])
+
+    # --- loading ---------------------------------------------------------------------------
+    def load(self, xy: tuple[int, int], program: Program) -> None:
+        """Load ``program`` into tile ``xy`` and make its core runnable."""
+        if not self.config.contains(xy):
+            raise ValueError(f"tile {xy} is outside the {self.config.width}x{self.config.height} mesh")
+        t = self.config.tile_index(xy)
+        if t == self.io:
+            raise ValueError(f"tile {xy} is the I/O tile: it has no core to load")
+        if not self.powered[t]:
+            raise ValueError(f"tile {xy} is powered off: it cannot run a program")
+        for addr, data in program.segments:
+            self.cores.write(addr, data, tile=t)
+        self.cores.st[t, S_PC] = program.entry
+        self.cst[t, kc.K_STATE] = kc.K_RUN
+        self.programs[t] = program
+
+    def load_all(self, program: Program) -> None:
+        """The same program on every core tile (it tells tiles apart by reading NI_TILE)."""
+        for xy in self.core_tiles():
+            self.load(xy, program)
+
+    # --- the I/O tile ----------------------------------------------------------------------
+    def inject(self, dest: tuple[int, int], payload: Sequence[int], at_cycle: int) -> None:
+        """Send a packet from the I/O tile to ``dest`` (payload: 16-bit flits) leaving at ``at_cycle``."""
+        if at_cycle < self.cycle:
+            raise ValueError(f"at_cycle {at_cycle} is in the past (the chip is at cycle {self.cycle})")
+        if not self.config.contains(dest):
+            raise ValueError(f"destination {dest} is outside the mesh")
+        if not self.powered[self.config.tile_index(dest)]:
+            raise ValueError(f"destination {dest} is powered off")
+        if len(payload) + 2 > self.config.noc.max_packet_flits:
+            raise ValueError(f"payload of {len(payload)} flits exceeds the maximum packet")
+        row = self._queue_next
+        if row >= IO_ROWS:
+            raise ValueError("too many injected packets pending")
+        q = self.noc.queue
+        flits = [(dest[0] << 4) | dest[1], len(payload), *payload]
+        q[row, nk.Q_TILE] = self.io
+        q[row, nk.Q_READY] = at_cycle
+        q[row, nk.Q_LEN] = len(flits)
+        q[row, nk.Q_NEXT] = nk.NONE
+        q[row, nk.Q_FLITS : nk.Q_FLITS + len(flits)] = np.array(flits, dtype=np.int64) & 0xFFFF
+        tail = self.noc.tile[self.io, nk.T_Q_TAIL]
+        if tail == nk.NONE:
+            self.noc.tile[self.io, nk.T_Q_HEAD] = row
+        else:
+            q[tail, nk.Q_NEXT] = row
+            if self.noc.tile[self.io, nk.T_Q_HEAD] == nk.NONE:
+                self.noc.tile[self.io, nk.T_Q_HEAD] = row
+        self.noc.tile[self.io, nk.T_Q_TAIL] = row
+        self._queue_next += 1
+
+    def received(self) -> list[tuple[int, list[int]]]:
+        """Packets that reached the I/O tile since the last call: (cycle of the last flit, flits)."""
+        out, self._io_received = self._io_received, []
+        return out
+
+    def _drain_io(self) -> None:
+        n = int(self.gst[kc.G_IO_COUNT])
+        for row in self.io_out[:n]:
+            length = int(row[1])
+            self._io_received.append((int(row[0]), [int(v) for v in row[3 : 3 + length]]))
+        self.gst[kc.G_IO_COUNT] = 0
+
+    # --- running ---------------------------------------------------------------------------
+    def step(self, until: int) -> int:
+        """Advance the chip to ``until`` (or a host event); returns the CHIP_* reason."""
+        c, n = self.cores, self.noc
+        kc.run_chip(
+            c.st, c.ctr, c.opc, c.regs, c.m8, c.m16, c.m32, c.dec, c.decb, c.out,
+            n.cfg, n.glob, n.buf, n.port, n.tile, n.mem, n.ev, n.queue,
+            self.cst, self.acc, self.snap, self.gst, self.xout, self.io_out, until,
+        )  # fmt: skip
+        self._drain_io()
+        return int(self.gst[kc.G_STATUS])
+
+    def drain_output(self) -> dict[tuple[int, int], bytes]:
+        out = {}
+        for t in range(self.config.n_tiles):
+            m = int(self.cst[t, kc.K_OUT_LEN])
+            if m:
+                out[self.config.tile_xy(t)] = self.xout[t, :m].tobytes()
+                self.cst[t, kc.K_OUT_LEN] = 0
+        return out
+
+    def run(
+        self,
+        max_cycles: int | None = None,
+        on_output: Callable[[tuple[int, int], bytes], object] | None = None,
+        chunk: int = 1 << 22,
+    ) -> ChipResult:
+        """Run until every core has exited.
+
+        Raises:
+            CoreError / ChipError: a tile failed (message names tile, pc, symbol, instruction),
+                or the budget ran out, or every core waits for something that cannot come.
+        """
+        outputs: dict[tuple[int, int], bytearray] = {}
+        start = time.perf_counter()
+        while True:
+            limit = self.cycle + chunk if max_cycles is None else min(self.cycle + chunk, max_cycles)
+            why = self.step(limit)
+            for xy, data in self.drain_output().items():
+                outputs.setdefault(xy, bytearray()).extend(data)
+                if on_output is not None:
+                    on_output(xy, data)
+            if why == kc.CHIP_DONE:
+                break
+            if why == kc.CHIP_ERROR:
+                raise self._error()
+            if why == kc.CHIP_STUCK:
+                raise ChipError(self._stuck_message(), None)
+            if max_cycles is not None and self.cycle >= max_cycles:
+                raise ChipError(
+                    f"cycle budget of {max_cycles} cycles exhausted; still running: "
+                    + ", ".join(f"{xy} at pc 0x{self.pc(xy):08x} ({self.symbolize(xy, self.pc(xy))})"
+                                for xy in self.core_tiles() if self.state(xy) in ("running", "sleeping")),
+                    None,
+                )  # fmt: skip
+        self.finish_accounting()
+        return ChipResult(
+            cycles=self.cycle,
+            exit_codes={xy: self.exit_code(xy) for xy in self.core_tiles() if self.state(xy) == "exited"},
+            output={xy: bytes(v) for xy, v in outputs.items()},
+            host_seconds=time.perf_counter() - start,
+            io_received=self.received(),
+        )
+
+    # --- inspection ------------------------------------------------------------------------
+    STATES = {kc.K_OFF: "off", kc.K_RUN: "running", kc.K_SLEEP: "sleeping", kc.K_EXITED: "exited",
+              kc.K_FAULT: "failed", kc.K_IO: "io"}  # fmt: skip
+
+    def state(self, xy: tuple[int, int]) -> str:
+        return self.STATES[int(self.cst[self.config.tile_index(xy), kc.K_STATE])]
+
+    def pc(self, xy: tuple[int, int]) -> int:
+        return int(self.cores.st[self.config.tile_index(xy), S_PC])
+
+    def tile_cycle(self, xy: tuple[int, int]) -> int:
+        return int(self.cores.st[self.config.tile_index(xy), S_CYCLE])
+
+    def regs(self, xy: tuple[int, int]) -> np.ndarray:
+        return self.cores.regs[self.config.tile_index(xy), :32]
+
+    def exit_code(self, xy: tuple[int, int]) -> int:
+        from robosoc.kernels.core_layout import S_EXIT_CODE
+
+        return int(self.cores.st[self.config.tile_index(xy), S_EXIT_CODE])
+
+    def symbolize(self, xy: tuple[int, int], pc: int) -> str:
+        program = self.programs.get(self.config.tile_index(xy))
+        return program.symbolize(pc) if program else f"0x{pc:08x}"
+
+    def counters(self, xy: tuple[int, int]) -> dict[str, int]:
+        """Counters of one tile's core, with sleep and DMA cycles."""
+        t = self.config.tile_index(xy)
+        out = counters_dict(self.cores.ctr[t], self.cores.opc[t], int(self.cores.st[t, S_CYCLE]))
+        out["sleep_cycle"] = int(self.cst[t, kc.K_SLEEP_CYCLES])
+        out["dma_cycle"] = int(self.cst[t, kc.K_DMA_CYCLES])
+        out["packets_sent"] = int(self.cst[t, kc.K_SENT])
+        out["packets_received"] = int(self.cst[t, kc.K_RECEIVED])
+        return out
+
+    def finish_accounting(self) -> None:
+        """Attribute everything not yet attributed to the tasks running now."""
+        for t in range(self.config.n_tiles):
+            if self.cst[t, kc.K_STATE] not in (kc.K_OFF, kc.K_IO):
+                kc._account(t, self.cores.st, self.cores.ctr, self.cores.opc, self.cst, self.acc, self.snap,
+                            int(self.cores.st[t, S_CYCLE]))  # fmt: skip
+
+    def task_counters(self, xy: tuple[int, int]) -> dict[int, dict[str, int]]:
+        """Counters per task id of one tile (task 0 is the kernel/idle), for tasks that ran."""
+        t = self.config.tile_index(xy)
+        out = {}
+        for task in range(kc.NTASKS):
+            row = self.acc[t, task]
+            if not row.any():
+                continue
+            c = counters_dict(row[kc.A_CTR : kc.A_CTR + CTR_SIZE], row[:OPC_SIZE], int(row[kc.A_CYCLES]))
+            c["sleep_cycle"] = int(row[kc.A_SLEEP])
+            c["dma_cycle"] = int(row[kc.A_DMA])
+            out[task] = c
+        return out
+
+    def noc_counters(self) -> dict[str, int]:
+        """Router activity for the energy model: buffer-active and idle port cycles, flit hops."""
+        port = self.noc.port
+        glob = self.noc.glob
+        cycles = int(glob[nk.G_CYCLE]) - int(glob[nk.G_CYCLE0])
+        n = self.config.n_tiles
+        busy_ports = int(port[:, :, nk.P_BUSY].sum())
+        return {
+            "router_cycles": cycles * n,
+            "router_busy_cycles": int(self.noc.tile[:, nk.T_BUSY].sum()),
+            "port_busy_cycles": busy_ports,
+            "port_idle_cycles": cycles * n * nk.NPORTS - busy_ports,
+            "flit_hops": int(glob[nk.G_HOPS]),
+            "flits_injected": int(glob[nk.G_INJECTED]),
+            "packets_delivered": int(glob[nk.G_DELIVERED]),
+        }
+
+    # --- errors ----------------------------------------------------------------------------
+    def _error(self) -> Exception:
+        t = int(self.gst[kc.G_ERR_TILE])
+        if t < 0:
+            code = int(self.noc.glob[nk.G_STATUS])
+            et = int(self.noc.glob[nk.G_ERR_TILE])
+            where = self.config.tile_xy(et) if et >= 0 else None
+            return ChipError(f"network error at cycle {int(self.noc.glob[nk.G_ERR_CYCLE])}, tile {where}: "
+                             f"{nk.STATUS_TEXT.get(code, code)}", where)  # fmt: skip
+        xy = self.config.tile_xy(t)
+        st = self.cores.st[t]
+        pc = int(st[S_PC])
+        code = int(self.cst[t, kc.K_ERR])
+        if code != kc.CE_NONE:
+            text = NI_ERRORS.get(code, f"network-interface error {code}")
+            if code == kc.CE_BAD_PACKET:
+                text += f": {nk.STATUS_TEXT.get(int(self.cst[t, kc.K_ERR_INFO]), '?')}"
+                dest = int(self.cores.m16[t, (int(self.cst[t, kc.K_SEND_ADDR]) - SRAM_BASE) // 2])
+                text += f" (destination flit 0x{dest:02x} = tile ({dest >> 4}, {dest & 15}))"
+            word = int(self.cores.m32[t, (pc - SRAM_BASE) // 4]) & 0xFFFFFFFF
+            addr = int(self.cst[t, kc.K_ERR_ADDR])
+            return ChipError(
+                f"tile {xy}: {text} at address 0x{addr:08x}, pc 0x{pc:08x} ({self.symbolize(xy, pc)}): "
+                f"instruction 0x{word:08x} `{disassemble(word, pc)}`, cycle {int(st[S_CYCLE])}",
+                xy,
+            )
+        err = int(st[S_ERR])
+        epc = int(st[S_ERR_PC])
+        word = int(st[S_ERR_INSN]) & 0xFFFFFFFF
+        addr = int(st[S_ERR_ADDR]) & 0xFFFFFFFF
+        text = ERROR_TEXT.get(err, f"error {err}")
+        msg = (f"tile {xy}: {text} (address 0x{addr:08x}) at pc 0x{epc:08x} ({self.symbolize(xy, epc)}): "
+               f"instruction 0x{word:08x} `{disassemble(word, epc)}`, cycle {int(st[S_CYCLE])}")  # fmt: skip
+        return CoreError(msg, kind=text, pc=epc, addr=addr, word=word, cycle=int(st[S_CYCLE]))
+
+    def _stuck_message(self) -> str:
+        waiting = []
+        for xy in self.core_tiles():
+            t = self.config.tile_index(xy)
+            if self.cst[t, kc.K_STATE] == kc.K_SLEEP:
+                waiting.append(f"{xy} sleeps at pc 0x{self.pc(xy):08x} ({self.symbolize(xy, self.pc(xy))})")
+        return (
+            f"no tile can make progress at cycle {self.cycle}: "
+            + "; ".join(waiting)
+            + " with no interrupt due and no packet on the way"
+        )

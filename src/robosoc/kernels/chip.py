@@ -1,0 +1,555 @@
+"""The whole MPSoC in one numba loop: cores, network interfaces, NoC, sleep, per-task accounting.
+
+Network-interface registers of a tile (word accesses only; base ``NI_BASE`` = 0xe1040000):
+
+======  ===========  ==========================================================================
+offset  register     meaning
+======  ===========  ==========================================================================
+0x00    NI_STATUS    read: bit 0 the send memory is busy (DMA or injection), bit 1 a packet waits
+0x04    SEND_ADDR    main-memory address of the packet to send (flits are 16-bit, little endian)
+0x08    SEND_SIZE    flits to send, header included (2..64)
+0x0c    NI_CMD       write 1: SEND (DMA copy, core stalled 1 cycle per flit, then injection);
+                     write 2: RECV (DMA copy of the waiting packet to RECV_ADDR, core stalled
+                     1 cycle per flit; the receive memory is free afterwards)
+0x10    RECV_ADDR    main-memory address the next RECV copies to
+0x14    RECV_SIZE    read: flits of the waiting packet (0 if none)
+0x18    NI_TILE      read: this tile's NoC address (x << 4) | y
+0x1c    NI_MESH      read: width | height << 8
+0x20    TASK_ID      read/write: the running task (0..15); counters are attributed per task
+0x24    SLEEP        write: the core stops until an interrupt request is pending
+0x28    IO_TILE      read: the NoC address of the I/O tile
+======  ===========  ==========================================================================
+
+IRQ_CAUSE bit 1 is "a packet waits in the receive memory"; it rises the cycle after the last
+flit was written and stays up until RECV has copied the packet.
+
+Time (exact, deterministic): all tiles and the NoC advance in quanta [T, H).  While the NoC is
+idle, a packet sent in the quantum cannot reach any tile before T + 2R + 8 (store, DMA of at
+least 2 flits, two routers, two flits), so cores run first and the NoC catches up after them
+with the new injections at their exact cycles.  While the NoC carries flits, quanta are 5 cycles
+(the earliest a SEND started in the quantum can inject), the NoC runs first, and the deliveries
+it makes are scheduled on the receiving cores before they run.  With one core awake and an idle
+NoC, the quantum stretches to the next wake-up.  An access to NI registers stops the core just
+before it (run_cores returns RUN_NI) and is performed here.  Sleeping cores cost nothing; their
+wake-up cycle is computed from their timers and the deliveries.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from robosoc.kernels import noc as nk
+from robosoc.kernels.core import LW, SW, U1, U2, U8, U16, U24, U255, run_cores
+from robosoc.kernels.core_layout import (
+    C_MMIO,
+    CTR_SIZE,
+    OPC_SIZE,
+    OUT_CAPACITY,
+    RUN_ERROR,
+    RUN_EXIT,
+    RUN_NI,
+    RUN_OUTPUT,
+    S_CYCLE,
+    S_EXT_RISE,
+    S_IRQ_CHECK,
+    S_MEM_BASE,
+    S_MEM_SIZE,
+    S_OUT_LEN,
+    S_PC,
+    S_RUN,
+)
+from robosoc.kernels.soc_devices import NEVER, NI_BASE, irq_pending, next_cause_change
+
+# tile states
+K_OFF, K_RUN, K_SLEEP, K_EXITED, K_FAULT, K_IO = 0, 1, 2, 3, 4, 5
+
+# cst columns
+K_STATE = 0
+K_WAKE = 1  # cycle a sleeping core resumes (NEVER: only a packet can wake it)
+K_SEND_ADDR = 2
+K_SEND_SIZE = 3
+K_RECV_ADDR = 4
+K_RX_READY = 5  # cycle from which a received packet waits (NEVER if none)
+K_RX_LEN = 6
+K_RX_FREE_AT = 7  # cycle the NoC may refill the receive memory after a RECV (NEVER if none)
+K_TASK = 8
+K_SLEEP_CYCLES = 9
+K_DMA_CYCLES = 10
+K_SLEEP_FROM = 11
+K_ERR = 12  # CE_* code of a network-interface misuse
+K_ERR_ADDR = 13
+K_ERR_INFO = 14
+K_OUT_LEN = 15  # bytes waiting in xout
+K_SENT = 16
+K_RECEIVED = 17
+CST_SIZE = 20
+
+# gst: global scalars
+G_TIME = 0
+G_STATUS = 1  # CHIP_* reason of the last return
+G_ERR_TILE = 2
+G_IO_TILE = 3
+G_LOOK_IDLE = 4
+G_LOOK_ACTIVE = 5
+G_QUANTA = 6
+G_IO_COUNT = 7  # rows used in io_out
+GST_SIZE = 10
+
+# return reasons
+CHIP_UNTIL = 0
+CHIP_DONE = 1  # every core has exited
+CHIP_OUTPUT = 2  # some tile's output needs draining
+CHIP_ERROR = 3
+CHIP_IO_FULL = 4  # io_out needs draining
+CHIP_STUCK = 5  # nothing can happen any more, but not every core has exited
+
+# network-interface misuse (K_ERR)
+CE_NONE = 0
+CE_WIDTH = 1
+CE_UNKNOWN_REG = 2
+CE_SEND_BUSY = 3
+CE_NO_PACKET = 4
+CE_BAD_PACKET = 5  # K_ERR_INFO holds the NoC STATUS_* code
+CE_DMA_RANGE = 6
+CE_TASK_RANGE = 7
+CE_BAD_COMMAND = 8
+CE_READONLY = 9
+
+NTASKS = 16
+# accounting vector: per-operation counters, core counters, cycles, sleep and DMA cycles
+A_CTR = OPC_SIZE
+A_CYCLES = OPC_SIZE + CTR_SIZE
+A_SLEEP = A_CYCLES + 1
+A_DMA = A_CYCLES + 2
+ACC_SIZE = A_CYCLES + 4
+
+IO_COLS = 3 + nk.MEM_FLITS  # io_out rows: cycle, length, first-flit cycle, flits
+SINGLE_QUANTUM = 1 << 20  # longest quantum of a lone awake core (bounds the output per quantum)
+
+
+@njit(cache=True)
+def _account(t, st, ctr, opc, cst, acc, snap, now):
+    """Attribute everything since the last snapshot to the current task of tile t."""
+    task = cst[t, K_TASK]
+    for k in range(OPC_SIZE):
+        v = opc[t, k]
+        acc[t, task, k] += v - snap[t, k]
+        snap[t, k] = v
+    for k in range(CTR_SIZE):
+        v = ctr[t, k]
+        acc[t, task, A_CTR + k] += v - snap[t, A_CTR + k]
+        snap[t, A_CTR + k] = v
+    acc[t, task, A_CYCLES] += now - snap[t, A_CYCLES]
+    snap[t, A_CYCLES] = now
+    acc[t, task, A_SLEEP] += cst[t, K_SLEEP_CYCLES] - snap[t, A_SLEEP]
+    snap[t, A_SLEEP] = cst[t, K_SLEEP_CYCLES]
+    acc[t, task, A_DMA] += cst[t, K_DMA_CYCLES] - snap[t, A_DMA]
+    snap[t, A_DMA] = cst[t, K_DMA_CYCLES]
+
+
+@njit(cache=True)
+def wake_time(st_t: np.ndarray, x: int) -> int:
+    """First cycle >= x at which the core's interrupt request is pending (NEVER if none is due)."""
+    for _ in range(4096):
+        if irq_pending(st_t, x):
+            return x
+        x = next_cause_change(st_t, x)
+        if x >= NEVER:
+            return NEVER
+    return x  # not found yet: look again from here when that cycle comes
+
+
+@njit(cache=True)
+def _send_done(tile, t):
+    """First cycle at which tile t's send memory is free again (NEVER while it cannot be known).
+
+    An injection armed in this quantum has not been simulated yet (the NoC catches up at the
+    end of an idle quantum); with the router's local buffer empty it takes one cycle per flit.
+    """
+    state = tile[t, nk.T_SEND_STATE]
+    if state == nk.SEND_IDLE:
+        return tile[t, nk.T_SEND_DONE]
+    if state == nk.SEND_PENDING and tile[t, nk.T_NI_CREDIT] >= tile[t, nk.T_SEND_LEN]:
+        return tile[t, nk.T_SEND_START] + tile[t, nk.T_SEND_LEN]
+    return NEVER
+
+
+@njit(cache=True)
+def _fault(cst, t, code, addr, info):
+    cst[t, K_STATE] = K_FAULT
+    cst[t, K_ERR] = code
+    cst[t, K_ERR_ADDR] = addr
+    cst[t, K_ERR_INFO] = info
+
+
+@njit(cache=True)
+def ni_access(t, st, ctr, opc, regs, m16, dec, cst, acc, snap, gst, cfg, glob, tile, mem):
+    """Perform the NI-register load or store tile t stopped before; returns False on a fault."""
+    base = st[t, S_MEM_BASE]
+    size = st[t, S_MEM_SIZE]
+    pc = st[t, S_PC]
+    s = st[t, S_CYCLE]
+    i = np.uint64(pc - base) >> U2
+    j = i << U1
+    w0 = np.uint64(np.uint32(dec[t, j]))
+    op = w0 & U255
+    rd = (w0 >> U8) & U255
+    rs1 = (w0 >> U16) & U255
+    rs2 = w0 >> U24
+    addr = (regs[t, rs1] + np.int64(dec[t, j + U1])) & 0xFFFFFFFF
+    off = addr - NI_BASE
+    if op != LW and op != SW:
+        _fault(cst, t, CE_WIDTH, addr, 0)
+        return False
+    opc[t, (op << U1) | (i & U1)] += 1
+    ctr[t, C_MMIO] += 1
+    width = cfg[nk.C_WIDTH]
+    if op == LW:
+        x = s - 1  # registered read: the value of the cycle before the load
+        v = 0
+        if off == 0x00:
+            busy = _send_done(tile, t) > x
+            v = (1 if busy else 0) | (2 if cst[t, K_RX_READY] <= x else 0)
+        elif off == 0x04:
+            v = cst[t, K_SEND_ADDR]
+        elif off == 0x08:
+            v = cst[t, K_SEND_SIZE]
+        elif off == 0x0C:
+            v = 0
+        elif off == 0x10:
+            v = cst[t, K_RECV_ADDR]
+        elif off == 0x14:
+            v = cst[t, K_RX_LEN] if cst[t, K_RX_READY] <= x else 0
+        elif off == 0x18:
+            v = ((t % width) << 4) | (t // width)
+        elif off == 0x1C:
+            v = width | (cfg[nk.C_HEIGHT] << 8)
+        elif off == 0x20:
+            v = cst[t, K_TASK]
+        elif off == 0x28:
+            io = gst[G_IO_TILE]
+            v = ((io % width) << 4) | (io // width)
+        elif off == 0x24:
+            v = 0
+        else:
+            _fault(cst, t, CE_UNKNOWN_REG, addr, 0)
+            return False
+        regs[t, rd] = v
+        st[t, S_CYCLE] = s + 3
+        st[t, S_PC] = pc + 4
+        return True
+    v = np.int64(regs[t, rs2]) & 0xFFFFFFFF
+    end = s + 3
+    if off == 0x04:
+        cst[t, K_SEND_ADDR] = v
+    elif off == 0x08:
+        cst[t, K_SEND_SIZE] = v
+    elif off == 0x10:
+        cst[t, K_RECV_ADDR] = v
+    elif off == 0x20:
+        if v >= NTASKS:
+            _fault(cst, t, CE_TASK_RANGE, addr, v)
+            return False
+        st[t, S_CYCLE] = end
+        st[t, S_PC] = pc + 4
+        _account(t, st, ctr, opc, cst, acc, snap, end)
+        cst[t, K_TASK] = v
+        return True
+    elif off == 0x24:
+        st[t, S_CYCLE] = end
+        st[t, S_PC] = pc + 4
+        cst[t, K_STATE] = K_SLEEP
+        cst[t, K_SLEEP_FROM] = end
+        cst[t, K_WAKE] = wake_time(st[t], end)
+        return True
+    elif off == 0x0C:
+        if v == 1:
+            n = cst[t, K_SEND_SIZE]
+            a = cst[t, K_SEND_ADDR] - base
+            if n < 2 or n > nk.MEM_FLITS or a < 0 or a + 2 * n > size or (a & 1):
+                _fault(cst, t, CE_DMA_RANGE, cst[t, K_SEND_ADDR], n)
+                return False
+            if _send_done(tile, t) > s:
+                _fault(cst, t, CE_SEND_BUSY, addr, 0)
+                return False
+            h = a >> 1
+            for k in range(n):
+                mem[t, nk.SEND, k] = m16[t, h + k]
+            start = end + n
+            code = nk.noc_send(cfg, glob, tile, mem, t, n, start)
+            if code != nk.STATUS_OK:
+                _fault(cst, t, CE_BAD_PACKET, cst[t, K_SEND_ADDR], code)
+                return False
+            cst[t, K_DMA_CYCLES] += n
+            cst[t, K_SENT] += 1
+            st[t, S_CYCLE] = start
+        elif v == 2:
+            if cst[t, K_RX_READY] > s - 1:
+                _fault(cst, t, CE_NO_PACKET, addr, 0)
+                return False
+            n = cst[t, K_RX_LEN]
+            a = cst[t, K_RECV_ADDR] - base
+            if a < 0 or a + 2 * n > size or (a & 1):
+                _fault(cst, t, CE_DMA_RANGE, cst[t, K_RECV_ADDR], n)
+                return False
+            h = a >> 1
+            for k in range(n):
+                m16[t, h + k] = mem[t, nk.RECV, k]
+            # the copied words are data now: forget any predecoded instructions there
+            for k in range(a >> 2, (a + 2 * n + 3) >> 2):
+                dec[t, 2 * k] = 0
+            cst[t, K_DMA_CYCLES] += n
+            cst[t, K_RECEIVED] += 1
+            cst[t, K_RX_READY] = NEVER
+            cst[t, K_RX_LEN] = 0
+            cst[t, K_RX_FREE_AT] = end + n
+            st[t, S_EXT_RISE] = NEVER
+            st[t, S_CYCLE] = end + n
+        else:
+            _fault(cst, t, CE_BAD_COMMAND, addr, v)
+            return False
+        st[t, S_PC] = pc + 4
+        return True
+    elif off in (0x00, 0x14, 0x18, 0x1C, 0x28):
+        _fault(cst, t, CE_READONLY, addr, 0)
+        return False
+    else:
+        _fault(cst, t, CE_UNKNOWN_REG, addr, 0)
+        return False
+    st[t, S_CYCLE] = end
+    st[t, S_PC] = pc + 4
+    return True
+
+
+@njit(cache=True)
+def _noc_advance(cfg, glob, buf, port, tile, mem, ev, queue, cst, to):
+    """Run the NoC up to cycle ``to``, freeing receive memories at the cycles RECV made them free."""
+    n = cfg[nk.C_NTILES]
+    while glob[nk.G_CYCLE] < to:
+        nxt = to
+        for t in range(n):
+            f = cst[t, K_RX_FREE_AT]
+            if f < nxt:
+                nxt = f
+        if nxt > glob[nk.G_CYCLE]:
+            nk.noc_run(cfg, glob, buf, port, tile, mem, ev, queue, nxt, 1 << 40)
+            if glob[nk.G_STATUS] != nk.STATUS_OK or glob[nk.G_CYCLE] < nxt:
+                return
+        for t in range(n):
+            if cst[t, K_RX_FREE_AT] <= glob[nk.G_CYCLE]:
+                nk.noc_rx_free(tile, t)
+                cst[t, K_RX_FREE_AT] = NEVER
+
+
+@njit(cache=True)
+def _noc_next(cfg, glob, tile, queue, cst):
+    """First cycle at which the NoC can change by itself (BIG if it is idle with nothing pending)."""
+    best = nk.noc_next_activity(cfg, glob, tile, queue)
+    for t in range(cfg[nk.C_NTILES]):
+        if cst[t, K_RX_FREE_AT] < best:
+            best = cst[t, K_RX_FREE_AT]
+    return best
+
+
+@njit(cache=True)
+def _take_deliveries(st, cst, gst, glob, ev, io_out):
+    """Move NoC delivery events to the receiving cores (interrupt line) or to io_out."""
+    io = gst[G_IO_TILE]
+    for r in range(glob[nk.G_NEV]):
+        d = ev[r, nk.EV_TILE]
+        rise = ev[r, nk.EV_CYCLE] + 1
+        if d == io:
+            row = gst[G_IO_COUNT]
+            io_out[row, 0] = ev[r, nk.EV_CYCLE]
+            io_out[row, 1] = ev[r, nk.EV_LEN]
+            io_out[row, 2] = ev[r, nk.EV_FIRST]
+            for k in range(nk.MEM_FLITS):
+                io_out[row, 3 + k] = ev[r, nk.EV_FLITS + k]
+            gst[G_IO_COUNT] = row + 1
+            continue
+        cst[d, K_RX_READY] = rise
+        cst[d, K_RX_LEN] = ev[r, nk.EV_LEN]
+        st[d, S_EXT_RISE] = rise
+        if st[d, S_IRQ_CHECK] > rise:
+            st[d, S_IRQ_CHECK] = rise
+        if cst[d, K_STATE] == K_SLEEP:
+            cst[d, K_WAKE] = wake_time(st[d], max(rise, cst[d, K_SLEEP_FROM]))
+    glob[nk.G_NEV] = 0
+
+
+@njit(cache=True)
+def run_chip(
+    st, ctr, opc, regs, m8, m16, m32, dec, decb, out,
+    cfg, glob, buf, port, tile, mem, ev, queue,
+    cst, acc, snap, gst, xout, io_out, until,
+):  # fmt: skip
+    """Advance the whole chip to cycle ``until`` or an event that needs the host (CHIP_* in gst)."""
+    n = cst.shape[0]
+    look_idle = gst[G_LOOK_IDLE]
+    look_active = gst[G_LOOK_ACTIVE]
+    run = np.empty(n, dtype=np.int64)
+    one = np.empty(1, dtype=np.int64)
+    xcap = xout.shape[1]
+    T = gst[G_TIME]
+    status = CHIP_UNTIL
+    while True:
+        if until <= T:
+            status = CHIP_UNTIL
+            break
+        if io_out.shape[0] - gst[G_IO_COUNT] < n:
+            status = CHIP_IO_FULL
+            break
+        nrun = 0
+        nsleep = 0
+        wake = NEVER
+        for t in range(n):
+            state = cst[t, K_STATE]
+            if state == K_RUN:
+                nrun += 1
+            elif state == K_SLEEP:
+                nsleep += 1
+                if cst[t, K_WAKE] < wake:
+                    wake = cst[t, K_WAKE]
+        nxt = _noc_next(cfg, glob, tile, queue, cst)
+        if nrun == 0 and nsleep == 0:
+            status = CHIP_DONE
+            break
+        # --- the quantum -------------------------------------------------------------------
+        active = nxt <= T
+        if active:
+            H = T + look_active
+        elif nrun >= 2:
+            H = T + look_idle
+            if nxt < H:
+                H = nxt
+        elif nrun == 1:
+            H = min(nxt, T + SINGLE_QUANTUM)
+        else:
+            H = nxt  # nobody runs: jump to the next NoC activity or wake-up
+        if wake < H:
+            if wake > T:
+                H = wake  # the sleeper starts with the next quantum
+            else:
+                waking = 0
+                for t in range(n):
+                    if cst[t, K_STATE] == K_SLEEP and cst[t, K_WAKE] <= T:
+                        waking += 1
+                if nrun + waking >= 2:
+                    H = min(H, T + look_idle)
+        if nrun == 0 and H >= NEVER and wake >= NEVER:
+            status = CHIP_STUCK
+            break
+        if until < H:
+            H = until
+        gst[G_QUANTA] += 1
+        if active:
+            _noc_advance(cfg, glob, buf, port, tile, mem, ev, queue, cst, H)
+            if glob[nk.G_STATUS] != nk.STATUS_OK:
+                status = CHIP_ERROR
+                gst[G_ERR_TILE] = -1
+                break
+            _take_deliveries(st, cst, gst, glob, ev, io_out)
+        # wake sleeping cores due in this quantum
+        for t in range(n):
+            if cst[t, K_STATE] == K_SLEEP and cst[t, K_WAKE] < H:
+                w = max(cst[t, K_WAKE], cst[t, K_SLEEP_FROM])
+                if irq_pending(st[t], w):
+                    cst[t, K_STATE] = K_RUN
+                    cst[t, K_SLEEP_CYCLES] += w - cst[t, K_SLEEP_FROM]
+                    st[t, S_CYCLE] = w
+                    if st[t, S_IRQ_CHECK] > w:
+                        st[t, S_IRQ_CHECK] = w
+                else:
+                    cst[t, K_WAKE] = wake_time(st[t], w)
+        # run the awake cores to H; NI accesses are performed here, then the core goes on
+        k = 0
+        for t in range(n):
+            if cst[t, K_STATE] == K_RUN:
+                run[k] = t
+                k += 1
+        run_cores(st, ctr, opc, regs, m8, m16, m32, dec, decb, out, run[:k], H)
+        failed = -1
+        for r in range(k):
+            t = run[r]
+            while True:
+                why = st[t, S_RUN]
+                if why == RUN_NI:
+                    s0 = st[t, S_CYCLE]
+                    sent = cst[t, K_SENT]
+                    if not ni_access(t, st, ctr, opc, regs, m16, dec, cst, acc, snap, gst, cfg, glob, tile, mem):
+                        failed = t
+                        break
+                    if cst[t, K_SENT] != sent and s0 + look_idle < H:
+                        # a packet left: nobody may run past the first cycle it could be answered
+                        # (only shrinks a quantum with a single awake core)
+                        H = s0 + look_idle
+                    if cst[t, K_STATE] != K_RUN:
+                        break
+                elif why == RUN_OUTPUT:
+                    used = cst[t, K_OUT_LEN]
+                    m = st[t, S_OUT_LEN]
+                    if used + m > xcap:
+                        m = xcap - used
+                    for b in range(m):
+                        xout[t, used + b] = out[t, b]
+                    cst[t, K_OUT_LEN] = used + m
+                    st[t, S_OUT_LEN] = 0
+                elif why == RUN_EXIT:
+                    cst[t, K_STATE] = K_EXITED
+                    break
+                elif why == RUN_ERROR:
+                    cst[t, K_STATE] = K_FAULT
+                    failed = t
+                    break
+                elif st[t, S_CYCLE] >= H:
+                    break
+                one[0] = t
+                run_cores(st, ctr, opc, regs, m8, m16, m32, dec, decb, out, one, H)
+            if failed >= 0:
+                break
+            # keep the tile's output in xout so the host sees it in order
+            m = st[t, S_OUT_LEN]
+            if m > 0:
+                used = cst[t, K_OUT_LEN]
+                if used + m > xcap:
+                    m = xcap - used
+                for b in range(m):
+                    xout[t, used + b] = out[t, b]
+                cst[t, K_OUT_LEN] = used + m
+                st[t, S_OUT_LEN] = 0
+        if failed >= 0:
+            gst[G_ERR_TILE] = failed
+            status = CHIP_ERROR
+            break
+        alive = False
+        last = T
+        for t in range(n):
+            state = cst[t, K_STATE]
+            if state == K_RUN or state == K_SLEEP:
+                alive = True
+            elif state == K_EXITED and st[t, S_CYCLE] > last:
+                last = st[t, S_CYCLE]
+        if not alive and last < H:
+            H = last  # the run ends with the last exit
+        if not active:
+            _noc_advance(cfg, glob, buf, port, tile, mem, ev, queue, cst, H)
+            if glob[nk.G_STATUS] != nk.STATUS_OK:
+                status = CHIP_ERROR
+                gst[G_ERR_TILE] = -1
+                break
+            _take_deliveries(st, cst, gst, glob, ev, io_out)
+        T = H
+        full = False
+        for t in range(n):
+            if cst[t, K_OUT_LEN] > xcap // 2:
+                full = True
+        if full:
+            status = CHIP_OUTPUT
+            break
+    gst[G_TIME] = T
+    gst[G_STATUS] = status
+    return status
+
+
+__all__ = ["OUT_CAPACITY", "run_chip", "wake_time"]
