@@ -55,6 +55,10 @@ NI_ERRORS = {
 }
 
 
+TILE_STATES = {kc.K_OFF: "off", kc.K_RUN: "running", kc.K_SLEEP: "sleeping", kc.K_EXITED: "exited",
+               kc.K_FAULT: "failed", kc.K_IO: "io"}  # fmt: skip
+
+
 class ChipError(RuntimeError):
     """A tile failed, or the chip cannot make progress; the message names the tile."""
 
@@ -258,11 +262,8 @@ class MPSoC:
         )
 
     # --- inspection ------------------------------------------------------------------------
-    STATES = {kc.K_OFF: "off", kc.K_RUN: "running", kc.K_SLEEP: "sleeping", kc.K_EXITED: "exited",
-              kc.K_FAULT: "failed", kc.K_IO: "io"}  # fmt: skip
-
     def state(self, xy: tuple[int, int]) -> str:
-        return self.STATES[int(self.cst[self.config.tile_index(xy), kc.K_STATE])]
+        return TILE_STATES[int(self.cst[self.config.tile_index(xy), kc.K_STATE])]
 
     def pc(self, xy: tuple[int, int]) -> int:
         return int(self.cores.st[self.config.tile_index(xy), S_PC])

@@ -394,9 +394,6 @@ def run_chip(
     T = gst[G_TIME]
     status = CHIP_UNTIL
     while True:
-        if until <= T:
-            status = CHIP_UNTIL
-            break
         if io_out.shape[0] - gst[G_IO_COUNT] < n:
             status = CHIP_IO_FULL
             break
@@ -414,6 +411,12 @@ def run_chip(
         nxt = _noc_next(cfg, glob, tile, queue, cst)
         if nrun == 0 and nsleep == 0:
             status = CHIP_DONE
+            break
+        if nrun == 0 and wake >= NEVER and nxt >= NEVER:
+            status = CHIP_STUCK
+            break
+        if T >= until:  # noqa: SIM300
+            status = CHIP_UNTIL
             break
         # --- the quantum -------------------------------------------------------------------
         active = nxt <= T
@@ -437,9 +440,6 @@ def run_chip(
                         waking += 1
                 if nrun + waking >= 2:
                     H = min(H, T + look_idle)
-        if nrun == 0 and H >= NEVER and wake >= NEVER:
-            status = CHIP_STUCK
-            break
         if until < H:
             H = until
         gst[G_QUANTA] += 1
@@ -484,6 +484,14 @@ def run_chip(
                         # a packet left: nobody may run past the first cycle it could be answered
                         # (only shrinks a quantum with a single awake core)
                         H = s0 + look_idle
+                    if cst[t, K_STATE] == K_SLEEP and cst[t, K_WAKE] < H:
+                        # asleep and due again within this quantum: wake it right away
+                        w = max(cst[t, K_WAKE], cst[t, K_SLEEP_FROM])
+                        cst[t, K_STATE] = K_RUN
+                        cst[t, K_SLEEP_CYCLES] += w - cst[t, K_SLEEP_FROM]
+                        st[t, S_CYCLE] = w
+                        if st[t, S_IRQ_CHECK] > w:
+                            st[t, S_IRQ_CHECK] = w
                     if cst[t, K_STATE] != K_RUN:
                         break
                 elif why == RUN_OUTPUT:
