@@ -37,7 +37,7 @@ DEFAULT_SRAM_SIZE = 2 * 1024 * 1024
 class CoreState:
     """Arrays of a set of cores, one row per core (tile).
 
-    ``m8``, ``m16`` and ``m32`` are views of the same SRAM bytes, ``decb`` of ``dec``.  The
+    ``m8``, ``m16`` and ``m32`` are views of the same SRAM bytes.  The
     single-core SoC uses one row; the MPSoC one per tile.  Accessors without a tile argument
     refer to row 0.
     """
@@ -50,7 +50,6 @@ class CoreState:
     m16: np.ndarray
     m32: np.ndarray
     dec: np.ndarray
-    decb: np.ndarray
     out: np.ndarray
 
     @classmethod
@@ -84,7 +83,6 @@ class CoreState:
             m16=m8.view(np.uint16),
             m32=m8.view(np.int32),
             dec=dec,
-            decb=dec.view(np.uint8),
             out=np.zeros((tiles, OUT_CAPACITY), dtype=np.uint8),
         )
 

@@ -202,7 +202,7 @@ class MPSoC:
         """Advance the chip to ``until`` (or a host event); returns the CHIP_* reason."""
         c, n = self.cores, self.noc
         kc.run_chip(
-            c.st, c.ctr, c.opc, c.regs, c.m8, c.m16, c.m32, c.dec, c.decb, c.out,
+            c.st, c.ctr, c.opc, c.regs, c.m8, c.m16, c.m32, c.dec, c.out,
             n.cfg, n.glob, n.buf, n.port, n.tile, n.mem, n.ev, n.queue,
             self.cst, self.acc, self.snap, self.gst, self.xout, self.io_out, until,
         )  # fmt: skip

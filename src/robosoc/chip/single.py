@@ -121,7 +121,7 @@ class SingleCoreSoC:
     def step_until(self, until: int) -> int:
         """Run the kernel to cycle ``until`` (or an event); returns its RUN_* status."""
         s = self.state
-        run_cores(s.st, s.ctr, s.opc, s.regs, s.m8, s.m16, s.m32, s.dec, s.decb, s.out, _TILE0, until)
+        run_cores(s.st, s.ctr, s.opc, s.regs, s.m8, s.m16, s.m32, s.dec, s.out, _TILE0, until)
         return int(s.st[0, S_RUN])
 
     def drain_output(self) -> bytes:

@@ -44,3 +44,16 @@ def bench_noc(
     except ValueError as exc:
         raise typer.BadParameter(f"expected WxH, got {size!r}", param_hint="--size") from exc
     run_noc_benchmark(width=width, height=height, cycles=cycles, seed=seed, plot_path=plot)
+
+
+@bench_app.command("chip")
+def bench_chip(
+    runs: Annotated[int, typer.Option(help="Timed runs after the warm-up.")] = 5,
+    cycles: Annotated[int, typer.Option(help="Simulated cycles of the busy meshes.")] = 2_000_000,
+    ticks: Annotated[int, typer.Option(help="Timer ticks (1 ms each) of the sleeping mesh.")] = 40,
+    noc: Annotated[bool, typer.Option("--noc/--no-noc", help="Also run the NoC-alone benchmark.")] = True,
+) -> None:
+    """Whole-MPSoC speed: busy 2x2 and 4x4 meshes, a mostly sleeping 2x2, and the NoC alone."""
+    from robosoc.benchmarks.chip import run_chip_benchmark
+
+    run_chip_benchmark(runs=runs, cycles=cycles, ticks=ticks, noc=noc)

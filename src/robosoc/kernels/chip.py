@@ -380,7 +380,7 @@ def _take_deliveries(st, cst, gst, glob, ev, io_out):
 
 @njit(cache=True)
 def run_chip(
-    st, ctr, opc, regs, m8, m16, m32, dec, decb, out,
+    st, ctr, opc, regs, m8, m16, m32, dec, out,
     cfg, glob, buf, port, tile, mem, ev, queue,
     cst, acc, snap, gst, xout, io_out, until,
 ):  # fmt: skip
@@ -468,7 +468,7 @@ def run_chip(
             if cst[t, K_STATE] == K_RUN:
                 run[k] = t
                 k += 1
-        run_cores(st, ctr, opc, regs, m8, m16, m32, dec, decb, out, run[:k], H)
+        run_cores(st, ctr, opc, regs, m8, m16, m32, dec, out, run[:k], H)
         failed = -1
         for r in range(k):
             t = run[r]
@@ -513,7 +513,7 @@ def run_chip(
                 elif st[t, S_CYCLE] >= H:
                     break
                 one[0] = t
-                run_cores(st, ctr, opc, regs, m8, m16, m32, dec, decb, out, one, H)
+                run_cores(st, ctr, opc, regs, m8, m16, m32, dec, out, one, H)
             if failed >= 0:
                 break
             # keep the tile's output in xout so the host sees it in order

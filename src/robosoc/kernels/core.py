@@ -208,7 +208,6 @@ def run_cores(
     m16: np.ndarray,
     m32: np.ndarray,
     dec: np.ndarray,
-    decb: np.ndarray,
     out: np.ndarray,
     tiles: np.ndarray,
     until: int,
@@ -222,53 +221,49 @@ def run_cores(
 
     ``opc[t, 2 * op + (word index & 1)]`` counts executed instructions per operation (two banks,
     so that consecutive instructions never wait on the same counter); ``dec`` is the predecode
-    table (int32, two per memory word) and ``decb`` its uint8 view.
+    table (int32, two per memory word).  The three arrays the loop touches on every instruction
+    (registers, predecode, counters) are taken as row views once per tile; the others are indexed
+    in two dimensions, because every view costs reference counting on entry and exit, which
+    dominates the short time slices of a busy many-core chip.
     """
     for k in range(tiles.shape[0]):
         t = tiles[k]
-        st_t = st[t]
-        ctr_t = ctr[t]
         opc_t = opc[t]
         regs_t = regs[t]
-        m8_t = m8[t]
-        m16_t = m16[t]
-        m32_t = m32[t]
         dec_t = dec[t]
-        decb_t = decb[t]
-        out_t = out[t]
-        base = st_t[S_MEM_BASE]
-        size = st_t[S_MEM_SIZE]
-        has_mul = st_t[S_MUL] != 0
-        pc = st_t[S_PC]
-        cyc = st_t[S_CYCLE]
-        budget = st_t[S_MAX_CYCLES]
+        base = st[t, S_MEM_BASE]
+        size = st[t, S_MEM_SIZE]
+        has_mul = st[t, S_MUL] != 0
+        pc = st[t, S_PC]
+        cyc = st[t, S_CYCLE]
+        budget = st[t, S_MAX_CYCLES]
         stop = until if budget < 0 else min(until, budget)
         out_limit = OUT_CAPACITY - 8
-        n_taken = ctr_t[C_TAKEN]
-        n_mulstall = ctr_t[C_MUL_STALL]
+        n_taken = ctr[t, C_TAKEN]
+        n_mulstall = ctr[t, C_MUL_STALL]
 
         status = RUN_CHUNK
         err = 0
         err_addr = 0
-        next_event = min(st_t[S_IRQ_CHECK], stop)
+        next_event = min(st[t, S_IRQ_CHECK], stop)
 
         while True:
             if cyc >= next_event:
-                if cyc >= st_t[S_IRQ_CHECK]:
-                    pc, cyc, entered = irq_event(st_t, pc, cyc)
+                if cyc >= st[t, S_IRQ_CHECK]:
+                    pc, cyc, entered = irq_event(st[t], pc, cyc)
                     if entered == 1:
-                        ctr_t[C_TRAP] += 1
-                        ctr_t[C_ENTRY_STALL] += 2
+                        ctr[t, C_TRAP] += 1
+                        ctr[t, C_ENTRY_STALL] += 2
                     elif entered == 2:
-                        ctr_t[C_IRQ] += 1
-                        ctr_t[C_ENTRY_STALL] += 2
+                        ctr[t, C_IRQ] += 1
+                        ctr[t, C_ENTRY_STALL] += 2
                 if cyc >= stop:
                     status = RUN_MAX_CYCLES if (budget >= 0 and cyc >= budget) else RUN_CHUNK
                     break
-                if st_t[S_OUT_LEN] >= out_limit:
+                if st[t, S_OUT_LEN] >= out_limit:
                     status = RUN_OUTPUT
                     break
-                next_event = min(st_t[S_IRQ_CHECK], stop)
+                next_event = min(st[t, S_IRQ_CHECK], stop)
                 if next_event <= cyc:
                     next_event = cyc + 1
 
@@ -294,9 +289,9 @@ def run_cores(
                     err_addr = addr
                     break
                 if (off & M32) < size:
-                    regs_t[rd] = m32_t[np.uint64(off) >> U2]
+                    regs_t[rd] = m32[t, np.uint64(off) >> U2]
                 else:
-                    v, code = mmio_load(st_t, addr, cyc)
+                    v, code = mmio_load(st[t], addr, cyc)
                     if code == LD_NI:
                         opc_t[(op << U1) | (i & U1)] -= 1
                         status = RUN_NI
@@ -305,7 +300,7 @@ def run_cores(
                         err = ERR_LOAD_UNMAPPED
                         err_addr = addr
                         break
-                    ctr_t[C_MMIO] += 1
+                    ctr[t, C_MMIO] += 1
                     regs_t[rd] = v
                 cyc += 3
                 pc += 4
@@ -318,15 +313,15 @@ def run_cores(
                     break
                 if (off & M32) < size:
                     wi = np.uint64(off) >> U2
-                    m32_t[wi] = regs_t[rs2]
+                    m32[t, wi] = regs_t[rs2]
                     dec_t[wi << U1] = 0
                 else:
-                    r = mmio_store(st_t, out_t, addr, regs_t[rs2], cyc)
+                    r = mmio_store(st[t], out[t], addr, regs_t[rs2], cyc)
                     if r == ST_NI:
                         opc_t[(op << U1) | (i & U1)] -= 1
                         status = RUN_NI
                         break
-                    ctr_t[C_MMIO] += 1
+                    ctr[t, C_MMIO] += 1
                     if r < 0:
                         err = ERR_STORE_READONLY if r == ST_READONLY else ERR_STORE_UNMAPPED
                         err_addr = addr
@@ -337,7 +332,7 @@ def run_cores(
                         status = RUN_EXIT
                         break
                     if r == ST_IRQ_CHANGED:
-                        st_t[S_IRQ_CHECK] = min(st_t[S_IRQ_CHECK], cyc + 3)
+                        st[t, S_IRQ_CHECK] = min(st[t, S_IRQ_CHECK], cyc + 3)
                     next_event = cyc + 3
                 cyc += 3
                 pc += 4
@@ -517,15 +512,15 @@ def run_cores(
                     break
                 if (off & M32) < size:
                     if op == LBU:
-                        v = np.int64(m8_t[np.uint64(off)])
+                        v = np.int64(m8[t, np.uint64(off)])
                     elif op == LB:
-                        v = _sext(np.int64(m8_t[np.uint64(off)]), 8)
+                        v = _sext(np.int64(m8[t, np.uint64(off)]), 8)
                     elif op == LHU:
-                        v = np.int64(m16_t[np.uint64(off) >> U1])
+                        v = np.int64(m16[t, np.uint64(off) >> U1])
                     else:
-                        v = _sext(np.int64(m16_t[np.uint64(off) >> U1]), 16)
+                        v = _sext(np.int64(m16[t, np.uint64(off) >> U1]), 16)
                 else:
-                    w, code = mmio_load(st_t, addr, cyc)
+                    w, code = mmio_load(st[t], addr, cyc)
                     if code == LD_NI:
                         opc_t[(op << U1) | (i & U1)] -= 1
                         status = RUN_NI
@@ -534,7 +529,7 @@ def run_cores(
                         err = ERR_LOAD_UNMAPPED
                         err_addr = addr
                         break
-                    ctr_t[C_MMIO] += 1
+                    ctr[t, C_MMIO] += 1
                     sh = (addr & 3) * 8
                     if op == LBU:
                         v = (w >> sh) & 0xFF
@@ -556,18 +551,18 @@ def run_cores(
                     break
                 if (off & M32) < size:
                     if op == SB:
-                        m8_t[np.uint64(off)] = regs_t[rs2]
+                        m8[t, np.uint64(off)] = regs_t[rs2]
                     else:
-                        m16_t[np.uint64(off) >> U1] = regs_t[rs2]
+                        m16[t, np.uint64(off) >> U1] = regs_t[rs2]
                     dec_t[(np.uint64(off) >> U2) << U1] = 0
                 else:
                     value = regs_t[rs2] & 0xFF if op == SB else regs_t[rs2] & 0xFFFF
-                    r = mmio_store(st_t, out_t, addr, value, cyc)
+                    r = mmio_store(st[t], out[t], addr, value, cyc)
                     if r == ST_NI:
                         opc_t[(op << U1) | (i & U1)] -= 1
                         status = RUN_NI
                         break
-                    ctr_t[C_MMIO] += 1
+                    ctr[t, C_MMIO] += 1
                     if r < 0:
                         err = ERR_STORE_READONLY if r == ST_READONLY else ERR_STORE_UNMAPPED
                         err_addr = addr
@@ -578,7 +573,7 @@ def run_cores(
                         status = RUN_EXIT
                         break
                     if r == ST_IRQ_CHANGED:
-                        st_t[S_IRQ_CHECK] = min(st_t[S_IRQ_CHECK], cyc + 3)
+                        st[t, S_IRQ_CHECK] = min(st[t, S_IRQ_CHECK], cyc + 3)
                     next_event = cyc + 3
                 cyc += 3
                 pc += 4
@@ -597,9 +592,9 @@ def run_cores(
                     regs_t[rd] = (p >> 32) + (b if a < 0 else 0) + (a if b < 0 else 0)
                 else:
                     regs_t[rd] = (p >> 32) + (a if b < 0 else 0)
-                    st_t[S_MULHSU_COUNT] += 1
-                    if st_t[S_MULHSU_PC] < 0:
-                        st_t[S_MULHSU_PC] = pc
+                    st[t, S_MULHSU_COUNT] += 1
+                    if st[t, S_MULHSU_PC] < 0:
+                        st[t, S_MULHSU_PC] = pc
                 lat = mul_latency(b & M32)
                 n_mulstall += lat - 1
                 cyc += lat
@@ -609,15 +604,15 @@ def run_cores(
                 pc += 4
             elif op == 0:
                 opc_t[i & U1] -= 1
-                decode_word(m32_t[i], dec_t, i)
+                decode_word(m32[t, i], dec_t, i)
             elif op >= FIRST_SYSTEM and op < ILLEGAL:
                 # SYSTEM opcode: trap.  EPC = trap + 8; the instruction at trap + 8 executes first.
-                st_t[S_IRQ_EPC] = (pc + 8) & M32
-                st_t[S_IRQ_STATUS] &= 0xFE
-                st_t[S_IRQ_PHASE] = PH_TRAP
+                st[t, S_IRQ_EPC] = (pc + 8) & M32
+                st[t, S_IRQ_STATUS] &= 0xFE
+                st[t, S_IRQ_PHASE] = PH_TRAP
                 cyc += 1
                 pc += 8
-                st_t[S_IRQ_CHECK] = cyc + 1
+                st[t, S_IRQ_CHECK] = cyc + 1
                 next_event = cyc + 1
             elif op == FETCH_FAULT:
                 err = ERR_FETCH
@@ -632,14 +627,14 @@ def run_cores(
 
         if err != 0:
             status = RUN_ERROR
-            st_t[S_ERR] = err
-            st_t[S_ERR_PC] = pc
-            st_t[S_ERR_ADDR] = err_addr
+            st[t, S_ERR] = err
+            st[t, S_ERR_PC] = pc
+            st[t, S_ERR_ADDR] = err_addr
             wi = (pc - base) >> 2
-            st_t[S_ERR_INSN] = m32_t[wi] & M32 if 0 <= wi < size >> 2 else 0
+            st[t, S_ERR_INSN] = m32[t, wi] & M32 if 0 <= wi < size >> 2 else 0
 
-        st_t[S_PC] = pc & M32
-        st_t[S_CYCLE] = cyc
-        st_t[S_RUN] = status
-        ctr_t[C_TAKEN] = n_taken
-        ctr_t[C_MUL_STALL] = n_mulstall
+        st[t, S_PC] = pc & M32
+        st[t, S_CYCLE] = cyc
+        st[t, S_RUN] = status
+        ctr[t, C_TAKEN] = n_taken
+        ctr[t, C_MUL_STALL] = n_mulstall

@@ -20,9 +20,7 @@ def render_linker_script(
         ToolchainError: the geometry is not word-aligned, not positive, or leaves the 32-bit space.
     """
     if sram_base % 16 or sram_size % 16 or sram_size <= 0 or sram_base < 0:
-        raise ToolchainError(
-            f"SRAM base 0x{sram_base:x} and size {sram_size} must be positive multiples of 16"
-        )
+        raise ToolchainError(f"SRAM base 0x{sram_base:x} and size {sram_size} must be positive multiples of 16")
     if sram_base + sram_size > 1 << 32:
         raise ToolchainError(f"SRAM 0x{sram_base:x} + {sram_size} bytes leaves the 32-bit address space")
     if not 0 <= stack_min < sram_size:

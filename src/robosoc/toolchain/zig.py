@@ -35,8 +35,6 @@ def run_zig_cc(args: list[str], zig_cache: Path, cwd: Path | None = None) -> sub
     """Run ``zig cc`` with the project's zig cache; returns the completed process (never raises on rc)."""
     command = zig_cc_command(args)
     try:
-        return subprocess.run(
-            command, env=zig_env(zig_cache), cwd=cwd, capture_output=True, text=True, check=False
-        )
+        return subprocess.run(command, env=zig_env(zig_cache), cwd=cwd, capture_output=True, text=True, check=False)
     except OSError as exc:
         raise ToolchainError(f"cannot run zig ({' '.join(command[:4])}): {exc}") from exc

@@ -37,7 +37,16 @@ static inline uint32_t hf_tile_x(void) { return HF_REG32(HF_NI_TILE) >> 4; }
 static inline uint32_t hf_tile_y(void) { return HF_REG32(HF_NI_TILE) & 15u; }
 static inline uint32_t hf_io_tile(void) { return HF_REG32(HF_NI_IO_TILE); }
 static inline void hf_set_task(uint32_t id) { HF_REG32(HF_TASK_ID) = id; }
-static inline void hf_sleep(void) { HF_REG32(HF_SLEEP) = 1u; }
+/*
+ * Sleep until an interrupt request is pending.  The NOP matters: HF-RISCV acknowledges an
+ * interrupt only while a single-cycle instruction executes, and a wait loop made of loads,
+ * stores and branches alone would never be interrupted.
+ */
+static inline void hf_sleep(void)
+{
+    HF_REG32(HF_SLEEP) = 1u;
+    __asm__ volatile("nop");
+}
 
 /* Send `n` flits from `packet` (flit 0 and 1 already filled); waits for the send memory first. */
 static inline void hf_ni_send(const uint16_t *packet, uint32_t n)
