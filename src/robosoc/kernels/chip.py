@@ -393,6 +393,7 @@ def run_chip(
     xcap = xout.shape[1]
     T = gst[G_TIME]
     status = CHIP_UNTIL
+    quiet = False  # known to have nothing in flight or pending (recomputed on every call)
     while True:
         if io_out.shape[0] - gst[G_IO_COUNT] < n:
             status = CHIP_IO_FULL
@@ -408,7 +409,9 @@ def run_chip(
                 nsleep += 1
                 if cst[t, K_WAKE] < wake:
                     wake = cst[t, K_WAKE]
-        nxt = _noc_next(cfg, glob, tile, queue, cst)
+        # the NoC's next activity; a quiet NoC stays quiet until a core sends or receives
+        nxt = NEVER if quiet else _noc_next(cfg, glob, tile, queue, cst)
+        quiet = nxt >= NEVER
         if nrun == 0 and nsleep == 0:
             status = CHIP_DONE
             break
@@ -477,9 +480,12 @@ def run_chip(
                 if why == RUN_NI:
                     s0 = st[t, S_CYCLE]
                     sent = cst[t, K_SENT]
+                    received = cst[t, K_RECEIVED]
                     if not ni_access(t, st, ctr, opc, regs, m16, dec, cst, acc, snap, gst, cfg, glob, tile, mem):
                         failed = t
                         break
+                    if cst[t, K_SENT] != sent or cst[t, K_RECEIVED] != received:
+                        quiet = False
                     if cst[t, K_SENT] != sent and s0 + look_idle < H:
                         # a packet left: nobody may run past the first cycle it could be answered
                         # (only shrinks a quantum with a single awake core)
@@ -540,13 +546,16 @@ def run_chip(
                 last = st[t, S_CYCLE]
         if not alive and last < H:
             H = last  # the run ends with the last exit
-        if not active:
+        if quiet:
+            glob[nk.G_CYCLE] = H  # nothing in or entering the network: time just passes
+        elif not active:
             _noc_advance(cfg, glob, buf, port, tile, mem, ev, queue, cst, H)
             if glob[nk.G_STATUS] != nk.STATUS_OK:
                 status = CHIP_ERROR
                 gst[G_ERR_TILE] = -1
                 break
-            _take_deliveries(st, cst, gst, glob, ev, io_out)
+            if glob[nk.G_NEV] != 0:
+                _take_deliveries(st, cst, gst, glob, ev, io_out)
         T = H
         full = False
         for t in range(n):

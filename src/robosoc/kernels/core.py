@@ -198,7 +198,7 @@ def mul_latency(b: int) -> int:
     return 5 + steps + (31 - c) + 1
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def run_cores(
     st: np.ndarray,
     ctr: np.ndarray,
