@@ -5,8 +5,11 @@ acknowledged at the earliest in cycle t + 3, only while a single-cycle instructi
 vector's first instruction then executes in t + 6 and t + 7, the second in t + 8.
 """
 
+import pytest
 import rv32_asm as A
 from core_harness import exit_with, make_soc
+
+from robosoc.chip.single import CycleBudgetExceeded
 
 SRAM = 0x40000000
 T0, T3, T4 = 5, 28, 29  # TIMER0 base, IRQ controller base, timer-cause block base
@@ -167,3 +170,28 @@ def test_trap_entry_timing():
     _, _, regs = run_program(words)
     s = regs[A5] + 1 + 3  # the ecall starts right after the TIMER0 load
     assert regs[A2] == s + 6 - 1
+
+
+def _idle_loop_program(first: int) -> list[int]:
+    """Arm the TIMER1 >= 2000 interrupt, then spin in `first; j .-4`; the handler exits."""
+    handler = [A.NOP, A.load("lw", A2, T0, 0), *exit_with(A2)]
+    return program([first, A.jal(0, -4)], handler, ocr=2000)
+
+
+def test_idle_loop_fast_forward_changes_nothing():
+    # `nop; j .-4` is skipped over in whole iterations; `addi x0, x0, 1; j .-4` has the same
+    # timing but is not recognised as idle, so it runs instruction by instruction
+    fast = run_program(_idle_loop_program(A.NOP))
+    slow = run_program(_idle_loop_program(A.i("addi", 0, 0, 1)))
+    assert fast[1].exit_code == slow[1].exit_code == fast[2][A2]
+    assert fast[1].counters == slow[1].counters
+    assert fast[1].counters["interrupts"] == 1
+
+
+def test_jump_to_self_spins_until_the_budget():
+    soc = make_soc([A.NOP, A.jal(0, 0)])
+    with pytest.raises(CycleBudgetExceeded):
+        soc.run(max_cycles=30_000_000)
+    c = soc.counters()
+    assert c["jump"] == (soc.cycle - 4) // 3
+    assert 30_000_000 <= soc.cycle < 30_000_003

@@ -101,6 +101,7 @@ F_I, F_SHIFT, F_LOAD, F_S = int(Fmt.I), int(Fmt.SHIFT), int(Fmt.LOAD), int(Fmt.S
 F_B, F_U, F_J, F_JALR = int(Fmt.B), int(Fmt.U), int(Fmt.J), int(Fmt.JALR)
 
 SINK = 32  # register index that stands in for rd = x0
+NOP_ROW = ADDI | (SINK << 8)  # predecoded `addi x0, x0, 0` (its immediate row is 0)
 UNSUPPORTED_BIT = 0x80
 U1 = np.uint64(1)
 U2 = np.uint64(2)
@@ -501,6 +502,22 @@ def run_cores(
                     err_addr = target
                     break
                 regs_t[rd] = pc + 4
+                if op == JAL and rd == SINK and imm <= 0:
+                    if imm == 0:
+                        # `j .`: taken jumps are never interrupted, so the core spins to the end
+                        # of the slice; jump there, counting every iteration
+                        k = (stop - cyc - 1) // 3
+                        if k > 0:
+                            cyc += 3 * k
+                            opc_t[(op << U1) | (i & U1)] += k
+                    elif imm == -4 and dec_t[j - U2] == NOP_ROW and dec_t[j - U1] == 0:
+                        # `nop; j .-4` idle loop: skip whole 4-cycle iterations while no event
+                        # (interrupt check, end of slice) is due
+                        k = (next_event - (cyc + 3)) // 4
+                        if k > 0:
+                            cyc += 4 * k
+                            opc_t[(op << U1) | (i & U1)] += k
+                            opc_t[(np.uint64(ADDI) << U1) | ((i - U1) & U1)] += k
                 pc = target
                 cyc += 3
             elif op == LBU or op == LB or op == LHU or op == LH:
