@@ -6,9 +6,9 @@ vector's first instruction then executes in t + 6 and t + 7, the second in t + 8
 """
 
 import pytest
+
 import rv32_asm as A
 from core_harness import exit_with, make_soc
-
 from robosoc.chip.single import CycleBudgetExceeded
 
 SRAM = 0x40000000
