@@ -36,3 +36,12 @@ def test_bad_files_name_file_and_key(tmp_path):
         EnergyModel.load(bad)
     with pytest.raises(ConfigError, match="cannot read"):
         EnergyModel.load(tmp_path / "nope.toml")
+
+
+def test_router_energy_matches_the_published_per_cycle_figures():
+    m = EnergyModel.load()
+    idle = {"router_cycles": 1, "router_busy_cycles": 0, "port_busy_cycles": 0, "port_idle_cycles": 5}
+    assert sum(m.noc_pj(idle).values()) == pytest.approx(10.49, abs=0.01)  # platform.md: ~10.5 pJ
+    # one flit sitting in one input buffer of a router for a cycle: ~10 pJ more (platform.md §5)
+    busy = {"router_cycles": 1, "router_busy_cycles": 1, "port_busy_cycles": 1, "port_idle_cycles": 4}
+    assert sum(m.noc_pj(busy).values()) - sum(m.noc_pj(idle).values()) == pytest.approx(9.96, abs=0.01)

@@ -14,7 +14,8 @@ from pathlib import Path
 from robosoc.config import ConfigError
 
 INSTRUCTION_CLASSES = ("jump", "branch", "memory", "add", "logic", "other", "mul", "system")
-STALL_KINDS = ("branch_cycle", "memory_cycle", "mul_cycle", "entry_cycle")
+STALL_KINDS = ("branch_cycle", "memory_cycle", "mul_cycle", "entry_cycle", "dma_cycle", "sleep_cycle")
+NOC_TERMS = ("buffer_active", "buffer_idle", "control_active", "control_idle", "leakage")
 
 
 @dataclass(frozen=True)
@@ -30,6 +31,7 @@ class EnergyModel:
 
     instruction: dict[str, Coefficient]
     stall: dict[str, Coefficient]
+    noc: dict[str, Coefficient]
     clock_ns: float
     path: str
 
@@ -82,7 +84,13 @@ class EnergyModel:
         clock = data.get("clock_ns", 4.0)
         if isinstance(clock, bool) or not isinstance(clock, int | float) or clock <= 0:
             raise ConfigError(where, "clock_ns", "expected a positive number")
-        return cls(table("instruction", INSTRUCTION_CLASSES), table("stall", STALL_KINDS), float(clock), where)
+        return cls(
+            table("instruction", INSTRUCTION_CLASSES),
+            table("stall", STALL_KINDS),
+            table("noc", NOC_TERMS),
+            float(clock),
+            where,
+        )
 
     def breakdown_pj(self, counts: dict[str, int]) -> dict[str, float]:
         """Energy per counter name in pJ, for counters named ``<class>`` or ``<kind>`` (see keys)."""
@@ -95,3 +103,13 @@ class EnergyModel:
 
     def total_nj(self, counts: dict[str, int]) -> float:
         return sum(self.breakdown_pj(counts).values()) / 1000.0
+
+    def noc_pj(self, noc: dict[str, int]) -> dict[str, float]:
+        """Router energy in pJ from :meth:`robosoc.chip.mpsoc.MPSoC.noc_counters`."""
+        c = self.noc
+        return {
+            "buffers": noc["port_busy_cycles"] * c["buffer_active"].pj + noc["port_idle_cycles"] * c["buffer_idle"].pj,
+            "control": noc["router_busy_cycles"] * c["control_active"].pj
+            + (noc["router_cycles"] - noc["router_busy_cycles"]) * c["control_idle"].pj,
+            "leakage": noc["router_cycles"] * c["leakage"].pj,
+        }

@@ -1,4 +1,4 @@
-"""``robosoc run``: run a bare-metal program on one HF-RISCV core."""
+"""``robosoc run``: run bare-metal programs on one HF-RISCV core or on the MPSoC."""
 
 from __future__ import annotations
 
@@ -12,27 +12,69 @@ import typer
 from robosoc.cli.app import app
 
 
+def _write_json(path: Path, record: dict) -> None:
+    tmp = path.with_suffix(path.suffix + ".tmp")
+    tmp.write_text(json.dumps(record, indent=2) + "\n")
+    tmp.replace(path)
+
+
+def _parse_mesh(mesh: str) -> tuple[int, int]:
+    try:
+        w, h = (int(v) for v in mesh.lower().split("x"))
+    except ValueError as exc:
+        raise typer.BadParameter(f"expected WxH such as 2x2, got {mesh!r}", param_hint="--mesh") from exc
+    return w, h
+
+
+def _parse_tile(text: str) -> tuple[int, int]:
+    try:
+        x, y = (int(v) for v in text.split(","))
+    except ValueError as exc:
+        raise typer.BadParameter(f"expected X,Y such as 1,1, got {text!r}", param_hint="--off") from exc
+    return x, y
+
+
 @app.command("run")
 def run(
-    program: Annotated[Path, typer.Argument(help="ELF file built for the core (robosoc cc).")],
-    mul: Annotated[bool, typer.Option("--mul/--no-mul", help="Core with or without the iterative multiplier.")] = True,
+    programs: Annotated[list[Path], typer.Argument(help="ELF file(s) built for the core (robosoc cc).")],
+    mul: Annotated[bool, typer.Option("--mul/--no-mul", help="Cores with or without the iterative multiplier.")] = True,
     max_cycles: Annotated[int, typer.Option("--max-cycles", help="Cycle budget: stop a hung program.")] = 10**10,
     stats: Annotated[Path | None, typer.Option("--stats", help="Write counters and energy to this JSON file.")] = None,
     energy: Annotated[Path | None, typer.Option("--energy", help="Energy coefficients (TOML) to use.")] = None,
-    sram_size: Annotated[int, typer.Option("--sram-size", help="SRAM bytes.")] = 2 * 1024 * 1024,
+    sram_size: Annotated[int, typer.Option("--sram-size", help="SRAM bytes (per tile).")] = 2 * 1024 * 1024,
+    mesh: Annotated[str | None, typer.Option("--mesh", help="Run on a WxH MPSoC (I/O tile at 0,0).")] = None,
+    chip: Annotated[Path | None, typer.Option("--chip", help="MPSoC configuration file (TOML).")] = None,
+    off: Annotated[list[str] | None, typer.Option("--off", help="Power off tile X,Y (repeatable).")] = None,
 ) -> None:
-    """Run PROGRAM on one core: its debug-port and UART output goes to stdout, the summary to stderr,
-    and the exit code is the program's."""
+    """Run programs: their debug-port and UART output goes to stdout (prefixed by the tile on the
+    MPSoC), a summary to stderr, and the exit code is the program's (the first non-zero one on the
+    MPSoC).  With --mesh or --chip, one ELF runs on every core tile (tiles tell themselves apart by
+    reading NI_TILE), or one ELF per core tile in tile order (x fastest)."""
     from robosoc.analysis.energy import EnergyModel
-    from robosoc.chip.elf import ElfError, load_elf
-    from robosoc.chip.single import CoreError, CycleBudgetExceeded, SingleCoreSoC
     from robosoc.config import ConfigError
 
     try:
         model = EnergyModel.load(energy)
+    except ConfigError as exc:
+        typer.echo(f"robosoc run: {exc}", err=True)
+        raise typer.Exit(2) from exc
+    if mesh is None and chip is None and not off:
+        if len(programs) != 1:
+            typer.echo("robosoc run: several programs need --mesh WxH or --chip FILE", err=True)
+            raise typer.Exit(2)
+        _run_single(programs[0], mul, max_cycles, stats, model, sram_size)
+    else:
+        _run_chip(programs, mul, max_cycles, stats, model, sram_size, mesh, chip, off or [])
+
+
+def _run_single(program: Path, mul: bool, max_cycles: int, stats: Path | None, model, sram_size: int) -> None:
+    from robosoc.chip.elf import ElfError, load_elf
+    from robosoc.chip.single import CoreError, CycleBudgetExceeded, SingleCoreSoC
+
+    try:
         soc = SingleCoreSoC(mul=mul, sram_size=sram_size)
         soc.load(load_elf(program, soc.regions()))
-    except (ConfigError, ElfError, ValueError, OSError) as exc:
+    except (ElfError, ValueError, OSError) as exc:
         typer.echo(f"robosoc run: {exc}", err=True)
         raise typer.Exit(2) from exc
 
@@ -44,37 +86,30 @@ def run(
     result = None
     try:
         result = soc.run(max_cycles=max_cycles, on_output=write_out)
-        counters = result.counters
         seconds = result.host_seconds
     except (CoreError, CycleBudgetExceeded) as exc:
-        failure = exc
-        counters = soc.counters()
-        seconds = 0.0
+        failure, seconds = exc, 0.0
     except KeyboardInterrupt:
-        failure = KeyboardInterrupt("interrupted")
-        counters = soc.counters()
-        seconds = 0.0
-
+        failure, seconds = KeyboardInterrupt("interrupted"), 0.0
+    counters = soc.counters()
     energy_pj = model.breakdown_pj(counters)
     total_nj = sum(energy_pj.values()) / 1000.0
     if stats is not None:
-        record = {
-            "program": str(program),
-            "mul": mul,
-            "exit_code": result.exit_code if result else None,
-            "error": str(failure) if failure else None,
-            "counters": counters,
-            "energy_pj": energy_pj,
-            "energy_nj": total_nj,
-            "energy_model": model.path,
-            "warnings": result.warnings if result else [],
-        }
-        tmp = stats.with_suffix(stats.suffix + ".tmp")
-        tmp.write_text(json.dumps(record, indent=2) + "\n")
-        tmp.replace(stats)
-
-    cycles = counters["cycles"]
-    instr = counters["instructions"]
+        _write_json(
+            stats,
+            {
+                "program": str(program),
+                "mul": mul,
+                "exit_code": result.exit_code if result else None,
+                "error": str(failure) if failure else None,
+                "counters": counters,
+                "energy_pj": energy_pj,
+                "energy_nj": total_nj,
+                "energy_model": model.path,
+                "warnings": result.warnings if result else [],
+            },
+        )
+    cycles, instr = counters["cycles"], counters["instructions"]
     cpi = cycles / instr if instr else float("nan")
     mips = instr / seconds / 1e6 if seconds > 0 else float("nan")
     typer.echo(
@@ -87,3 +122,111 @@ def run(
         raise typer.Exit(130 if isinstance(failure, KeyboardInterrupt) else 3)
     assert result is not None
     raise typer.Exit(result.exit_code & 0xFF)
+
+
+def _run_chip(
+    programs: list[Path], mul: bool, max_cycles: int, stats: Path | None, model, sram_size: int,
+    mesh: str | None, chip_file: Path | None, off: list[str],
+) -> None:  # fmt: skip
+    import dataclasses
+
+    from robosoc.chip.elf import ElfError, load_elf
+    from robosoc.chip.mpsoc import ChipError, MPSoC
+    from robosoc.chip.single import CoreError
+    from robosoc.config import ConfigError
+    from robosoc.config.chip import ChipConfig, TileConfig, load_chip_config
+
+    try:
+        if chip_file is not None:
+            config = load_chip_config(chip_file)
+        else:
+            w, h = _parse_mesh(mesh or "2x2")
+            config = ChipConfig(width=w, height=h, tile=TileConfig(multiplier=mul, sram_bytes=sram_size))
+        if off:
+            config = dataclasses.replace(config, powered_off=tuple(_parse_tile(t) for t in off))
+        chip = MPSoC(config)
+        tiles = chip.core_tiles()
+        if len(programs) == 1:
+            chip.load_all(load_elf(programs[0], chip.regions()))
+        elif len(programs) == len(tiles):
+            for xy, path in zip(tiles, programs, strict=True):
+                chip.load(xy, load_elf(path, chip.regions(xy)))
+        else:
+            raise ValueError(
+                f"{len(programs)} programs for {len(tiles)} core tiles {tiles}: give one program, or one per tile"
+            )
+    except (ConfigError, ElfError, ValueError, OSError) as exc:
+        typer.echo(f"robosoc run: {exc}", err=True)
+        raise typer.Exit(2) from exc
+
+    pending: dict[tuple[int, int], bytearray] = {}
+
+    def write_out(xy: tuple[int, int], data: bytes) -> None:
+        buf = pending.setdefault(xy, bytearray())
+        buf.extend(data)
+        while b"\n" in buf:
+            line, _, rest = bytes(buf).partition(b"\n")
+            sys.stdout.buffer.write(f"[{xy[0]},{xy[1]}] ".encode() + line + b"\n")
+            buf[:] = rest
+        sys.stdout.buffer.flush()
+
+    failure: Exception | None = None
+    result = None
+    try:
+        result = chip.run(max_cycles=max_cycles, on_output=write_out)
+    except (ChipError, CoreError) as exc:
+        failure = exc
+    except KeyboardInterrupt:
+        failure = KeyboardInterrupt("interrupted")
+    for xy, rest in pending.items():
+        if rest:
+            sys.stdout.buffer.write(f"[{xy[0]},{xy[1]}] ".encode() + bytes(rest) + b"\n")
+    sys.stdout.buffer.flush()
+    chip.finish_accounting()
+
+    per_tile = {}
+    total_nj = 0.0
+    for xy in tiles:
+        c = chip.counters(xy)
+        e = sum(model.breakdown_pj(c).values()) / 1000.0
+        total_nj += e
+        tasks = {
+            str(task): {"counters": tc, "energy_nj": sum(model.breakdown_pj(tc).values()) / 1000.0}
+            for task, tc in chip.task_counters(xy).items()
+        }
+        per_tile[f"{xy[0]},{xy[1]}"] = {"state": chip.state(xy), "counters": c, "energy_nj": e, "tasks": tasks}
+        cpi = c["cycles"] / c["instructions"] if c["instructions"] else float("nan")
+        typer.echo(
+            f"robosoc: tile {xy}: {chip.state(xy)}, {c['cycles']} cycles, {c['instructions']} instructions, "
+            f"CPI {cpi:.3f}, sleep {c['sleep_cycle']}, energy {e:.3f} nJ",
+            err=True,
+        )
+    noc = chip.noc_counters()
+    noc_pj = model.noc_pj(noc)
+    noc_nj = sum(noc_pj.values()) / 1000.0
+    typer.echo(
+        f"robosoc: NoC {noc['packets_delivered']} packets, {noc['flit_hops']} flit-hops, energy {noc_nj:.3f} nJ; "
+        f"chip {chip.cycle} cycles, energy {total_nj + noc_nj:.3f} nJ",
+        err=True,
+    )
+    exit_codes = result.exit_codes if result else {}
+    if stats is not None:
+        _write_json(
+            stats,
+            {
+                "programs": [str(p) for p in programs],
+                "mesh": [config.width, config.height],
+                "cycles": chip.cycle,
+                "exit_codes": {f"{x},{y}": v for (x, y), v in exit_codes.items()},
+                "error": str(failure) if failure else None,
+                "tiles": per_tile,
+                "noc": {"counters": noc, "energy_pj": noc_pj, "energy_nj": noc_nj},
+                "energy_nj": total_nj + noc_nj,
+                "energy_model": model.path,
+            },
+        )
+    if failure is not None:
+        typer.echo(f"robosoc run: {failure}", err=True)
+        raise typer.Exit(130 if isinstance(failure, KeyboardInterrupt) else 3)
+    code = next((v for v in exit_codes.values() if v), 0)
+    raise typer.Exit(code & 0xFF)
