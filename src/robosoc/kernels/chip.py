@@ -323,6 +323,27 @@ def ni_access(t, st, ctr, opc, regs, m16, dec, cst, acc, snap, gst, cfg, glob, t
 
 
 @njit(cache=True)
+def _wake(t, st, cst, w):
+    """A sleeping core resumes in cycle w."""
+    cst[t, K_STATE] = K_RUN
+    cst[t, K_SLEEP_CYCLES] += w - cst[t, K_SLEEP_FROM]
+    st[t, S_CYCLE] = w
+    if st[t, S_IRQ_CHECK] > w:
+        st[t, S_IRQ_CHECK] = w
+
+
+@njit(cache=True)
+def _keep_output(t, st, cst, out, xout):
+    """Move a core's output bytes into its large host buffer (drained by the host between calls)."""
+    used = cst[t, K_OUT_LEN]
+    m = min(st[t, S_OUT_LEN], xout.shape[1] - used)
+    for b in range(m):
+        xout[t, used + b] = out[t, b]
+    cst[t, K_OUT_LEN] = used + m
+    st[t, S_OUT_LEN] = 0
+
+
+@njit(cache=True)
 def _noc_advance(cfg, glob, buf, port, tile, mem, ev, queue, cst, to):
     """Run the NoC up to cycle ``to``, freeing receive memories at the cycles RECV made them free."""
     n = cfg[nk.C_NTILES]
@@ -458,11 +479,7 @@ def run_chip(
             if cst[t, K_STATE] == K_SLEEP and cst[t, K_WAKE] < H:
                 w = max(cst[t, K_WAKE], cst[t, K_SLEEP_FROM])
                 if irq_pending(st[t], w):
-                    cst[t, K_STATE] = K_RUN
-                    cst[t, K_SLEEP_CYCLES] += w - cst[t, K_SLEEP_FROM]
-                    st[t, S_CYCLE] = w
-                    if st[t, S_IRQ_CHECK] > w:
-                        st[t, S_IRQ_CHECK] = w
+                    _wake(t, st, cst, w)
                 else:
                     cst[t, K_WAKE] = wake_time(st[t], w)
         # run the awake cores to H; NI accesses are performed here, then the core goes on
@@ -492,23 +509,11 @@ def run_chip(
                         H = s0 + look_idle
                     if cst[t, K_STATE] == K_SLEEP and cst[t, K_WAKE] < H:
                         # asleep and due again within this quantum: wake it right away
-                        w = max(cst[t, K_WAKE], cst[t, K_SLEEP_FROM])
-                        cst[t, K_STATE] = K_RUN
-                        cst[t, K_SLEEP_CYCLES] += w - cst[t, K_SLEEP_FROM]
-                        st[t, S_CYCLE] = w
-                        if st[t, S_IRQ_CHECK] > w:
-                            st[t, S_IRQ_CHECK] = w
+                        _wake(t, st, cst, max(cst[t, K_WAKE], cst[t, K_SLEEP_FROM]))
                     if cst[t, K_STATE] != K_RUN:
                         break
                 elif why == RUN_OUTPUT:
-                    used = cst[t, K_OUT_LEN]
-                    m = st[t, S_OUT_LEN]
-                    if used + m > xcap:
-                        m = xcap - used
-                    for b in range(m):
-                        xout[t, used + b] = out[t, b]
-                    cst[t, K_OUT_LEN] = used + m
-                    st[t, S_OUT_LEN] = 0
+                    _keep_output(t, st, cst, out, xout)
                 elif why == RUN_EXIT:
                     cst[t, K_STATE] = K_EXITED
                     break
@@ -522,16 +527,7 @@ def run_chip(
                 run_cores(st, ctr, opc, regs, m8, m16, m32, dec, out, one, H)
             if failed >= 0:
                 break
-            # keep the tile's output in xout so the host sees it in order
-            m = st[t, S_OUT_LEN]
-            if m > 0:
-                used = cst[t, K_OUT_LEN]
-                if used + m > xcap:
-                    m = xcap - used
-                for b in range(m):
-                    xout[t, used + b] = out[t, b]
-                cst[t, K_OUT_LEN] = used + m
-                st[t, S_OUT_LEN] = 0
+            _keep_output(t, st, cst, out, xout)
         if failed >= 0:
             gst[G_ERR_TILE] = failed
             status = CHIP_ERROR
