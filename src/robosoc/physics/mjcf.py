@@ -98,7 +98,7 @@ def world_xml(vehicles: Sequence[VehicleConfig]) -> str:
 </visual>
 <asset>
   <texture name="grid" type="2d" builtin="checker" rgb1=".25 .3 .35" rgb2=".35 .4 .45" width="512" height="512"/>
-  <material name="floor" texture="grid" texrepeat="8 8" reflectance="0.1"/>
+  <material name="floor" texture="grid" texrepeat="1 1" texuniform="true" reflectance="0"/>
   <material name="hull" rgba=".15 .15 .18 1"/>
   <material name="skid" rgba=".5 .5 .5 1"/>
   <material name="arm" rgba=".2 .2 .25 1"/>
@@ -107,7 +107,8 @@ def world_xml(vehicles: Sequence[VehicleConfig]) -> str:
   <material name="laser" rgba=".1 .3 .8 1"/>
 </asset>
 <worldbody>
-  <light name="sun" pos="0 0 6" dir="0 0 -1" directional="true"/>
+  <light name="sun" pos="0 0 6" dir="0.3 0.2 -1" directional="true" castshadow="false"/>
+  <light name="spot" mode="trackcom" pos="0 0 4" dir="0 0 -1" diffuse=".4 .4 .4"/>
   <geom name="ground" type="plane" size="50 50 0.1" material="floor"/>
   <camera name="chase" mode="targetbody" target={quoteattr(first)} pos="-3.0 -3.0 2.2"/>
 {bodies}
