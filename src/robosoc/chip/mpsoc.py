@@ -79,7 +79,14 @@ class ChipResult:
 class MPSoC:
     """A mesh of tiles built from a :class:`ChipConfig`."""
 
-    def __init__(self, config: ChipConfig) -> None:
+    def __init__(self, config: ChipConfig, lockstep: bool = False) -> None:
+        """Build the chip.
+
+        Args:
+            config: the validated platform configuration.
+            lockstep: advance everything one cycle at a time instead of in quanta (slow; the
+                results must be identical, which the tests use to check the quantum scheme).
+        """
         periods = {config.tile_config(config.tile_xy(t)).clock_period_ns for t in range(config.n_tiles)}
         if len(periods) > 1:
             raise ValueError("tiles: different clock periods per tile are not supported yet (one global clock)")
@@ -112,8 +119,9 @@ class MPSoC:
         self.gst = np.zeros(kc.GST_SIZE, dtype=np.int64)
         self.gst[kc.G_IO_TILE] = self.io
         r = noc.routing_latency
-        self.gst[kc.G_LOOK_IDLE] = 2 * r + 8
-        self.gst[kc.G_LOOK_ACTIVE] = 5
+        self.gst[kc.G_LOOK_IDLE] = 1 if lockstep else 2 * r + 8
+        self.gst[kc.G_LOOK_ACTIVE] = 1 if lockstep else 5
+        self.gst[kc.G_LOOK_SINGLE] = 1 if lockstep else kc.SINGLE_QUANTUM
         self.xout = np.zeros((n, XOUT_CAPACITY), dtype=np.uint8)
         self.io_out = np.zeros((IO_ROWS, kc.IO_COLS), dtype=np.int64)
         self.programs: dict[int, Program] = {}

@@ -92,6 +92,7 @@ G_ERR_TILE = 2
 G_IO_TILE = 3
 G_LOOK_IDLE = 4
 G_LOOK_ACTIVE = 5
+G_LOOK_SINGLE = 8  # longest quantum of a lone awake core
 G_QUANTA = 6
 G_IO_COUNT = 7  # rows used in io_out
 GST_SIZE = 10
@@ -125,7 +126,7 @@ A_DMA = A_CYCLES + 2
 ACC_SIZE = A_CYCLES + 4
 
 IO_COLS = 3 + nk.MEM_FLITS  # io_out rows: cycle, length, first-flit cycle, flits
-SINGLE_QUANTUM = 1 << 20  # longest quantum of a lone awake core (bounds the output per quantum)
+SINGLE_QUANTUM = 1 << 20  # default G_LOOK_SINGLE (bounds the output of one quantum)
 
 
 @njit(cache=True)
@@ -451,7 +452,7 @@ def run_chip(
             if nxt < H:
                 H = nxt
         elif nrun == 1:
-            H = min(nxt, T + SINGLE_QUANTUM)
+            H = min(nxt, T + gst[G_LOOK_SINGLE])
         else:
             H = nxt  # nobody runs: jump to the next NoC activity or wake-up
         if wake < H:
@@ -540,8 +541,8 @@ def run_chip(
                 alive = True
             elif state == K_EXITED and st[t, S_CYCLE] > last:
                 last = st[t, S_CYCLE]
-        if not alive and last < H:
-            H = last  # the run ends with the last exit
+        if not alive:
+            H = last  # the run ends when the last core has completed its exit store
         if quiet:
             glob[nk.G_CYCLE] = H  # nothing in or entering the network: time just passes
         elif not active:

@@ -1,0 +1,65 @@
+/*
+ * traffic.c - every core tile sends ROUNDS packets of pseudo-random length (1..40 payload flits)
+ * to every other core tile, receiving in its interrupt handler, and prints a checksum of what it
+ * received and the cycle it finished.  Used to check that the quantum scheme of the chip
+ * simulator gives exactly the results of lockstep simulation under contention.
+ */
+#include "hf_noc.h"
+#include "hf_print.h"
+
+#ifndef ROUNDS
+#define ROUNDS 6
+#endif
+
+static uint16_t tx[HF_NI_MAX_FLITS], rx[HF_NI_MAX_FLITS];
+static volatile uint32_t got, sum;
+
+void irq_handler(uint32_t cause)
+{
+    if (cause & HF_IRQ_NI) {
+        uint32_t n = hf_ni_recv(rx);
+        for (uint32_t k = 2; k < n; k++) {
+            sum = sum * 31u + rx[k];
+        }
+        got++;
+    }
+}
+
+int main(void)
+{
+    uint32_t me = hf_tile();
+    uint32_t mesh = HF_REG32(HF_NI_MESH);
+    uint32_t io = hf_io_tile();
+    uint32_t peers[256];
+    uint32_t np = 0;
+    for (uint32_t y = 0; y < (mesh >> 8); y++) {
+        for (uint32_t x = 0; x < (mesh & 0xffu); x++) {
+            uint32_t a = (x << 4) | y;
+            if (a != io && a != me) {
+                peers[np++] = a;
+            }
+        }
+    }
+    hf_irq_mask(HF_IRQ_NI);
+    hf_irq_enable();
+    uint32_t seed = me * 2654435761u + 1u;
+    for (int r = 0; r < ROUNDS; r++) {
+        for (uint32_t p = 0; p < np; p++) {
+            seed = seed * 1103515245u + 12345u;
+            uint32_t len = 1u + (seed >> 16) % 40u;
+            tx[0] = (uint16_t)peers[p];
+            tx[1] = (uint16_t)len;
+            for (uint32_t k = 0; k < len; k++) {
+                tx[2 + k] = (uint16_t)((seed >> (k & 15u)) ^ k);
+            }
+            hf_ni_send(tx, len + 2u);
+            for (volatile uint32_t d = 0; d < ((seed >> 8) & 63u); d++) {
+            }
+        }
+    }
+    while (got < ROUNDS * np) {
+        hf_sleep();
+    }
+    hf_printf("tile %x got %u sum %x at %u\n", me, got, sum, hf_cycles());
+    return 0;
+}

@@ -1,0 +1,50 @@
+"""The quantum scheme of the chip simulator gives exactly the results of lockstep simulation.
+
+robosoc advances cores and the NoC in quanta chosen so that nothing one tile does can reach
+another inside a quantum (docs/platform.md, "Time").  Running the same programs with every
+quantum one cycle long must therefore give bit-identical outputs, counters and network
+activity.  A traffic program (every tile sends packets of random length to every other, receives
+in its interrupt handler, sleeps while waiting) exercises idle and busy network phases,
+back-pressure, DMA, interrupts and sleep.
+"""
+
+from pathlib import Path
+
+import pytest
+
+from robosoc.chip.elf import load_elf
+from robosoc.chip.mpsoc import MPSoC
+from robosoc.config.chip import ChipConfig, NocConfig
+from robosoc.toolchain import build_elf
+
+TRAFFIC = Path(__file__).parent / "programs" / "traffic.c"
+
+
+def run(config: ChipConfig, lockstep: bool, rounds: int):
+    program = load_elf(build_elf([TRAFFIC], mul=True, defines={"ROUNDS": rounds}))
+    chip = MPSoC(config, lockstep=lockstep)
+    chip.load_all(program)
+    result = chip.run(max_cycles=20_000_000)
+    tiles = {xy: chip.counters(xy) for xy in chip.core_tiles()}
+    tasks = {xy: chip.task_counters(xy) for xy in chip.core_tiles()}
+    return result.output, result.cycles, tiles, tasks, chip.noc_counters()
+
+
+@pytest.mark.parametrize(
+    "config,rounds",
+    [
+        (ChipConfig(), 6),
+        (ChipConfig(width=3, height=2), 3),
+        (ChipConfig(width=3, height=2, noc=NocConfig(buffer_depth=2, routing_latency=1)), 3),
+    ],
+    ids=["2x2", "3x2", "3x2-shallow-fast-routers"],
+)
+def test_quanta_give_the_lockstep_results(config: ChipConfig, rounds: int):
+    fast = run(config, lockstep=False, rounds=rounds)
+    slow = run(config, lockstep=True, rounds=rounds)
+    output, _, tiles, _, noc = fast
+    n_cores = len(tiles)
+    for xy, text in output.items():
+        assert f"got {rounds * (n_cores - 1)} " in text.decode(), (xy, text)
+    assert noc["packets_delivered"] == rounds * n_cores * (n_cores - 1)
+    assert fast == slow
