@@ -369,7 +369,7 @@ def _deliver(glob, tile, mem, ev, t, cycle):
         tile[t, T_RX_FREE_AT] = cycle + 1 + tile[t, T_RX_AUTO]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def noc_step(cfg, glob, buf, port, tile, mem, ev, queue, cycle):
     """Simulate one NoC cycle ``cycle``: decide everything from the cycle-start state, then commit.
 
