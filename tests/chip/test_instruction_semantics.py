@@ -7,6 +7,7 @@ runs one instruction between two registers loaded with edge values and compares 
 import itertools
 
 import pytest
+
 import rv32_asm as A
 from core_harness import exit_with, run_words
 
