@@ -34,6 +34,7 @@ from robosoc.kernels.core_layout import (
     S_ERR_ADDR,
     S_ERR_INSN,
     S_ERR_PC,
+    S_EXIT_CODE,
     S_MEM_SIZE,
     S_NI,
     S_PC,
@@ -283,8 +284,6 @@ class MPSoC:
         return self.cores.regs[self.config.tile_index(xy), :32]
 
     def exit_code(self, xy: tuple[int, int]) -> int:
-        from robosoc.kernels.core_layout import S_EXIT_CODE
-
         return int(self.cores.st[self.config.tile_index(xy), S_EXIT_CODE])
 
     def symbolize(self, xy: tuple[int, int], pc: int) -> str:
@@ -305,7 +304,7 @@ class MPSoC:
         """Attribute everything not yet attributed to the tasks running now."""
         for t in range(self.config.n_tiles):
             if self.cst[t, kc.K_STATE] not in (kc.K_OFF, kc.K_IO):
-                kc._account(t, self.cores.st, self.cores.ctr, self.cores.opc, self.cst, self.acc, self.snap,
+                kc.account(t, self.cores.st, self.cores.ctr, self.cores.opc, self.cst, self.acc, self.snap,
                             int(self.cores.st[t, S_CYCLE]))  # fmt: skip
 
     def task_counters(self, xy: tuple[int, int]) -> dict[int, dict[str, int]]:

@@ -130,7 +130,7 @@ SINGLE_QUANTUM = 1 << 20  # default G_LOOK_SINGLE (bounds the output of one quan
 
 
 @njit(cache=True)
-def _account(t, st, ctr, opc, cst, acc, snap, now):
+def account(t, st, ctr, opc, cst, acc, snap, now):
     """Attribute everything since the last snapshot to the current task of tile t."""
     task = cst[t, K_TASK]
     for k in range(OPC_SIZE):
@@ -254,7 +254,7 @@ def ni_access(t, st, ctr, opc, regs, m16, dec, cst, acc, snap, gst, cfg, glob, t
             return False
         st[t, S_CYCLE] = end
         st[t, S_PC] = pc + 4
-        _account(t, st, ctr, opc, cst, acc, snap, end)
+        account(t, st, ctr, opc, cst, acc, snap, end)
         cst[t, K_TASK] = v
         return True
     elif off == 0x24:
@@ -566,4 +566,4 @@ def run_chip(
     return status
 
 
-__all__ = ["OUT_CAPACITY", "run_chip", "wake_time"]
+__all__ = ["OUT_CAPACITY", "account", "run_chip", "wake_time"]
