@@ -48,3 +48,19 @@ def test_quanta_give_the_lockstep_results(config: ChipConfig, rounds: int):
         assert f"got {rounds * (n_cores - 1)} " in text.decode(), (xy, text)
     assert noc["packets_delivered"] == rounds * n_cores * (n_cores - 1)
     assert fast == slow
+
+
+def test_quanta_give_the_lockstep_results_with_packets_from_the_io_tile():
+    def run_with_io(lockstep: bool):
+        program = load_elf(build_elf([TRAFFIC], mul=True, defines={"ROUNDS": 4}))
+        chip = MPSoC(ChipConfig(), lockstep=lockstep)
+        chip.load_all(program)
+        for k, at in enumerate(range(300, 6000, 700)):
+            chip.inject((1, 0) if k % 2 else (1, 1), list(range(k + 1)), at_cycle=at)
+        result = chip.run(max_cycles=20_000_000)
+        return result.output, result.cycles, {xy: chip.counters(xy) for xy in chip.core_tiles()}
+
+    fast, slow = run_with_io(False), run_with_io(True)
+    received = sum(c["packets_received"] for c in fast[2].values())
+    assert received == 4 * 3 * 2 + 9  # all-to-all traffic plus the nine injected packets
+    assert fast == slow
