@@ -45,6 +45,7 @@ def run(
     mesh: Annotated[str | None, typer.Option("--mesh", help="Run on a WxH MPSoC (I/O tile at 0,0).")] = None,
     chip: Annotated[Path | None, typer.Option("--chip", help="MPSoC configuration file (TOML).")] = None,
     off: Annotated[list[str] | None, typer.Option("--off", help="Power off tile X,Y (repeatable).")] = None,
+    trace: Annotated[int, typer.Option("--trace", help="Print the first N instructions to stderr (one core).")] = 0,
 ) -> None:
     """Run programs: their debug-port and UART output goes to stdout (prefixed by the tile on the
     MPSoC), a summary to stderr, and the exit code is the program's (the first non-zero one on the
@@ -62,12 +63,14 @@ def run(
         if len(programs) != 1:
             typer.echo("robosoc run: several programs need --mesh WxH or --chip FILE", err=True)
             raise typer.Exit(2)
-        _run_single(programs[0], mul, max_cycles, stats, model, sram_size)
+        _run_single(programs[0], mul, max_cycles, stats, model, sram_size, trace)
     else:
         _run_chip(programs, mul, max_cycles, stats, model, sram_size, mesh, chip, off or [])
 
 
-def _run_single(program: Path, mul: bool, max_cycles: int, stats: Path | None, model, sram_size: int) -> None:
+def _run_single(
+    program: Path, mul: bool, max_cycles: int, stats: Path | None, model, sram_size: int, trace: int = 0
+) -> None:
     from robosoc.chip.elf import ElfError, load_elf
     from robosoc.chip.single import CoreError, CycleBudgetExceeded, SingleCoreSoC
 
@@ -81,6 +84,14 @@ def _run_single(program: Path, mul: bool, max_cycles: int, stats: Path | None, m
     def write_out(data: bytes) -> None:
         sys.stdout.buffer.write(data)
         sys.stdout.buffer.flush()
+
+    if trace > 0:
+        from robosoc.chip.trace import trace as trace_steps
+
+        typer.echo(f"{'cycle':>10}  {'pc':8}  {'word':8}  {'instruction':<28} {'symbol':<24} writes", err=True)
+        for record in trace_steps(soc, trace):
+            typer.echo(str(record), err=True)
+        write_out(soc.drain_output())
 
     failure: Exception | None = None
     result = None
