@@ -2,7 +2,6 @@
 
 import rv32_asm as A
 from core_harness import exit_with, make_soc
-
 from robosoc.chip.trace import trace
 
 
