@@ -12,6 +12,7 @@ import warnings
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -37,6 +38,9 @@ from robosoc.kernels.core_layout import (
     S_OUT_LEN,
     S_RUN,
 )
+
+if TYPE_CHECKING:
+    from robosoc.chip.profile import Sampler
 
 CHUNK_CYCLES = 1 << 24
 _TILE0 = np.zeros(1, dtype=np.int64)  # host returns between slices: output is flushed, Ctrl-C is seen
@@ -154,8 +158,16 @@ class SingleCoreSoC:
         max_cycles: int | None = None,
         on_output: Callable[[bytes], object] | None = None,
         chunk: int = CHUNK_CYCLES,
+        sampler: Sampler | None = None,
     ) -> RunResult:
         """Run until the program exits.
+
+        Args:
+            max_cycles: cycle budget (None: none).
+            on_output: called with output bytes as they come.
+            chunk: cycles per kernel call (output and Ctrl-C are seen between calls).
+            sampler: a profiler (:class:`robosoc.chip.profile.Sampler`): the run is sliced at its
+                sample points and it is called after each slice.
 
         Raises:
             CoreError: illegal/unsupported instruction, bad access or fetch (with pc and symbol).
@@ -166,8 +178,11 @@ class SingleCoreSoC:
         output = bytearray()
         start = time.perf_counter()
         try:
+            step = chunk if sampler is None else sampler.first()
             while True:
-                status = self.step_until(self.cycle + chunk)
+                status = self.step_until(self.cycle + step)
+                if sampler is not None:
+                    step = sampler()
                 data = self.drain_output()
                 if data:
                     output += data

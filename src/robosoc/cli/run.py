@@ -46,6 +46,9 @@ def run(
     chip: Annotated[Path | None, typer.Option("--chip", help="MPSoC configuration file (TOML).")] = None,
     off: Annotated[list[str] | None, typer.Option("--off", help="Power off tile X,Y (repeatable).")] = None,
     trace: Annotated[int, typer.Option("--trace", help="Print the first N instructions to stderr (one core).")] = 0,
+    profile: Annotated[
+        int, typer.Option("--profile", help="Sample the pc every ~N cycles; print cycles by function (one core).")
+    ] = 0,
 ) -> None:
     """Run programs: their debug-port and UART output goes to stdout (prefixed by the tile on the
     MPSoC), a summary to stderr, and the exit code is the program's (the first non-zero one on the
@@ -63,13 +66,20 @@ def run(
         if len(programs) != 1:
             typer.echo("robosoc run: several programs need --mesh WxH or --chip FILE", err=True)
             raise typer.Exit(2)
-        _run_single(programs[0], mul, max_cycles, stats, model, sram_size, trace)
+        _run_single(programs[0], mul, max_cycles, stats, model, sram_size, trace, profile)
     else:
         _run_chip(programs, mul, max_cycles, stats, model, sram_size, mesh, chip, off or [])
 
 
 def _run_single(
-    program: Path, mul: bool, max_cycles: int, stats: Path | None, model, sram_size: int, trace: int = 0
+    program: Path,
+    mul: bool,
+    max_cycles: int,
+    stats: Path | None,
+    model,
+    sram_size: int,
+    trace: int = 0,
+    profile_every: int = 0,
 ) -> None:
     from robosoc.chip.elf import ElfError, load_elf
     from robosoc.chip.single import CoreError, CycleBudgetExceeded, SingleCoreSoC
@@ -93,10 +103,14 @@ def _run_single(
             typer.echo(str(record), err=True)
         write_out(soc.drain_output())
 
+    from robosoc.chip.profile import Profile, Sampler
+
+    profile = Profile(profile_every) if profile_every > 0 else None
+    sampler = Sampler(soc, profile) if profile is not None else None
     failure: Exception | None = None
     result = None
     try:
-        result = soc.run(max_cycles=max_cycles, on_output=write_out)
+        result = soc.run(max_cycles=max_cycles, on_output=write_out, sampler=sampler)
         seconds = result.host_seconds
     except (CoreError, CycleBudgetExceeded) as exc:
         failure, seconds = exc, 0.0
@@ -118,9 +132,12 @@ def _run_single(
                 "energy_nj": total_nj,
                 "energy_model": model.path,
                 "warnings": result.warnings if result else [],
+                "profile": dict(profile.shares()) if profile is not None else None,
             },
         )
     cycles, instr = counters["cycles"], counters["instructions"]
+    if profile is not None:
+        typer.echo(profile.table(cycles), err=True)
     cpi = cycles / instr if instr else float("nan")
     mips = instr / seconds / 1e6 if seconds > 0 else float("nan")
     typer.echo(
