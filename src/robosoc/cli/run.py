@@ -192,9 +192,10 @@ def _run_chip(
     def write_out(xy: tuple[int, int], data: bytes) -> None:
         buf = pending.setdefault(xy, bytearray())
         buf.extend(data)
-        while b"\n" in buf:
-            line, _, rest = bytes(buf).partition(b"\n")
-            sys.stdout.buffer.write(f"[{xy[0]},{xy[1]}] ".encode() + line + b"\n")
+        *lines, rest = bytes(buf).split(b"\n")
+        if lines:
+            prefix = f"[{xy[0]},{xy[1]}] ".encode()
+            sys.stdout.buffer.write(b"".join(prefix + line + b"\n" for line in lines))
             buf[:] = rest
         sys.stdout.buffer.flush()
 
