@@ -25,8 +25,10 @@ def fly_command(
     scenario: Annotated[Path | None, typer.Option(help="Scenario TOML file (default: built-in).")] = None,
     vehicle: Annotated[str | None, typer.Option(help="default or laser (default: the scenario's).")] = None,
     out: Annotated[
-        Path | None, typer.Option(help="Folder for flight.csv (written as it flies) and flight.png.")
+        Path | None,
+        typer.Option(help="Folder for flight.csv (written as it flies) and flight.png [default: runs/fly-NAME-sSEED]."),
     ] = None,
+    no_out: Annotated[bool, typer.Option("--no-out", help="Write no log and no plot.")] = False,
     video: Annotated[Path | None, typer.Option(help="Render to FILE.mp4, or to a folder of PNG frames.")] = None,
 ) -> None:
     """Fly the scenario (default: take off to 1 m, hover, 10° roll/pitch/yaw steps, a gust; 10 s)."""
@@ -59,6 +61,12 @@ def fly_command(
         console.print(f"[red]{exc}[/red]")
         raise typer.Exit(2) from exc
 
+    if out is None and not no_out:
+        out = Path("runs") / f"fly-{config.name}-s{seed}"
+    if no_out:
+        out = None
+    if out is not None:
+        out.mkdir(parents=True, exist_ok=True)
     pilot = HostController(craft, config.sensors.period_steps * 0.001)
     log = CsvFlightLog(out / "flight.csv") if out else None
     renderer = sink = None
