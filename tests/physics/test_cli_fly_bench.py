@@ -38,7 +38,7 @@ def test_bad_scenario_file_is_reported_with_the_field(tmp_path: Path) -> None:
 
 def test_video_renders_frames_or_explains_why_not(tmp_path: Path) -> None:
     frames = tmp_path / "frames"
-    result = runner.invoke(app, ["fly", "--seconds", "0.2", "--video", str(frames)])
+    result = runner.invoke(app, ["fly", "--seconds", "0.2", "--no-out", "--video", str(frames)])
     assert result.exit_code == 0, result.output
     if "no video" in result.output:
         pytest.skip("no OpenGL backend here: " + result.output)
