@@ -50,10 +50,13 @@ def run(
         int, typer.Option("--profile", help="Sample the pc every ~N cycles; print cycles by function (one core).")
     ] = 0,
 ) -> None:
-    """Run programs: their debug-port and UART output goes to stdout (prefixed by the tile on the
-    MPSoC), a summary to stderr, and the exit code is the program's (the first non-zero one on the
-    MPSoC).  With --mesh or --chip, one ELF runs on every core tile (tiles tell themselves apart by
-    reading NI_TILE), or one ELF per core tile in tile order (x fastest)."""
+    """Run bare-metal programs on one HF-RISCV core, or on the MPSoC with --mesh/--chip.
+
+    Program output (debug port, UART) goes to stdout, prefixed by the tile on the MPSoC; a
+    summary goes to stderr; the exit code is the program's (the first non-zero one on the MPSoC).
+    On the MPSoC one ELF runs on every core tile (tiles tell themselves apart by reading
+    NI_TILE), or one ELF per core tile in tile order (x fastest).
+    """
     from robosoc.analysis.energy import EnergyModel
     from robosoc.config import ConfigError
 
