@@ -71,6 +71,9 @@ def run(
             raise typer.Exit(2)
         _run_single(programs[0], mul, max_cycles, stats, model, sram_size, trace, profile)
     else:
+        if trace or profile:
+            typer.echo("robosoc run: --trace and --profile work on one core (without --mesh/--chip/--off)", err=True)
+            raise typer.Exit(2)
         _run_chip(programs, mul, max_cycles, stats, model, sram_size, mesh, chip, off or [])
 
 
