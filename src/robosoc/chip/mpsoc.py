@@ -19,7 +19,7 @@ import numpy as np
 from robosoc.chip.core_state import SRAM_BASE, CoreState
 from robosoc.chip.counters import counters_dict
 from robosoc.chip.elf import Program, Region
-from robosoc.chip.single import CoreError
+from robosoc.chip.single import core_error
 from robosoc.config.chip import ChipConfig
 from robosoc.isa.disasm import disassemble
 from robosoc.isa.table import OP_FETCH_FAULT
@@ -27,13 +27,8 @@ from robosoc.kernels import chip as kc
 from robosoc.kernels import noc as nk
 from robosoc.kernels.core_layout import (
     CTR_SIZE,
-    ERROR_TEXT,
     OPC_SIZE,
     S_CYCLE,
-    S_ERR,
-    S_ERR_ADDR,
-    S_ERR_INSN,
-    S_ERR_PC,
     S_EXIT_CODE,
     S_MEM_SIZE,
     S_NI,
@@ -364,14 +359,7 @@ class MPSoC:
                 f"instruction 0x{word:08x} `{disassemble(word, pc)}`, cycle {int(st[S_CYCLE])}",
                 xy,
             )
-        err = int(st[S_ERR])
-        epc = int(st[S_ERR_PC])
-        word = int(st[S_ERR_INSN]) & 0xFFFFFFFF
-        addr = int(st[S_ERR_ADDR]) & 0xFFFFFFFF
-        text = ERROR_TEXT.get(err, f"error {err}")
-        msg = (f"tile {xy}: {text} (address 0x{addr:08x}) at pc 0x{epc:08x} ({self.symbolize(xy, epc)}): "
-               f"instruction 0x{word:08x} `{disassemble(word, epc)}`, cycle {int(st[S_CYCLE])}")  # fmt: skip
-        return CoreError(msg, kind=text, pc=epc, addr=addr, word=word, cycle=int(st[S_CYCLE]))
+        return core_error(st, lambda pc: self.symbolize(xy, pc), int(st[S_MEM_SIZE]), where=f"tile {xy}: ")
 
     def _stuck_message(self) -> str:
         waiting = []

@@ -22,6 +22,8 @@ from robosoc.chip.elf import Program, Region, load_elf
 from robosoc.isa.disasm import disassemble
 from robosoc.kernels.core import run_cores
 from robosoc.kernels.core_layout import (
+    ADDRESS_ERRORS,
+    ERR_FETCH,
     ERROR_TEXT,
     RUN_ERROR,
     RUN_EXIT,
@@ -60,6 +62,31 @@ class CoreError(RuntimeError):
         self.addr = addr
         self.word = word
         self.cycle = cycle
+
+
+def core_error(st: np.ndarray, symbolize: Callable[[int], str], sram_size: int, where: str = "") -> CoreError:
+    """The :class:`CoreError` for a core that stopped with RUN_ERROR (``st``: its state row).
+
+    ``where`` prefixes the message (the MPSoC names the tile there).
+    """
+    code = int(st[S_ERR])
+    pc = int(st[S_ERR_PC])
+    word = int(st[S_ERR_INSN]) & 0xFFFFFFFF
+    addr = int(st[S_ERR_ADDR]) & 0xFFFFFFFF
+    cycle = int(st[S_CYCLE])
+    text = ERROR_TEXT.get(code, f"error {code}")
+    if code == ERR_FETCH and addr == pc:
+        detail = f"{text}: pc 0x{pc:08x} is not in SRAM 0x{SRAM_BASE:08x}..0x{SRAM_BASE + sram_size:08x}"
+        return CoreError(f"{where}{detail}, cycle {cycle}", kind=text, pc=pc, addr=addr, word=0, cycle=cycle)
+    has_addr = code in ADDRESS_ERRORS
+    target = ""
+    if has_addr:
+        target = f" 0x{addr:08x}" if text.endswith("address") else f" (address 0x{addr:08x})"
+    msg = (
+        f"{where}{text}{target} at pc 0x{pc:08x} ({symbolize(pc)}): "
+        f"instruction 0x{word:08x} `{disassemble(word, pc)}`, cycle {cycle}"
+    )
+    return CoreError(msg, kind=text, pc=pc, addr=addr if has_addr else None, word=word, cycle=cycle)
 
 
 class CycleBudgetExceeded(RuntimeError):
@@ -135,23 +162,7 @@ class SingleCoreSoC:
         return data
 
     def _error(self) -> CoreError:
-        st = self.state.st[0]
-        code = int(st[S_ERR])
-        pc = int(st[S_ERR_PC])
-        word = int(st[S_ERR_INSN]) & 0xFFFFFFFF
-        addr = int(st[S_ERR_ADDR]) & 0xFFFFFFFF
-        text = ERROR_TEXT.get(code, f"error {code}")
-        has_addr = "load" in text or "store" in text or "fetch" in text or "jump" in text
-        where = f"at pc 0x{pc:08x} ({self.symbolize(pc)})"
-        if "fetch outside" in text and addr == pc:
-            detail = f"{text}: pc 0x{pc:08x} is not in SRAM 0x{SRAM_BASE:08x}..0x{SRAM_BASE + self.state.size:08x}"
-            return CoreError(detail + f", cycle {self.cycle}", kind=text, pc=pc, addr=addr, word=0, cycle=self.cycle)
-        insn = f"instruction 0x{word:08x} `{disassemble(word, pc)}`"
-        target = ""
-        if has_addr:
-            target = f" 0x{addr:08x}" if text.endswith("address") else f" (address 0x{addr:08x})"
-        msg = f"{text}{target} {where}: {insn}, cycle {self.cycle}"
-        return CoreError(msg, kind=text, pc=pc, addr=addr if has_addr else None, word=word, cycle=self.cycle)
+        return core_error(self.state.st[0], self.symbolize, self.state.size)
 
     def run(
         self,

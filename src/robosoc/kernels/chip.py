@@ -45,7 +45,6 @@ from robosoc.kernels.core_layout import (
     C_MMIO,
     CTR_SIZE,
     OPC_SIZE,
-    OUT_CAPACITY,
     RUN_ERROR,
     RUN_EXIT,
     RUN_NI,
@@ -566,4 +565,4 @@ def run_chip(
     return status
 
 
-__all__ = ["OUT_CAPACITY", "account", "run_chip", "wake_time"]
+__all__ = ["account", "ni_access", "run_chip", "wake_time"]

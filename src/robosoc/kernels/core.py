@@ -105,7 +105,6 @@ NOP_ROW = ADDI | (SINK << 8)  # predecoded `addi x0, x0, 0` (its immediate row i
 UNSUPPORTED_BIT = 0x80
 U1 = np.uint64(1)
 U2 = np.uint64(2)
-U3 = np.uint64(3)
 U8 = np.uint64(8)
 U16 = np.uint64(16)
 U24 = np.uint64(24)
@@ -303,38 +302,6 @@ def run_cores(
                         break
                     ctr[t, C_MMIO] += 1
                     regs_t[rd] = v
-                cyc += 3
-                pc += 4
-            elif op == SW:
-                addr = (regs_t[rs1] + imm) & M32
-                off = addr - base
-                if off & 3:
-                    err = ERR_STORE_MISALIGNED
-                    err_addr = addr
-                    break
-                if (off & M32) < size:
-                    wi = np.uint64(off) >> U2
-                    m32[t, wi] = regs_t[rs2]
-                    dec_t[wi << U1] = 0
-                else:
-                    r = mmio_store(st[t], out[t], addr, regs_t[rs2], cyc)
-                    if r == ST_NI:
-                        opc_t[(op << U1) | (i & U1)] -= 1
-                        status = RUN_NI
-                        break
-                    ctr[t, C_MMIO] += 1
-                    if r < 0:
-                        err = ERR_STORE_READONLY if r == ST_READONLY else ERR_STORE_UNMAPPED
-                        err_addr = addr
-                        break
-                    if r == ST_EXIT:
-                        cyc += 3
-                        pc += 4
-                        status = RUN_EXIT
-                        break
-                    if r == ST_IRQ_CHANGED:
-                        st[t, S_IRQ_CHECK] = min(st[t, S_IRQ_CHECK], cyc + 3)
-                    next_event = cyc + 3
                 cyc += 3
                 pc += 4
             elif op == ADD:
@@ -559,21 +526,25 @@ def run_cores(
                 regs_t[rd] = v
                 cyc += 3
                 pc += 4
-            elif op == SB or op == SH:
+            elif op == SW or op == SB or op == SH:
                 addr = (regs_t[rs1] + imm) & M32
                 off = addr - base
-                if op == SH and (off & 1):
+                if off & (3 if op == SW else 1 if op == SH else 0):
                     err = ERR_STORE_MISALIGNED
                     err_addr = addr
                     break
                 if (off & M32) < size:
-                    if op == SB:
-                        m8[t, np.uint64(off)] = regs_t[rs2]
-                    else:
+                    if op == SW:
+                        m32[t, np.uint64(off) >> U2] = regs_t[rs2]
+                    elif op == SH:
                         m16[t, np.uint64(off) >> U1] = regs_t[rs2]
-                    dec_t[(np.uint64(off) >> U2) << U1] = 0
+                    else:
+                        m8[t, np.uint64(off)] = regs_t[rs2]
+                    dec_t[(np.uint64(off) >> U2) << U1] = 0  # the word is data now: decode again if run
                 else:
-                    value = regs_t[rs2] & 0xFF if op == SB else regs_t[rs2] & 0xFFFF
+                    value = np.int64(regs_t[rs2])  # a word keeps its sign (the exit code is signed)
+                    if op != SW:
+                        value &= 0xFFFF if op == SH else 0xFF
                     r = mmio_store(st[t], out[t], addr, value, cyc)
                     if r == ST_NI:
                         opc_t[(op << U1) | (i & U1)] -= 1

@@ -73,6 +73,12 @@ ERR_FETCH = 8  # control transfer or fall-through outside memory
 ERR_FETCH_MISALIGNED = 9
 ERR_STORE_READONLY = 10
 
+# errors whose message names an address (S_ERR_ADDR)
+ADDRESS_ERRORS = frozenset({
+    ERR_LOAD_MISALIGNED, ERR_STORE_MISALIGNED, ERR_LOAD_UNMAPPED, ERR_STORE_UNMAPPED,
+    ERR_FETCH, ERR_FETCH_MISALIGNED, ERR_STORE_READONLY,
+})  # fmt: skip
+
 ERROR_TEXT = {
     ERR_ILLEGAL: "illegal instruction",
     ERR_UNSUPPORTED: "instruction not implemented by the hardware",
@@ -97,6 +103,8 @@ C_ENTRY_STALL = 4  # vector fetch bubbles of interrupt and trap entry (2 each)
 C_MMIO = 5  # loads and stores that went to device registers
 CTR_SIZE = 8
 OPC_SIZE = 512  # per-operation counters, two banks each (operation numbers are bytes)
+
+NEVER = 1 << 62  # a cycle that never comes (event times, wake-ups)
 
 PIPELINE_FILL = 3  # the first instruction after reset executes in cycle 3
 OUT_CAPACITY = 1 << 16

@@ -40,6 +40,8 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
+from robosoc.kernels.core_layout import NEVER
+
 # ports (Hermes order)
 EAST, WEST, NORTH, SOUTH, LOCAL = 0, 1, 2, 3, 4
 NPORTS = 5
@@ -47,7 +49,7 @@ PORT_NAMES = ("east", "west", "north", "south", "local")
 MEM_FLITS = 64
 SEND, RECV = 0, 1
 NONE = -1
-BIG = 1 << 62
+BIG = NEVER  # the same 'never' as the rest of the chip: times are compared across kernels
 
 # cfg: constants
 C_WIDTH, C_HEIGHT, C_NTILES, C_DEPTH, C_RLAT, C_MAXPKT, C_FLITMASK, C_REVERSE = range(8)

@@ -36,6 +36,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from robosoc.kernels.core_layout import NEVER as NEVER_CYCLE
 from robosoc.kernels.core_layout import (
     OUT_CAPACITY,
     PH_ARMED,
@@ -89,7 +90,7 @@ DEBUG = 0xF00000D0
 NI_BASE = 0xE1040000  # network interface, task id and sleep registers of an MPSoC tile (kernels/chip.py)
 NI_END = 0xE1040040
 
-NEVER = np.int64(1) << 62
+NEVER = np.int64(NEVER_CYCLE)
 
 # load results
 LD_OK = 0
