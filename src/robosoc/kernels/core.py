@@ -198,6 +198,27 @@ def mul_latency(b: int) -> int:
     return 5 + steps + (31 - c) + 1
 
 
+DEV_OK = 0
+DEV_NI = -1  # a network-interface register: stop before the store (the chip loop performs it)
+DEV_EXIT = -2  # the program stored its exit code
+
+
+@njit(cache=True)
+def device_store(st_t: np.ndarray, ctr_t: np.ndarray, out_t: np.ndarray, addr: int, value: int, s: int) -> int:
+    """A store starting in cycle ``s`` outside SRAM: DEV_OK, DEV_NI, DEV_EXIT or an ERR_* code."""
+    r = mmio_store(st_t, out_t, addr, value, s)
+    if r == ST_NI:
+        return DEV_NI
+    ctr_t[C_MMIO] += 1
+    if r < 0:
+        return ERR_STORE_READONLY if r == ST_READONLY else ERR_STORE_UNMAPPED
+    if r == ST_EXIT:
+        return DEV_EXIT
+    if r == ST_IRQ_CHANGED:
+        st_t[S_IRQ_CHECK] = min(st_t[S_IRQ_CHECK], s + 3)
+    return DEV_OK
+
+
 @njit(cache=True, inline="always")
 def run_cores(
     st: np.ndarray,
@@ -302,6 +323,34 @@ def run_cores(
                         break
                     ctr[t, C_MMIO] += 1
                     regs_t[rd] = v
+                cyc += 3
+                pc += 4
+            elif op == SW:
+                addr = (regs_t[rs1] + imm) & M32
+                off = addr - base
+                if off & 3:
+                    err = ERR_STORE_MISALIGNED
+                    err_addr = addr
+                    break
+                if (off & M32) < size:
+                    wi = np.uint64(off) >> U2
+                    m32[t, wi] = regs_t[rs2]
+                    dec_t[wi << U1] = 0
+                else:
+                    r = device_store(st[t], ctr[t], out[t], addr, regs_t[rs2], cyc)
+                    if r != DEV_OK:
+                        if r == DEV_NI:
+                            opc_t[(op << U1) | (i & U1)] -= 1
+                            status = RUN_NI
+                        elif r == DEV_EXIT:
+                            cyc += 3
+                            pc += 4
+                            status = RUN_EXIT
+                        else:
+                            err = r
+                            err_addr = addr
+                        break
+                    next_event = cyc + 3
                 cyc += 3
                 pc += 4
             elif op == ADD:
@@ -526,42 +575,34 @@ def run_cores(
                 regs_t[rd] = v
                 cyc += 3
                 pc += 4
-            elif op == SW or op == SB or op == SH:
+            elif op == SB or op == SH:
                 addr = (regs_t[rs1] + imm) & M32
                 off = addr - base
-                if off & (3 if op == SW else 1 if op == SH else 0):
+                if op == SH and (off & 1):
                     err = ERR_STORE_MISALIGNED
                     err_addr = addr
                     break
                 if (off & M32) < size:
-                    if op == SW:
-                        m32[t, np.uint64(off) >> U2] = regs_t[rs2]
-                    elif op == SH:
-                        m16[t, np.uint64(off) >> U1] = regs_t[rs2]
-                    else:
+                    if op == SB:
                         m8[t, np.uint64(off)] = regs_t[rs2]
-                    dec_t[(np.uint64(off) >> U2) << U1] = 0  # the word is data now: decode again if run
+                    else:
+                        m16[t, np.uint64(off) >> U1] = regs_t[rs2]
+                    dec_t[(np.uint64(off) >> U2) << U1] = 0
                 else:
-                    value = np.int64(regs_t[rs2])  # a word keeps its sign (the exit code is signed)
-                    if op != SW:
-                        value &= 0xFFFF if op == SH else 0xFF
-                    r = mmio_store(st[t], out[t], addr, value, cyc)
-                    if r == ST_NI:
-                        opc_t[(op << U1) | (i & U1)] -= 1
-                        status = RUN_NI
+                    value = regs_t[rs2] & 0xFF if op == SB else regs_t[rs2] & 0xFFFF
+                    r = device_store(st[t], ctr[t], out[t], addr, value, cyc)
+                    if r != DEV_OK:
+                        if r == DEV_NI:
+                            opc_t[(op << U1) | (i & U1)] -= 1
+                            status = RUN_NI
+                        elif r == DEV_EXIT:
+                            cyc += 3
+                            pc += 4
+                            status = RUN_EXIT
+                        else:
+                            err = r
+                            err_addr = addr
                         break
-                    ctr[t, C_MMIO] += 1
-                    if r < 0:
-                        err = ERR_STORE_READONLY if r == ST_READONLY else ERR_STORE_UNMAPPED
-                        err_addr = addr
-                        break
-                    if r == ST_EXIT:
-                        cyc += 3
-                        pc += 4
-                        status = RUN_EXIT
-                        break
-                    if r == ST_IRQ_CHANGED:
-                        st[t, S_IRQ_CHECK] = min(st[t, S_IRQ_CHECK], cyc + 3)
                     next_event = cyc + 3
                 cyc += 3
                 pc += 4
