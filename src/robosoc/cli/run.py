@@ -5,11 +5,14 @@ from __future__ import annotations
 import json
 import sys
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 
 from robosoc.cli.app import app
+
+if TYPE_CHECKING:
+    from robosoc.analysis.energy import EnergyModel
 
 
 def _write_json(path: Path, record: dict) -> None:
@@ -82,7 +85,7 @@ def _run_single(
     mul: bool,
     max_cycles: int,
     stats: Path | None,
-    model,
+    model: EnergyModel,
     sram_size: int,
     trace: int = 0,
     profile_every: int = 0,
@@ -159,7 +162,7 @@ def _run_single(
 
 
 def _run_chip(
-    programs: list[Path], mul: bool, max_cycles: int, stats: Path | None, model, sram_size: int,
+    programs: list[Path], mul: bool, max_cycles: int, stats: Path | None, model: EnergyModel, sram_size: int,
     mesh: str | None, chip_file: Path | None, off: list[str],
 ) -> None:  # fmt: skip
     import dataclasses
