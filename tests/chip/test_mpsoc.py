@@ -126,11 +126,14 @@ def test_receive_interrupt_wakes_a_sleeping_core():
     chip.load((1, 0), sender(dest=0x01))
     chip.load((0, 1), program(words))
     result = chip.run(max_cycles=100_000)
-    rise = last_flit(hops=2) + 1  # 47: the core wakes and runs the nop after the SLEEP store
-    # acknowledged in rise + 3 (a nop), vector instruction in +6 and +7, the TIMER0 load in +8
-    assert result.exit_codes[(0, 1)] == rise + 3 + 5 - 1
+    rise = last_flit(hops=2) + 1  # IRQ_CAUSE bit 1 is up from this device cycle
+    # platform.md §3: the request reaches the core in instruction cycle rise + 4 and is entered at
+    # the first boundary >= rise + 5; the sleeping core wakes exactly there.  The first vector
+    # instruction executes in b + 2 and b + 3, the TIMER0 load in b + 4 reads b + 3.
+    b = rise + 5
+    assert result.exit_codes[(0, 1)] == b + 4 - 1
     assert int(chip.regs((0, 1))[A0]) == 2, "first vector instruction executes twice"
-    assert chip.counters((0, 1))["sleep_cycle"] == rise - 25
+    assert chip.counters((0, 1))["sleep_cycle"] == b - 25
     assert chip.counters((0, 1))["interrupts"] == 1
 
 
@@ -161,9 +164,20 @@ def test_timer_interrupt_wakes_a_sleeping_core_on_the_exact_cycle():
     chip = MPSoC(ChipConfig())
     chip.load((1, 0), program(words))
     result = chip.run(max_cycles=100_000)
-    t = ocr + 2  # TIMER1 = cycle - 2 with the reset prescaler: TIMER1 >= OCR from cycle 402
-    assert result.exit_codes[(1, 0)] == t + 8 - 1
-    assert chip.counters((1, 0))["sleep_cycle"] > 300
+    t = ocr + 2  # TIMER1 = device cycle - 2 with the reset prescaler: TIMER1 >= OCR from 402
+    b = t + 5  # the entry boundary (platform.md §3): the core wakes in it
+    assert result.exit_codes[(1, 0)] == b + 4 - 1  # the TIMER0 load in b + 4 reads b + 3
+    assert chip.counters((1, 0))["sleep_cycle"] == b - sleep_start(words)
+
+
+def sleep_start(words: list[int]) -> int:
+    """The cycle after the SLEEP store of a straight-line program (1-cycle ALU ops, 3-cycle stores)."""
+    cycle = 3
+    for w in words:
+        cycle += 3 if (w & 0x7F) in (0x03, 0x23) else 1
+        if w == A.store("sw", T2, T0, 0x24):
+            return cycle
+    raise AssertionError("no SLEEP store")
 
 
 def test_io_tile_injects_and_receives():

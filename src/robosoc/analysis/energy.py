@@ -12,9 +12,11 @@ from importlib import resources
 from pathlib import Path
 
 from robosoc.config import ConfigError
+from robosoc.isa.table import CLASS_NAMES, CORE_STALL_KINDS
 
-INSTRUCTION_CLASSES = ("jump", "branch", "memory", "add", "logic", "other", "mul", "system")
-STALL_KINDS = ("branch_cycle", "memory_cycle", "mul_cycle", "entry_cycle", "dma_cycle", "sleep_cycle")
+INSTRUCTION_CLASSES: tuple[str, ...] = tuple(CLASS_NAMES.values())
+#: The core's stall kinds (from the instruction table) and the chip's: DMA copies and sleep.
+STALL_KINDS: tuple[str, ...] = (*CORE_STALL_KINDS, "dma_cycle", "sleep_cycle")
 NOC_TERMS = ("buffer_active", "buffer_idle", "control_active", "control_idle", "leakage")
 
 

@@ -12,12 +12,19 @@ import numpy as np
 from robosoc.isa.table import OP_FETCH_FAULT
 from robosoc.kernels.core_layout import (
     CTR_SIZE,
+    ERRATA_SPEC,
+    NEVER,
     OPC_SIZE,
     OUT_CAPACITY,
     PIPELINE_FILL,
+    S_CODE_SIZE,
     S_CYCLE,
+    S_ERRATA,
     S_EXT_RISE,
+    S_IRQ_CHECK,
     S_IRQ_RISE,
+    S_IRQ_SCAN,
+    S_IRQMUL_PC,
     S_MAX_CYCLES,
     S_MEM_BASE,
     S_MEM_SIZE,
@@ -27,7 +34,6 @@ from robosoc.kernels.core_layout import (
     S_T1_CTC,
     ST_SIZE,
 )
-from robosoc.kernels.soc_devices import NEVER
 
 SRAM_BASE = 0x40000000
 DEFAULT_SRAM_SIZE = 2 * 1024 * 1024
@@ -54,9 +60,20 @@ class CoreState:
 
     @classmethod
     def new(
-        cls, *, mul: bool | list[bool], sram_size: int = DEFAULT_SRAM_SIZE, base: int = SRAM_BASE, tiles: int = 1
+        cls,
+        *,
+        mul: bool | list[bool],
+        sram_size: int = DEFAULT_SRAM_SIZE,
+        base: int = SRAM_BASE,
+        tiles: int = 1,
+        errata: int = ERRATA_SPEC,
+        code_size: int | None = None,
     ) -> CoreState:
-        """Fresh cores after reset; ``mul`` may be given per tile."""
+        """Fresh cores after reset; ``mul`` may be given per tile.
+
+        ``code_size`` bytes from the base get predecode rows (default: the whole SRAM; loading a
+        program shrinks it to the program's code with :meth:`set_code_size`).
+        """
         if sram_size <= 0 or sram_size % 4:
             raise ValueError(f"sram_size: must be a positive multiple of 4 bytes, got {sram_size}")
         muls = mul if isinstance(mul, list) else [mul] * tiles
@@ -68,13 +85,14 @@ class CoreState:
         st[:, S_CYCLE] = PIPELINE_FILL
         st[:, S_MAX_CYCLES] = -1
         st[:, S_IRQ_RISE] = -1
+        st[:, S_IRQ_SCAN] = NEVER  # interrupts are off after reset: nothing to look at yet
+        st[:, S_IRQ_CHECK] = NEVER
         st[:, S_EXT_RISE] = NEVER
         st[:, S_MULHSU_PC] = -1
+        st[:, S_IRQMUL_PC] = -1
         st[:, S_T1_CTC] = 0xFFFF
-        # predecode: two int32 per memory word, plus a sentinel row past the end of memory
-        dec = np.zeros((tiles, 2 * (sram_size // 4 + 1)), dtype=np.int32)
-        dec[:, -2] = OP_FETCH_FAULT
-        return cls(
+        st[:, S_ERRATA] = errata
+        state = cls(
             st=st,
             ctr=np.zeros((tiles, CTR_SIZE), dtype=np.int64),
             opc=np.zeros((tiles, OPC_SIZE), dtype=np.int64),
@@ -82,9 +100,38 @@ class CoreState:
             m8=m8,
             m16=m8.view(np.uint16),
             m32=m8.view(np.int32),
-            dec=dec,
+            dec=np.zeros((tiles, 2), dtype=np.int32),
             out=np.zeros((tiles, OUT_CAPACITY), dtype=np.uint8),
         )
+        state.set_code_size(sram_size if code_size is None else code_size)
+        return state
+
+    def set_code_size(self, nbytes: int, tile: int | None = None) -> None:
+        """Give predecode rows to the first ``nbytes`` of SRAM (rounded up to a word) of one tile or all.
+
+        Execution beyond them is an error (``execution past the loaded code``); stores there are
+        data stores.  Each word has two int32; a sentinel row after the last stops execution.
+        The tile's earlier predecoded rows are forgotten.
+        """
+        tiles = range(self.tiles) if tile is None else [tile]
+        for t in tiles:
+            words = min(max(0, -(-nbytes // 4)), int(self.st[t, S_MEM_SIZE]) // 4)
+            self.st[t, S_CODE_SIZE] = 4 * words
+        need = 2 * (int(self.st[:, S_CODE_SIZE].max()) // 4 + 1)
+        if tile is None or need > self.dec.shape[1]:
+            old = self.dec
+            self.dec = np.zeros((self.tiles, need), dtype=np.int32)
+            if tile is not None:
+                keep = min(old.shape[1], need)
+                self.dec[:, :keep] = old[:, :keep]
+        for t in tiles:
+            end = 2 * (int(self.st[t, S_CODE_SIZE]) // 4)
+            self.dec[t, :] = 0
+            self.dec[t, end] = OP_FETCH_FAULT
+
+    def code_size(self, tile: int = 0) -> int:
+        """Bytes of a tile's SRAM that have predecode rows (the loaded code)."""
+        return int(self.st[tile, S_CODE_SIZE])
 
     @property
     def tiles(self) -> int:
@@ -114,7 +161,8 @@ class CoreState:
                 f"address 0x{addr:08x}+{len(data)} is outside SRAM 0x{self.base:08x}..0x{self.base + self.size:08x}"
             )
         self.m8[tile, off : off + len(data)] = np.frombuffer(data, dtype=np.uint8)
-        self.dec[tile, 2 * (off // 4) : 2 * ((off + len(data) + 3) // 4)] = 0
+        words = self.code_size(tile) // 4
+        self.dec[tile, 2 * min(off // 4, words) : 2 * min((off + len(data) + 3) // 4, words)] = 0
 
     def read(self, addr: int, length: int, tile: int = 0) -> bytes:
         off = addr - self.base

@@ -138,6 +138,13 @@ class Program:
         self.address_of(name)
         return self._by_name[name]
 
+    def code_end(self, base: int) -> int:
+        """Bytes from ``base`` to the end of the last executable segment (0 if there is none)."""
+        ends = [seg.end - base for seg in self.segment_info if seg.executable]
+        if not ends and not self.segment_info:  # no segment flags known: everything may be code
+            ends = [addr + len(data) - base for addr, data in self.segments]
+        return max([0, *ends])
+
     def read(self, addr: int, length: int) -> bytes:
         """Bytes of the loaded image at ``[addr, addr + length)``.
 

@@ -22,11 +22,11 @@ from robosoc.chip.elf import Program, Region
 from robosoc.chip.single import core_error
 from robosoc.config.chip import ChipConfig
 from robosoc.isa.disasm import disassemble
-from robosoc.isa.table import OP_FETCH_FAULT
 from robosoc.kernels import chip as kc
 from robosoc.kernels import noc as nk
 from robosoc.kernels.core_layout import (
     CTR_SIZE,
+    ERRATA_MODES,
     OPC_SIZE,
     S_CYCLE,
     S_EXIT_CODE,
@@ -91,10 +91,11 @@ class MPSoC:
         n = config.n_tiles
         sizes = [config.tile_config(config.tile_xy(t)).sram_bytes for t in range(n)]
         muls = [config.tile_config(config.tile_xy(t)).multiplier for t in range(n)]
-        self.cores = CoreState.new(mul=muls, sram_size=max(sizes), base=SRAM_BASE, tiles=n)
+        self.cores = CoreState.new(
+            mul=muls, sram_size=max(sizes), base=SRAM_BASE, tiles=n, errata=ERRATA_MODES[config.errata], code_size=0
+        )
         for t, size in enumerate(sizes):
             self.cores.st[t, S_MEM_SIZE] = size
-            self.cores.dec[t, 2 * (size // 4)] = OP_FETCH_FAULT
         self.cores.st[:, S_NI] = 1
         powered = np.array([config.is_powered(config.tile_xy(t)) for t in range(n)], dtype=bool)
         noc = config.noc
@@ -147,6 +148,7 @@ class MPSoC:
             raise ValueError(f"tile {xy} is the I/O tile: it has no core to load")
         if not self.powered[t]:
             raise ValueError(f"tile {xy} is powered off: it cannot run a program")
+        self.cores.set_code_size(program.code_end(SRAM_BASE), tile=t)
         for addr, data in program.segments:
             self.cores.write(addr, data, tile=t)
         self.cores.st[t, S_PC] = program.entry

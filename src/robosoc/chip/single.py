@@ -24,6 +24,7 @@ from robosoc.kernels.core import run_cores
 from robosoc.kernels.core_layout import (
     ADDRESS_ERRORS,
     ERR_FETCH,
+    ERRATA_MODES,
     ERROR_TEXT,
     RUN_ERROR,
     RUN_EXIT,
@@ -34,6 +35,8 @@ from robosoc.kernels.core_layout import (
     S_ERR_INSN,
     S_ERR_PC,
     S_EXIT_CODE,
+    S_IRQMUL_COUNT,
+    S_IRQMUL_PC,
     S_MAX_CYCLES,
     S_MULHSU_COUNT,
     S_MULHSU_PC,
@@ -48,8 +51,52 @@ CHUNK_CYCLES = 1 << 24
 _TILE0 = np.zeros(1, dtype=np.int64)  # host returns between slices: output is flushed, Ctrl-C is seen
 
 
-class MulhsuErratum(UserWarning):
+class RtlErratum(UserWarning):
+    """The program did something the HF-RISCV RTL gets wrong (platform.md §1, §3)."""
+
+
+class MulhsuErratum(RtlErratum):
     """The program used MULHSU, which the HF-RISCV RTL computes as MULHU."""
+
+
+class IrqDuringMulErratum(RtlErratum):
+    """An interrupt request met a multiply in the window the RTL mishandles."""
+
+
+def errata_report(
+    st: np.ndarray, symbolize: Callable[[int], str], mode: str, where: str = ""
+) -> dict[str, tuple[int, str]]:
+    """The errata a core hit: name -> (count, sentence naming the first pc and symbol).
+
+    ``st`` is the core's state row; ``mode`` the errata mode it ran in ("spec" or "rtl").
+    """
+    spec = mode == "spec"
+    out: dict[str, tuple[int, str]] = {}
+    n = int(st[S_MULHSU_COUNT])
+    if n:
+        pc = int(st[S_MULHSU_PC])
+        effect = "robosoc computed the RISC-V result, the RTL returns" if spec else "returned, as the RTL does,"
+        out["mulhsu"] = (
+            n,
+            f"{where}MULHSU executed {n} times (first at pc 0x{pc:08x}, {symbolize(pc)}): {effect} the MULHU result",
+        )
+    n = int(st[S_IRQMUL_COUNT])
+    if n:
+        pc = int(st[S_IRQMUL_PC])
+        effect = (
+            "robosoc entered at the end of the multiply; the RTL would have run the shadow instruction first "
+            "or the multiply twice (platform.md §3)"
+            if spec
+            else "handled as the RTL does (shadow instruction, repeated multiply or lost vector, platform.md §3)"
+        )
+        out["irq_during_mul"] = (
+            n,
+            f"{where}an interrupt met a multiply {n} times (first at pc 0x{pc:08x}, {symbolize(pc)}): {effect}",
+        )
+    return out
+
+
+ERRATUM_WARNINGS: dict[str, type[RtlErratum]] = {"mulhsu": MulhsuErratum, "irq_during_mul": IrqDuringMulErratum}
 
 
 class CoreError(RuntimeError):
@@ -105,6 +152,8 @@ class RunResult:
     counters: dict[str, int]
     host_seconds: float
     warnings: list[str] = field(default_factory=list)
+    #: how many times each RTL erratum was hit ("mulhsu", "irq_during_mul"); in "spec" mode: would have been
+    errata: dict[str, int] = field(default_factory=dict)
 
     @property
     def cycles(self) -> int:
@@ -118,15 +167,28 @@ class RunResult:
 class SingleCoreSoC:
     """One HF-RISCV core with its SRAM at 0x40000000 and the SoC devices."""
 
-    def __init__(self, *, mul: bool = True, sram_size: int = DEFAULT_SRAM_SIZE) -> None:
+    def __init__(self, *, mul: bool = True, sram_size: int = DEFAULT_SRAM_SIZE, errata: str = "spec") -> None:
+        """A core after reset.
+
+        Args:
+            mul: with the iterative multiplier.
+            sram_size: bytes of SRAM at 0x40000000.
+            errata: "spec" (RISC-V results, each RTL erratum the program hits is counted and warned
+                about) or "rtl" (reproduce the RTL's errata, still counted).
+        """
+        if errata not in ERRATA_MODES:
+            raise ValueError(f"errata: must be one of {', '.join(map(repr, ERRATA_MODES))}, got {errata!r}")
         self.mul = mul
-        self.state = CoreState.new(mul=mul, sram_size=sram_size, base=SRAM_BASE)
+        self.errata = errata
+        self.state = CoreState.new(mul=mul, sram_size=sram_size, base=SRAM_BASE, errata=ERRATA_MODES[errata])
         self.program: Program | None = None
 
     def regions(self) -> list[Region]:
         return [Region(SRAM_BASE, self.state.size, "SRAM")]
 
     def load(self, program: Program) -> None:
+        """Copy the program into SRAM (predecode rows only for its code) and point the pc at its entry."""
+        self.state.set_code_size(program.code_end(SRAM_BASE))
         for addr, data in program.segments:
             self.state.write(addr, data)
         self.state.pc = program.entry
@@ -214,21 +276,17 @@ class SingleCoreSoC:
                     )
         finally:
             elapsed = time.perf_counter() - start
-        notes = []
-        if st[S_MULHSU_COUNT]:
-            pc = int(st[S_MULHSU_PC])
-            note = (
-                f"MULHSU executed {int(st[S_MULHSU_COUNT])} times (first at pc 0x{pc:08x}, {self.symbolize(pc)}): "
-                "robosoc computes the RISC-V result, the HF-RISCV RTL returns the MULHU result (erratum)"
-            )
-            notes.append(note)
-            warnings.warn(note, MulhsuErratum, stacklevel=2)
+        errata = errata_report(st, self.symbolize, self.errata)
+        if self.errata == "spec":
+            for name, (_, note) in errata.items():
+                warnings.warn(note, ERRATUM_WARNINGS[name], stacklevel=2)
         return RunResult(
             exit_code=int(st[S_EXIT_CODE]),
             output=bytes(output),
             counters=self.counters(),
             host_seconds=elapsed,
-            warnings=notes,
+            warnings=[note for _, note in errata.values()],
+            errata={name: count for name, (count, _) in errata.items()},
         )
 
 
@@ -238,8 +296,9 @@ def run_elf(
     max_cycles: int | None = None,
     sram_size: int = DEFAULT_SRAM_SIZE,
     on_output: Callable[[bytes], object] | None = None,
+    errata: str = "spec",
 ) -> RunResult:
     """Load an ELF into a fresh single-core SoC and run it to its exit."""
-    soc = SingleCoreSoC(mul=mul, sram_size=sram_size)
+    soc = SingleCoreSoC(mul=mul, sram_size=sram_size, errata=errata)
     soc.load(load_elf(path, soc.regions()))
     return soc.run(max_cycles=max_cycles, on_output=on_output)

@@ -52,6 +52,8 @@ HERMES_ROUTING_LATENCY = 6
 #: Size of the NI send and receive memories in flits (128 bytes of 16-bit flits, ORCA).
 NI_MEMORY_FLITS = 64
 MAX_MESH_SIDE = 16
+#: How the cores treat the HF-RISCV RTL's errata (see ``ChipConfig.errata``).
+ERRATA_CHOICES = ("spec", "rtl")
 
 
 def _check_sram(name: str, value: int) -> None:
@@ -151,6 +153,9 @@ class ChipConfig:
         tile: defaults for every tile.
         tiles: per-tile overrides.
         noc: router and packet parameters.
+        errata: ``"spec"`` (RISC-V results; each HF-RISCV RTL erratum a program would hit is reported)
+            or ``"rtl"`` (reproduce the RTL: MULHSU as MULHU, an interrupt during a multiply as in
+            platform.md §3), for every core.
     """
 
     width: int = 2
@@ -160,8 +165,11 @@ class ChipConfig:
     tile: TileConfig = field(default_factory=TileConfig)
     tiles: tuple[TileOverride, ...] = ()
     noc: NocConfig = field(default_factory=NocConfig)
+    errata: str = "spec"
 
     def __post_init__(self) -> None:
+        if self.errata not in ERRATA_CHOICES:
+            raise ValueError(f"errata: must be one of {', '.join(map(repr, ERRATA_CHOICES))}, got {self.errata!r}")
         for name in ("width", "height"):
             value = getattr(self, name)
             if not 1 <= value <= MAX_MESH_SIDE:

@@ -1,24 +1,7 @@
 """The whole MPSoC in one numba loop: cores, network interfaces, NoC, sleep, per-task accounting.
 
-Network-interface registers of a tile (word accesses only; base ``NI_BASE`` = 0xe1040000):
-
-======  ===========  ==========================================================================
-offset  register     meaning
-======  ===========  ==========================================================================
-0x00    NI_STATUS    read: bit 0 the send memory is busy (DMA or injection), bit 1 a packet waits
-0x04    SEND_ADDR    main-memory address of the packet to send (flits are 16-bit, little endian)
-0x08    SEND_SIZE    flits to send, header included (2..64)
-0x0c    NI_CMD       write 1: SEND (DMA copy, core stalled 1 cycle per flit, then injection);
-                     write 2: RECV (DMA copy of the waiting packet to RECV_ADDR, core stalled
-                     1 cycle per flit; the receive memory is free afterwards)
-0x10    RECV_ADDR    main-memory address the next RECV copies to
-0x14    RECV_SIZE    read: flits of the waiting packet (0 if none)
-0x18    NI_TILE      read: this tile's NoC address (x << 4) | y
-0x1c    NI_MESH      read: width | height << 8
-0x20    TASK_ID      read/write: the running task (0..15); counters are attributed per task
-0x24    SLEEP        write: the core stops until an interrupt request is pending
-0x28    IO_TILE      read: the NoC address of the I/O tile
-======  ===========  ==========================================================================
+The network-interface registers of a tile (:mod:`robosoc.kernels.ni_registers`, word accesses
+only) are performed here, in global time order: a core stops just before accessing them.
 
 IRQ_CAUSE bit 1 is "a packet waits in the receive memory"; it rises the cycle after the last
 flit was written and stays up until RECV has copied the packet.
@@ -39,16 +22,20 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from robosoc.isa.table import MEMORY_CYCLES
+from robosoc.kernels import ni_registers as ni
 from robosoc.kernels import noc as nk
-from robosoc.kernels.core import LW, SW, U1, U2, U8, U16, U24, U255, run_cores
+from robosoc.kernels.core import LW, SW, U1, U2, fields, run_cores
 from robosoc.kernels.core_layout import (
     C_MMIO,
     CTR_SIZE,
+    NEVER,
     OPC_SIZE,
     RUN_ERROR,
     RUN_EXIT,
     RUN_NI,
     RUN_OUTPUT,
+    S_CODE_SIZE,
     S_CYCLE,
     S_EXT_RISE,
     S_IRQ_CHECK,
@@ -58,7 +45,16 @@ from robosoc.kernels.core_layout import (
     S_PC,
     S_RUN,
 )
-from robosoc.kernels.soc_devices import NEVER, NI_BASE, irq_pending, next_cause_change
+from robosoc.kernels.dev_irq import (
+    ENTRY_DELAY,
+    cause_enabled,
+    earliest_entry,
+    first_cause,
+    first_request,
+    irq_external_rise,
+    irq_scan,
+    requests_possible,
+)
 
 # tile states
 K_OFF, K_RUN, K_SLEEP, K_EXITED, K_FAULT, K_IO = 0, 1, 2, 3, 4, 5
@@ -116,7 +112,7 @@ CE_TASK_RANGE = 7
 CE_BAD_COMMAND = 8
 CE_READONLY = 9
 
-NTASKS = 16
+NTASKS = ni.NTASKS
 # accounting vector: per-operation counters, core counters, cycles, sleep and DMA cycles
 A_CTR = OPC_SIZE
 A_CYCLES = OPC_SIZE + CTR_SIZE
@@ -150,14 +146,19 @@ def account(t, st, ctr, opc, cst, acc, snap, now):
 
 @njit(cache=True)
 def wake_time(st_t: np.ndarray, x: int) -> int:
-    """First cycle >= x at which the core's interrupt request is pending (NEVER if none is due)."""
-    for _ in range(4096):
-        if irq_pending(st_t, x):
-            return x
-        x = next_cause_change(st_t, x)
-        if x >= NEVER:
-            return NEVER
-    return x  # not found yet: look again from here when that cycle comes
+    """The cycle a core asleep since instruction cycle ``x`` resumes (NEVER if nothing is due).
+
+    With interrupts enabled it resumes at the boundary where its interrupt is entered: t + 5 for
+    a request the controller raises in device cycle t (platform.md §3).  Otherwise (IRQ_STATUS
+    bit 0 clear, or inside a handler) it resumes like RISC-V's WFI when an enabled cause rises,
+    in the clock of that device cycle y, i.e. instruction cycle y + 1, without an entry.  Never
+    before ``x``.  The value may be a point at which to look again (see :func:`_wake_if_due`).
+    """
+    if requests_possible(st_t):
+        t = first_request(st_t, NEVER)
+        return NEVER if t >= NEVER else max(x, t + ENTRY_DELAY)
+    y = first_cause(st_t, x - 1)
+    return NEVER if y >= NEVER else max(x, y + 1)
 
 
 @njit(cache=True)
@@ -191,14 +192,9 @@ def ni_access(t, st, ctr, opc, regs, m16, dec, cst, acc, snap, gst, cfg, glob, t
     pc = st[t, S_PC]
     s = st[t, S_CYCLE]
     i = np.uint64(pc - base) >> U2
-    j = i << U1
-    w0 = np.uint64(np.uint32(dec[t, j]))
-    op = w0 & U255
-    rd = (w0 >> U8) & U255
-    rs1 = (w0 >> U16) & U255
-    rs2 = w0 >> U24
-    addr = (regs[t, rs1] + np.int64(dec[t, j + U1])) & 0xFFFFFFFF
-    off = addr - NI_BASE
+    op, rd, rs1, rs2, imm = fields(dec[t], i)
+    addr = (regs[t, rs1] + imm) & 0xFFFFFFFF
+    off = addr - ni.NI_BASE
     if op != LW and op != SW:
         _fault(cst, t, CE_WIDTH, addr, 0)
         return False
@@ -208,46 +204,46 @@ def ni_access(t, st, ctr, opc, regs, m16, dec, cst, acc, snap, gst, cfg, glob, t
     if op == LW:
         x = s - 1  # registered read: the value of the cycle before the load
         v = 0
-        if off == 0x00:
+        if off == ni.NI_STATUS:
             busy = _send_done(tile, t) > x
-            v = (1 if busy else 0) | (2 if cst[t, K_RX_READY] <= x else 0)
-        elif off == 0x04:
+            v = (ni.STATUS_SEND_BUSY if busy else 0) | (ni.STATUS_PACKET_WAITING if cst[t, K_RX_READY] <= x else 0)
+        elif off == ni.SEND_ADDR:
             v = cst[t, K_SEND_ADDR]
-        elif off == 0x08:
+        elif off == ni.SEND_SIZE:
             v = cst[t, K_SEND_SIZE]
-        elif off == 0x0C:
+        elif off == ni.NI_CMD:
             v = 0
-        elif off == 0x10:
+        elif off == ni.RECV_ADDR:
             v = cst[t, K_RECV_ADDR]
-        elif off == 0x14:
+        elif off == ni.RECV_SIZE:
             v = cst[t, K_RX_LEN] if cst[t, K_RX_READY] <= x else 0
-        elif off == 0x18:
+        elif off == ni.NI_TILE:
             v = ((t % width) << 4) | (t // width)
-        elif off == 0x1C:
+        elif off == ni.NI_MESH:
             v = width | (cfg[nk.C_HEIGHT] << 8)
-        elif off == 0x20:
+        elif off == ni.TASK_ID:
             v = cst[t, K_TASK]
-        elif off == 0x28:
+        elif off == ni.IO_TILE:
             io = gst[G_IO_TILE]
             v = ((io % width) << 4) | (io // width)
-        elif off == 0x24:
+        elif off == ni.SLEEP:
             v = 0
         else:
             _fault(cst, t, CE_UNKNOWN_REG, addr, 0)
             return False
         regs[t, rd] = v
-        st[t, S_CYCLE] = s + 3
+        st[t, S_CYCLE] = s + MEMORY_CYCLES
         st[t, S_PC] = pc + 4
         return True
     v = np.int64(regs[t, rs2]) & 0xFFFFFFFF
-    end = s + 3
-    if off == 0x04:
+    end = s + MEMORY_CYCLES
+    if off == ni.SEND_ADDR:
         cst[t, K_SEND_ADDR] = v
-    elif off == 0x08:
+    elif off == ni.SEND_SIZE:
         cst[t, K_SEND_SIZE] = v
-    elif off == 0x10:
+    elif off == ni.RECV_ADDR:
         cst[t, K_RECV_ADDR] = v
-    elif off == 0x20:
+    elif off == ni.TASK_ID:
         if v >= NTASKS:
             _fault(cst, t, CE_TASK_RANGE, addr, v)
             return False
@@ -256,15 +252,15 @@ def ni_access(t, st, ctr, opc, regs, m16, dec, cst, acc, snap, gst, cfg, glob, t
         account(t, st, ctr, opc, cst, acc, snap, end)
         cst[t, K_TASK] = v
         return True
-    elif off == 0x24:
+    elif off == ni.SLEEP:
         st[t, S_CYCLE] = end
         st[t, S_PC] = pc + 4
         cst[t, K_STATE] = K_SLEEP
         cst[t, K_SLEEP_FROM] = end
         cst[t, K_WAKE] = wake_time(st[t], end)
         return True
-    elif off == 0x0C:
-        if v == 1:
+    elif off == ni.NI_CMD:
+        if v == ni.CMD_SEND:
             n = cst[t, K_SEND_SIZE]
             a = cst[t, K_SEND_ADDR] - base
             if n < 2 or n > nk.MEM_FLITS or a < 0 or a + 2 * n > size or (a & 1):
@@ -284,7 +280,7 @@ def ni_access(t, st, ctr, opc, regs, m16, dec, cst, acc, snap, gst, cfg, glob, t
             cst[t, K_DMA_CYCLES] += n
             cst[t, K_SENT] += 1
             st[t, S_CYCLE] = start
-        elif v == 2:
+        elif v == ni.CMD_RECV:
             if cst[t, K_RX_READY] > s - 1:
                 _fault(cst, t, CE_NO_PACKET, addr, 0)
                 return False
@@ -297,7 +293,7 @@ def ni_access(t, st, ctr, opc, regs, m16, dec, cst, acc, snap, gst, cfg, glob, t
             for k in range(n):
                 m16[t, h + k] = mem[t, nk.RECV, k]
             # the copied words are data now: forget any predecoded instructions there
-            for k in range(a >> 2, (a + 2 * n + 3) >> 2):
+            for k in range(a >> 2, min((a + 2 * n + 3) >> 2, st[t, S_CODE_SIZE] >> 2)):
                 dec[t, 2 * k] = 0
             cst[t, K_DMA_CYCLES] += n
             cst[t, K_RECEIVED] += 1
@@ -311,7 +307,7 @@ def ni_access(t, st, ctr, opc, regs, m16, dec, cst, acc, snap, gst, cfg, glob, t
             return False
         st[t, S_PC] = pc + 4
         return True
-    elif off in (0x00, 0x14, 0x18, 0x1C, 0x28):
+    elif off in ni.READ_ONLY:
         _fault(cst, t, CE_READONLY, addr, 0)
         return False
     else:
@@ -330,6 +326,30 @@ def _wake(t, st, cst, w):
     st[t, S_CYCLE] = w
     if st[t, S_IRQ_CHECK] > w:
         st[t, S_IRQ_CHECK] = w
+
+
+@njit(cache=True)
+def _wake_if_due(t, st, cst, H):
+    """Wake sleeping core t if its interrupt is entered before cycle H, else refresh its wake-up.
+
+    Called while the chip works on the quantum ending at H, when every input of the core's
+    interrupt controller before H is known (deliveries of the quantum are scheduled, and no
+    packet sent in it can arrive before H), so the controller may look up to H for good.
+    """
+    start = cst[t, K_SLEEP_FROM]
+    if requests_possible(st[t]):
+        irq_scan(st[t], H)
+        w = max(earliest_entry(st[t]), start)
+        if w < H:
+            _wake(t, st, cst, w)
+            return
+    else:
+        w = cst[t, K_WAKE]
+        if w < H and cause_enabled(st[t], w - 1):
+            _wake(t, st, cst, w)
+            return
+        start = max(start, w)  # a point the search reached without finding the cause
+    cst[t, K_WAKE] = wake_time(st[t], start)
 
 
 @njit(cache=True)
@@ -391,11 +411,9 @@ def _take_deliveries(st, cst, gst, glob, ev, io_out):
             continue
         cst[d, K_RX_READY] = rise
         cst[d, K_RX_LEN] = ev[r, nk.EV_LEN]
-        st[d, S_EXT_RISE] = rise
-        if st[d, S_IRQ_CHECK] > rise:
-            st[d, S_IRQ_CHECK] = rise
+        irq_external_rise(st[d], rise)
         if cst[d, K_STATE] == K_SLEEP:
-            cst[d, K_WAKE] = wake_time(st[d], max(rise, cst[d, K_SLEEP_FROM]))
+            cst[d, K_WAKE] = wake_time(st[d], cst[d, K_SLEEP_FROM])
     glob[nk.G_NEV] = 0
 
 
@@ -477,11 +495,7 @@ def run_chip(
         # wake sleeping cores due in this quantum
         for t in range(n):
             if cst[t, K_STATE] == K_SLEEP and cst[t, K_WAKE] < H:
-                w = max(cst[t, K_WAKE], cst[t, K_SLEEP_FROM])
-                if irq_pending(st[t], w):
-                    _wake(t, st, cst, w)
-                else:
-                    cst[t, K_WAKE] = wake_time(st[t], w)
+                _wake_if_due(t, st, cst, H)
         # run the awake cores to H; NI accesses are performed here, then the core goes on
         k = 0
         for t in range(n):
@@ -509,7 +523,7 @@ def run_chip(
                         H = s0 + look_idle
                     if cst[t, K_STATE] == K_SLEEP and cst[t, K_WAKE] < H:
                         # asleep and due again within this quantum: wake it right away
-                        _wake(t, st, cst, max(cst[t, K_WAKE], cst[t, K_SLEEP_FROM]))
+                        _wake_if_due(t, st, cst, H)
                     if cst[t, K_STATE] != K_RUN:
                         break
                 elif why == RUN_OUTPUT:

@@ -8,10 +8,15 @@ running off the end of memory is caught without a bounds check per instruction.
 Registers live in ``regs`` (int32, 33 entries): x0..x31 and a sink at index 32 that the decoder
 substitutes for rd = x0, so x0 is never written and no per-instruction reset is needed.
 
-Timing (platform.md §1): 1 cycle for ALU, LUI, AUIPC, FENCE and not-taken branches; 3 for loads,
-stores, taken branches, JAL and JALR; 5 + steps(rs2) for multiplies.  Devices, timers and the
-interrupt controller are in :mod:`robosoc.kernels.soc_devices`; the loop only looks at them when
-the cycle reaches the next scheduled event, so an instruction costs one comparison for them.
+Timing (platform.md §1) comes from the timing class of each row of :mod:`robosoc.isa.table`: 1
+cycle for ALU, LUI, AUIPC, FENCE and not-taken branches; 3 for loads, stores, taken branches, JAL
+and JALR; 5 + steps(rs2) for multiplies.  Devices are reached through :mod:`robosoc.kernels.soc_bus`;
+the loop consults the interrupt controller (:mod:`robosoc.kernels.dev_irq`) only at instruction
+boundaries at or after the earliest cycle an entry could happen, so an instruction costs one
+comparison for it.
+
+Only the loaded code has predecode rows (``S_CODE_SIZE`` bytes from the SRAM base, plus the
+sentinel row), so the table grows with the program rather than with the SRAM.
 """
 
 from __future__ import annotations
@@ -19,15 +24,29 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from robosoc.isa.table import INSTRUCTIONS, OP, OP_FETCH_FAULT, OP_ILLEGAL, Fmt
+from robosoc.isa.table import (
+    BRANCH_NOT_TAKEN_CYCLES,
+    BRANCH_TAKEN_CYCLES,
+    INSTRUCTIONS,
+    JUMP_CYCLES,
+    MEMORY_CYCLES,
+    MUL_BASE_CYCLES,
+    OP,
+    OP_FETCH_FAULT,
+    OP_ILLEGAL,
+    SINGLE_CYCLES,
+    TRAP_CYCLES,
+    Fmt,
+)
 from robosoc.kernels.core_layout import (
-    C_ENTRY_STALL,
-    C_IRQ,
     C_MMIO,
     C_MUL_STALL,
     C_TAKEN,
-    C_TRAP,
+    DEV_EXIT,
+    DEV_NI,
+    DEV_READONLY,
     ERR_FETCH,
+    ERR_FETCH_DATA,
     ERR_FETCH_MISALIGNED,
     ERR_ILLEGAL,
     ERR_LOAD_MISALIGNED,
@@ -37,44 +56,35 @@ from robosoc.kernels.core_layout import (
     ERR_STORE_READONLY,
     ERR_STORE_UNMAPPED,
     ERR_UNSUPPORTED,
+    ERRATA_RTL,
     OUT_CAPACITY,
-    PH_TRAP,
     RUN_CHUNK,
     RUN_ERROR,
     RUN_EXIT,
     RUN_MAX_CYCLES,
     RUN_NI,
     RUN_OUTPUT,
+    S_CODE_SIZE,
     S_CYCLE,
     S_ERR,
     S_ERR_ADDR,
     S_ERR_INSN,
     S_ERR_PC,
+    S_ERRATA,
     S_IRQ_CHECK,
-    S_IRQ_EPC,
-    S_IRQ_PHASE,
-    S_IRQ_STATUS,
     S_MAX_CYCLES,
     S_MEM_BASE,
     S_MEM_SIZE,
     S_MUL,
+    S_MUL_END,
     S_MULHSU_COUNT,
     S_MULHSU_PC,
     S_OUT_LEN,
     S_PC,
     S_RUN,
 )
-from robosoc.kernels.soc_devices import (
-    LD_NI,
-    LD_OK,
-    ST_EXIT,
-    ST_IRQ_CHANGED,
-    ST_NI,
-    ST_READONLY,
-    irq_event,
-    mmio_load,
-    mmio_store,
-)
+from robosoc.kernels.dev_irq import irq_event, trap
+from robosoc.kernels.soc_bus import LD_NI, LD_OK, mmio_load, mmio_store
 
 # The encoding table as arrays for the decoder.
 _MATCH = np.array([i.match for i in INSTRUCTIONS], dtype=np.int64)
@@ -195,28 +205,72 @@ def mul_latency(b: int) -> int:
         c += 1 if (b >> c) & 15 else 4
         steps += 1
     # from c to 31 one step per bit, then the last step at c == 31
-    return 5 + steps + (31 - c) + 1
+    return MUL_BASE_CYCLES + steps + (31 - c) + 1
 
 
-DEV_OK = 0
-DEV_NI = -1  # a network-interface register: stop before the store (the chip loop performs it)
-DEV_EXIT = -2  # the program stored its exit code
+@njit(cache=True, inline="always")
+def fields(dec_t: np.ndarray, i: np.uint64) -> tuple[np.uint64, np.uint64, np.uint64, np.uint64, np.int64]:
+    """(op, rd, rs1, rs2, imm) of predecode row ``i``."""
+    w0 = np.uint64(np.uint32(dec_t[i << U1]))
+    return w0 & U255, (w0 >> U8) & U255, (w0 >> U16) & U255, w0 >> U24, np.int64(dec_t[(i << U1) + U1])
 
 
-@njit(cache=True)
-def device_store(st_t: np.ndarray, ctr_t: np.ndarray, out_t: np.ndarray, addr: int, value: int, s: int) -> int:
-    """A store starting in cycle ``s`` outside SRAM: DEV_OK, DEV_NI, DEV_EXIT or an ERR_* code."""
-    r = mmio_store(st_t, out_t, addr, value, s)
-    if r == ST_NI:
-        return DEV_NI
+@njit(cache=True, inline="always")
+def fetch_error(target: int, base: int, code: int, size: int) -> int:
+    """0 if the core may continue at ``target``, else the ERR_* code of the jump or branch."""
+    if target & 3:
+        return ERR_FETCH_MISALIGNED
+    off = (target - base) & M32
+    if off >= code:
+        return ERR_FETCH_DATA if off < size else ERR_FETCH
+    return 0
+
+
+@njit(cache=True, inline="always")
+def branch(
+    taken: bool, pc: int, imm: int, cyc: int, n_taken: int, base: int, code: int, size: int
+) -> tuple[int, int, int, int, int]:
+    """A conditional branch: (pc, cyc, taken count, err, err_addr) after it."""
+    if not taken:
+        return pc + 4, cyc + BRANCH_NOT_TAKEN_CYCLES, n_taken, 0, 0
+    target = (pc + imm) & M32
+    err = fetch_error(target, base, code, size)
+    if err != 0:
+        return pc, cyc, n_taken, err, target
+    return target, cyc + BRANCH_TAKEN_CYCLES, n_taken + 1, 0, 0
+
+
+@njit(cache=True, inline="always")
+def load_device(
+    st_t: np.ndarray, ctr_t: np.ndarray, opc_t: np.ndarray, k: np.uint64, addr: int, cyc: int
+) -> tuple[int, int, int]:
+    """A load outside SRAM: (value, RUN_CHUNK or RUN_NI or RUN_ERROR, err)."""
+    v, code = mmio_load(st_t, addr, cyc)
+    if code == LD_NI:
+        opc_t[k] -= 1  # not executed yet: the chip loop performs it
+        return 0, RUN_NI, 0
+    if code != LD_OK:
+        return 0, RUN_ERROR, ERR_LOAD_UNMAPPED
     ctr_t[C_MMIO] += 1
+    return v, RUN_CHUNK, 0
+
+
+@njit(cache=True, inline="always")
+def store_device(
+    st_t: np.ndarray, ctr_t: np.ndarray, out_t: np.ndarray, opc_t: np.ndarray, k: np.uint64, addr: int,
+    value: int, pc: int, cyc: int,
+) -> tuple[int, int, int, int]:  # fmt: skip
+    """A store outside SRAM: (status, err, pc, cyc) after it (status RUN_CHUNK: go on)."""
+    r = mmio_store(st_t, out_t, addr, value, cyc)
+    if r == DEV_NI:
+        opc_t[k] -= 1  # not executed yet: the chip loop performs it
+        return RUN_NI, 0, pc, cyc
+    ctr_t[C_MMIO] += 1
+    if r == DEV_EXIT:
+        return RUN_EXIT, 0, pc + 4, cyc + MEMORY_CYCLES
     if r < 0:
-        return ERR_STORE_READONLY if r == ST_READONLY else ERR_STORE_UNMAPPED
-    if r == ST_EXIT:
-        return DEV_EXIT
-    if r == ST_IRQ_CHANGED:
-        st_t[S_IRQ_CHECK] = min(st_t[S_IRQ_CHECK], s + 3)
-    return DEV_OK
+        return RUN_ERROR, ERR_STORE_READONLY if r == DEV_READONLY else ERR_STORE_UNMAPPED, pc, cyc
+    return RUN_CHUNK, 0, pc + 4, cyc + MEMORY_CYCLES
 
 
 @njit(cache=True, inline="always")
@@ -235,17 +289,18 @@ def run_cores(
 ) -> None:
     """Run each core in ``tiles`` until cycle ``until`` or until it must stop.
 
-    Every array has one row per core (tile).  A core stops at ``until``, at its exit, an error,
-    its cycle budget, a full output buffer, or just before an access to its network-interface
-    registers (RUN_NI: the chip simulator performs that access in global time order).  The
-    reason is left in ``st[t, S_RUN]``; all state stays in the arrays, so calls can be repeated.
+    Every array has one row per core (tile).  A core stops at the first instruction boundary at or
+    after ``until``, at its exit, an error, its cycle budget, a full output buffer, or just before
+    an access to its network-interface registers (RUN_NI: the chip simulator performs that access
+    in global time order).  The reason is left in ``st[t, S_RUN]``; all state stays in the arrays,
+    so calls can be repeated.
 
     ``opc[t, 2 * op + (word index & 1)]`` counts executed instructions per operation (two banks,
     so that consecutive instructions never wait on the same counter); ``dec`` is the predecode
-    table (int32, two per memory word).  The three arrays the loop touches on every instruction
-    (registers, predecode, counters) are taken as row views once per tile; the others are indexed
-    in two dimensions, because every view costs reference counting on entry and exit, which
-    dominates the short time slices of a busy many-core chip.
+    table (int32, two per word of loaded code).  The three arrays the loop touches on every
+    instruction (registers, predecode, counters) are taken as row views once per tile; the others
+    are indexed in two dimensions, because every view costs reference counting on entry and exit,
+    which dominates the short time slices of a busy many-core chip.
     """
     for k in range(tiles.shape[0]):
         t = tiles[k]
@@ -254,7 +309,10 @@ def run_cores(
         dec_t = dec[t]
         base = st[t, S_MEM_BASE]
         size = st[t, S_MEM_SIZE]
+        code = st[t, S_CODE_SIZE]
+        code_words = np.uint64(code >> 2)
         has_mul = st[t, S_MUL] != 0
+        rtl = st[t, S_ERRATA] == ERRATA_RTL
         pc = st[t, S_PC]
         cyc = st[t, S_CYCLE]
         budget = st[t, S_MAX_CYCLES]
@@ -271,13 +329,7 @@ def run_cores(
         while True:
             if cyc >= next_event:
                 if cyc >= st[t, S_IRQ_CHECK]:
-                    pc, cyc, entered = irq_event(st[t], pc, cyc)
-                    if entered == 1:
-                        ctr[t, C_TRAP] += 1
-                        ctr[t, C_ENTRY_STALL] += 2
-                    elif entered == 2:
-                        ctr[t, C_IRQ] += 1
-                        ctr[t, C_ENTRY_STALL] += 2
+                    pc, cyc = irq_event(st[t], ctr[t], pc, cyc)
                 if cyc >= stop:
                     status = RUN_MAX_CYCLES if (budget >= 0 and cyc >= budget) else RUN_CHUNK
                     break
@@ -289,18 +341,13 @@ def run_cores(
                     next_event = cyc + 1
 
             i = np.uint64(pc - base) >> U2
-            j = i << U1
-            w0 = np.uint64(np.uint32(dec_t[j]))
-            op = w0 & U255
-            rd = (w0 >> U8) & U255
-            rs1 = (w0 >> U16) & U255
-            rs2 = w0 >> U24
-            imm = np.int64(dec_t[j + U1])
-            opc_t[(op << U1) | (i & U1)] += 1  # two banks by word parity: no store-to-load chain
+            op, rd, rs1, rs2, imm = fields(dec_t, i)
+            kc = (op << U1) | (i & U1)
+            opc_t[kc] += 1  # two banks by word parity: no store-to-load chain
 
             if op == ADDI:
                 regs_t[rd] = regs_t[rs1] + imm
-                cyc += 1
+                cyc += SINGLE_CYCLES
                 pc += 4
             elif op == LW:
                 addr = (regs_t[rs1] + imm) & M32
@@ -312,18 +359,12 @@ def run_cores(
                 if (off & M32) < size:
                     regs_t[rd] = m32[t, np.uint64(off) >> U2]
                 else:
-                    v, code = mmio_load(st[t], addr, cyc)
-                    if code == LD_NI:
-                        opc_t[(op << U1) | (i & U1)] -= 1
-                        status = RUN_NI
-                        break
-                    if code != LD_OK:
-                        err = ERR_LOAD_UNMAPPED
+                    v, status, err = load_device(st[t], ctr[t], opc_t, kc, addr, cyc)
+                    if status != RUN_CHUNK:
                         err_addr = addr
                         break
-                    ctr[t, C_MMIO] += 1
                     regs_t[rd] = v
-                cyc += 3
+                cyc += MEMORY_CYCLES
                 pc += 4
             elif op == SW:
                 addr = (regs_t[rs1] + imm) & M32
@@ -335,207 +376,156 @@ def run_cores(
                 if (off & M32) < size:
                     wi = np.uint64(off) >> U2
                     m32[t, wi] = regs_t[rs2]
-                    dec_t[wi << U1] = 0
+                    if wi < code_words:
+                        dec_t[wi << U1] = 0  # the word may be code: decode it again
+                    cyc += MEMORY_CYCLES
+                    pc += 4
                 else:
-                    r = device_store(st[t], ctr[t], out[t], addr, regs_t[rs2], cyc)
-                    if r != DEV_OK:
-                        if r == DEV_NI:
-                            opc_t[(op << U1) | (i & U1)] -= 1
-                            status = RUN_NI
-                        elif r == DEV_EXIT:
-                            cyc += 3
-                            pc += 4
-                            status = RUN_EXIT
-                        else:
-                            err = r
-                            err_addr = addr
+                    status, err, pc, cyc = store_device(st[t], ctr[t], out[t], opc_t, kc, addr, regs_t[rs2], pc, cyc)
+                    if status != RUN_CHUNK:
+                        err_addr = addr
                         break
-                    next_event = cyc + 3
-                cyc += 3
-                pc += 4
+                    next_event = cyc
             elif op == ADD:
                 regs_t[rd] = regs_t[rs1] + regs_t[rs2]
-                cyc += 1
+                cyc += SINGLE_CYCLES
                 pc += 4
             elif op == BNE:
-                if regs_t[rs1] != regs_t[rs2]:
-                    target = (pc + imm) & M32
-                    if (target - base) & M32 >= size or target & 3:
-                        err = ERR_FETCH_MISALIGNED if target & 3 else ERR_FETCH
-                        err_addr = target
-                        break
-                    pc = target
-                    cyc += 3
-                    n_taken += 1
-                else:
-                    pc += 4
-                    cyc += 1
+                pc, cyc, n_taken, err, err_addr = branch(
+                    regs_t[rs1] != regs_t[rs2], pc, imm, cyc, n_taken, base, code, size
+                )
+                if err != 0:
+                    break
             elif op == BEQ:
-                if regs_t[rs1] == regs_t[rs2]:
-                    target = (pc + imm) & M32
-                    if (target - base) & M32 >= size or target & 3:
-                        err = ERR_FETCH_MISALIGNED if target & 3 else ERR_FETCH
-                        err_addr = target
-                        break
-                    pc = target
-                    cyc += 3
-                    n_taken += 1
-                else:
-                    pc += 4
-                    cyc += 1
+                pc, cyc, n_taken, err, err_addr = branch(
+                    regs_t[rs1] == regs_t[rs2], pc, imm, cyc, n_taken, base, code, size
+                )
+                if err != 0:
+                    break
             elif op == BLT:
-                if regs_t[rs1] < regs_t[rs2]:
-                    target = (pc + imm) & M32
-                    if (target - base) & M32 >= size or target & 3:
-                        err = ERR_FETCH_MISALIGNED if target & 3 else ERR_FETCH
-                        err_addr = target
-                        break
-                    pc = target
-                    cyc += 3
-                    n_taken += 1
-                else:
-                    pc += 4
-                    cyc += 1
+                pc, cyc, n_taken, err, err_addr = branch(
+                    regs_t[rs1] < regs_t[rs2], pc, imm, cyc, n_taken, base, code, size
+                )
+                if err != 0:
+                    break
             elif op == BGE:
-                if regs_t[rs1] >= regs_t[rs2]:
-                    target = (pc + imm) & M32
-                    if (target - base) & M32 >= size or target & 3:
-                        err = ERR_FETCH_MISALIGNED if target & 3 else ERR_FETCH
-                        err_addr = target
-                        break
-                    pc = target
-                    cyc += 3
-                    n_taken += 1
-                else:
-                    pc += 4
-                    cyc += 1
+                pc, cyc, n_taken, err, err_addr = branch(
+                    regs_t[rs1] >= regs_t[rs2], pc, imm, cyc, n_taken, base, code, size
+                )
+                if err != 0:
+                    break
             elif op == BLTU:
-                if (regs_t[rs1] & M32) < (regs_t[rs2] & M32):
-                    target = (pc + imm) & M32
-                    if (target - base) & M32 >= size or target & 3:
-                        err = ERR_FETCH_MISALIGNED if target & 3 else ERR_FETCH
-                        err_addr = target
-                        break
-                    pc = target
-                    cyc += 3
-                    n_taken += 1
-                else:
-                    pc += 4
-                    cyc += 1
+                pc, cyc, n_taken, err, err_addr = branch(
+                    (regs_t[rs1] & M32) < (regs_t[rs2] & M32), pc, imm, cyc, n_taken, base, code, size
+                )
+                if err != 0:
+                    break
             elif op == BGEU:
-                if (regs_t[rs1] & M32) >= (regs_t[rs2] & M32):
-                    target = (pc + imm) & M32
-                    if (target - base) & M32 >= size or target & 3:
-                        err = ERR_FETCH_MISALIGNED if target & 3 else ERR_FETCH
-                        err_addr = target
-                        break
-                    pc = target
-                    cyc += 3
-                    n_taken += 1
-                else:
-                    pc += 4
-                    cyc += 1
+                pc, cyc, n_taken, err, err_addr = branch(
+                    (regs_t[rs1] & M32) >= (regs_t[rs2] & M32), pc, imm, cyc, n_taken, base, code, size
+                )
+                if err != 0:
+                    break
             elif op == SLLI:
                 regs_t[rd] = regs_t[rs1] << imm
-                cyc += 1
+                cyc += SINGLE_CYCLES
                 pc += 4
             elif op == SRLI:
                 regs_t[rd] = (regs_t[rs1] & M32) >> imm
-                cyc += 1
+                cyc += SINGLE_CYCLES
                 pc += 4
             elif op == SRAI:
                 regs_t[rd] = regs_t[rs1] >> imm
-                cyc += 1
+                cyc += SINGLE_CYCLES
                 pc += 4
             elif op == ANDI:
                 regs_t[rd] = regs_t[rs1] & imm
-                cyc += 1
+                cyc += SINGLE_CYCLES
                 pc += 4
             elif op == ORI:
                 regs_t[rd] = regs_t[rs1] | imm
-                cyc += 1
+                cyc += SINGLE_CYCLES
                 pc += 4
             elif op == XORI:
                 regs_t[rd] = regs_t[rs1] ^ imm
-                cyc += 1
+                cyc += SINGLE_CYCLES
                 pc += 4
             elif op == SUB:
                 regs_t[rd] = regs_t[rs1] - regs_t[rs2]
-                cyc += 1
+                cyc += SINGLE_CYCLES
                 pc += 4
             elif op == AND:
                 regs_t[rd] = regs_t[rs1] & regs_t[rs2]
-                cyc += 1
+                cyc += SINGLE_CYCLES
                 pc += 4
             elif op == OR:
                 regs_t[rd] = regs_t[rs1] | regs_t[rs2]
-                cyc += 1
+                cyc += SINGLE_CYCLES
                 pc += 4
             elif op == XOR:
                 regs_t[rd] = regs_t[rs1] ^ regs_t[rs2]
-                cyc += 1
+                cyc += SINGLE_CYCLES
                 pc += 4
             elif op == SLL:
                 regs_t[rd] = regs_t[rs1] << (regs_t[rs2] & 31)
-                cyc += 1
+                cyc += SINGLE_CYCLES
                 pc += 4
             elif op == SRL:
                 regs_t[rd] = (regs_t[rs1] & M32) >> (regs_t[rs2] & 31)
-                cyc += 1
+                cyc += SINGLE_CYCLES
                 pc += 4
             elif op == SRA:
                 regs_t[rd] = regs_t[rs1] >> (regs_t[rs2] & 31)
-                cyc += 1
+                cyc += SINGLE_CYCLES
                 pc += 4
             elif op == SLT:
                 regs_t[rd] = 1 if regs_t[rs1] < regs_t[rs2] else 0
-                cyc += 1
+                cyc += SINGLE_CYCLES
                 pc += 4
             elif op == SLTU:
                 regs_t[rd] = 1 if (regs_t[rs1] & M32) < (regs_t[rs2] & M32) else 0
-                cyc += 1
+                cyc += SINGLE_CYCLES
                 pc += 4
             elif op == SLTI:
                 regs_t[rd] = 1 if regs_t[rs1] < imm else 0
-                cyc += 1
+                cyc += SINGLE_CYCLES
                 pc += 4
             elif op == SLTIU:
                 regs_t[rd] = 1 if (regs_t[rs1] & M32) < (imm & M32) else 0
-                cyc += 1
+                cyc += SINGLE_CYCLES
                 pc += 4
             elif op == LUI:
                 regs_t[rd] = imm
-                cyc += 1
+                cyc += SINGLE_CYCLES
                 pc += 4
             elif op == AUIPC:
                 regs_t[rd] = pc + imm
-                cyc += 1
+                cyc += SINGLE_CYCLES
                 pc += 4
             elif op == JAL or op == JALR:
                 target = (pc + imm) & M32 if op == JAL else (regs_t[rs1] + imm) & 0xFFFFFFFE
-                if (target - base) & M32 >= size or target & 3:
-                    err = ERR_FETCH_MISALIGNED if target & 3 else ERR_FETCH
+                err = fetch_error(target, base, code, size)
+                if err != 0:
                     err_addr = target
                     break
                 regs_t[rd] = pc + 4
                 if op == JAL and rd == SINK and imm <= 0:
+                    # idle loops `j .` and `nop; j .-4`: skip whole iterations while every boundary
+                    # they pass lies before the next event (interrupt check, end of the slice)
                     if imm == 0:
-                        # `j .`: taken jumps are never interrupted, so the core spins to the end
-                        # of the slice; jump there, counting every iteration
-                        k = (stop - cyc - 1) // 3
-                        if k > 0:
-                            cyc += 3 * k
-                            opc_t[(op << U1) | (i & U1)] += k
-                    elif imm == -4 and dec_t[j - U2] == NOP_ROW and dec_t[j - U1] == 0:
-                        # `nop; j .-4` idle loop: skip whole 4-cycle iterations while no event
-                        # (interrupt check, end of slice) is due
-                        k = (next_event - (cyc + 3)) // 4
-                        if k > 0:
-                            cyc += 4 * k
-                            opc_t[(op << U1) | (i & U1)] += k
-                            opc_t[(np.uint64(ADDI) << U1) | ((i - U1) & U1)] += k
+                        n = (next_event - cyc - 1) // JUMP_CYCLES
+                        if n > 0:
+                            cyc += JUMP_CYCLES * n
+                            opc_t[kc] += n
+                    elif imm == -4 and dec_t[(i << U1) - U2] == NOP_ROW and dec_t[(i << U1) - U1] == 0:
+                        period = JUMP_CYCLES + SINGLE_CYCLES
+                        n = (next_event - (cyc + JUMP_CYCLES)) // period
+                        if n > 0:
+                            cyc += period * n
+                            opc_t[kc] += n
+                            opc_t[(np.uint64(ADDI) << U1) | ((i - U1) & U1)] += n
                 pc = target
-                cyc += 3
+                cyc += JUMP_CYCLES
             elif op == LBU or op == LB or op == LHU or op == LH:
                 addr = (regs_t[rs1] + imm) & M32
                 off = addr - base
@@ -553,16 +543,10 @@ def run_cores(
                     else:
                         v = _sext(np.int64(m16[t, np.uint64(off) >> U1]), 16)
                 else:
-                    w, code = mmio_load(st[t], addr, cyc)
-                    if code == LD_NI:
-                        opc_t[(op << U1) | (i & U1)] -= 1
-                        status = RUN_NI
-                        break
-                    if code != LD_OK:
-                        err = ERR_LOAD_UNMAPPED
+                    w, status, err = load_device(st[t], ctr[t], opc_t, kc, addr, cyc)
+                    if status != RUN_CHUNK:
                         err_addr = addr
                         break
-                    ctr[t, C_MMIO] += 1
                     sh = (addr & 3) * 8
                     if op == LBU:
                         v = (w >> sh) & 0xFF
@@ -573,7 +557,7 @@ def run_cores(
                     else:
                         v = _sext((w >> sh) & 0xFFFF, 16)
                 regs_t[rd] = v
-                cyc += 3
+                cyc += MEMORY_CYCLES
                 pc += 4
             elif op == SB or op == SH:
                 addr = (regs_t[rs1] + imm) & M32
@@ -587,25 +571,18 @@ def run_cores(
                         m8[t, np.uint64(off)] = regs_t[rs2]
                     else:
                         m16[t, np.uint64(off) >> U1] = regs_t[rs2]
-                    dec_t[(np.uint64(off) >> U2) << U1] = 0
+                    wi = np.uint64(off) >> U2
+                    if wi < code_words:
+                        dec_t[wi << U1] = 0  # the word may be code: decode it again
+                    cyc += MEMORY_CYCLES
+                    pc += 4
                 else:
                     value = regs_t[rs2] & 0xFF if op == SB else regs_t[rs2] & 0xFFFF
-                    r = device_store(st[t], ctr[t], out[t], addr, value, cyc)
-                    if r != DEV_OK:
-                        if r == DEV_NI:
-                            opc_t[(op << U1) | (i & U1)] -= 1
-                            status = RUN_NI
-                        elif r == DEV_EXIT:
-                            cyc += 3
-                            pc += 4
-                            status = RUN_EXIT
-                        else:
-                            err = r
-                            err_addr = addr
+                    status, err, pc, cyc = store_device(st[t], ctr[t], out[t], opc_t, kc, addr, value, pc, cyc)
+                    if status != RUN_CHUNK:
+                        err_addr = addr
                         break
-                    next_event = cyc + 3
-                cyc += 3
-                pc += 4
+                    next_event = cyc
             elif op == MUL or op == MULH or op == MULHU or op == MULHSU:
                 if not has_mul:
                     err = ERR_NO_MUL
@@ -617,10 +594,11 @@ def run_cores(
                     regs_t[rd] = p
                 elif op == MULH:
                     regs_t[rd] = p >> 32
-                elif op == MULHU:
+                elif op == MULHU or rtl:  # the RTL's MULHSU returns the MULHU result (erratum)
                     regs_t[rd] = (p >> 32) + (b if a < 0 else 0) + (a if b < 0 else 0)
                 else:
                     regs_t[rd] = (p >> 32) + (a if b < 0 else 0)
+                if op == MULHSU:
                     st[t, S_MULHSU_COUNT] += 1
                     if st[t, S_MULHSU_PC] < 0:
                         st[t, S_MULHSU_PC] = pc
@@ -628,23 +606,21 @@ def run_cores(
                 n_mulstall += lat - 1
                 cyc += lat
                 pc += 4
+                st[t, S_MUL_END] = cyc  # the interrupt controller's erratum window needs it
             elif op == FENCE:
-                cyc += 1
+                cyc += SINGLE_CYCLES
                 pc += 4
             elif op == 0:
-                opc_t[i & U1] -= 1
+                opc_t[kc] -= 1
                 decode_word(m32[t, i], dec_t, i)
             elif op >= FIRST_SYSTEM and op < ILLEGAL:
                 # SYSTEM opcode: trap.  EPC = trap + 8; the instruction at trap + 8 executes first.
-                st[t, S_IRQ_EPC] = (pc + 8) & M32
-                st[t, S_IRQ_STATUS] &= 0xFE
-                st[t, S_IRQ_PHASE] = PH_TRAP
-                cyc += 1
+                cyc += TRAP_CYCLES
+                trap(st[t], pc, cyc)
                 pc += 8
-                st[t, S_IRQ_CHECK] = cyc + 1
                 next_event = cyc + 1
             elif op == FETCH_FAULT:
-                err = ERR_FETCH
+                err = ERR_FETCH if code >= size else ERR_FETCH_DATA
                 err_addr = pc
                 break
             elif op & UNSUPPORTED_BIT:

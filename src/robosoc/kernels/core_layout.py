@@ -27,12 +27,18 @@ S_IRQ_VECTOR = 16
 S_IRQ_MASK = 17
 S_IRQ_STATUS = 18
 S_IRQ_EPC = 19
-S_IRQ_PHASE = 20  # PH_*
-S_IRQ_RISE = 21  # cycle the pending condition became true, -1 if not pending
-S_IRQ_ARMED = 22  # start cycle of the instruction during which the ack may happen
-S_IRQ_CHECK = 23  # next cycle at which the interrupt state must be re-evaluated
+S_IRQ_PHASE = 20  # PH_*: where the core is in an entry sequence
+S_IRQ_RISE = 21  # device cycle t in which the controller latched a request (-1: none latched)
+S_IRQ_SCAN = 22  # first device cycle the controller has not yet looked at
+S_IRQ_CHECK = 23  # first instruction boundary at which the core must consult the controller
 S_EXT_IRQ = 24  # IRQ_CAUSE bits 1..7 driven by devices outside the core SoC (network interface)
-S_EXT_RISE = 25  # cycle from which IRQ_CAUSE bit 1 (packet received) is set, NEVER if not scheduled
+S_EXT_RISE = 25  # device cycle from which IRQ_CAUSE bit 1 (packet received) is set, NEVER if not
+S_IRQ_IDLE = 26  # device cycle from which the controller is idle (NEVER: done, waiting for STATUS)
+S_MUL_END = 27  # the instruction boundary at which the last multiply ended
+S_ERRATA = 28  # ERRATA_SPEC or ERRATA_RTL
+S_IRQMUL_COUNT = 29  # interrupts that met a multiply in the RTL's faulty window
+S_IRQMUL_PC = 30  # pc of the first such multiply (-1: none)
+S_IRQ_SHADOW_END = 31  # pc after the shadow instruction while PH_SHADOW
 # timers
 S_TMASK = 32
 S_TINV = 33
@@ -44,6 +50,7 @@ S_T1_CTC = 38
 S_T1_OCR = 39
 S_UART_DIV = 40
 S_T1_HIST = 41  # 41..43: TIMER1 value | flag << 16 | OCR << 17 in cycles S_T1_REF-3 .. S_T1_REF-1
+S_CODE_SIZE = 44  # bytes from S_MEM_BASE the predecode table covers (the rest of SRAM is data only)
 ST_SIZE = 48
 
 # run status
@@ -54,11 +61,23 @@ RUN_MAX_CYCLES = 3
 RUN_OUTPUT = 4  # the output buffer is full: drain it and call again
 RUN_NI = 5  # stopped before an access to the network-interface registers
 
-# interrupt controller phases
+# what a device register store did (the devices' store functions, kernels/soc_bus.py)
+DEV_WRITTEN = 0
+DEV_EXIT = 1  # the program stored its exit code
+DEV_NI = 2  # a network-interface register: the chip loop performs the access (kernels/chip.py)
+DEV_UNMAPPED = -1
+DEV_READONLY = -2
+
+# entry sequence phases (S_IRQ_PHASE)
 PH_NONE = 0
-PH_ARMED = 1  # pending for >= 3 cycles: acknowledged after the next single-cycle instruction
-PH_REPLAY = 2  # the first vector instruction has executed once and executes again
-PH_TRAP = 3  # a SYSTEM instruction trapped: the shadow instruction at trap+8 executes first
+PH_REPLAY = 1  # the first vector instruction has executed once and executes again
+PH_TRAP = 2  # a SYSTEM instruction trapped: the shadow instruction at trap+8 executes first
+PH_SHADOW = 3  # RTL erratum: an interrupt met a multiply; its shadow executes, then the vector once
+
+# errata modes (S_ERRATA)
+ERRATA_SPEC = 0  # RISC-V results; what the RTL would have done differently is only counted
+ERRATA_RTL = 1  # reproduce the RTL's errata (MULHSU, interrupt during a multiply)
+ERRATA_MODES = {"spec": ERRATA_SPEC, "rtl": ERRATA_RTL}
 
 # errors
 ERR_NONE = 0
@@ -72,11 +91,12 @@ ERR_STORE_UNMAPPED = 7
 ERR_FETCH = 8  # control transfer or fall-through outside memory
 ERR_FETCH_MISALIGNED = 9
 ERR_STORE_READONLY = 10
+ERR_FETCH_DATA = 11  # control transfer into SRAM beyond the loaded code
 
 # errors whose message names an address (S_ERR_ADDR)
 ADDRESS_ERRORS = frozenset({
     ERR_LOAD_MISALIGNED, ERR_STORE_MISALIGNED, ERR_LOAD_UNMAPPED, ERR_STORE_UNMAPPED,
-    ERR_FETCH, ERR_FETCH_MISALIGNED, ERR_STORE_READONLY,
+    ERR_FETCH, ERR_FETCH_MISALIGNED, ERR_STORE_READONLY, ERR_FETCH_DATA,
 })  # fmt: skip
 
 ERROR_TEXT = {
@@ -90,6 +110,7 @@ ERROR_TEXT = {
     ERR_FETCH: "instruction fetch outside memory",
     ERR_FETCH_MISALIGNED: "jump or branch to a misaligned address",
     ERR_STORE_READONLY: "store to a read-only device register",
+    ERR_FETCH_DATA: "execution past the loaded code, in data memory",
 }
 
 # --- ctr: counters not derivable from the per-operation counts ---------------------------------
@@ -101,6 +122,7 @@ C_IRQ = 2  # interrupts taken
 C_TRAP = 3  # SYSTEM traps taken
 C_ENTRY_STALL = 4  # vector fetch bubbles of interrupt and trap entry (2 each)
 C_MMIO = 5  # loads and stores that went to device registers
+C_IRQ_LOST = 6  # RTL erratum: interrupts whose vector a taken jump in the shadow of a multiply dropped
 CTR_SIZE = 8
 OPC_SIZE = 512  # per-operation counters, two banks each (operation numbers are bytes)
 

@@ -4,8 +4,8 @@ The interrupt return sequence loads the return address into s11 and jumps throug
 interrupt taken while other code keeps a value in s11 destroys that value.  Programs are compiled
 with ``-ffixed-x27`` and compiler-rt with the ``reserve_x27`` CPU feature, so normally nothing
 else touches s11; hand-written assembly or foreign objects may.  This module decodes every word of
-the executable segments itself (no disassembler needed): in RV32I every format except S (stores)
-and B (branches) writes ``rd`` = bits 11:7.
+the executable segments with the instruction table (:func:`robosoc.isa.table.writes_rd` says which
+encodings write ``rd`` = bits 11:7).
 """
 
 from dataclasses import dataclass
@@ -13,21 +13,10 @@ from pathlib import Path
 
 from robosoc.chip.elf import Program, load_elf
 from robosoc.firmware import IRQ_ENTRY_SYMBOL
+from robosoc.isa.table import lookup
+from robosoc.isa.table import writes_rd as _row_writes_rd
 
 X27 = 27
-
-#: Major opcodes (bits 6:0) whose instructions write rd; stores (0x23) and branches (0x63) do not.
-OPCODES_WRITING_RD: dict[int, str] = {
-    0x03: "load",
-    0x0F: "misc-mem",
-    0x13: "op-imm",
-    0x17: "auipc",
-    0x33: "op",
-    0x37: "lui",
-    0x67: "jalr",
-    0x6F: "jal",
-    0x73: "system",
-}
 
 
 @dataclass(frozen=True)
@@ -46,9 +35,10 @@ class X27Write:
 
 def writes_register(word: int, reg: int) -> bool:
     """True when the 32-bit instruction ``word`` has ``rd == reg`` in a format that writes rd."""
-    if word & 0b11 != 0b11:  # not a 32-bit encoding (no C extension on this core)
+    if (word >> 7) & 0x1F != reg:
         return False
-    return (word & 0x7F) in OPCODES_WRITING_RD and (word >> 7) & 0x1F == reg
+    row = lookup(word)
+    return row is not None and _row_writes_rd(row)
 
 
 def find_x27_writes(program: Program, allowed_function: str = IRQ_ENTRY_SYMBOL) -> list[X27Write]:
@@ -71,7 +61,7 @@ def find_x27_writes(program: Program, allowed_function: str = IRQ_ENTRY_SYMBOL) 
             addr = seg.addr + offset
             if allowed_range is not None and allowed_range[0] <= addr < allowed_range[1]:
                 continue
-            kind = OPCODES_WRITING_RD[word & 0x7F]
+            kind = lookup(word).name  # type: ignore[union-attr]  # writes_register found its row
             found.append(X27Write(addr, word, program.symbolize(addr), kind))
     return found
 

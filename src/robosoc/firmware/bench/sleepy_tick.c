@@ -38,9 +38,10 @@ int main(void)
     HF_REG32(HF_TIMER1_CTC) = 15624;  /* 15625 * 16 = 250 000 cycles per toggle */
     HF_REG32(HF_TIMERMASK) = HF_TIMERCAUSE_T1_CTC;
     hf_irq_mask(1u);
-    hf_irq_enable();
-    while (ticks < TICKS) {
+    while (ticks < TICKS) { /* interrupts off between the check and the sleep: see hf_sleep() */
         hf_sleep();
+        hf_irq_enable();
+        hf_irq_disable();
     }
     return 0;
 }

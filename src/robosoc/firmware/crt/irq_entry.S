@@ -14,11 +14,21 @@
  * s11, which every program is compiled not to use (-ffixed-x27): nothing
  * else is free to hold the return address at the final jump.
  *
- * Return sequence and why it is safe: IRQ_STATUS is set to 1 by a store
- * that is followed only by loads and the JALR.  The controller never
- * acknowledges an interrupt while a load, a store or a jump executes, so a
- * pending interrupt is taken at the interrupted code, not inside this
- * sequence, and s11 still holds the right address when the JALR runs.
+ * Why the return ends with "sw tp, IRQ_STATUS-1(tp); jalr x0, 0(s11)" and
+ * nothing between them.  HF-RISCV takes an interrupt at any instruction
+ * boundary at or after t + 5 for a request that rose in device cycle t
+ * (platform.md §3).  After an interrupt the controller idles again only in
+ * cycle s + 2 for the re-enabling store starting in s, so the first entry
+ * can come at the boundary s + 7; after a trap it is idle already and the
+ * entry can come at s + 5.  The store ends at s + 3, the JALR at s + 6:
+ * the only boundary in between is s + 3, too early for either case, so a
+ * new interrupt is taken at the interrupted code and s11 is used before a
+ * nested entry could overwrite it.  Any instruction between the store and
+ * the JALR would open that window, so the store needs a register of its
+ * own: tp (x4), which LLVM never allocates and this bare-metal runtime has
+ * no thread-local storage for.  tp = IRQ_BASE + 1 serves as base (with
+ * offset IRQ_STATUS - 1) and as the value (its low byte, which is what
+ * IRQ_STATUS keeps, is 1).
  */
     .equ    IRQ_BASE,   0xf0000000
     .equ    IRQ_CAUSE,  0x10
@@ -59,6 +69,8 @@ _irq_entry:
     addi    s11, s11, -4            /* return address: EPC - 4 */
 
     lw      ra,  0(sp)
+    lw      t0,  4(sp)
+    lw      t1,  8(sp)
     lw      t2, 12(sp)
     lw      a0, 16(sp)
     lw      a1, 20(sp)
@@ -73,9 +85,7 @@ _irq_entry:
     lw      t5, 56(sp)
     lw      t6, 60(sp)
     addi    sp, sp, FRAME
-    li      t1, 1
-    sw      t1, IRQ_STATUS(t0)      /* re-enable; from here on only loads and the jump */
-    lw      t0, 4-FRAME(sp)
-    lw      t1, 8-FRAME(sp)
-    jalr    x0, 0(s11)
+    li      tp, IRQ_BASE + 1
+    sw      tp, IRQ_STATUS - 1(tp)  /* re-enable: IRQ_STATUS keeps the low byte, 1 */
+    jalr    x0, 0(s11)              /* nothing may stand between these two (see above) */
     .size _irq_entry, . - _irq_entry

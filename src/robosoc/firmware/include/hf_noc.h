@@ -24,7 +24,7 @@
 #define HF_NI_TILE (HF_NI_BASE + 0x18u)       /* this tile: (x << 4) | y */
 #define HF_NI_MESH (HF_NI_BASE + 0x1cu)       /* width | height << 8 */
 #define HF_TASK_ID (HF_NI_BASE + 0x20u)       /* running task, for per-task accounting */
-#define HF_SLEEP (HF_NI_BASE + 0x24u)         /* write: sleep until an interrupt is pending */
+#define HF_SLEEP (HF_NI_BASE + 0x24u)         /* write: sleep until IRQ_CAUSE & IRQ_MASK != 0 */
 #define HF_NI_IO_TILE (HF_NI_BASE + 0x28u)    /* the I/O tile's address */
 
 #define HF_NI_SEND_BUSY (1u << 0)
@@ -38,14 +38,28 @@ static inline uint32_t hf_tile_y(void) { return HF_REG32(HF_NI_TILE) & 15u; }
 static inline uint32_t hf_io_tile(void) { return HF_REG32(HF_NI_IO_TILE); }
 static inline void hf_set_task(uint32_t id) { HF_REG32(HF_TASK_ID) = id; }
 /*
- * Sleep until an interrupt request is pending.  The NOP matters: HF-RISCV acknowledges an
- * interrupt only while a single-cycle instruction executes, and a wait loop made of loads,
- * stores and branches alone would never be interrupted.
+ * Sleep until an enabled cause is up (IRQ_CAUSE & IRQ_MASK != 0).  With interrupts enabled the
+ * interrupt is entered as the core wakes; with them disabled the core just resumes after the
+ * store, like RISC-V's WFI, and the interrupt is taken when software enables interrupts.
+ *
+ * An interrupt can come at any instruction boundary, so "check, then sleep" with interrupts on
+ * can miss the wake-up that arrives between the two.  Wait with hf_wait_for(), or this idiom:
+ *     uint32_t s = hf_irq_disable();
+ *     while (!condition) { hf_sleep(); hf_irq_enable(); hf_irq_disable(); }
+ *     hf_irq_restore(s);
  */
-static inline void hf_sleep(void)
+static inline void hf_sleep(void) { HF_REG32(HF_SLEEP) = 1u; }
+
+/* Sleep until `*flag` (set by an interrupt handler) is non-zero, without a lost wake-up. */
+static inline void hf_wait_for(volatile uint32_t *flag)
 {
-    HF_REG32(HF_SLEEP) = 1u;
-    __asm__ volatile("nop");
+    uint32_t state = hf_irq_disable();
+    while (*flag == 0u) {
+        hf_sleep();
+        hf_irq_enable();
+        hf_irq_disable();
+    }
+    hf_irq_restore(state);
 }
 
 /* Send `n` flits from `packet` (flit 0 and 1 already filled); waits for the send memory first. */

@@ -60,12 +60,24 @@
 /* Cycle counter (TIMER0). */
 static inline uint32_t hf_cycles(void) { return HF_REG32(HF_TIMER0); }
 
-/* Global interrupt enable / disable; hf_irq_disable returns the previous state. */
+/*
+ * Global interrupt enable / disable; hf_irq_disable returns the previous state.
+ *
+ * Clearing IRQ_STATUS does not withdraw a request the controller latched in
+ * the cycle before (platform.md §3): it is still taken at a boundary up to
+ * the store's end + 1, and its handler returns with IRQ_STATUS set again.
+ * So the disable is followed by one single-cycle instruction (after it no
+ * latched request can still be entered) and confirmed by reading the
+ * register back; if an interrupt slipped in, it is done again.
+ */
 static inline void hf_irq_enable(void) { HF_REG32(HF_IRQ_STATUS) = 1u; }
 static inline uint32_t hf_irq_disable(void)
 {
     uint32_t old = HF_REG32(HF_IRQ_STATUS) & 1u;
-    HF_REG32(HF_IRQ_STATUS) = 0u;
+    do {
+        HF_REG32(HF_IRQ_STATUS) = 0u;
+        __asm__ volatile("nop");
+    } while (HF_REG32(HF_IRQ_STATUS) & 1u);
     return old;
 }
 static inline void hf_irq_restore(uint32_t state) { HF_REG32(HF_IRQ_STATUS) = state & 1u; }
