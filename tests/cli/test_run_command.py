@@ -92,3 +92,42 @@ def test_custom_energy_file_is_used_and_validated(elf: Path, tmp_path: Path):
     broken.write_text(textwrap.dedent(source.replace('source = "ORCA HF-RISCV characterisation: loads', 'x = "')))
     result = CliRunner().invoke(app, ["run", str(elf), "--energy", str(broken)])
     assert result.exit_code == 2 and "broken.toml" in result.stderr and "instruction.memory.source" in result.stderr
+
+
+MULHSU_PROGRAM = """
+#include "hf_print.h"
+int main(void) {
+    volatile int a = -3;
+    volatile unsigned b = 5;
+    int hi;
+    __asm__ volatile("mulhsu %0, %1, %2" : "=r"(hi) : "r"(a), "r"(b));
+    hf_printf("high %d\\n", hi);
+    return 0;
+}
+"""
+
+
+@pytest.fixture(scope="module")
+def mulhsu_elf(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    src = tmp_path_factory.mktemp("mulhsu") / "mulhsu.c"
+    src.write_text(MULHSU_PROGRAM)
+    return build_elf([src], mul=True)
+
+
+def test_errata_modes_of_run(mulhsu_elf: Path, tmp_path: Path):
+    # -3 * 5 = -15: the signed x unsigned high word is -1 (all ones); the RTL computes MULHU
+    # (0xfffffffd * 5) >> 32 = 4
+    stats = tmp_path / "spec.json"
+    spec = CliRunner().invoke(app, ["run", str(mulhsu_elf), "--stats", str(stats)])
+    assert spec.exit_code == 0 and "high -1" in spec.stdout
+    assert "RTL errata: mulhsu 1" in spec.stderr and "robosoc computed the RISC-V result" in spec.stderr
+    assert json.loads(stats.read_text())["errata"] == {"mulhsu": 1, "irq_during_mul": 0}
+    rtl = CliRunner().invoke(app, ["run", str(mulhsu_elf), "--errata", "rtl"])
+    assert rtl.exit_code == 0 and "high 4" in rtl.stdout
+    assert "RTL errata: mulhsu 1" in rtl.stderr
+
+
+def test_errata_mode_must_be_known(mulhsu_elf: Path):
+    result = CliRunner().invoke(app, ["run", str(mulhsu_elf), "--errata", "hardware"])
+    assert result.exit_code == 2
+    assert "--errata: must be one of spec, rtl, got 'hardware'" in result.stderr

@@ -49,10 +49,7 @@ def test_crc_sort_string_matches_python() -> None:
     assert [s32(int(line.split()[3], 16)) for line in sorted_lines] == sorted(numbers)
     assert "reversed " + "robosoc on hf-riscv"[::-1] in lines
     assert "strcmp 1 1 1" in lines
-    assert (
-        f"printf -42|4000000000|beef|00001234|   -7|Q|str|-1234567890123456789|{0x0123456789ABCDEF:x}|%"
-        in lines
-    )
+    assert f"printf -42|4000000000|beef|00001234|   -7|Q|str|-1234567890123456789|{0x0123456789ABCDEF:x}|%" in lines
     assert lines[-1] == f"{-(2**31)} {2**32 - 1} {-(2**63)} {2**64 - 1}"
 
 
@@ -64,9 +61,7 @@ def test_matrix_inverse_matches_numpy() -> None:
         m = re.match(r"(\w+)\[(\d)\] (.*)", line)
         if m:
             rows.setdefault(m.group(1), []).append([int(x, 16) for x in m.group(3).split()])
-    a = np.array(
-        [[(4 * (4 + i) if i == j else (i * 7 + j * 3) % 5 - 2) / 4 for j in range(7)] for i in range(7)]
-    )
+    a = np.array([[(4 * (4 + i) if i == j else (i * 7 + j * 3) % 5 - 2) / 4 for j in range(7)] for i in range(7)])
     inverse = np.linalg.inv(a)
     inv_f = np.array(rows["inv_f"], dtype=np.uint32).view(np.float32).astype(float)
     inv_q = np.array(rows["inv_q"], dtype=np.uint32).view(np.int32) / 65536

@@ -128,8 +128,7 @@ def test_only_the_interrupt_entry_writes_x27(tmp_path: Path, cache: Path) -> Non
 def test_hand_written_x27_write_is_reported(tmp_path: Path, cache: Path) -> None:
     src = tmp_path / "bad.S"
     src.write_text(
-        ".text\n.globl main\n.type main, @function\n"
-        "main:\n  li s11, 5\n  li a0, 0\n  ret\n.size main, .-main\n"
+        ".text\n.globl main\n.type main, @function\nmain:\n  li s11, 5\n  li a0, 0\n  ret\n.size main, .-main\n"
     )
     with pytest.warns(FixedRegisterWarning, match=r"main writes x27"):
         build_elf([src], mul=False)
@@ -169,3 +168,11 @@ def test_cli_cc(tmp_path: Path, cache: Path) -> None:
     result = CliRunner().invoke(app, ["cc", str(bad), "-o", str(tmp_path / "bad.elf")])
     assert result.exit_code == 1
     assert "bad.c" in result.output and "nope" in result.output
+
+
+def test_hand_written_tp_write_is_reported(tmp_path: Path, cache: Path) -> None:
+    # tp is the interrupt return sequence's register (crt/irq_entry.S): nobody else may write it
+    src = tmp_path / "tp.S"
+    src.write_text(".globl main\n.type main, @function\nmain:\n  li tp, 7\n  li a0, 0\n  ret\n.size main, .-main\n")
+    with pytest.warns(FixedRegisterWarning, match=r"main writes x4 \(tp\)"):
+        build_elf([src], mul=False)

@@ -11,6 +11,7 @@ programs, talks to the I/O tile and turns counters into per-tile and per-task re
 from __future__ import annotations
 
 import time
+import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
@@ -19,7 +20,7 @@ import numpy as np
 from robosoc.chip.core_state import SRAM_BASE, CoreState
 from robosoc.chip.counters import counters_dict
 from robosoc.chip.elf import Program, Region
-from robosoc.chip.single import core_error
+from robosoc.chip.single import ERRATUM_WARNINGS, core_error, errata_counts, errata_report
 from robosoc.config.chip import ChipConfig
 from robosoc.isa.disasm import disassemble
 from robosoc.kernels import chip as kc
@@ -70,6 +71,9 @@ class ChipResult:
     output: dict[tuple[int, int], bytes]
     host_seconds: float
     io_received: list[tuple[int, list[int]]] = field(default_factory=list)
+    #: per tile, how many times each RTL erratum was hit ("spec" mode: would have been)
+    errata: dict[tuple[int, int], dict[str, int]] = field(default_factory=dict)
+    warnings: list[str] = field(default_factory=list)
 
 
 class MPSoC:
@@ -259,12 +263,27 @@ class MPSoC:
                     None,
                 )  # fmt: skip
         self.finish_accounting()
+        reports = {xy: self.errata_report(xy) for xy in self.core_tiles()}
+        notes = [note for report in reports.values() for _, note in report.values()]
+        if self.config.errata == "spec":
+            for report in reports.values():
+                for name, (_, note) in report.items():
+                    warnings.warn(note, ERRATUM_WARNINGS[name], stacklevel=2)
         return ChipResult(
             cycles=self.cycle,
             exit_codes={xy: self.exit_code(xy) for xy in self.core_tiles() if self.state(xy) == "exited"},
             output={xy: bytes(v) for xy, v in outputs.items()},
             host_seconds=time.perf_counter() - start,
             io_received=self.received(),
+            errata={xy: errata_counts(r) for xy, r in reports.items()},
+            warnings=notes,
+        )
+
+    def errata_report(self, xy: tuple[int, int]) -> dict[str, tuple[int, str]]:
+        """The RTL errata tile ``xy`` hit: name -> (count, sentence naming tile, pc and symbol)."""
+        t = self.config.tile_index(xy)
+        return errata_report(
+            self.cores.st[t], lambda pc: self.symbolize(xy, pc), self.config.errata, where=f"tile {xy}: "
         )
 
     # --- inspection ------------------------------------------------------------------------

@@ -99,6 +99,11 @@ def errata_report(
 ERRATUM_WARNINGS: dict[str, type[RtlErratum]] = {"mulhsu": MulhsuErratum, "irq_during_mul": IrqDuringMulErratum}
 
 
+def errata_counts(report: dict[str, tuple[int, str]]) -> dict[str, int]:
+    """Every erratum's count (0 for those not hit) from an :func:`errata_report`."""
+    return {name: report[name][0] if name in report else 0 for name in ERRATUM_WARNINGS}
+
+
 class CoreError(RuntimeError):
     """The program did something the hardware cannot do; the message names pc, symbol and instruction."""
 
@@ -286,7 +291,7 @@ class SingleCoreSoC:
             counters=self.counters(),
             host_seconds=elapsed,
             warnings=[note for _, note in errata.values()],
-            errata={name: count for name, (count, _) in errata.items()},
+            errata=errata_counts(errata),
         )
 
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import sys
+import warnings
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated
 
@@ -52,6 +53,13 @@ def run(
     profile: Annotated[
         int, typer.Option("--profile", help="Sample the pc every ~N cycles; print cycles by function (one core).")
     ] = 0,
+    errata: Annotated[
+        str,
+        typer.Option(
+            "--errata",
+            help="spec: RISC-V results, report each HF-RISCV RTL erratum hit; rtl: reproduce the RTL's errata.",
+        ),
+    ] = "spec",
 ) -> None:
     """Run bare-metal programs on one HF-RISCV core, or on the MPSoC with --mesh/--chip.
 
@@ -62,7 +70,11 @@ def run(
     """
     from robosoc.analysis.energy import EnergyModel
     from robosoc.config import ConfigError
+    from robosoc.config.chip import ERRATA_CHOICES
 
+    if errata not in ERRATA_CHOICES:
+        typer.echo(f"robosoc run: --errata: must be one of {', '.join(ERRATA_CHOICES)}, got {errata!r}", err=True)
+        raise typer.Exit(2)
     try:
         model = EnergyModel.load(energy)
     except ConfigError as exc:
@@ -72,12 +84,12 @@ def run(
         if len(programs) != 1:
             typer.echo("robosoc run: several programs need --mesh WxH or --chip FILE", err=True)
             raise typer.Exit(2)
-        _run_single(programs[0], mul, max_cycles, stats, model, sram_size, trace, profile)
+        _run_single(programs[0], mul, max_cycles, stats, model, sram_size, trace, profile, errata)
     else:
         if trace or profile:
             typer.echo("robosoc run: --trace and --profile work on one core (without --mesh/--chip/--off)", err=True)
             raise typer.Exit(2)
-        _run_chip(programs, mul, max_cycles, stats, model, sram_size, mesh, chip, off or [])
+        _run_chip(programs, mul, max_cycles, stats, model, sram_size, mesh, chip, off or [], errata)
 
 
 def _run_single(
@@ -89,12 +101,21 @@ def _run_single(
     sram_size: int,
     trace: int = 0,
     profile_every: int = 0,
+    errata: str = "spec",
 ) -> None:
     from robosoc.chip.elf import ElfError, load_elf
-    from robosoc.chip.single import CoreError, CycleBudgetExceeded, SingleCoreSoC
+    from robosoc.chip.single import (
+        CoreError,
+        CycleBudgetExceeded,
+        RtlErratum,
+        SingleCoreSoC,
+        errata_counts,
+        errata_report,
+    )
 
+    warnings.simplefilter("ignore", RtlErratum)  # reported below, in the summary's words
     try:
-        soc = SingleCoreSoC(mul=mul, sram_size=sram_size)
+        soc = SingleCoreSoC(mul=mul, sram_size=sram_size, errata=errata)
         soc.load(load_elf(program, soc.regions()))
     except (ElfError, ValueError, OSError) as exc:
         typer.echo(f"robosoc run: {exc}", err=True)
@@ -126,6 +147,7 @@ def _run_single(
     except KeyboardInterrupt:
         failure, seconds = KeyboardInterrupt("interrupted"), 0.0
     counters = soc.counters()
+    errata_hit = result.errata if result else errata_counts(errata_report(soc.state.st[0], soc.symbolize, errata))
     energy_pj = model.breakdown_pj(counters)
     total_nj = sum(energy_pj.values()) / 1000.0
     if stats is not None:
@@ -140,6 +162,8 @@ def _run_single(
                 "energy_pj": energy_pj,
                 "energy_nj": total_nj,
                 "energy_model": model.path,
+                "errata_mode": errata,
+                "errata": errata_hit,
                 "warnings": result.warnings if result else [],
                 "profile": dict(profile.shares()) if profile is not None else None,
             },
@@ -151,9 +175,11 @@ def _run_single(
     mips = instr / seconds / 1e6 if seconds > 0 else float("nan")
     typer.echo(
         f"robosoc: {cycles} cycles, {instr} instructions, CPI {cpi:.3f}, "
-        f"energy {total_nj:.3f} nJ, host {mips:.0f} MIPS",
+        f"energy {total_nj:.3f} nJ, host {mips:.0f} MIPS{_errata_summary(errata_hit)}",
         err=True,
     )
+    for note in result.warnings if result else []:
+        typer.echo(f"robosoc run: erratum: {note}", err=True)
     if failure is not None:
         typer.echo(f"robosoc run: {failure}", err=True)
         raise typer.Exit(130 if isinstance(failure, KeyboardInterrupt) else 3)
@@ -161,15 +187,21 @@ def _run_single(
     raise typer.Exit(result.exit_code & 0xFF)
 
 
+def _errata_summary(errata: dict[str, int]) -> str:
+    """``", RTL errata: mulhsu 2"`` for the summary line (empty when none was hit)."""
+    hit = ", ".join(f"{name} {n}" for name, n in errata.items() if n)
+    return f", RTL errata: {hit}" if hit else ""
+
+
 def _run_chip(
     programs: list[Path], mul: bool, max_cycles: int, stats: Path | None, model: EnergyModel, sram_size: int,
-    mesh: str | None, chip_file: Path | None, off: list[str],
+    mesh: str | None, chip_file: Path | None, off: list[str], errata: str = "spec",
 ) -> None:  # fmt: skip
     import dataclasses
 
     from robosoc.chip.elf import ElfError, load_elf
     from robosoc.chip.mpsoc import ChipError, MPSoC
-    from robosoc.chip.single import CoreError
+    from robosoc.chip.single import CoreError, RtlErratum, errata_counts
     from robosoc.config import ConfigError
     from robosoc.config.chip import ChipConfig, TileConfig, load_chip_config
 
@@ -181,6 +213,9 @@ def _run_chip(
             config = ChipConfig(width=w, height=h, tile=TileConfig(multiplier=mul, sram_bytes=sram_size))
         if off:
             config = dataclasses.replace(config, powered_off=tuple(_parse_tile(t) for t in off))
+        if chip_file is None or errata != "spec":
+            config = dataclasses.replace(config, errata=errata)
+        warnings.simplefilter("ignore", RtlErratum)  # reported below, in the summary's words
         chip = MPSoC(config)
         tiles = chip.core_tiles()
         if len(programs) == 1:
@@ -232,13 +267,19 @@ def _run_chip(
             str(task): {"counters": tc, "energy_nj": sum(model.breakdown_pj(tc).values()) / 1000.0}
             for task, tc in chip.task_counters(xy).items()
         }
-        per_tile[f"{xy[0]},{xy[1]}"] = {"state": chip.state(xy), "counters": c, "energy_nj": e, "tasks": tasks}
+        report = chip.errata_report(xy)
+        hit = errata_counts(report)
+        per_tile[f"{xy[0]},{xy[1]}"] = {
+            "state": chip.state(xy), "counters": c, "energy_nj": e, "tasks": tasks, "errata": hit,
+        }  # fmt: skip
         cpi = c["cycles"] / c["instructions"] if c["instructions"] else float("nan")
         typer.echo(
             f"robosoc: tile {xy}: {chip.state(xy)}, {c['cycles']} cycles, {c['instructions']} instructions, "
-            f"CPI {cpi:.3f}, sleep {c['sleep_cycle']}, energy {e:.3f} nJ",
+            f"CPI {cpi:.3f}, sleep {c['sleep_cycle']}, energy {e:.3f} nJ{_errata_summary(hit)}",
             err=True,
         )
+        for _, note in report.values():
+            typer.echo(f"robosoc run: erratum: {note}", err=True)
     noc = chip.noc_counters()
     noc_pj = model.noc_pj(noc)
     noc_nj = sum(noc_pj.values()) / 1000.0
@@ -261,6 +302,7 @@ def _run_chip(
                 "noc": {"counters": noc, "energy_pj": noc_pj, "energy_nj": noc_nj},
                 "energy_nj": total_nj + noc_nj,
                 "energy_model": model.path,
+                "errata_mode": config.errata,
             },
         )
     if failure is not None:

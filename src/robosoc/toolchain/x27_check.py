@@ -17,6 +17,9 @@ from robosoc.isa.table import lookup
 from robosoc.isa.table import writes_rd as _row_writes_rd
 
 X27 = 27
+#: Registers the runtime owns: s11 holds the return address of the interrupt return sequence and
+#: tp is its IRQ_STATUS store's base and value (crt/irq_entry.S); only the entry may write them.
+RESERVED_REGISTERS: dict[int, str] = {X27: "s11", 4: "tp"}
 
 
 @dataclass(frozen=True)
@@ -27,6 +30,7 @@ class X27Write:
     word: int
     function: str
     kind: str
+    register: int = X27
 
     def describe(self) -> str:
         """``0x40000184 (__divdf3+0x34): op-imm 0x01e95d93``."""
@@ -42,7 +46,7 @@ def writes_register(word: int, reg: int) -> bool:
 
 
 def find_x27_writes(program: Program, allowed_function: str = IRQ_ENTRY_SYMBOL) -> list[X27Write]:
-    """Every instruction outside ``allowed_function`` in an executable segment that writes x27."""
+    """Every instruction outside ``allowed_function`` in an executable segment that writes x27 or tp."""
     allowed_range: tuple[int, int] | None = None
     try:
         entry = program.symbol(allowed_function)
@@ -56,13 +60,14 @@ def find_x27_writes(program: Program, allowed_function: str = IRQ_ENTRY_SYMBOL) 
         data = seg.data
         for offset in range(0, len(data) - 3, 4):
             word = int.from_bytes(data[offset : offset + 4], "little")
-            if not writes_register(word, X27):
+            reg = next((r for r in RESERVED_REGISTERS if writes_register(word, r)), None)
+            if reg is None:
                 continue
             addr = seg.addr + offset
             if allowed_range is not None and allowed_range[0] <= addr < allowed_range[1]:
                 continue
             kind = lookup(word).name  # type: ignore[union-attr]  # writes_register found its row
-            found.append(X27Write(addr, word, program.symbolize(addr), kind))
+            found.append(X27Write(addr, word, program.symbolize(addr), kind, reg))
     return found
 
 
@@ -72,13 +77,13 @@ def check_x27(elf_path: Path, label: str | None = None) -> list[str]:
     ``label`` names the program in the texts (default: the ELF path).
     """
     writes = find_x27_writes(load_elf(elf_path))
-    by_function: dict[str, list[X27Write]] = {}
+    by_function: dict[tuple[str, int], list[X27Write]] = {}
     for write in writes:
         name = write.function.split("+", 1)[0]
-        by_function.setdefault(name, []).append(write)
+        by_function.setdefault((name, write.register), []).append(write)
     return [
-        f"{label or elf_path}: {name} writes x27 (s11), which the interrupt return sequence owns; "
-        f"an interrupt taken while it runs corrupts s11 "
+        f"{label or elf_path}: {name} writes x{reg} ({RESERVED_REGISTERS[reg]}), which the interrupt return "
+        f"sequence owns; an interrupt taken while it runs corrupts {RESERVED_REGISTERS[reg]} "
         f"({len(ws)} instruction(s), first at {ws[0].describe()})"
-        for name, ws in by_function.items()
+        for (name, reg), ws in by_function.items()
     ]
