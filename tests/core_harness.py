@@ -14,16 +14,20 @@ def exit_with(reg: int) -> list[int]:
     return [*A.li(31, 0xE0000000), A.store("sw", reg, 31, 0)]
 
 
-def make_soc(words: list[int], mul: bool = True, sram_size: int = 64 * 1024) -> SingleCoreSoC:
-    soc = SingleCoreSoC(mul=mul, sram_size=sram_size)
+def make_soc(words: list[int], mul: bool = True, sram_size: int = 64 * 1024, errata: str = "spec") -> SingleCoreSoC:
+    """A fresh SoC with ``words`` at the start of SRAM and the pc there.
+
+    ``errata``: "spec" (RISC-V results, the RTL's errata only reported) or "rtl" (reproduce them).
+    """
+    soc = SingleCoreSoC(mul=mul, sram_size=sram_size, errata=errata)
     soc.state.write(SRAM_BASE, A.words_to_bytes(words))
     soc.state.pc = SRAM_BASE
     return soc
 
 
 def run_words(
-    words: list[int], mul: bool = True, max_cycles: int | None = 1_000_000
+    words: list[int], mul: bool = True, max_cycles: int | None = 1_000_000, errata: str = "spec"
 ) -> tuple[SingleCoreSoC, RunResult]:
-    soc = make_soc(words, mul)
+    soc = make_soc(words, mul, errata=errata)
     result = soc.run(max_cycles=max_cycles)
     return soc, result
