@@ -177,6 +177,7 @@ OP: dict[str, int] = {ins.name: i + 1 for i, ins in enumerate(INSTRUCTIONS)}
 OP_UNDECODED = 0
 OP_ILLEGAL = len(INSTRUCTIONS) + 1
 OP_FETCH_FAULT = len(INSTRUCTIONS) + 2  # sentinel row after the last word of memory
+OP_BREAK = len(INSTRUCTIONS) + 3  # a debugger's breakpoint: the core stops before the instruction
 
 
 #: Operand formats whose instructions write ``rd``: every format but stores and branches.  FENCE

@@ -32,6 +32,7 @@ from robosoc.isa.table import (
     MEMORY_CYCLES,
     MUL_BASE_CYCLES,
     OP,
+    OP_BREAK,
     OP_FETCH_FAULT,
     OP_ILLEGAL,
     SINGLE_CYCLES,
@@ -58,6 +59,7 @@ from robosoc.kernels.core_layout import (
     ERR_UNSUPPORTED,
     ERRATA_RTL,
     OUT_CAPACITY,
+    RUN_BREAK,
     RUN_CHUNK,
     RUN_ERROR,
     RUN_EXIT,
@@ -105,6 +107,7 @@ MUL, MULH, MULHSU, MULHU = OP["mul"], OP["mulh"], OP["mulhsu"], OP["mulhu"]
 FENCE = OP["fence"]
 FIRST_SYSTEM = OP["ecall"]
 FETCH_FAULT = OP_FETCH_FAULT
+BREAK = OP_BREAK
 ILLEGAL = OP_ILLEGAL
 
 F_I, F_SHIFT, F_LOAD, F_S = int(Fmt.I), int(Fmt.SHIFT), int(Fmt.LOAD), int(Fmt.S)
@@ -290,8 +293,9 @@ def run_cores(
     """Run each core in ``tiles`` until cycle ``until`` or until it must stop.
 
     Every array has one row per core (tile).  A core stops at the first instruction boundary at or
-    after ``until``, at its exit, an error, its cycle budget, a full output buffer, or just before
-    an access to its network-interface registers (RUN_NI: the chip simulator performs that access
+    after ``until``, at its exit, an error, its cycle budget, a full output buffer, before an
+    instruction a debugger marked (RUN_BREAK), or just before an access to its network-interface
+    registers (RUN_NI: the chip simulator performs that access
     in global time order).  The reason is left in ``st[t, S_RUN]``; all state stays in the arrays,
     so calls can be repeated.
 
@@ -622,6 +626,10 @@ def run_cores(
             elif op == FETCH_FAULT:
                 err = ERR_FETCH if code >= size else ERR_FETCH_DATA
                 err_addr = pc
+                break
+            elif op == BREAK:
+                opc_t[kc] -= 1  # not executed: a debugger stops the core before it
+                status = RUN_BREAK
                 break
             elif op & UNSUPPORTED_BIT:
                 err = ERR_UNSUPPORTED

@@ -60,6 +60,7 @@ RUN_ERROR = 2
 RUN_MAX_CYCLES = 3
 RUN_OUTPUT = 4  # the output buffer is full: drain it and call again
 RUN_NI = 5  # stopped before an access to the network-interface registers
+RUN_BREAK = 6  # stopped before an instruction whose predecode row holds a breakpoint (OP_BREAK)
 
 # what a device register store did (the devices' store functions, kernels/soc_bus.py)
 DEV_WRITTEN = 0
