@@ -7,7 +7,7 @@ offset  register     meaning
 ======  ===========  ==========================================================================
 0x00    NI_STATUS    read: bit 0 the send memory is busy (DMA or injection), bit 1 a packet waits
 0x04    SEND_ADDR    main-memory address of the packet to send (flits are 16-bit, little endian)
-0x08    SEND_SIZE    flits to send, header included (2..64)
+0x08    SEND_SIZE    flits to send, header included (3..64)
 0x0c    NI_CMD       write 1: SEND (DMA copy, core stalled 1 cycle per flit, then injection);
                      write 2: RECV (DMA copy of the waiting packet to RECV_ADDR, core stalled
                      1 cycle per flit; the receive memory is free afterwards)
@@ -24,10 +24,11 @@ IRQ_CAUSE bit 1 is "a packet waits in the receive memory"; it rises the cycle af
 flit was written and stays up until RECV has copied the packet.
 
 Time (exact, deterministic): all tiles and the NoC advance in quanta [T, H).  While the NoC is
-idle, a packet sent in the quantum cannot reach any tile before T + 2R + 8 (store, DMA of at
-least 2 flits, two routers, two flits), so cores run first and the NoC catches up after them
-with the new injections at their exact cycles.  While the NoC carries flits, quanta are 5 cycles
-(the earliest a SEND started in the quantum can inject), the NoC runs first, and the deliveries
+idle, a packet sent in the quantum cannot be seen by any tile before T + G_LOOK_IDLE (store, DMA
+of at least 3 flits, two routers, the flits behind the header: docs/noc.md), so cores run first
+and the NoC catches up after them with the new injections at their exact cycles.  While the NoC
+carries flits, quanta are G_LOOK_ACTIVE = 6 cycles (the earliest a SEND or RECV started in the
+quantum can change the NoC), the NoC runs first, and the deliveries
 it makes are scheduled on the receiving cores before they run.  With one core awake and an idle
 NoC, the quantum stretches to the next wake-up.  An access to NI registers stops the core just
 before it (run_cores returns RUN_NI) and is performed here.  Sleeping cores cost nothing; their
@@ -126,6 +127,7 @@ ACC_SIZE = A_CYCLES + 4
 
 IO_COLS = 3 + nk.MEM_FLITS  # io_out rows: cycle, length, first-flit cycle, flits
 SINGLE_QUANTUM = 1 << 20  # default G_LOOK_SINGLE (bounds the output of one quantum)
+NI_ACCESS_CYCLES = 3  # a load or store to an NI register takes 3 cycles (before any DMA)
 
 
 @njit(cache=True)
@@ -236,11 +238,11 @@ def ni_access(t, st, ctr, opc, regs, m16, dec, cst, acc, snap, gst, cfg, glob, t
             _fault(cst, t, CE_UNKNOWN_REG, addr, 0)
             return False
         regs[t, rd] = v
-        st[t, S_CYCLE] = s + 3
+        st[t, S_CYCLE] = s + NI_ACCESS_CYCLES
         st[t, S_PC] = pc + 4
         return True
     v = np.int64(regs[t, rs2]) & 0xFFFFFFFF
-    end = s + 3
+    end = s + NI_ACCESS_CYCLES
     if off == 0x04:
         cst[t, K_SEND_ADDR] = v
     elif off == 0x08:
@@ -267,7 +269,10 @@ def ni_access(t, st, ctr, opc, regs, m16, dec, cst, acc, snap, gst, cfg, glob, t
         if v == 1:
             n = cst[t, K_SEND_SIZE]
             a = cst[t, K_SEND_ADDR] - base
-            if n < 2 or n > nk.MEM_FLITS or a < 0 or a + 2 * n > size or (a & 1):
+            if n < nk.MIN_PACKET_FLITS:
+                _fault(cst, t, CE_BAD_PACKET, cst[t, K_SEND_ADDR], nk.STATUS_SHORT_PACKET)
+                return False
+            if n > nk.MEM_FLITS or a < 0 or a + 2 * n > size or (a & 1):
                 _fault(cst, t, CE_DMA_RANGE, cst[t, K_SEND_ADDR], n)
                 return False
             if _send_done(tile, t) > s:
