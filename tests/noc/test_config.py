@@ -21,9 +21,7 @@ def test_defaults_match_the_paper_platform():
     cfg = ChipConfig()
     assert (cfg.width, cfg.height, cfg.io_tile, cfg.powered_off) == (2, 2, (0, 0), ())
     assert cfg.tile == TileConfig(multiplier=True, sram_bytes=2 * 1024 * 1024, clock_period_ns=4.0)
-    assert cfg.noc == NocConfig(
-        buffer_depth=16, flit_bits=16, max_packet_flits=64, routing_latency=4, arbiter="hermes"
-    )
+    assert cfg.noc == NocConfig(buffer_depth=16, flit_bits=16, max_packet_flits=64, routing_latency=4, arbiter="hermes")
     assert HERMES_ROUTING_LATENCY == 4
     assert ARBITERS == ("hermes", "per-output")
     # the idealised router keeps a free routing latency
@@ -97,7 +95,8 @@ def test_bad_config_names_the_field(data, field):
 
 
 def test_hermes_routing_latency_error_says_what_to_do():
-    with pytest.raises(ConfigError, match=r"noc\.routing_latency: the Hermes switch controller fixes it at 4.*per-output"):
+    text = r"noc\.routing_latency: the Hermes switch controller fixes it at 4.*per-output"
+    with pytest.raises(ConfigError, match=text):
         from_mapping(ChipConfig, {"noc": {"routing_latency": 6}}, "chip.toml")
 
 

@@ -108,7 +108,9 @@ def test_back_pressure_stops_the_source_and_resumes_exactly():
     assert mesh.rtl_lost_headers == 1
 
 
-@pytest.mark.parametrize("noc", [NocConfig(buffer_depth=3), NocConfig(buffer_depth=3, routing_latency=1, arbiter="per-output")])
+@pytest.mark.parametrize(
+    "noc", [NocConfig(buffer_depth=3), NocConfig(buffer_depth=3, routing_latency=1, arbiter="per-output")]
+)
 def test_credits_equal_free_downstream_space_after_traffic(noc):
     cfg = ChipConfig(width=3, height=3, noc=noc)
     mesh = Mesh(cfg)

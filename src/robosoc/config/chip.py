@@ -155,7 +155,7 @@ class NocConfig:
         if self.arbiter == "hermes" and self.routing_latency != HERMES_ROUTING_LATENCY:
             raise ValueError(
                 f"routing_latency: the Hermes switch controller fixes it at {HERMES_ROUTING_LATENCY} "
-                f"(5 cycles per router), got {self.routing_latency}; use arbiter = \"per-output\" to vary it"
+                f'(5 cycles per router), got {self.routing_latency}; use arbiter = "per-output" to vary it'
             )
 
 
