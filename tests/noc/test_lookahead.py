@@ -106,3 +106,22 @@ def test_hermes_lookahead_is_tight():
         mesh.run(12)
     router0_east = [m.state.buf[0, k.EAST, :2].tolist() for m in (alone, with_b)]
     assert router0_east == [[0x00, 4], [0x00, 3]]
+
+
+@pytest.mark.parametrize(("arbiter", "rlat"), [("hermes", 4), ("per-output", 2)])
+def test_no_packet_beats_the_fewest_cycles_per_router(arbiter, rlat):
+    """The chip's time quanta rest on this (docs/noc.md): under any traffic a packet whose first flit
+    enters its router in s has its last flit in the receive memory no earlier than s + (h + 1)m + L - 1.
+    With the Hermes controller some packets do beat the uncontended 5 cycles per router, so m = 5 would
+    be wrong."""
+    cfg = ChipConfig(width=4, height=4, noc=NocConfig(buffer_depth=4, routing_latency=rlat, arbiter=arbiter))
+    mesh = build(cfg, quiet=0, extra=None)
+    mesh.run_until_idle(limit=100_000)
+    m = mesh.lookahead
+    faster = 0
+    for d in mesh.deliveries():
+        info = mesh.packet(d.packet_id)
+        hops = mesh.hops(info.src, info.dst)
+        assert d.cycle - info.start >= (hops + 1) * m + d.length - 1
+        faster += d.cycle - info.start < mesh.single_packet_latency(hops, d.length)
+    assert (faster > 0) == (arbiter == "hermes")
