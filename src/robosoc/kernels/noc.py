@@ -66,8 +66,8 @@ ARB_PER_OUTPUT = ARBITERS.index("per-output")
 # up; SC_SELECT [S2] picks, among the requests up in that cycle, the first input in cyclic port order
 # after the last one selected; SC_ROUTE [S3] computes the XY output and checks that it is free, else
 # goes back to SC_IDLE (a failed attempt: 3 cycles); SC_CONNECT [S4-S6] connects input and output;
-# in SC_CROSS [S7] the header crosses. Hence 5 cycles per connection and, uncontended, a header at
-# the head of its buffer crosses HERMES_ROUTING_LATENCY = 4 cycles after it arrived plus one.
+# in SC_CROSS [S7] the header crosses. Hence 5 cycles per connection, and an uncontended header that
+# arrived in cycle a crosses in a + 5 (requests a + 1, S1 a + 1 ... S7 a + 5): routing latency 4.
 SC_IDLE, SC_SELECT, SC_ROUTE, SC_CONNECT, SC_CROSS = range(5)
 HERMES_RELEASE = 2  # an output whose tail crossed in cycle c is free for a new connection from c + 2
 HERMES_MIN_ROUTER_CYCLES = 4  # request up in a cycle the controller is in SC_SELECT: crosses 3 later
