@@ -112,7 +112,7 @@ def run_noc_benchmark(
     for arbiter in arbiters:
         if arbiter not in ARBITERS:
             raise ValueError(f"arbiter: must be one of {', '.join(ARBITERS)}, got {arbiter!r}")
-    console = console or Console()
+    console = console or Console(width=max(Console().width, 100))  # the table needs ~90 columns
     configs = {
         arbiter: ChipConfig(
             width=width,
