@@ -3,8 +3,8 @@
 Cycle numbers are derived by hand from platform.md and docs/noc.md: a SEND store starting in
 cycle s stalls the core for the DMA copy (one cycle per flit) after its own three cycles, the
 first flit enters the router in s + 3 + L, the last flit is written into the receive memory
-(h + 1)(R + 1) + L - 1 cycles later and the packet is visible (NI_STATUS, IRQ_CAUSE bit 1)
-from the cycle after that.
+5(h + 1) + L - 1 cycles later (Hermes RTL: 5 cycles per router, platform.md §4) and the packet
+is visible (NI_STATUS, IRQ_CAUSE bit 1) from the cycle after that.
 """
 
 from pathlib import Path
@@ -21,7 +21,7 @@ SRAM = 0x40000000
 NI, IRQ, TIMER0 = 0xE1040000, 0xF0000000, 0xE1024000
 T0, T1, T2, T3, T4 = 5, 6, 7, 28, 29
 A0, A1, A2, A3 = 10, 11, 12, 13
-R = 6  # default routing latency
+ROUTER_CYCLES = 5  # an uncontended header spends 5 cycles in each Hermes router
 PACKET = SRAM + 0x400
 RXBUF = SRAM + 0x500
 
@@ -36,13 +36,13 @@ def flits(*values: int) -> bytes:
     return b"".join((v & 0xFFFF).to_bytes(2, "little") for v in values)
 
 
-def sender(dest: int, payload: int = 0xBEEF) -> Program:
+def sender(dest: int, payload: int = 0xBEEF, size: int = 3) -> Program:
     words = [
         *A.li(T0, NI),  # cycles 3, 4
         *A.li(T1, PACKET),  # 5, 6
         *A.li(T3, TIMER0),  # 7, 8
         A.store("sw", T1, T0, 0x04),  # SEND_ADDR: 9..11
-        A.i("addi", T2, 0, 3),  # 12
+        A.i("addi", T2, 0, size),  # 12
         A.store("sw", T2, T0, 0x08),  # SEND_SIZE: 13..15
         A.i("addi", T2, 0, 1),  # 16
         A.store("sw", T2, T0, 0x0C),  # SEND at 17: store 17..19, DMA 20..22
@@ -57,7 +57,7 @@ FIRST_FLIT = SEND_START + 3 + 3  # cycle the first flit enters the source router
 
 
 def last_flit(hops: int, length: int = 3) -> int:
-    return FIRST_FLIT + (hops + 1) * (R + 1) + length - 1
+    return FIRST_FLIT + (hops + 1) * ROUTER_CYCLES + length - 1
 
 
 def poller() -> Program:
@@ -89,12 +89,13 @@ def test_ping_timing_by_hand():
     assert result.exit_codes[(0, 1)] == 0xBEEF
     # sender: TIMER0 read right after the SEND's DMA: the load starts in 23, reads 22
     assert result.exit_codes[(1, 0)] == SEND_START + 3 + 3 - 1
-    d = last_flit(hops=2)  # 23 + 3*7 + 2 = 46
-    assert d == 46
+    d = last_flit(hops=2)  # 23 + 3*5 + 2 = 40
+    assert d == 40
     # the poll load starting in c sees the packet when d + 1 <= c - 1: polls start in 12 + 8k
     k = next(k for k in range(100) if 12 + 8 * k >= d + 2)
-    poll = 12 + 8 * k  # 52
-    recv = poll + 3 + 1 + 1 + 1 + 1  # lw, addi, andi, beq not taken, addi -> the RECV store in 59
+    poll = 12 + 8 * k  # 44 (k = 4: the load of 36 reads cycle 35, before the packet)
+    assert (k, poll) == (4, 44)
+    recv = poll + 3 + 1 + 1 + 1 + 1  # lw, addi, andi, beq not taken, addi -> the RECV store in 51
     regs = chip.regs((0, 1))
     assert int(regs[A2]) == k + 1, "number of polls"
     assert int(regs[A1]) == recv + 3 + 3 - 1, "TIMER0 after the RECV store and its 3-flit DMA"
@@ -127,6 +128,7 @@ def test_receive_interrupt_wakes_a_sleeping_core():
     chip.load((0, 1), program(words))
     result = chip.run(max_cycles=100_000)
     rise = last_flit(hops=2) + 1  # IRQ_CAUSE bit 1 is up from this device cycle
+    assert rise == 41
     # platform.md §3: the request reaches the core in instruction cycle rise + 4 and is entered at
     # the first boundary >= rise + 5; the sleeping core wakes exactly there.  The first vector
     # instruction executes in b + 2 and b + 3, the TIMER0 load in b + 4 reads b + 3.
@@ -237,6 +239,19 @@ def test_packet_to_its_own_tile_and_bad_commands_are_errors():
     chip.load((1, 0), program([*A.li(T0, NI), A.i("addi", T2, 0, 2), A.store("sw", T2, T0, 0x0C), *exit_with(0)]))
     with pytest.raises(ChipError, match="RECV with no packet"):
         chip.run(max_cycles=100_000)
+
+
+def test_packet_shorter_than_3_flits_is_an_error_naming_tile_and_pc():
+    """On the Hermes RTL a packet without payload keeps its connection open and swallows the next one."""
+    chip = MPSoC(ChipConfig())
+    chip.load((1, 0), sender(dest=0x01, size=2))
+    send_pc = SRAM + 4 * 10  # the SEND store, after three li pairs, two stores and two addi
+    text = r"tile \(1, 0\): the packet cannot be sent: packet shorter than 3 flits.*\(SEND_SIZE = 2\)"
+    with pytest.raises(ChipError, match=rf"{text} at address 0x{PACKET:08x}, pc 0x{send_pc:08x}") as err:
+        chip.run(max_cycles=100_000)
+    assert err.value.tile == (1, 0)
+    with pytest.raises(ValueError, match="at least 1 payload flit"):
+        chip.inject((1, 1), [], at_cycle=0)
 
 
 def test_sleeping_forever_is_reported():

@@ -1,11 +1,12 @@
 """The quantum scheme of the chip simulator gives exactly the results of lockstep simulation.
 
 robosoc advances cores and the NoC in quanta chosen so that nothing one tile does can reach
-another inside a quantum (docs/platform.md, "Time").  Running the same programs with every
-quantum one cycle long must therefore give bit-identical outputs, counters and network
-activity.  A traffic program (every tile sends packets of random length to every other, receives
-in its interrupt handler, sleeps while waiting) exercises idle and busy network phases,
-back-pressure, DMA, interrupts and sleep.
+another inside a quantum (docs/platform.md, "Time"; docs/noc.md derives their lengths for each
+router model).  Running the same programs with every quantum one cycle long must therefore give
+bit-identical outputs, counters and network activity, with either router model.  A traffic
+program (every tile sends packets of random length to every other, receives in its interrupt
+handler, sleeps while waiting) exercises idle and busy network phases, back-pressure, DMA,
+interrupts and sleep.
 """
 
 from pathlib import Path
@@ -34,15 +35,20 @@ def run(config: ChipConfig, lockstep: bool, rounds: int):
 # the erratum report (spec mode) is expected there
 pytestmark = pytest.mark.filterwarnings("ignore::robosoc.chip.single.IrqDuringMulErratum")
 
+PER_OUTPUT = NocConfig(arbiter="per-output")
+
 
 @pytest.mark.parametrize(
     "config,rounds",
     [
         (ChipConfig(), 6),
         (ChipConfig(width=3, height=2), 3),
-        (ChipConfig(width=3, height=2, noc=NocConfig(buffer_depth=2, routing_latency=1)), 3),
+        (ChipConfig(width=3, height=2, noc=NocConfig(buffer_depth=2)), 3),
+        (ChipConfig(noc=PER_OUTPUT), 6),
+        (ChipConfig(width=3, height=2, noc=PER_OUTPUT), 3),
+        (ChipConfig(width=3, height=2, noc=NocConfig(buffer_depth=2, routing_latency=1, arbiter="per-output")), 3),
     ],
-    ids=["2x2", "3x2", "3x2-shallow-fast-routers"],
+    ids=["hermes-2x2", "hermes-3x2", "hermes-3x2-shallow", "per-output-2x2", "per-output-3x2", "per-output-3x2-fast"],
 )
 def test_quanta_give_the_lockstep_results(config: ChipConfig, rounds: int):
     fast = run(config, lockstep=False, rounds=rounds)
@@ -55,10 +61,11 @@ def test_quanta_give_the_lockstep_results(config: ChipConfig, rounds: int):
     assert fast == slow
 
 
-def test_quanta_give_the_lockstep_results_with_packets_from_the_io_tile():
+@pytest.mark.parametrize("arbiter", ["hermes", "per-output"])
+def test_quanta_give_the_lockstep_results_with_packets_from_the_io_tile(arbiter: str):
     def run_with_io(lockstep: bool):
         program = load_elf(build_elf([TRAFFIC], mul=True, defines={"ROUNDS": 4}))
-        chip = MPSoC(ChipConfig(), lockstep=lockstep)
+        chip = MPSoC(ChipConfig(noc=NocConfig(arbiter=arbiter)), lockstep=lockstep)
         chip.load_all(program)
         for k, at in enumerate(range(300, 6000, 700)):
             chip.inject((1, 0) if k % 2 else (1, 1), list(range(k + 1)), at_cycle=at)

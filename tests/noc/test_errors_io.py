@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from robosoc.chip.noc import Mesh, NocError
-from robosoc.config.chip import ChipConfig, NocConfig
+from robosoc.config.chip import HERMES_ROUTING_LATENCY, ChipConfig
 from robosoc.kernels import noc as k
 
 
@@ -29,8 +29,8 @@ def test_python_api_rejects_bad_packets():
 
 
 def kernel_state():
-    # 3x1 mesh, tile 2 powered off
-    return k.noc_alloc(3, 1, depth=4, routing_latency=2, powered=np.array([1, 1, 0]), queue_rows=4)
+    # 3x1 mesh, tile 2 powered off, Hermes routers
+    return k.noc_alloc(3, 1, 4, HERMES_ROUTING_LATENCY, powered=np.array([1, 1, 0]), queue_rows=4)
 
 
 @pytest.mark.parametrize(
@@ -41,6 +41,7 @@ def kernel_state():
         ([0x30, 1, 7], 0, k.STATUS_DEST_OUTSIDE),
         ([0x01, 1, 7], 0, k.STATUS_DEST_OUTSIDE),
         ([0x10, 5, 7], 0, k.STATUS_BAD_LENGTH),
+        ([0x10, 0], 0, k.STATUS_SHORT_PACKET),
         ([0x00, 1, 7], 2, k.STATUS_SRC_OFF),
     ],
 )
@@ -59,9 +60,9 @@ def test_kernel_send_while_busy_and_manual_receive():
     assert k.noc_send(st.cfg, st.glob, st.tile, st.mem, 0, 4, 5) == k.STATUS_OK
     assert k.noc_send(st.cfg, st.glob, st.tile, st.mem, 0, 4, 5) == k.STATUS_NI_BUSY
     assert k.noc_run(*st, 1000, 1) == k.STATUS_OK
-    # stopped right after the delivery: 5 + 2 * 3 + 3 = 14
-    assert st.glob[k.G_CYCLE] == 15 and st.glob[k.G_NEV] == 1
-    assert st.ev[0, : k.EV_FLITS + 4].tolist() == [1, 14, 4, 11, 0x10, 2, 7, 8]
+    # stopped right after the delivery: 5 + 2 * 5 + 3 = 18 (one hop, 5 cycles per router)
+    assert st.glob[k.G_CYCLE] == 19 and st.glob[k.G_NEV] == 1
+    assert st.ev[0, : k.EV_FLITS + 4].tolist() == [1, 18, 4, 15, 0x10, 2, 7, 8]
     assert st.tile[1, k.T_RX_STATE] == k.RX_HELD and st.mem[1, k.RECV, :4].tolist() == [0x10, 2, 7, 8]
     assert k.noc_idle(*st)
     k.noc_rx_free(st.tile, 1)
@@ -90,15 +91,22 @@ def test_mesh_raises_kernel_errors():
 
 
 def test_io_tile_door():
-    """Default 2x2 with (1,0) powered off: the outside sends to (1,1) and (0,1) answers to the I/O tile."""
-    cfg = ChipConfig(powered_off=((1, 0),), noc=NocConfig(routing_latency=6))
-    mesh = Mesh(cfg)
+    """Default 2x2 with (1,0) powered off: the outside sends to (1,1) through (1,0)'s router, which keeps
+    forwarding, and (0,1) and (1,1) send to the I/O tile. 5 cycles per router:
+
+    * I/O tile -> (1,1), 6 flits in 100, 2 hops (via (1,0)): 100 + 3 * 5 + 5 = 120;
+    * (0,1) -> (0,0), 10 flits in 50, 1 hop: header crosses (0,1) in 55, tail 64; 50 + 2 * 5 + 9 = 69;
+    * (1,1) -> (0,0), 4 flits in 60, 2 hops via (0,1) (x first): crosses (1,1) in 65, arrives at (0,1)
+      in 65 and requests in 66 (its SOUTH output free from 66), crosses 70; (0,0)'s NORTH buffer was left
+      by the first packet's tail in 69, so it arrives in 70 at an idle buffer: crosses 75, tail 78.
+    """
+    mesh = Mesh(ChipConfig(powered_off=((1, 0),)))
     assert mesh.io_tile == (0, 0)
-    mesh.io_send((1, 1), [1, 2, 3, 4], at_cycle=100)  # 6 flits, 2 hops: 3 * 7 + 5 = 26
-    mesh.inject((0, 1), (0, 0), [9] * 8, at_cycle=50)  # 10 flits, 1 hop: 2 * 7 + 9 = 23
-    mesh.inject((1, 1), (0, 0), [8] * 2, at_cycle=60)  # 4 flits, 2 hops through (1,0)'s router: 21 + 3
+    mesh.io_send((1, 1), [1, 2, 3, 4], at_cycle=100)
+    mesh.inject((0, 1), (0, 0), [9] * 8, at_cycle=50)
+    mesh.inject((1, 1), (0, 0), [8] * 2, at_cycle=60)
     mesh.run(1000)
-    assert mesh.io_received() == [(73, (0x00, 8, *[9] * 8)), (84, (0x00, 2, 8, 8))]
-    assert [(d.dst, d.cycle) for d in mesh.deliveries() if d.dst != (0, 0)] == [((1, 1), 126)]
+    assert mesh.io_received() == [(69, (0x00, 8, *[9] * 8)), (78, (0x00, 2, 8, 8))]
+    assert [(d.dst, d.cycle) for d in mesh.deliveries() if d.dst != (0, 0)] == [((1, 1), 120)]
     with pytest.raises(ValueError, match="powered off"):
         mesh.io_send((1, 0), [1], at_cycle=2000)

@@ -1,6 +1,7 @@
 """Random traffic: delivered exactly once and in order, no deadlock; determinism; order independence."""
 
 import numpy as np
+import pytest
 
 from robosoc.chip.noc import Mesh
 from robosoc.config.chip import ChipConfig, NocConfig
@@ -24,8 +25,12 @@ def random_traffic(mesh: Mesh, packets_per_tile: int, seed: int, spread: int) ->
     return sent
 
 
-def test_saturation_on_8x8_delivers_everything_once_in_order():
-    cfg = ChipConfig(width=8, height=8, noc=NocConfig(buffer_depth=4))
+ARBITERS = pytest.mark.parametrize("arbiter", ["hermes", "per-output"])
+
+
+@ARBITERS
+def test_saturation_on_8x8_delivers_everything_once_in_order(arbiter):
+    cfg = ChipConfig(width=8, height=8, noc=NocConfig(buffer_depth=4, arbiter=arbiter))
     mesh = Mesh(cfg, tag_packets=True)
     sent = random_traffic(mesh, packets_per_tile=15, seed=1, spread=0)  # all ready at once: saturation
     mesh.run_until_idle(limit=200_000)
@@ -53,8 +58,8 @@ def test_saturation_on_8x8_delivers_everything_once_in_order():
     assert max(waits) > 100
 
 
-def run_case(reverse: bool) -> Mesh:
-    noc = NocConfig(buffer_depth=3, routing_latency=2)
+def run_case(reverse: bool, arbiter: str) -> Mesh:
+    noc = NocConfig(buffer_depth=3, arbiter=arbiter, routing_latency=4 if arbiter == "hermes" else 2)
     cfg = ChipConfig(width=5, height=4, powered_off=((4, 3),), noc=noc)
     mesh = Mesh(cfg, tag_packets=True, reverse_evaluation=reverse, rx_free_delay=3, event_capacity=64)
     rng = np.random.default_rng(7)
@@ -67,8 +72,9 @@ def run_case(reverse: bool) -> Mesh:
     return mesh
 
 
-def test_determinism_and_evaluation_order_independence():
-    a, b, rev = run_case(False), run_case(False), run_case(True)
+@ARBITERS
+def test_determinism_and_evaluation_order_independence(arbiter):
+    a, b, rev = run_case(False, arbiter), run_case(False, arbiter), run_case(True, arbiter)
     assert len(a.deliveries()) == 400
     assert a.deliveries() == b.deliveries() == rev.deliveries()
     for name in k.NocState._fields:
@@ -77,8 +83,9 @@ def test_determinism_and_evaluation_order_independence():
             assert np.array_equal(getattr(a.state, name), getattr(rev.state, name)), name
 
 
-def test_snapshot_and_restore_replay_identically():
-    cfg = ChipConfig(width=4, height=4, noc=NocConfig(buffer_depth=4))
+@ARBITERS
+def test_snapshot_and_restore_replay_identically(arbiter):
+    cfg = ChipConfig(width=4, height=4, noc=NocConfig(buffer_depth=4, arbiter=arbiter))
     mesh = Mesh(cfg, tag_packets=True)
     random_traffic(mesh, packets_per_tile=6, seed=3, spread=300)
     mesh.run(250)
@@ -91,9 +98,10 @@ def test_snapshot_and_restore_replay_identically():
     assert mesh.deliveries() == first
 
 
-def test_idle_skipping_is_exact():
+@pytest.mark.parametrize("noc", [NocConfig(), NocConfig(routing_latency=3, arbiter="per-output")])
+def test_idle_skipping_is_exact(noc):
     """Running in one call (idle gaps skipped) or cycle by cycle gives the same state."""
-    cfg = ChipConfig(width=3, height=2, noc=NocConfig(routing_latency=3))
+    cfg = ChipConfig(width=3, height=2, noc=noc)
     meshes = [Mesh(cfg), Mesh(cfg)]
     for m in meshes:
         m.inject((0, 0), (2, 1), [1, 2, 3], at_cycle=10)

@@ -1,4 +1,8 @@
-"""Wormhole switching, round-robin arbitration and back-pressure, against hand-derived cycle counts."""
+"""Per-output arbiters (the idealised router): wormhole switching, round-robin arbitration and
+back-pressure against hand-derived cycle counts; the credit invariant in both router models.
+
+(The Hermes switch controller under contention: test_hermes.py.)
+"""
 
 import numpy as np
 import pytest
@@ -19,7 +23,8 @@ def test_held_output_blocks_until_the_tail_passes(rlat, depth):
     the head from 23 + 3R, waits R cycles, enters the receive memory in 23 + 4R and B's tail 5 cycles
     later. A itself is untouched: 3(R + 1) + 19.
     """
-    cfg = ChipConfig(width=3, height=1, noc=NocConfig(routing_latency=rlat, buffer_depth=depth))
+    noc = NocConfig(routing_latency=rlat, buffer_depth=depth, arbiter="per-output")
+    cfg = ChipConfig(width=3, height=1, noc=noc)
     mesh = Mesh(cfg)
     a = mesh.inject((0, 0), (2, 0), [1] * 18, at_cycle=0)
     b = mesh.inject((1, 0), (2, 0), [2] * 4, at_cycle=2 * rlat + 2)
@@ -42,7 +47,7 @@ def test_round_robin_per_output():
     header must reach the head of (1,2)'s SOUTH buffer and wait R there, so deliveries are L + R apart.
     """
     rlat, length = 2, 8
-    cfg = ChipConfig(width=3, height=3, noc=NocConfig(routing_latency=rlat))
+    cfg = ChipConfig(width=3, height=3, noc=NocConfig(routing_latency=rlat, arbiter="per-output"))
     mesh = Mesh(cfg, tag_packets=True)
     dst = (1, 2)
     payload = [0] * (length - 5)
@@ -69,13 +74,20 @@ def test_back_pressure_stops_the_source_and_resumes_exactly():
     everything stops. Freed before cycle 200, the waiting header moves in cycle 200 and the other 39
     flits follow one per cycle: delivered in cycle 239, intact. The freed slot travels back one hop per
     cycle as a credit (router 1 sends in 201, router 0 in 202), so the NI resumes in cycle 203 and injects
-    the last of the remaining 28 flits in cycle 230.
+    the last of the remaining 28 flits in cycle 230. P2's header crosses router 0 in 10 and router 1 in
+    13 (each time at the head 1 cycle after P1's tail left, plus R), reaches the head of router 2's buffer
+    in 14 and is granted the LOCAL output in 16 with the receive memory held: it would cross in its grant
+    cycle and the RTL would lose it (counted once).
     """
-    cfg = ChipConfig(width=3, height=1, noc=NocConfig(routing_latency=2, buffer_depth=4))
+    cfg = ChipConfig(width=3, height=1, noc=NocConfig(routing_latency=2, buffer_depth=4, arbiter="per-output"))
     mesh = Mesh(cfg, rx_free_delay=None)
     mesh.inject((0, 0), (2, 0), [11, 12, 13], at_cycle=0)
     p2_payload = list(range(100, 138))
     p2 = mesh.inject((0, 0), (2, 0), p2_payload, at_cycle=0)
+    mesh.run(16)
+    assert mesh.rtl_lost_headers == 0
+    mesh.run(17)
+    assert mesh.rtl_lost_headers == 1
     mesh.run(200)
     (d1,) = mesh.deliveries()
     assert d1.cycle == 13 and d1.payload == (11, 12, 13) and mesh.rx_held((2, 0))
@@ -93,15 +105,19 @@ def test_back_pressure_stops_the_source_and_resumes_exactly():
     d2 = mesh.deliveries()[1]
     assert d2.cycle == 239 and d2.first_cycle == 200 and d2.payload == tuple(p2_payload)
     assert mesh.packet(p2).end == 230
+    assert mesh.rtl_lost_headers == 1
 
 
-def test_credits_equal_free_downstream_space_after_traffic():
-    cfg = ChipConfig(width=3, height=3, noc=NocConfig(buffer_depth=3, routing_latency=1))
+@pytest.mark.parametrize(
+    "noc", [NocConfig(buffer_depth=3), NocConfig(buffer_depth=3, routing_latency=1, arbiter="per-output")]
+)
+def test_credits_equal_free_downstream_space_after_traffic(noc):
+    cfg = ChipConfig(width=3, height=3, noc=noc)
     mesh = Mesh(cfg)
     rng = np.random.default_rng(5)
     for i in range(60):
         src, dst = rng.choice(9, size=2, replace=False)
-        mesh.inject(cfg.tile_xy(int(src)), cfg.tile_xy(int(dst)), [i] * int(rng.integers(0, 20)), at_cycle=i)
+        mesh.inject(cfg.tile_xy(int(src)), cfg.tile_xy(int(dst)), [i] * int(rng.integers(1, 20)), at_cycle=i)
     # check the credit invariant at many intermediate points
     for until in range(5, 400, 7):
         mesh.run(until)

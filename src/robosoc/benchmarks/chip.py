@@ -86,7 +86,7 @@ def run_chip_benchmark(runs: int = 5, cycles: int = 2_000_000, ticks: int = 40, 
     if noc:
         from robosoc.benchmarks.noc import run_noc_benchmark
 
-        run_noc_benchmark(width=8, height=8, cycles=5_000, console=console)
+        run_noc_benchmark(width=8, height=8, cycles=5_000, console=console, arbiters=("hermes",))
     median = statistics.median(rows[(4, 4)])
     print(f"chip: {median:.0f} Mcycles/s")
     return median

@@ -6,6 +6,10 @@ cycle per tile), addressed to a uniformly drawn other tile. The network is then 
 has been delivered. Latency is counted from the cycle the packet was generated (source queueing
 included) to the cycle its last flit reached the receive memory; the network latency starts when its
 first flit entered the source router.
+
+Both router models run on the same traffic: ``hermes`` (the RTL's single switch controller per router)
+and ``per-output`` (one arbiter per output port) with the same per-hop timing (routing latency 4, i.e.
+5 cycles per uncontended router), so the difference is the arbitration alone.
 """
 
 from __future__ import annotations
@@ -15,12 +19,13 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from rich import box
 from rich.console import Console
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
 from robosoc.chip.noc import Mesh
-from robosoc.config.chip import ChipConfig, NocConfig
+from robosoc.config.chip import ARBITERS, HERMES_ROUTING_LATENCY, ChipConfig, NocConfig
 
 __all__ = ["NocBenchmarkRow", "run_noc_benchmark"]
 
@@ -29,9 +34,10 @@ DEFAULT_RATES = (0.02, 0.05, 0.1, 0.15, 0.2, 0.25, 0.3, 0.35)
 
 @dataclass(frozen=True)
 class NocBenchmarkRow:
-    """Figures for one injection rate.
+    """Figures for one router model at one injection rate.
 
     Attributes:
+        arbiter: the router model (``config.chip.ARBITERS``).
         rate: offered load, flits per cycle per tile.
         packets: packets generated (and delivered).
         flits: flits delivered.
@@ -43,6 +49,7 @@ class NocBenchmarkRow:
         host_seconds: host time of the simulation (kernel plus event collection).
     """
 
+    arbiter: str
     rate: float
     packets: int
     flits: int
@@ -77,20 +84,23 @@ def run_noc_benchmark(
     cycles: int = 10_000,
     packet_flits: int = 16,
     buffer_depth: int = 16,
-    routing_latency: int | None = None,
+    routing_latency: int = HERMES_ROUTING_LATENCY,
     seed: int = 1,
     plot_path: str | Path | None = None,
     console: Console | None = None,
+    arbiters: tuple[str, ...] = ARBITERS,
 ) -> list[NocBenchmarkRow]:
-    """Run the NoC alone under uniform random traffic at each rate and print a table.
+    """Run the NoC alone under uniform random traffic at each rate, for each router model, and print a table.
 
     Args:
         width, height: mesh size.
         rates: offered loads in flits per cycle per tile.
         cycles: cycles during which traffic is generated (the run continues until all is delivered).
         packet_flits: flits per packet on the wire (at least 5: header and the 3-flit tag).
-        buffer_depth, routing_latency: router parameters (default: the platform defaults).
-        seed: traffic seed.
+        buffer_depth: flits per input buffer (default: the platform's 16).
+        routing_latency: of the per-output model (the Hermes model's is fixed at 4).
+        seed: traffic seed (the same traffic for every model).
+        arbiters: router models to run.
         plot_path: if given, a PNG of latency against offered load is written there.
         console: where to print (default: a new rich console).
 
@@ -99,13 +109,24 @@ def run_noc_benchmark(
     """
     if not 5 <= packet_flits <= 64:
         raise ValueError(f"packet_flits: must be between 5 and 64, got {packet_flits}")
-    console = console or Console()
-    noc = NocConfig(buffer_depth=buffer_depth)
-    if routing_latency is not None:
-        noc = NocConfig(buffer_depth=buffer_depth, routing_latency=routing_latency)
-    cfg = ChipConfig(width=width, height=height, noc=noc)
+    for arbiter in arbiters:
+        if arbiter not in ARBITERS:
+            raise ValueError(f"arbiter: must be one of {', '.join(ARBITERS)}, got {arbiter!r}")
+    console = console or Console(width=max(Console().width, 100))  # the table needs ~90 columns
+    configs = {
+        arbiter: ChipConfig(
+            width=width,
+            height=height,
+            noc=NocConfig(
+                buffer_depth=buffer_depth,
+                arbiter=arbiter,
+                routing_latency=HERMES_ROUTING_LATENCY if arbiter == "hermes" else routing_latency,
+            ),
+        )
+        for arbiter in arbiters
+    }
 
-    warm = Mesh(cfg)  # JIT compile (or load from cache) outside the timings
+    warm = Mesh(next(iter(configs.values())))  # JIT compile (or load from cache) outside the timings
     warm.inject((0, 0), (width - 1, height - 1), [1, 2, 3], at_cycle=0)
     warm.run_until_idle(limit=10_000)
 
@@ -117,11 +138,11 @@ def run_noc_benchmark(
         TimeElapsedColumn(),
     )
     with Progress(*columns, console=console, transient=True) as progress:
-        for rate in rates:
+        for (arbiter, cfg), rate in ((item, rate) for item in configs.items() for rate in rates):
             rng = np.random.default_rng(seed)
             mesh = Mesh(cfg, tag_packets=True, event_capacity=8192)
             n_packets = _traffic(mesh, rate, cycles, packet_flits, rng)
-            task = progress.add_task(f"{width}x{height} rate {rate:.2f}", total=n_packets)
+            task = progress.add_task(f"{width}x{height} {arbiter} rate {rate:.3f}", total=n_packets)
             host = 0.0
             chunk = max(1000, cycles // 20)
             while not mesh.idle:
@@ -139,6 +160,7 @@ def run_noc_benchmark(
             flits = sum(d.length for d in deliveries)
             rows.append(
                 NocBenchmarkRow(
+                    arbiter=arbiter,
                     rate=rate,
                     packets=len(deliveries),
                     flits=flits,
@@ -151,13 +173,19 @@ def run_noc_benchmark(
             )
 
     table = Table(
-        title=f"NoC {width}x{height}, uniform random, {packet_flits}-flit packets, "
-        f"depth {cfg.noc.buffer_depth}, routing latency {cfg.noc.routing_latency}"
+        title=f"NoC {width}x{height}, uniform random, {packet_flits}-flit packets, depth {buffer_depth}; "
+        f"hermes: the RTL's switch controller, per-output: routing latency {routing_latency}",
+        box=box.SIMPLE_HEAD,
+        pad_edge=False,
+        caption="load and accept: flits/cycle/tile; lat: mean cycles from generation (net: from the first "
+        "flit entering the source router) to the last flit in the receive memory",
     )
-    for name in ("offered", "accepted", "packets", "latency", "net latency", "cycles", "host s", "Mflits/s"):
-        table.add_column(name, justify="right")
+    columns = ("router", "load", "accept", "pkts", "lat", "net", "cycles", "host s", "Mflit/s")
+    for name in columns:
+        table.add_column(name, justify="right", no_wrap=True)
     for r in rows:
         table.add_row(
+            r.arbiter,
             f"{r.rate:.3f}",
             f"{r.accepted:.3f}",
             str(r.packets),
@@ -183,8 +211,11 @@ def _plot(rows: list[NocBenchmarkRow], path: Path, title: str) -> None:
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(figsize=(6, 4))
-    ax.plot([r.rate for r in rows], [r.latency for r in rows], "o-", label="generation to delivery")
-    ax.plot([r.rate for r in rows], [r.network_latency for r in rows], "s--", label="in the network")
+    for arbiter in dict.fromkeys(r.arbiter for r in rows):
+        mine = [r for r in rows if r.arbiter == arbiter]
+        rate = [r.rate for r in mine]
+        ax.plot(rate, [r.latency for r in mine], "o-", label=f"{arbiter}: generation to delivery")
+        ax.plot(rate, [r.network_latency for r in mine], "s--", label=f"{arbiter}: in the network")
     ax.set_xlabel("offered load (flits / cycle / tile)")
     ax.set_ylabel("average packet latency (cycles)")
     ax.set_yscale("log")

@@ -21,8 +21,9 @@ from robosoc.chip.core_state import SRAM_BASE, CoreState
 from robosoc.chip.counters import counters_dict
 from robosoc.chip.elf import Program, Region
 from robosoc.chip.single import ERRATUM_WARNINGS, core_error, errata_counts, errata_report
-from robosoc.config.chip import ChipConfig
+from robosoc.config.chip import MIN_PACKET_FLITS, ChipConfig
 from robosoc.isa.disasm import disassemble
+from robosoc.isa.table import MEMORY_CYCLES
 from robosoc.kernels import chip as kc
 from robosoc.kernels import noc as nk
 from robosoc.kernels.core_layout import (
@@ -105,7 +106,7 @@ class MPSoC:
         noc = config.noc
         self.noc = nk.noc_alloc(
             config.width, config.height, noc.buffer_depth, noc.routing_latency, noc.max_packet_flits,
-            noc.flit_bits, powered, event_capacity=4 * n + 64, queue_rows=IO_ROWS,
+            noc.flit_bits, powered, event_capacity=4 * n + 64, queue_rows=IO_ROWS, arbiter=noc.arbiter,
         )  # fmt: skip
         self.io = config.tile_index(config.io_tile)
         self.noc.tile[self.io, nk.T_RX_AUTO] = 0  # the outside world takes packets as they come
@@ -119,9 +120,14 @@ class MPSoC:
         self.snap = np.zeros((n, kc.ACC_SIZE), dtype=np.int64)
         self.gst = np.zeros(kc.GST_SIZE, dtype=np.int64)
         self.gst[kc.G_IO_TILE] = self.io
-        r = noc.routing_latency
-        self.gst[kc.G_LOOK_IDLE] = 1 if lockstep else 2 * r + 8
-        self.gst[kc.G_LOOK_ACTIVE] = 1 if lockstep else 5
+        # quanta (docs/noc.md, "Lookahead and the chip's time quanta"): a SEND store starting in s
+        # injects from s + 3 + n (n >= MIN_PACKET_FLITS, the DMA) and a RECV frees the receive memory
+        # from s + 3 + n; a packet sent into an idle network needs at least m cycles per router, so over
+        # one hop its last flit is written in s + 3 + n + 2m + n - 1 at the earliest and the receiver
+        # sees it (interrupt, NI_STATUS) from the cycle after.
+        m = nk.min_router_cycles(int(self.noc.cfg[nk.C_ARBITER]), noc.routing_latency)
+        self.gst[kc.G_LOOK_IDLE] = 1 if lockstep else MEMORY_CYCLES + 2 * MIN_PACKET_FLITS + 2 * m
+        self.gst[kc.G_LOOK_ACTIVE] = 1 if lockstep else MEMORY_CYCLES + MIN_PACKET_FLITS
         self.gst[kc.G_LOOK_SINGLE] = 1 if lockstep else kc.SINGLE_QUANTUM
         self.xout = np.zeros((n, XOUT_CAPACITY), dtype=np.uint8)
         self.io_out = np.zeros((IO_ROWS, kc.IO_COLS), dtype=np.int64)
@@ -175,6 +181,11 @@ class MPSoC:
             raise ValueError(f"destination {dest} is powered off")
         if len(payload) + 2 > self.config.noc.max_packet_flits:
             raise ValueError(f"payload of {len(payload)} flits exceeds the maximum packet")
+        if len(payload) + 2 < MIN_PACKET_FLITS:
+            raise ValueError(
+                f"payload of {len(payload)} flits: a packet needs at least {MIN_PACKET_FLITS - 2} payload flit "
+                "(on the Hermes RTL a packet without payload swallows the next one)"
+            )
         row = self._queue_next
         if row >= IO_ROWS:
             raise ValueError("too many injected packets pending")
@@ -338,7 +349,9 @@ class MPSoC:
         return out
 
     def noc_counters(self) -> dict[str, int]:
-        """Router activity for the energy model: buffer-active and idle port cycles, flit hops."""
+        """Router activity for the energy model (buffer-active and idle port cycles, flit hops) and
+        ``rtl_lost_headers``: headers that found no room downstream in their crossing cycle, which
+        robosoc lets wait but the Hermes RTL would have lost (docs/noc.md)."""
         port = self.noc.port
         glob = self.noc.glob
         cycles = int(glob[nk.G_CYCLE]) - int(glob[nk.G_CYCLE0])
@@ -352,6 +365,7 @@ class MPSoC:
             "flit_hops": int(glob[nk.G_HOPS]),
             "flits_injected": int(glob[nk.G_INJECTED]),
             "packets_delivered": int(glob[nk.G_DELIVERED]),
+            "rtl_lost_headers": int(glob[nk.G_RTL_LOST]),
         }
 
     # --- errors ----------------------------------------------------------------------------
@@ -370,9 +384,13 @@ class MPSoC:
         if code != kc.CE_NONE:
             text = NI_ERRORS.get(code, f"network-interface error {code}")
             if code == kc.CE_BAD_PACKET:
-                text += f": {nk.STATUS_TEXT.get(int(self.cst[t, kc.K_ERR_INFO]), '?')}"
-                dest = int(self.cores.m16[t, (int(self.cst[t, kc.K_SEND_ADDR]) - SRAM_BASE) // 2])
-                text += f" (destination flit 0x{dest:02x} = tile ({dest >> 4}, {dest & 15}))"
+                status = int(self.cst[t, kc.K_ERR_INFO])
+                text += f": {nk.STATUS_TEXT.get(status, '?')}"
+                if status == nk.STATUS_SHORT_PACKET:
+                    text += f" (SEND_SIZE = {int(self.cst[t, kc.K_SEND_SIZE])})"
+                else:
+                    dest = int(self.cores.m16[t, (int(self.cst[t, kc.K_SEND_ADDR]) - SRAM_BASE) // 2])
+                    text += f" (destination flit 0x{dest:02x} = tile ({dest >> 4}, {dest & 15}))"
             word = int(self.cores.m32[t, (pc - SRAM_BASE) // 4]) & 0xFFFFFFFF
             addr = int(self.cst[t, kc.K_ERR_ADDR])
             return ChipError(

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from robosoc.config.chip import ChipConfig
+from robosoc.config.chip import MIN_PACKET_FLITS, ChipConfig
 from robosoc.kernels import noc as k
 
 __all__ = ["Delivery", "Mesh", "NocError", "PacketInfo", "PortCounters"]
@@ -92,6 +92,8 @@ class PortCounters:
         busy_cycles: cycles each input buffer held at least one flit (buffer active).
         idle_cycles: ``cycles - busy_cycles`` (buffer idle).
         router_busy_cycles: cycles each router held at least one flit (control logic active), ``[x, y]``.
+        rtl_lost_headers: headers each router could not send in their crossing cycle for lack of room
+            downstream, ``[x, y]``: robosoc lets them wait, the Hermes RTL would have lost them.
     """
 
     cycles: int
@@ -100,6 +102,7 @@ class PortCounters:
     busy_cycles: np.ndarray
     idle_cycles: np.ndarray
     router_busy_cycles: np.ndarray
+    rtl_lost_headers: np.ndarray
 
 
 PORT_NAMES = k.PORT_NAMES
@@ -148,6 +151,7 @@ class Mesh:
             queue_rows=64,
             rx_auto_free=k.NONE if rx_free_delay is None else rx_free_delay,
             reverse=reverse_evaluation,
+            arbiter=noc.arbiter,
         )
         self._rows = 0
         self._deliveries: list[Delivery] = []
@@ -165,7 +169,13 @@ class Mesh:
     @property
     def lookahead(self) -> int:
         """Cycles after an injection starts during which no flit move or delivery elsewhere can change."""
-        return self.config.noc.routing_latency + 1
+        return k.min_router_cycles(int(self.state.cfg[k.C_ARBITER]), self.routing_latency)
+
+    @property
+    def rtl_lost_headers(self) -> int:
+        """Headers that found no room downstream in their crossing cycle: robosoc lets them wait, the
+        Hermes RTL would have lost them (docs/noc.md, "Departures from the RTL")."""
+        return int(self.state.glob[k.G_RTL_LOST])
 
     @property
     def idle(self) -> bool:
@@ -218,6 +228,11 @@ class Mesh:
         flits = [(dst[0] << 4) | dst[1], len(body), *body]
         if len(flits) > cfg.noc.max_packet_flits:
             raise ValueError(f"payload: {len(flits)} flits on the wire, max {cfg.noc.max_packet_flits}")
+        if len(flits) < MIN_PACKET_FLITS:
+            raise ValueError(
+                f"payload: packet from {src} of {len(flits)} flits; at least {MIN_PACKET_FLITS} are needed "
+                "(on the Hermes RTL a packet without payload swallows the next one)"
+            )
         limit = 1 << cfg.noc.flit_bits
         if any(not 0 <= f < limit for f in flits):
             raise ValueError(f"payload: flit values must be in [0, {limit})")
@@ -369,6 +384,7 @@ class Mesh:
             busy_cycles=busy,
             idle_cycles=cycles - busy,
             router_busy_cycles=by_xy(st.tile[:, k.T_BUSY]),
+            rtl_lost_headers=by_xy(st.tile[:, k.T_RTL_LOST]),
         )
 
     def snapshot(self) -> tuple[k.NocState, int, list[Delivery]]:

@@ -35,15 +35,46 @@ def bench_noc(
     cycles: Annotated[int, typer.Option(help="Simulated cycles per injection rate.")] = 10_000,
     plot: Annotated[str | None, typer.Option(help="Write latency against injection rate to this PNG.")] = None,
     seed: Annotated[int, typer.Option(help="Seed of the random traffic.")] = 1,
+    arbiter: Annotated[
+        str, typer.Option(help="Router model: hermes, per-output, or both (same traffic, same per-hop timing).")
+    ] = "both",
+    rates: Annotated[
+        str | None, typer.Option(help="Offered loads in flits/cycle/tile, comma separated (default: a sweep).")
+    ] = None,
+    packet_flits: Annotated[int, typer.Option(help="Flits per packet, header and 3-flit tag included.")] = 16,
 ) -> None:
-    """NoC alone under uniform random traffic: flits per host second and latency against load."""
-    from robosoc.benchmarks.noc import run_noc_benchmark
+    """NoC alone under uniform random traffic: flits per host second and latency against load, per router model."""
+    from robosoc.benchmarks.noc import DEFAULT_RATES, run_noc_benchmark
+    from robosoc.config.chip import ARBITERS, ChipConfig
 
     try:
         width, height = (int(v) for v in size.lower().split("x"))
     except ValueError as exc:
         raise typer.BadParameter(f"expected WxH, got {size!r}", param_hint="--size") from exc
-    run_noc_benchmark(width=width, height=height, cycles=cycles, seed=seed, plot_path=plot)
+    try:
+        ChipConfig(width=width, height=height)
+    except ValueError as exc:
+        raise typer.BadParameter(str(exc), param_hint="--size") from exc
+    if arbiter != "both" and arbiter not in ARBITERS:
+        raise typer.BadParameter(f"expected {', '.join(ARBITERS)} or both, got {arbiter!r}", param_hint="--arbiter")
+    try:
+        loads = DEFAULT_RATES if rates is None else tuple(float(v) for v in rates.split(","))
+    except ValueError as exc:
+        raise typer.BadParameter(f"expected numbers separated by commas, got {rates!r}", param_hint="--rates") from exc
+    if not all(0.0 < r <= 1.0 for r in loads):
+        raise typer.BadParameter(f"loads must be in (0, 1] flits/cycle/tile, got {rates!r}", param_hint="--rates")
+    if not 5 <= packet_flits <= 64:
+        raise typer.BadParameter(f"must be between 5 and 64, got {packet_flits}", param_hint="--packet-flits")
+    run_noc_benchmark(
+        width=width,
+        height=height,
+        rates=loads,
+        cycles=cycles,
+        packet_flits=packet_flits,
+        seed=seed,
+        plot_path=plot,
+        arbiters=ARBITERS if arbiter == "both" else (arbiter,),
+    )
 
 
 @bench_app.command("chip")

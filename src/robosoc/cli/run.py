@@ -283,9 +283,11 @@ def _run_chip(
     noc = chip.noc_counters()
     noc_pj = model.noc_pj(noc)
     noc_nj = sum(noc_pj.values()) / 1000.0
+    lost = noc["rtl_lost_headers"]
     typer.echo(
-        f"robosoc: NoC {noc['packets_delivered']} packets, {noc['flit_hops']} flit-hops, energy {noc_nj:.3f} nJ; "
-        f"chip {chip.cycle} cycles, energy {total_nj + noc_nj:.3f} nJ",
+        f"robosoc: NoC {noc['packets_delivered']} packets, {noc['flit_hops']} flit-hops, energy {noc_nj:.3f} nJ"
+        + (f", {lost} headers found no room in their crossing cycle (lost on the Hermes RTL)" if lost else "")
+        + f"; chip {chip.cycle} cycles, energy {total_nj + noc_nj:.3f} nJ",
         err=True,
     )
     exit_codes = result.exit_codes if result else {}

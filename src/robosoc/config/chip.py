@@ -18,16 +18,16 @@ and loadable from TOML through :func:`load_chip_config`, whose errors name the f
 
     [noc]
     buffer_depth = 16
-    routing_latency = 6
+    arbiter = "hermes"      # or "per-output" (idealised router)
 
 Coordinates are ``(x, y)`` with ``0 <= x < width`` and ``0 <= y < height``; ``y`` grows northwards. The
 NoC address of a tile is ``(x << 4) | y`` (ORCA packet format), hence at most 16 tiles per side.
 
-Default routing latency: platform.md §4 says the Hermes RTL spends about 5 to 7 cycles per hop before a
-header is switched through, and the original Hermes paper counts a routing time per router plus the
-packet length. We take the middle of that range: a header waits :data:`HERMES_ROUTING_LATENCY` = 6 cycles
-at the head of an input buffer and crosses the switch and link in the 7th, so an uncontended header
-advances one router every 7 cycles, while body flits stream at 1 flit per cycle (credit-based Hermes).
+Router model (docs/noc.md): ``noc.arbiter = "hermes"`` (the default) is the ORCA Hermes router as measured
+on its RTL (platform.md §4): one switch-control state machine per router, an uncontended header costing
+5 cycles per router (:data:`HERMES_ROUTING_LATENCY` = 4 cycles at the head of the buffer, the crossing in
+the 5th) and body flits following at 1 flit per cycle. ``"per-output"`` is an idealised router with one
+round-robin arbiter per output port and a configurable routing latency, for comparing router designs.
 """
 
 from __future__ import annotations
@@ -35,11 +35,14 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Literal, get_args
 
 from robosoc.config.validate import load_toml
 
 __all__ = [
+    "ARBITERS",
     "HERMES_ROUTING_LATENCY",
+    "MIN_PACKET_FLITS",
     "ChipConfig",
     "NocConfig",
     "TileConfig",
@@ -47,10 +50,17 @@ __all__ = [
     "load_chip_config",
 ]
 
-#: Cycles a header waits at the head of an input buffer before it may be switched (see module docstring).
-HERMES_ROUTING_LATENCY = 6
+#: Router models: the Hermes RTL's single switch controller, or one idealised arbiter per output port.
+Arbiter = Literal["hermes", "per-output"]
+ARBITERS: tuple[str, ...] = get_args(Arbiter)
+#: Cycles an uncontended header spends at the head of an input buffer before it crosses (in the next
+#: cycle) on the Hermes RTL: 5 cycles per router, measured (platform.md §4, docs/noc.md).
+HERMES_ROUTING_LATENCY = 4
 #: Size of the NI send and receive memories in flits (128 bytes of 16-bit flits, ORCA).
 NI_MEMORY_FLITS = 64
+#: Shortest packet: destination, size and one payload flit. On the Hermes RTL a packet of size 0
+#: (2 flits) keeps its connection open and swallows the next packet (platform.md §4).
+MIN_PACKET_FLITS = 3
 MAX_MESH_SIDE = 16
 #: How the cores treat the HF-RISCV RTL's errata (see ``ChipConfig.errata``).
 ERRATA_CHOICES = ("spec", "rtl")
@@ -111,32 +121,44 @@ class NocConfig:
     """Hermes router and packet parameters.
 
     Attributes:
-        buffer_depth: flits per router input buffer (ORCA default 8, the paper 16). At least 2: with
-            one-slot buffers and a one-cycle credit loop a connection moves only one flit every 2 cycles.
+        buffer_depth: flits per router input buffer: 16 as in the seed's paper (the ORCA repository's
+            RTL uses 4). At least 2: with one-slot buffers and a one-cycle credit loop a connection
+            moves only one flit every 2 cycles.
         flit_bits: flit width; the ORCA packet format uses 16-bit flits.
         max_packet_flits: longest packet including the destination and size flits; at most the
             64-flit NI memories.
-        routing_latency: cycles a header waits at the head of an input buffer before it may be switched
-            (the per-hop header cost is ``routing_latency + 1``).
+        routing_latency: cycles an uncontended header waits at the head of an input buffer before it
+            crosses (the per-router header cost is ``routing_latency + 1``). Fixed at
+            :data:`HERMES_ROUTING_LATENCY` by the Hermes switch controller; free with ``"per-output"``.
+        arbiter: ``"hermes"``, the RTL's single switch controller per router (default), or
+            ``"per-output"``, an idealised router with one round-robin arbiter per output port.
     """
 
     buffer_depth: int = 16
     flit_bits: int = 16
     max_packet_flits: int = NI_MEMORY_FLITS
     routing_latency: int = HERMES_ROUTING_LATENCY
+    arbiter: Arbiter = "hermes"
 
     def __post_init__(self) -> None:
         if not 2 <= self.buffer_depth <= 256:
             raise ValueError(f"buffer_depth: must be between 2 and 256 flits, got {self.buffer_depth}")
         if self.flit_bits not in (16, 32):
             raise ValueError(f"flit_bits: must be 16 (ORCA) or 32, got {self.flit_bits}")
-        if not 2 <= self.max_packet_flits <= NI_MEMORY_FLITS:
+        if not MIN_PACKET_FLITS <= self.max_packet_flits <= NI_MEMORY_FLITS:
             raise ValueError(
-                f"max_packet_flits: must be between 2 and {NI_MEMORY_FLITS} (the NI memories), "
+                f"max_packet_flits: must be between {MIN_PACKET_FLITS} and {NI_MEMORY_FLITS} (the NI memories), "
                 f"got {self.max_packet_flits}"
             )
+        if self.arbiter not in ARBITERS:
+            raise ValueError(f"arbiter: must be one of {', '.join(map(repr, ARBITERS))}, got {self.arbiter!r}")
         if not 0 <= self.routing_latency <= 64:
             raise ValueError(f"routing_latency: must be between 0 and 64 cycles, got {self.routing_latency}")
+        if self.arbiter == "hermes" and self.routing_latency != HERMES_ROUTING_LATENCY:
+            raise ValueError(
+                f"routing_latency: the Hermes switch controller fixes it at {HERMES_ROUTING_LATENCY} "
+                f'(5 cycles per router), got {self.routing_latency}; use arbiter = "per-output" to vary it'
+            )
 
 
 @dataclass(frozen=True)

@@ -7,10 +7,11 @@ IRQ_CAUSE bit 1 is "a packet waits in the receive memory"; it rises the cycle af
 flit was written and stays up until RECV has copied the packet.
 
 Time (exact, deterministic): all tiles and the NoC advance in quanta [T, H).  While the NoC is
-idle, a packet sent in the quantum cannot reach any tile before T + 2R + 8 (store, DMA of at
-least 2 flits, two routers, two flits), so cores run first and the NoC catches up after them
-with the new injections at their exact cycles.  While the NoC carries flits, quanta are 5 cycles
-(the earliest a SEND started in the quantum can inject), the NoC runs first, and the deliveries
+idle, a packet sent in the quantum cannot be seen by any tile before T + G_LOOK_IDLE (store, DMA
+of at least 3 flits, two routers, the flits behind the header: docs/noc.md), so cores run first
+and the NoC catches up after them with the new injections at their exact cycles.  While the NoC
+carries flits, quanta are G_LOOK_ACTIVE = 6 cycles (the earliest a SEND or RECV started in the
+quantum can change the NoC), the NoC runs first, and the deliveries
 it makes are scheduled on the receiving cores before they run.  With one core awake and an idle
 NoC, the quantum stretches to the next wake-up.  An access to NI registers stops the core just
 before it (run_cores returns RUN_NI) and is performed here.  Sleeping cores cost nothing; their
@@ -263,7 +264,10 @@ def ni_access(t, st, ctr, opc, regs, m16, dec, cst, acc, snap, gst, cfg, glob, t
         if v == ni.CMD_SEND:
             n = cst[t, K_SEND_SIZE]
             a = cst[t, K_SEND_ADDR] - base
-            if n < 2 or n > nk.MEM_FLITS or a < 0 or a + 2 * n > size or (a & 1):
+            if n < nk.MIN_PACKET_FLITS:
+                _fault(cst, t, CE_BAD_PACKET, cst[t, K_SEND_ADDR], nk.STATUS_SHORT_PACKET)
+                return False
+            if n > nk.MEM_FLITS or a < 0 or a + 2 * n > size or (a & 1):
                 _fault(cst, t, CE_DMA_RANGE, cst[t, K_SEND_ADDR], n)
                 return False
             if _send_done(tile, t) > s:

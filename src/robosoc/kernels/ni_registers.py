@@ -9,7 +9,7 @@ offset  register     meaning
 ======  ===========  ==========================================================================
 0x00    NI_STATUS    read: bit 0 the send memory is busy (DMA or injection), bit 1 a packet waits
 0x04    SEND_ADDR    main-memory address of the packet to send (flits are 16-bit, little endian)
-0x08    SEND_SIZE    flits to send, header included
+0x08    SEND_SIZE    flits to send, header included (3..64)
 0x0c    NI_CMD       write 1: SEND (DMA copy, core stalled 1 cycle per flit, then injection);
                      write 2: RECV (DMA copy of the waiting packet to RECV_ADDR, core stalled
                      1 cycle per flit; the receive memory is free afterwards)

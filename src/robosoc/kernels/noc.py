@@ -3,8 +3,12 @@
 Model (see docs/noc.md for the full description and the latency formula):
 
 * A ``width`` × ``height`` mesh of 5-port routers (ports EAST, WEST, NORTH, SOUTH, LOCAL, Hermes order),
-  an input FIFO of ``depth`` flits per port, XY routing, wormhole switching, credit flow control and
-  one round-robin arbiter per output port.
+  an input FIFO of ``depth`` flits per port, XY routing, wormhole switching and credit flow control.
+* Two router models (``cfg[C_ARBITER]``): ``ARB_HERMES``, the Hermes RTL's single switch-control state
+  machine per router (request, select, route and check, connect, cross: at most one new connection
+  every 5 cycles, a failed attempt 3 cycles, output released 2 cycles after the tail), and
+  ``ARB_PER_OUTPUT``, an idealised router with one round-robin arbiter per output port and a routing
+  latency of ``cfg[C_RLAT]`` cycles.
 * Two-phase semantics: :func:`noc_step` first decides every request, grant and flit move from the state
   at the start of the cycle, then commits all moves (the cycle edge). A flit moves at most one hop per
   cycle and the result does not depend on the order in which routers are evaluated (``cfg[C_REVERSE]``
@@ -40,6 +44,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
+from robosoc.config.chip import ARBITERS, MIN_PACKET_FLITS
 from robosoc.kernels.core_layout import NEVER
 
 # ports (Hermes order)
@@ -51,9 +56,25 @@ SEND, RECV = 0, 1
 NONE = -1
 BIG = NEVER  # the same 'never' as the rest of the chip: times are compared across kernels
 
+# router models (cfg[C_ARBITER]), numbered as named in the chip configuration
+ARB_HERMES = ARBITERS.index("hermes")
+ARB_PER_OUTPUT = ARBITERS.index("per-output")
+
+# Hermes switch control (one state machine per router; RTL states in brackets). A buffer raises its
+# request the cycle after its header arrived at an idle buffer (or the second cycle after the previous
+# tail left it, if the header was queued behind that tail). SC_IDLE [S1] moves on when some request is
+# up; SC_SELECT [S2] picks, among the requests up in that cycle, the first input in cyclic port order
+# after the last one selected; SC_ROUTE [S3] computes the XY output and checks that it is free, else
+# goes back to SC_IDLE (a failed attempt: 3 cycles); SC_CONNECT [S4-S6] connects input and output;
+# in SC_CROSS [S7] the header crosses. Hence 5 cycles per connection, and an uncontended header that
+# arrived in cycle a crosses in a + 5 (requests a + 1, S1 a + 1 ... S7 a + 5): routing latency 4.
+SC_IDLE, SC_SELECT, SC_ROUTE, SC_CONNECT, SC_CROSS = range(5)
+HERMES_RELEASE = 2  # an output whose tail crossed in cycle c is free for a new connection from c + 2
+HERMES_MIN_ROUTER_CYCLES = 4  # request up in a cycle the controller is in SC_SELECT: crosses 3 later
+
 # cfg: constants
-C_WIDTH, C_HEIGHT, C_NTILES, C_DEPTH, C_RLAT, C_MAXPKT, C_FLITMASK, C_REVERSE = range(8)
-CFG_SIZE = 8
+C_WIDTH, C_HEIGHT, C_NTILES, C_DEPTH, C_RLAT, C_MAXPKT, C_FLITMASK, C_REVERSE, C_ARBITER = range(9)
+CFG_SIZE = 9
 
 # glob: scalars that change
 G_CYCLE = 0  # next cycle to simulate
@@ -68,24 +89,28 @@ G_HOPS = 8  # router-to-router flit moves (all time)
 G_INJECTED = 9  # flits injected by NIs (all time)
 G_EJECTED = 10  # flits written into receive memories (all time)
 G_CYCLE0 = 11  # cycle at which the counters started
-GLOB_SIZE = 12
+G_RTL_LOST = 12  # headers that would have been lost on the RTL (no room downstream in their crossing cycle)
+GLOB_SIZE = 13
 
 # port columns; an index p is both input port p and output port p of the router
 P_HEAD = 0  # input FIFO head slot
 P_COUNT = 1  # input FIFO occupancy
-P_WAIT = 2  # cycles the header at the head has waited for routing
+P_WAIT = 2  # per-output: cycles the header at the head has waited for routing
 P_CONN = 3  # output port this input is connected to, or NONE
 P_SENT = 4  # flits of the current packet already forwarded by this input
 P_TOTAL = 5  # flits of the current packet (known once flit 1 has passed), BIG before
 P_REQ = 6  # scratch: output requested this cycle, or NONE
 P_OWNER = 7  # input port holding this output, or NONE
-P_RR = 8  # round-robin pointer of this output: first input considered at the next grant
+P_RR = 8  # per-output: round-robin pointer of this output: first input considered at the next grant
 P_CREDIT = 9  # free slots in the downstream buffer as known to this output
 P_MOVE = 10  # scratch: this output moves a flit this cycle
 P_FLITS_IN = 11  # energy: flits written into this input buffer
 P_FLITS_OUT = 12  # energy: flits sent through this output
 P_BUSY = 13  # energy: cycles this input buffer held at least one flit at the cycle start
-PORT_COLS = 14
+P_HREQ = 14  # hermes: first cycle this input's request is up (its header at the head), BIG if none
+P_IDLE_AT = 15  # hermes: first cycle this input buffer was idle after its last tail left
+P_FREE_AT = 16  # hermes: first cycle this output may be connected again after its last tail
+PORT_COLS = 17
 
 # tile columns
 T_POWERED = 0  # core, memory and NI on (the router is always on)
@@ -111,7 +136,11 @@ T_SENT_PKTS = 19
 T_RECV_PKTS = 20
 T_SEND_FIRST = 21  # cycle the first flit of the last started packet entered the router
 T_SEND_DONE = 22  # first cycle after the last flit of the last packet entered the router
-TILE_COLS = 23
+T_SC_STATE = 23  # hermes: switch-control state SC_* of this cycle
+T_SC_SEL = 24  # hermes: input selected last (the selection starts after it)
+T_SC_OUT = 25  # hermes: output of the connection being made
+T_RTL_LOST = 26  # headers that would have been lost on the RTL at this router (see G_RTL_LOST)
+TILE_COLS = 27
 
 SEND_IDLE, SEND_PENDING, SEND_ACTIVE = 0, 1, 2
 RX_ACCEPT, RX_HELD = 0, 1
@@ -135,6 +164,7 @@ STATUS_BAD_LENGTH = 4  # size flit inconsistent with the send length, or too lon
 STATUS_SRC_OFF = 5  # the sending tile is powered off
 STATUS_NI_BUSY = 6  # send requested while the NI is still sending
 STATUS_EVENTS_FULL = 7  # a delivery event was lost: the ev array was full
+STATUS_SHORT_PACKET = 8  # fewer than MIN_PACKET_FLITS flits
 STATUS_TEXT = {
     STATUS_OK: "ok",
     STATUS_DEST_OFF: "destination tile is powered off",
@@ -144,6 +174,8 @@ STATUS_TEXT = {
     STATUS_SRC_OFF: "sending tile is powered off",
     STATUS_NI_BUSY: "network interface is still sending",
     STATUS_EVENTS_FULL: "delivery event buffer overflowed",
+    STATUS_SHORT_PACKET: f"packet shorter than {MIN_PACKET_FLITS} flits (destination, size, at least one payload "
+    "flit): on the Hermes RTL it would keep its connection open and swallow the next packet",
 }
 
 
@@ -172,6 +204,7 @@ def noc_alloc(
     queue_rows: int = 0,
     rx_auto_free: int = NONE,
     reverse: bool = False,
+    arbiter: str = "hermes",
 ) -> NocState:
     """Allocate an empty, idle NoC at cycle 0 (plain numpy; parameters are checked by ChipConfig).
 
@@ -181,6 +214,7 @@ def noc_alloc(
         queue_rows: rows of the packet queue (0 if the caller drives the send memories itself).
         rx_auto_free: NONE to let software free receive memories, else the delay in cycles.
         reverse: evaluate routers in reverse index order (test hook; results must not change).
+        arbiter: router model, one of ``config.chip.ARBITERS``.
     """
     n = width * height
     cfg = np.zeros(CFG_SIZE, np.int64)
@@ -188,6 +222,7 @@ def noc_alloc(
     cfg[C_DEPTH], cfg[C_RLAT], cfg[C_MAXPKT] = depth, routing_latency, max_packet_flits
     cfg[C_FLITMASK] = (1 << flit_bits) - 1
     cfg[C_REVERSE] = int(reverse)
+    cfg[C_ARBITER] = ARBITERS.index(arbiter)
     glob = np.zeros(GLOB_SIZE, np.int64)
     buf = np.zeros((n, NPORTS, depth), np.int64)
     port = np.zeros((n, NPORTS, PORT_COLS), np.int64)
@@ -196,6 +231,7 @@ def noc_alloc(
     port[:, :, P_REQ] = NONE
     port[:, :, P_OWNER] = NONE
     port[:, :, P_CREDIT] = depth
+    port[:, :, P_HREQ] = BIG
     tile = np.zeros((n, TILE_COLS), np.int64)
     tile[:, T_POWERED] = 1 if powered is None else np.asarray(powered, dtype=np.int64)
     tile[:, T_SEND_ROW] = NONE
@@ -207,6 +243,8 @@ def noc_alloc(
     tile[:, T_Q_HEAD] = NONE
     tile[:, T_Q_TAIL] = NONE
     tile[:, T_SEND_FIRST] = NONE
+    tile[:, T_SC_STATE] = SC_IDLE
+    tile[:, T_SC_SEL] = EAST  # after reset the selection starts after EAST
     mem = np.zeros((n, 2, MEM_FLITS), np.int64)
     ev = np.zeros((max(event_capacity, 1), EV_COLS), np.int64)
     queue = np.zeros((queue_rows, Q_COLS), np.int64)
@@ -222,6 +260,20 @@ def noc_restore(state: NocState, snapshot: NocState) -> None:
     """Copy ``snapshot`` back into ``state`` in place (arrays keep their identity)."""
     for dst, src in zip(state, snapshot, strict=True):
         np.copyto(dst, src)
+
+
+def min_router_cycles(arbiter: int, routing_latency: int) -> int:
+    """Fewest cycles from a header's arrival in a router's input buffer to its crossing (docs/noc.md).
+
+    Per-output: the header waits ``routing_latency`` cycles at the head, then crosses. Hermes: its
+    request is up the cycle after it arrives and, if the switch controller is already in SC_SELECT then
+    (another input asked a cycle earlier), it crosses 3 cycles later: one cycle less than uncontended.
+    This is also the router's lookahead: a packet entering in cycle s changes no other flit move before
+    s + min_router_cycles.
+    """
+    if arbiter == ARB_HERMES:
+        return HERMES_MIN_ROUTER_CYCLES
+    return routing_latency + 1
 
 
 @njit(cache=True)
@@ -271,7 +323,9 @@ def noc_check_packet(cfg, tile, mem, t, length):
     """Validate the packet in tile ``t``'s send memory; returns a STATUS_* code (0 if it may be sent)."""
     if tile[t, T_POWERED] == 0:
         return STATUS_SRC_OFF
-    if length < 2 or length > cfg[C_MAXPKT] or mem[t, SEND, 1] + 2 != length:
+    if length < MIN_PACKET_FLITS:
+        return STATUS_SHORT_PACKET
+    if length > cfg[C_MAXPKT] or mem[t, SEND, 1] + 2 != length:
         return STATUS_BAD_LENGTH
     dest = mem[t, SEND, 0]
     dx = dest >> 4
@@ -372,13 +426,23 @@ def _deliver(glob, tile, mem, ev, t, cycle):
 
 
 @njit(cache=True, inline="always")
+def _room(port, tile, t, o):
+    """Output ``o`` of router ``t`` may send a flit this cycle: a credit, or a receive memory accepting."""
+    if o == LOCAL:
+        return tile[t, T_RX_STATE] == RX_ACCEPT and tile[t, T_RX_COUNT] < MEM_FLITS
+    return port[t, o, P_CREDIT] > 0
+
+
+@njit(cache=True, inline="always")
 def noc_step(cfg, glob, buf, port, tile, mem, ev, queue, cycle):
     """Simulate one NoC cycle ``cycle``: decide everything from the cycle-start state, then commit.
 
     Phase 1 (per tile, any order): the NI applies what was scheduled for this edge (automatic receive
     free, loading a queued packet, a pending send reaching its start cycle) and decides whether it
-    injects; the router counts routing waits, raises requests, lets each free output grant one request
-    round-robin and decides which outputs move a flit (owner has a flit, downstream has a credit).
+    injects; the router raises requests, decides which connected outputs move a flit (owner has a flit,
+    downstream has a credit) and advances its arbitration: the Hermes switch controller by one state
+    (a connection it makes carries flits from the next cycle), or, per output, each free output grants
+    one request round-robin (its header moves in the same cycle). Only the router's own state changes.
     Phase 2 (per tile, any order): the moves are committed. Every buffer sees at most one pop (its own
     connection) and one push (its single upstream), and pushes were allowed by the cycle-start credits,
     so commits of different tiles commute.
@@ -393,6 +457,7 @@ def noc_step(cfg, glob, buf, port, tile, mem, ev, queue, cycle):
     depth = cfg[C_DEPTH]
     rlat = cfg[C_RLAT]
     reverse = cfg[C_REVERSE] != 0
+    hermes = cfg[C_ARBITER] == ARB_HERMES
     # ---------------------------------------------------------------- phase 1: decide
     for i in range(n):
         t = n - 1 - i if reverse else i
@@ -411,8 +476,64 @@ def noc_step(cfg, glob, buf, port, tile, mem, ev, queue, cycle):
         # router
         tile[t, T_MOVES] = 0
         if tile[t, T_RFLITS] == 0:
-            continue
+            continue  # (an empty router's switch controller is idle: it only serves headers present)
         tile[t, T_BUSY] += 1
+        if hermes:
+            asking = False  # some input's request is up in this cycle
+            for p in range(NPORTS):
+                if port[t, p, P_COUNT] > 0:
+                    port[t, p, P_BUSY] += 1
+                    if port[t, p, P_CONN] == NONE:
+                        if port[t, p, P_HREQ] == BIG:
+                            # a header is at the head for the first time: the request is up now, or
+                            # next cycle if the buffer only became idle now (queued behind a tail)
+                            port[t, p, P_HREQ] = cycle + 1 if port[t, p, P_IDLE_AT] == cycle else cycle
+                        if port[t, p, P_HREQ] <= cycle:
+                            asking = True
+            # flit moves of the existing connections
+            for o in range(NPORTS):
+                owner = port[t, o, P_OWNER]
+                if owner != NONE and port[t, owner, P_COUNT] > 0 and _room(port, tile, t, o):
+                    port[t, o, P_MOVE] = 1
+                    tile[t, T_MOVES] = 1
+            # the switch controller (its connection takes effect from the next cycle)
+            sc = tile[t, T_SC_STATE]
+            if sc == SC_IDLE:
+                if asking:
+                    sc = SC_SELECT
+            elif sc == SC_SELECT:
+                sc = SC_IDLE  # (unreachable: a request stays up until its connection is made)
+                last = tile[t, T_SC_SEL]
+                for k in range(1, NPORTS + 1):
+                    p = last + k
+                    if p >= NPORTS:
+                        p -= NPORTS
+                    if port[t, p, P_HREQ] <= cycle:
+                        tile[t, T_SC_SEL] = p
+                        sc = SC_ROUTE
+                        break
+            elif sc == SC_ROUTE:
+                p = tile[t, T_SC_SEL]
+                o = _route(width, t, buf[t, p, port[t, p, P_HEAD]])
+                if port[t, o, P_OWNER] == NONE and port[t, o, P_FREE_AT] <= cycle:
+                    tile[t, T_SC_OUT] = o
+                    sc = SC_CONNECT
+                else:
+                    sc = SC_IDLE  # failed attempt: the output is still held
+            elif sc == SC_CONNECT:
+                p = tile[t, T_SC_SEL]
+                o = tile[t, T_SC_OUT]
+                port[t, o, P_OWNER] = p
+                port[t, p, P_CONN] = o
+                port[t, p, P_HREQ] = BIG
+                sc = SC_CROSS
+            else:  # SC_CROSS: the header crosses now; on the RTL it is lost if there is no room
+                if port[t, tile[t, T_SC_OUT], P_MOVE] == 0:
+                    tile[t, T_RTL_LOST] += 1
+                    glob[G_RTL_LOST] += 1
+                sc = SC_IDLE
+            tile[t, T_SC_STATE] = sc
+            continue
         requested = 0  # bit o: some input requests output o
         for p in range(NPORTS):
             port[t, p, P_REQ] = NONE
@@ -427,6 +548,7 @@ def noc_step(cfg, glob, buf, port, tile, mem, ev, queue, cycle):
                         requested |= 1 << o
         for o in range(NPORTS):
             owner = port[t, o, P_OWNER]
+            granted = False
             if owner == NONE and (requested >> o) & 1:
                 first = port[t, o, P_RR]
                 for k in range(NPORTS):
@@ -435,19 +557,19 @@ def noc_step(cfg, glob, buf, port, tile, mem, ev, queue, cycle):
                         p -= NPORTS
                     if port[t, p, P_REQ] == o:
                         owner = p
+                        granted = True
                         port[t, o, P_OWNER] = p
                         port[t, p, P_CONN] = o
                         port[t, p, P_REQ] = NONE  # scratch left clean: empty routers are skipped
                         port[t, o, P_RR] = p + 1 if p + 1 < NPORTS else 0
                         break
             if owner != NONE and port[t, owner, P_COUNT] > 0:
-                if o == LOCAL:
-                    ok = tile[t, T_RX_STATE] == RX_ACCEPT and tile[t, T_RX_COUNT] < MEM_FLITS
-                else:
-                    ok = port[t, o, P_CREDIT] > 0
-                if ok:
+                if _room(port, tile, t, o):
                     port[t, o, P_MOVE] = 1
                     tile[t, T_MOVES] = 1
+                elif granted:  # the header would cross in its grant cycle: lost on the RTL
+                    tile[t, T_RTL_LOST] += 1
+                    glob[G_RTL_LOST] += 1
     # ---------------------------------------------------------------- phase 2: commit at the edge
     for i in range(n):
         t = n - 1 - i if reverse else i
@@ -532,9 +654,11 @@ def noc_step(cfg, glob, buf, port, tile, mem, ev, queue, cycle):
             sent += 1
             if sent == port[t, p, P_TOTAL]:
                 port[t, o, P_OWNER] = NONE
+                port[t, o, P_FREE_AT] = cycle + HERMES_RELEASE
                 port[t, p, P_CONN] = NONE
                 port[t, p, P_TOTAL] = BIG
                 port[t, p, P_WAIT] = 0
+                port[t, p, P_IDLE_AT] = cycle + 1
                 sent = 0
             port[t, p, P_SENT] = sent
     glob[G_CYCLE] = cycle + 1

@@ -2,7 +2,9 @@
  * hf_noc.h - the network interface of an MPSoC tile (docs/platform.md, "Network interface").
  *
  * Packets are arrays of 16-bit flits in the ORCA wire format: flit 0 is the destination
- * (x << 4) | y, flit 1 the number of flits that follow, then the payload.  SEND copies the
+ * (x << 4) | y, flit 1 the number of flits that follow, then the payload: 3 to 64 flits in all
+ * (at least one payload flit: on the Hermes RTL an empty packet swallows the next one, so the
+ * NI refuses it and the run stops with an error naming the tile and pc).  SEND copies the
  * packet into the NI by DMA (the core stalls one cycle per flit) and injects it; RECV copies
  * the waiting packet out (one cycle per flit) and frees the receive memory.  IRQ_CAUSE bit 1
  * is up while a packet waits.
@@ -17,7 +19,7 @@
 #define HF_NI_BASE 0xe1040000u
 #define HF_NI_STATUS (HF_NI_BASE + 0x00u)     /* bit 0 send busy, bit 1 packet waiting */
 #define HF_NI_SEND_ADDR (HF_NI_BASE + 0x04u)
-#define HF_NI_SEND_SIZE (HF_NI_BASE + 0x08u)
+#define HF_NI_SEND_SIZE (HF_NI_BASE + 0x08u)  /* flits, header included: 3..64 */
 #define HF_NI_CMD (HF_NI_BASE + 0x0cu)        /* 1 SEND, 2 RECV */
 #define HF_NI_RECV_ADDR (HF_NI_BASE + 0x10u)
 #define HF_NI_RECV_SIZE (HF_NI_BASE + 0x14u)  /* flits of the waiting packet, 0 if none */
@@ -31,6 +33,7 @@
 #define HF_NI_RECV_READY (1u << 1)
 #define HF_IRQ_NI (1u << 1)                   /* IRQ_CAUSE / IRQ_MASK bit of the network interface */
 #define HF_NI_MAX_FLITS 64
+#define HF_NI_MIN_FLITS 3
 
 static inline uint32_t hf_tile(void) { return HF_REG32(HF_NI_TILE); }
 static inline uint32_t hf_tile_x(void) { return HF_REG32(HF_NI_TILE) >> 4; }
@@ -62,7 +65,7 @@ static inline void hf_wait_for(volatile uint32_t *flag)
     hf_irq_restore(state);
 }
 
-/* Send `n` flits from `packet` (flit 0 and 1 already filled); waits for the send memory first. */
+/* Send `n` flits (3..64) from `packet` (flit 0 and 1 already filled); waits for the send memory first. */
 static inline void hf_ni_send(const uint16_t *packet, uint32_t n)
 {
     while (HF_REG32(HF_NI_STATUS) & HF_NI_SEND_BUSY) {
@@ -72,7 +75,7 @@ static inline void hf_ni_send(const uint16_t *packet, uint32_t n)
     HF_REG32(HF_NI_CMD) = 1u;
 }
 
-/* Build and send a packet to tile `dest` with `len` payload flits. */
+/* Build and send a packet to tile `dest` with `len` payload flits (1..62). */
 static inline void hf_ni_send_to(uint32_t dest, const uint16_t *payload, uint32_t len, uint16_t *buffer)
 {
     buffer[0] = (uint16_t)dest;
