@@ -76,3 +76,20 @@ def test_quanta_give_the_lockstep_results_with_packets_from_the_io_tile(arbiter:
     received = sum(c["packets_received"] for c in fast[2].values())
     assert received == 4 * 3 * 2 + 9  # all-to-all traffic plus the nine injected packets
     assert fast == slow
+
+
+@pytest.mark.parametrize("arbiter", ["hermes", "per-output"])
+def test_send_status_polls_see_the_network_of_their_cycle(arbiter: str):
+    # 3-flit packets through 2-flit buffers: when the send memory frees up depends on the routers,
+    # so every NI_STATUS poll needs the network as it is in the poll's own cycle
+    program = load_elf(build_elf([Path(__file__).parent / "programs" / "send_burst.c"], mul=True))
+
+    def one(lockstep: bool):
+        chip = MPSoC(ChipConfig(noc=NocConfig(buffer_depth=2, arbiter=arbiter)), lockstep=lockstep)
+        chip.load((1, 0), program)
+        result = chip.run(max_cycles=1_000_000)
+        return result.cycles, result.io_received, chip.counters((1, 0))
+
+    fast, slow = one(False), one(True)
+    assert len(fast[1]) == 20
+    assert fast == slow

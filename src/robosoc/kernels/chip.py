@@ -32,6 +32,7 @@ from robosoc.kernels.core_layout import (
     CTR_SIZE,
     NEVER,
     OPC_SIZE,
+    RUN_CHUNK,
     RUN_ERROR,
     RUN_EXIT,
     RUN_NI,
@@ -507,45 +508,65 @@ def run_chip(
                 run[k] = t
                 k += 1
         run_cores(st, ctr, opc, regs, m8, m16, m32, dec, out, run[:k], H)
+        # Stopped cores are handled in global cycle order, so that an NI access sees the network
+        # exactly as it is in its cycle: in an idle quantum the NoC is brought up to the access
+        # first, with every packet sent before it by any core (a send cannot reach another tile
+        # within the quantum, but it can hold up the sender's own injection, which NI_STATUS shows).
         failed = -1
-        for r in range(k):
-            t = run[r]
-            while True:
-                why = st[t, S_RUN]
-                if why == RUN_NI:
-                    s0 = st[t, S_CYCLE]
-                    sent = cst[t, K_SENT]
-                    received = cst[t, K_RECEIVED]
-                    if not ni_access(t, st, ctr, opc, regs, m16, dec, cst, acc, snap, gst, cfg, glob, tile, mem):
-                        failed = t
+        while True:
+            t = -1
+            for r in range(k):
+                u = run[r]
+                if cst[u, K_STATE] != K_RUN or (st[u, S_RUN] == RUN_CHUNK and st[u, S_CYCLE] >= H):
+                    continue
+                if t < 0 or st[u, S_CYCLE] < st[t, S_CYCLE]:
+                    t = u
+            if t < 0:
+                break
+            why = st[t, S_RUN]
+            if why == RUN_NI:
+                s0 = st[t, S_CYCLE]
+                sent = cst[t, K_SENT]
+                received = cst[t, K_RECEIVED]
+                if not active and not quiet:
+                    _noc_advance(cfg, glob, buf, port, tile, mem, ev, queue, cst, s0)
+                    if glob[nk.G_STATUS] != nk.STATUS_OK:
                         break
-                    if cst[t, K_SENT] != sent or cst[t, K_RECEIVED] != received:
-                        quiet = False
-                    if cst[t, K_SENT] != sent and s0 + look_idle < H:
-                        # a packet left: nobody may run past the first cycle it could be answered
-                        # (only shrinks a quantum with a single awake core)
-                        H = s0 + look_idle
-                    if cst[t, K_STATE] == K_SLEEP and cst[t, K_WAKE] < H:
-                        # asleep and due again within this quantum: wake it right away
-                        _wake_if_due(t, st, cst, H)
-                    if cst[t, K_STATE] != K_RUN:
-                        break
-                elif why == RUN_OUTPUT:
-                    _keep_output(t, st, cst, out, xout)
-                elif why == RUN_EXIT:
-                    cst[t, K_STATE] = K_EXITED
-                    break
-                elif why == RUN_ERROR:
-                    cst[t, K_STATE] = K_FAULT
+                    if glob[nk.G_NEV] != 0:
+                        _take_deliveries(st, cst, gst, glob, ev, io_out)
+                if not ni_access(t, st, ctr, opc, regs, m16, dec, cst, acc, snap, gst, cfg, glob, tile, mem):
                     failed = t
                     break
-                elif st[t, S_CYCLE] >= H:
-                    break
-                one[0] = t
-                run_cores(st, ctr, opc, regs, m8, m16, m32, dec, out, one, H)
-            if failed >= 0:
+                if cst[t, K_SENT] != sent or cst[t, K_RECEIVED] != received:
+                    if quiet:
+                        glob[nk.G_CYCLE] = s0  # the network was idle up to here
+                    quiet = False
+                if cst[t, K_SENT] != sent and s0 + look_idle < H:
+                    # a packet left: nobody may run past the first cycle it could be answered
+                    # (only shrinks a quantum with a single awake core)
+                    H = s0 + look_idle
+                if cst[t, K_STATE] == K_SLEEP and cst[t, K_WAKE] < H:
+                    # asleep and due again within this quantum: wake it right away
+                    _wake_if_due(t, st, cst, H)
+                if cst[t, K_STATE] != K_RUN:
+                    continue
+            elif why == RUN_OUTPUT:
+                _keep_output(t, st, cst, out, xout)
+            elif why == RUN_EXIT:
+                cst[t, K_STATE] = K_EXITED
+                continue
+            elif why == RUN_ERROR:
+                cst[t, K_STATE] = K_FAULT
+                failed = t
                 break
-            _keep_output(t, st, cst, out, xout)
+            one[0] = t
+            run_cores(st, ctr, opc, regs, m8, m16, m32, dec, out, one, H)
+        if glob[nk.G_STATUS] != nk.STATUS_OK:
+            status = CHIP_ERROR
+            gst[G_ERR_TILE] = -1
+            break
+        for r in range(k):
+            _keep_output(run[r], st, cst, out, xout)
         if failed >= 0:
             gst[G_ERR_TILE] = failed
             status = CHIP_ERROR
