@@ -228,3 +228,31 @@ def test_altitude_filter_hand_checked_and_tracks_a_climb() -> None:
         alt.step(level, np.array([0.0, 0.0, 10.8]), 11.8 + 0.2 + 0.5 * t * t, 0.01)
     assert alt.height == pytest.approx(0.2 + 0.5 * 9.0, abs=0.01)
     assert alt.velocity == pytest.approx(3.0, abs=0.02)
+
+
+def test_altitude_filter_scalars_match_the_matrix_form() -> None:
+    """The scalar code against the documented matrix equations, run side by side in numpy."""
+    alt = AltitudeFilter()
+    alt.reset(baro_ground=11.0, rest_height=0.2)
+    p = alt.params
+    x = np.array([0.2, 0.0, 0.0])
+    cov = np.diag([p.baro_noise**2, 0.01**2, p.initial_bias_sigma**2])
+    dt = 0.01
+    f = np.array([[1.0, dt, -0.5 * dt * dt], [0.0, 1.0, -dt], [0.0, 0.0, 1.0]])
+    g = np.array([0.5 * dt * dt, dt, 0.0])
+    h = np.array([1.0, 0.0, 0.0])
+    rng = np.random.default_rng(3)
+    for _ in range(300):
+        c, s = np.cos(0.1), np.sin(0.1)
+        rotation = np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])  # rolled 0.1 rad
+        accel = np.array([0.0, 0.0, 9.8]) + rng.normal(0.0, 0.5, 3)
+        baro = 10.8 + rng.normal(0.0, 0.3)
+        alt.step(rotation, accel, baro, dt)
+        a = rotation[2] @ accel - 9.8
+        x = f @ x + g * a
+        cov = f @ cov @ f.T + np.outer(g, g) * p.accel_noise**2 + np.diag([0.0, 0.0, p.bias_walk**2 * dt])
+        gain = cov @ h / (h @ cov @ h + p.baro_noise**2)
+        x = x + gain * (baro - 10.8 - h @ x)
+        cov = cov - np.outer(gain, h @ cov)
+    np.testing.assert_allclose([alt.height, alt.velocity, alt.b], x, rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(alt.covariance, cov, rtol=1e-9, atol=1e-15)
