@@ -137,9 +137,9 @@ def test_climbs_of_any_size_keep_the_default_steps_and_do_not_overshoot(height: 
 
 
 def _updraft(idle_pwm: int) -> tuple[np.ndarray, np.ndarray]:
-    """Hover at 1 m with a 10° roll step at 5 s while an 8 m/s updraft (4.5–6 s) lifts the vehicle:
-    its drag (0.1·8² = 6.4 N) leaves less to carry than four idle rotors give (6.7 N)."""
-    gust = GustConfig(start_s=4.5, duration_s=1.5, rise_s=0.3, velocity=(0.0, 0.0, 8.0))
+    """Hover at 1 m with a 10° roll step at 5 s while a 10 m/s updraft (4.5–6 s) lifts the vehicle:
+    its drag (0.1·10² = 10 N) leaves 4.5 N to carry, less than four idle rotors give (6.7 N)."""
+    gust = GustConfig(start_s=4.5, duration_s=1.5, rise_s=0.3, velocity=(0.0, 0.0, 10.0))
     plan = FlightPlan(steps=(SCENARIO.flight.steps[0],))
     scenario = ScenarioConfig(duration_s=6.5, wind=WindConfig(gusts=(gust,)), flight=plan)
     vehicle = dataclasses.replace(vehicle_preset("default"), idle_pwm=idle_pwm)
@@ -155,9 +155,9 @@ def test_motors_keep_the_idle_minimum_and_attitude_authority_when_thrust_must_dr
     roll_error, pwm = _updraft(idle_pwm=50)
     assert pwm.min() == 50  # the floor is reached ...
     assert (pwm == 50).any(axis=1).sum() > 20  # ... for a while
-    assert roll_error.max() < 2.5
+    assert roll_error.max() < 3.0
     # The same flight with no floor: the motors drop towards PWM 0, where this motor model gives
     # every rotor the same free-spinning thrust, and roll control loses its grip.
     roll_error, pwm = _updraft(idle_pwm=0)
     assert pwm.min() < 10
-    assert roll_error.max() > 4.0
+    assert roll_error.max() > 5.0

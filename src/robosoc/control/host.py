@@ -18,8 +18,9 @@ Per sensor sample (the seed runs the whole chain once per sample):
 5. **Mixer** (:mod:`robosoc.control.mixer`): equation 3 with desaturation, PWM counts in
    [idle_pwm, 255] (0 while disarmed).
 
-Gains (see docs/physics.md for the tuning): roll/pitch are PD-dominant with K_p = 100·I_xx and
-K_d = 20·I_xx (hector's own attitude loop: natural frequency 10 rad/s, damping 1); yaw K_p = 0.3,
+Gains (see docs/physics.md for the tuning): roll/pitch are PD-dominant with K_p = 150·I_xx and
+K_d = 25·I_xx (natural frequency 12.2 rad/s, damping 1.0; hector's own attitude loop has 100 and
+20, 10 rad/s, which leaves longer step tails through the 66 ms motor lag); yaw K_p = 0.3,
 K_d = 0.12 on I_zz = 0.0218 (about 3.7 rad/s: the yaw authority through rotor drag is small);
 height K_p = 3·m·ω², K_i = m·ω³, K_d = 3·m·ω (a triple pole at ω = 2.5 rad/s), so the commanded
 vertical speed is ω = 2.5 m/s per metre of height error.
@@ -73,8 +74,8 @@ def default_gains(vehicle: VehicleConfig) -> ControllerGains:
     m = vehicle.mass
     wn_z = 2.5
     return ControllerGains(
-        roll=PidGains(kp=100.0 * ixx, ki=20.0 * ixx, kd=20.0 * ixx, integral_limit=0.2, output_limit=1.5),
-        pitch=PidGains(kp=100.0 * iyy, ki=20.0 * iyy, kd=20.0 * iyy, integral_limit=0.2, output_limit=1.5),
+        roll=PidGains(kp=150.0 * ixx, ki=20.0 * ixx, kd=25.0 * ixx, integral_limit=0.2, output_limit=1.5),
+        pitch=PidGains(kp=150.0 * iyy, ki=20.0 * iyy, kd=25.0 * iyy, integral_limit=0.2, output_limit=1.5),
         yaw=PidGains(kp=0.3, ki=0.05, kd=0.12, integral_limit=0.5, output_limit=0.3),
         height=PidGains(
             kp=3.0 * m * wn_z**2,
