@@ -256,3 +256,14 @@ def test_altitude_filter_scalars_match_the_matrix_form() -> None:
         cov = cov - np.outer(gain, h @ cov)
     np.testing.assert_allclose([alt.height, alt.velocity, alt.b], x, rtol=1e-9, atol=1e-12)
     np.testing.assert_allclose(alt.covariance, cov, rtol=1e-9, atol=1e-15)
+
+
+def test_altitude_reference_from_many_samples_is_trusted_accordingly() -> None:
+    # The ground reference is the mean of N barometer readings: uncertain by σ_baro/√N, so one
+    # noisy reading right after take-off moves the estimate by K = P/(P + σ²) ≈ 1/(N + 1) of its error.
+    level, rest = np.eye(3), np.array([0.0, 0.0, 9.8])
+    for samples, expected in ((1, 0.15), (100, 0.3 / 101)):
+        alt = AltitudeFilter()
+        alt.reset(baro_ground=12.0, rest_height=0.2, samples=samples)
+        assert alt.covariance[0, 0] == pytest.approx(0.01 / samples)
+        assert alt.step(level, rest, 12.0 + 0.3, 0.01) - 0.2 == pytest.approx(expected, rel=1e-3)

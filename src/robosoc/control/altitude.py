@@ -72,11 +72,12 @@ class AltitudeFilter:
             [[self.p00, self.p01, self.p02], [self.p01, self.p11, self.p12], [self.p02, self.p12, self.p22]]
         )
 
-    def reset(self, baro_ground: float, rest_height: float) -> None:
-        """Calibrate: ``baro_ground`` is the mean barometer altitude while resting at ``rest_height``."""
+    def reset(self, baro_ground: float, rest_height: float, samples: int = 1) -> None:
+        """Calibrate: ``baro_ground`` is the mean of ``samples`` barometer altitudes taken while
+        resting at ``rest_height``, so the reference is uncertain by σ_baro/√samples."""
         self.reference = baro_ground - rest_height
         self.h, self.v, self.b = rest_height, 0.0, 0.0
-        self.p00 = self.params.baro_noise**2
+        self.p00 = self.params.baro_noise**2 / max(1, samples)
         self.p11 = 0.01**2
         self.p22 = self.params.initial_bias_sigma**2
         self.p01 = self.p02 = self.p12 = 0.0

@@ -176,7 +176,7 @@ class HostController:
         q0 = quat.from_accel_mag(mean[3:6] - self.accel_bias, mean[6:9])
         n = np.sqrt(self._count)
         self.ekf.reset(q0, bias=mean[0:3], quat_sigma=CALIBRATED_QUAT_SIGMA, bias_sigma=GYRO_NOISE / n)
-        self.altitude.reset(float(mean[9]), self.vehicle.rest_height)
+        self.altitude.reset(float(mean[9]), self.vehicle.rest_height, self._count)
 
     def step(self, sample, setpoint: Setpoint) -> tuple[int, int, int, int]:
         """Consume one sensor sample; return the four PWM counts to apply now."""
