@@ -51,3 +51,16 @@ def test_bench_physics_prints_the_summary_line() -> None:
     last = result.output.strip().splitlines()[-1]
     assert last.startswith("physics: ") and last.endswith("x real time")
     assert float(last.split()[1].rstrip("x")) > 0
+
+
+def test_fly_prints_which_fields_came_from_the_scenario_file(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.chdir(tmp_path)
+    Path("h2.toml").write_text("[flight]\nheight_m = 2.0\n[sensors]\nnoise = false\n")
+    result = runner.invoke(app, ["fly", "--scenario", "h2.toml", "--seconds", "0.5", "--no-out"])
+    assert result.exit_code == 0, result.output
+    assert "from h2.toml: flight.height_m, sensors.noise" in result.output
+    assert "from --seconds: duration_s" in result.output
+    assert "every other field: built-in default" in result.output
+    result = runner.invoke(app, ["fly", "--seconds", "0.5", "--no-out"])
+    assert result.exit_code == 0, result.output
+    assert "from --seconds: duration_s" in result.output and "h2.toml" not in result.output

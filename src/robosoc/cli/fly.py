@@ -33,10 +33,11 @@ def fly_command(
 ) -> None:
     """Fly the scenario (default: take off to 1 m, hover, 10° roll/pitch/yaw steps, a gust; 10 s)."""
     from rich.console import Console
+    from rich.markup import escape
     from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
 
     from robosoc.config.scenario import ScenarioConfig
-    from robosoc.config.validate import ConfigError, load_toml, replace_checked
+    from robosoc.config.validate import ConfigError, load_toml_named, replace_checked
     from robosoc.config.vehicle import vehicle_preset
     from robosoc.control.flight import flight_metrics, fly
     from robosoc.control.flight_log import CsvFlightLog
@@ -50,15 +51,21 @@ def fly_command(
     if controller != "host":
         console.print(f"[red]--controller: must be host or chip, got {controller!r}[/red]")
         raise typer.Exit(2)
+    sources: list[tuple[str, tuple[str, ...]]] = []
     try:
-        config = load_toml(ScenarioConfig, scenario) if scenario else ScenarioConfig()
+        config = ScenarioConfig()
+        if scenario:
+            config, named = load_toml_named(ScenarioConfig, scenario)
+            sources.append((str(scenario), named))
         if seconds is not None:
             config = replace_checked(config, duration_s=seconds)
+            sources.append(("--seconds", ("duration_s",)))
         if vehicle is not None:
             config = replace_checked(config, vehicle=vehicle)
+            sources.append(("--vehicle", ("vehicle",)))
         craft = vehicle_preset(config.vehicle)
     except (ConfigError, ValueError) as exc:
-        console.print(f"[red]{exc}[/red]")
+        console.print(escape(str(exc)), style="red")
         raise typer.Exit(2) from exc
 
     if out is None and not no_out:
@@ -67,7 +74,7 @@ def fly_command(
         out = None
     if out is not None:
         out.mkdir(parents=True, exist_ok=True)
-    pilot = HostController(craft, config.sensors.period_steps * 0.001)
+    pilot = HostController.for_scenario(config, craft)
     log = CsvFlightLog(out / "flight.csv") if out else None
     renderer = sink = None
     if video is not None:
@@ -90,6 +97,9 @@ def fly_command(
         f"flying scenario [bold]{config.name}[/bold] for {config.duration_s:g} s, vehicle {config.vehicle}, "
         f"controller host, seed {seed}, sensors at {config.sensors.rate_hz:g} Hz"
     )
+    for source, named in sources:
+        console.print(escape(f"from {source}: {', '.join(named) if named else '(no fields)'}"))
+    console.print("every other field: built-in default" if sources else "all fields: built-in defaults")
     try:
         with Progress(
             TextColumn("flight"),
@@ -112,11 +122,13 @@ def fly_command(
         if sink is not None:
             sink.close()
 
-    m = flight_metrics(rows, config.flight)
+    m = flight_metrics(rows, config.flight, craft.rest_height)
     console.print(
         f"hover height error (RMS, after the climb): {_fmt(m.hover_rms * 100, 'cm')}"
-        f"  (max {_fmt(m.hover_max * 100, 'cm')})"
+        f"  (max {_fmt(m.hover_max * 100, 'cm')}); overshoot {_fmt(m.overshoot * 100, 'cm')}"
     )
+    if m.min_pwm_armed >= 0:
+        console.print(f"lowest motor PWM while armed: {m.min_pwm_armed} (idle {craft.idle_pwm})")
     console.print(
         "attitude tracking error (RMS, 0.5 s after steps excluded): "
         f"roll {_fmt(m.tracking_rms[0], 'deg')}, pitch {_fmt(m.tracking_rms[1], 'deg')}, "

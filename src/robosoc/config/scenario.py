@@ -1,28 +1,35 @@
 """Scenario configuration: sensors, wind and the flight plan of one ``robosoc fly`` run.
 
-A scenario TOML file holds any subset of these fields (the rest keep their defaults)::
+A scenario TOML file names only the fields it changes; every other field keeps its default,
+field by field (see :func:`robosoc.config.validate.from_mapping` and ``docs/scenarios.md``).
+Nested tables are merged into the default's tables; a list (``wind.gusts``, ``flight.steps``,
+vectors) is replaced as a whole.  All fields, with their defaults::
 
-    name = "gusty"
-    duration_s = 12.0
-    vehicle = "laser"
+    name = "default"
+    duration_s = 10.0
+    vehicle = "default"      # or "laser"
 
     [sensors]
     rate_hz = 100.0          # must divide into whole 1 ms physics steps
     noise = true
 
     [wind]
-    constant = [1.0, 0.0, 0.0]
-    gust_sigma = 0.5         # random (seeded) gusts, m/s per axis
-    [[wind.gusts]]           # scheduled gusts
-    start_s = 8.0
-    duration_s = 1.0
-    velocity = [3.0, 0.0, 0.0]
+    constant = [0.0, 0.0, 0.0]
+    gust_sigma = 0.0         # random (seeded) gusts, m/s per axis
+    [[wind.gusts]]           # scheduled gusts (the default has this one)
+    start_s = 8.5
+    duration_s = 1.5
+    rise_s = 0.3
+    velocity = [3.0, 2.0, 0.0]
 
     [flight]
-    takeoff_s = 1.0
+    takeoff_s = 3.0
     height_m = 1.0
-    [[flight.steps]]
-    time_s = 4.0
+    climb_s = 1.5            # shortest duration of a height move
+    climb_rate_mps = 2.0     # vertical-speed limits of the controller and the height profile
+    descent_rate_mps = 1.0
+    [[flight.steps]]         # the default has five: roll, pitch and yaw 10° steps
+    time_s = 5.0
     axis = "roll"
     value = 10.0             # degrees for roll/pitch/yaw, metres for height
 
@@ -40,6 +47,20 @@ from robosoc.config.vehicle import VEHICLE_PRESETS
 
 PHYSICS_DT_S = 0.001
 """The MuJoCo step: 1 ms, as in the seed's Gazebo setup."""
+
+DEFAULT_CLIMB_RATE_MPS = 2.0
+"""Default vertical-speed limit upwards [m/s] (PX4's multicopter defaults: 3 up, 1 down)."""
+DEFAULT_DESCENT_RATE_MPS = 1.0
+"""Default vertical-speed limit downwards [m/s]: slower, a rotor sinking into its own wake loses lift."""
+HEIGHT_ACCEL_LIMIT_MPS2 = 3.0
+"""Peak vertical acceleration of a height move [m/s²].  Downwards it must stay below what the
+motors at their idle thrust allow (g − 4·f_idle/m = 5.3 m/s² for the default vehicle)."""
+MIN_HEIGHT_M = 0.3
+"""Lowest height setpoint [m] (the body origin rests at 0.18 m)."""
+MAX_HEIGHT_M = 5.0
+"""Highest height setpoint [m]."""
+MAX_ANGLE_DEG = 45.0
+"""Largest roll, pitch or yaw setpoint [degrees]."""
 
 Vector3 = tuple[float, float, float]
 
@@ -183,7 +204,11 @@ class WindConfig:
 
 @dataclass(frozen=True)
 class SetpointStep:
-    """From ``time_s`` on, the setpoint of ``axis`` is ``value`` (degrees, or metres for height)."""
+    """From ``time_s`` on, the setpoint of ``axis`` is ``value`` (degrees, or metres for height).
+
+    A roll, pitch or yaw step is a step; a height step starts a height move (see
+    :class:`FlightPlan`) towards ``value``.
+    """
 
     time_s: float
     axis: Literal["roll", "pitch", "yaw", "height"]
@@ -191,15 +216,49 @@ class SetpointStep:
 
     def __post_init__(self) -> None:
         _require(math.isfinite(self.time_s) and self.time_s >= 0, "time_s", f"must be >= 0, got {self.time_s}")
-        limit = 5.0 if self.axis == "height" else 45.0
         if self.axis == "height":
-            _require(0 < self.value <= 5.0, "value", f"height must be in (0, 5] m, got {self.value}")
+            _require(
+                math.isfinite(self.value) and MIN_HEIGHT_M <= self.value <= MAX_HEIGHT_M,
+                "value",
+                f"height must be in [{MIN_HEIGHT_M:g}, {MAX_HEIGHT_M:g}] m, got {self.value}",
+            )
         else:
             _require(
-                math.isfinite(self.value) and abs(self.value) <= limit,
+                math.isfinite(self.value) and abs(self.value) <= MAX_ANGLE_DEG,
                 "value",
-                f"{self.axis} must be within ±{limit:g} degrees, got {self.value}",
+                f"{self.axis} must be within ±{MAX_ANGLE_DEG:g} degrees, got {self.value}",
             )
+
+
+@dataclass(frozen=True)
+class HeightMove:
+    """One height move of a flight plan: from ``from_m`` to ``to_m`` in ``duration_s`` from ``start_s``."""
+
+    start_s: float
+    duration_s: float
+    from_m: float
+    to_m: float
+
+    @property
+    def end_s(self) -> float:
+        """Time at which the move arrives at ``to_m``."""
+        return self.start_s + self.duration_s
+
+
+def move_duration(delta_m: float, shortest_s: float, climb_rate: float, descent_rate: float) -> float:
+    """Duration [s] of a half-cosine height move over ``delta_m`` (up positive).
+
+    The move takes at least ``shortest_s``, and long enough that its peak speed π·|Δ|/(2·T)
+    stays within the climb (Δ > 0) or descent rate and its peak acceleration π²·|Δ|/(2·T²)
+    within :data:`HEIGHT_ACCEL_LIMIT_MPS2`::
+
+        T = max(shortest_s, π·|Δ|/(2·rate), π·sqrt(|Δ|/(2·a_max)))
+    """
+    distance = abs(delta_m)
+    rate = climb_rate if delta_m > 0 else descent_rate
+    by_speed = math.pi * distance / (2.0 * rate)
+    by_accel = math.pi * math.sqrt(distance / (2.0 * HEIGHT_ACCEL_LIMIT_MPS2))
+    return max(shortest_s, by_speed, by_accel)
 
 
 @dataclass(frozen=True)
@@ -207,13 +266,21 @@ class FlightPlan:
     """Setpoints over time: calibrate on the ground, take off, then step the setpoints.
 
     Until ``takeoff_s`` the motors stay off and the controller calibrates (the vehicle rests on
-    flat ground).  The height setpoint then ramps from the rest height to ``height_m`` over
-    ``climb_s`` (half-cosine profile).  ``steps`` change one setpoint each, at their time.
+    flat ground).  The height setpoint then moves from the rest height to ``height_m``, and each
+    height step moves it on from the previous target.  Every height move follows a half cosine
+    (zero speed at both ends) whose duration is :func:`move_duration`: at least ``climb_s``, and
+    long enough that it stays within ``climb_rate_mps`` upwards, ``descent_rate_mps`` downwards
+    and :data:`HEIGHT_ACCEL_LIMIT_MPS2`.  The controller limits its commanded vertical speed
+    to the same two rates.  ``steps`` change one setpoint each, at their time: attitude steps
+    from ``takeoff_s + climb_s`` on, height steps once the previous height move has ended (checked
+    by :class:`ScenarioConfig`, which knows the vehicle's rest height).
     """
 
     takeoff_s: float = 3.0
     height_m: float = 1.0
     climb_s: float = 1.5
+    climb_rate_mps: float = DEFAULT_CLIMB_RATE_MPS
+    descent_rate_mps: float = DEFAULT_DESCENT_RATE_MPS
     steps: tuple[SetpointStep, ...] = ()
 
     def __post_init__(self) -> None:
@@ -223,22 +290,40 @@ class FlightPlan:
             f"must be >= 0.1 s (the controller calibrates before take-off), got {self.takeoff_s}",
         )
         _require(
-            math.isfinite(self.height_m) and 0.3 <= self.height_m <= 5.0,
+            math.isfinite(self.height_m) and MIN_HEIGHT_M <= self.height_m <= MAX_HEIGHT_M,
             "height_m",
-            f"must be in [0.3, 5] m, got {self.height_m}",
+            f"must be in [{MIN_HEIGHT_M:g}, {MAX_HEIGHT_M:g}] m, got {self.height_m}",
         )
         _require(math.isfinite(self.climb_s) and self.climb_s >= 0, "climb_s", f"must be >= 0, got {self.climb_s}")
+        for name in ("climb_rate_mps", "descent_rate_mps"):
+            value = getattr(self, name)
+            _require(math.isfinite(value) and 0.1 <= value <= 10.0, name, f"must be in [0.1, 10] m/s, got {value}")
         for i, step in enumerate(self.steps):
             _require(
-                step.time_s >= self.takeoff_s + self.climb_s,
+                step.axis == "height" or step.time_s >= self.attitude_from_s,
                 f"steps[{i}].time_s",
-                f"must not come before the climb ends ({self.takeoff_s + self.climb_s:g} s), got {step.time_s}",
+                f"must not come before take-off + climb_s ({self.attitude_from_s:g} s), got {step.time_s}",
             )
 
     @property
-    def hover_from_s(self) -> float:
-        """Time at which the climb ends and the vehicle should hover at ``height_m``."""
+    def attitude_from_s(self) -> float:
+        """Time from which attitude steps may come and attitude tracking is measured."""
         return self.takeoff_s + self.climb_s
+
+    def height_moves(self, rest_height: float) -> tuple[HeightMove, ...]:
+        """The take-off climb from ``rest_height`` and one move per height step, in time order."""
+        moves = []
+        start, target = self.takeoff_s, self.height_m
+        previous = rest_height
+        height_steps = sorted((s for s in self.steps if s.axis == "height"), key=lambda s: s.time_s)
+        for step in (None, *height_steps):
+            if step is not None:
+                start, target = step.time_s, step.value
+            delta = target - previous
+            duration = move_duration(delta, self.climb_s, self.climb_rate_mps, self.descent_rate_mps)
+            moves.append(HeightMove(start, duration, previous, target))
+            previous = target
+        return tuple(moves)
 
 
 def _default_steps() -> tuple[SetpointStep, ...]:
@@ -287,3 +372,15 @@ class ScenarioConfig:
             "duration_s",
             f"must be a whole number of {PHYSICS_DT_S * 1000:g} ms physics steps, got {self.duration_s}",
         )
+        moves = self.flight.height_moves(VEHICLE_PRESETS[self.vehicle]().rest_height)
+        height_steps = sorted(
+            (i for i, s in enumerate(self.flight.steps) if s.axis == "height"),
+            key=lambda i: self.flight.steps[i].time_s,
+        )
+        for i, previous in zip(height_steps, moves, strict=False):
+            _require(
+                self.flight.steps[i].time_s >= previous.end_s,
+                f"flight.steps[{i}].time_s",
+                f"a height step must not come before the previous height move ends ({previous.end_s:g} s), "
+                f"got {self.flight.steps[i].time_s}",
+            )

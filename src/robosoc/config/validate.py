@@ -5,6 +5,13 @@ str, tuples, nested dataclasses, ``X | None``) and, optionally, a ``__post_init_
 ``ValueError("field: reason")`` for range checks.  :func:`from_mapping` rejects unknown keys,
 converts types strictly (no bool where a number is meant, ints accepted for floats) and wraps
 every failure in a :class:`ConfigError` whose message is ``<file>: <dotted.field>: <reason>``.
+
+Merging is field by field: a mapping overrides only the fields it names and every other field
+keeps its value in the *base* instance (by default ``cls()``, the class's defaults, including
+defaults that a ``default_factory`` builds).  A table for a nested dataclass is merged the same
+way into the base's nested instance; anything else, a list of tables included, replaces the
+base's value as a whole (elements of a list are built from their class's defaults).
+:func:`named_fields` lists the dotted fields a mapping sets, for provenance.
 """
 
 from __future__ import annotations
@@ -36,7 +43,7 @@ def _join(path: str, name: str | int) -> str:
     return f"{path}.{name}" if path else name
 
 
-def _convert(value: Any, hint: Any, path: str, where: str) -> Any:
+def _convert(value: Any, hint: Any, path: str, where: str, base: Any = None) -> Any:
     origin = typing.get_origin(hint)
     args = typing.get_args(hint)
     if hint is Any:
@@ -49,7 +56,7 @@ def _convert(value: Any, hint: Any, path: str, where: str) -> Any:
             if option is type(None):
                 continue
             try:
-                return _convert(value, option, path, where)
+                return _convert(value, option, path, where, base)
             except ConfigError as exc:
                 errors.append(exc.reason)
         raise ConfigError(where, path, "; ".join(errors))
@@ -60,7 +67,7 @@ def _convert(value: Any, hint: Any, path: str, where: str) -> Any:
     if dataclasses.is_dataclass(hint):
         if not isinstance(value, dict):
             raise ConfigError(where, path, f"expected a table, got {type(value).__name__}")
-        return _build(hint, value, path, where)  # type: ignore[arg-type]
+        return _build(hint, value, path, where, base if isinstance(base, hint) else None)  # type: ignore[arg-type]
     if origin is tuple:
         if not isinstance(value, list | tuple):
             raise ConfigError(where, path, f"expected a list, got {type(value).__name__}")
@@ -88,7 +95,7 @@ def _convert(value: Any, hint: Any, path: str, where: str) -> Any:
     raise ConfigError(where, path, f"unsupported field type {hint!r}")
 
 
-def _build(cls: type[T], data: dict[str, Any], path: str, where: str) -> T:
+def _build(cls: type[T], data: dict[str, Any], path: str, where: str, base: T | None) -> T:
     hints = typing.get_type_hints(cls)
     fields = {f.name: f for f in dataclasses.fields(cls) if f.init}  # type: ignore[arg-type]
     unknown = sorted(set(data) - set(fields))
@@ -97,10 +104,13 @@ def _build(cls: type[T], data: dict[str, Any], path: str, where: str) -> T:
     kwargs: dict[str, Any] = {}
     for name, field in fields.items():
         if name not in data:
-            if field.default is dataclasses.MISSING and field.default_factory is dataclasses.MISSING:
+            if base is not None:
+                kwargs[name] = getattr(base, name)
+            elif field.default is dataclasses.MISSING and field.default_factory is dataclasses.MISSING:
                 raise ConfigError(where, _join(path, name), "missing required field")
             continue
-        kwargs[name] = _convert(data[name], hints[name], _join(path, name), where)
+        inner = getattr(base, name) if base is not None else None
+        kwargs[name] = _convert(data[name], hints[name], _join(path, name), where, inner)
     try:
         return cls(**kwargs)
     except ConfigError:
@@ -113,26 +123,54 @@ def _build(cls: type[T], data: dict[str, Any], path: str, where: str) -> T:
         raise ConfigError(where, path, text) from exc
 
 
-def from_mapping(cls: type[T], data: dict[str, Any], where: str = "") -> T:
-    """Build ``cls`` from a plain mapping, validating every field.
+def _defaults(cls: type[T]) -> T | None:
+    """``cls()``, or ``None`` if ``cls`` has required fields."""
+    try:
+        return cls()
+    except TypeError:
+        return None
+
+
+def from_mapping(cls: type[T], data: dict[str, Any], where: str = "", base: T | None = None) -> T:
+    """Build ``cls`` from a plain mapping merged field by field into ``base``, validating every field.
 
     Args:
         cls: a frozen dataclass type.
         data: the mapping (for example parsed TOML).
         where: a label for error messages (usually the file name).
+        base: the instance whose values the fields ``data`` does not name keep (default:
+            ``cls()`` if ``cls`` has no required field).
 
     Raises:
         ConfigError: naming ``where`` and the dotted field path.
     """
-    return _build(cls, data, "", where)
+    return _build(cls, data, "", where, base if base is not None else _defaults(cls))
+
+
+def named_fields(data: dict[str, Any], path: str = "") -> tuple[str, ...]:
+    """The dotted fields a (validated) mapping sets: tables are descended, any other value,
+    a list included, is one field.  In the mapping's order."""
+    names: list[str] = []
+    for name, value in data.items():
+        if isinstance(value, dict):
+            names.extend(named_fields(value, _join(path, name)))
+        else:
+            names.append(_join(path, name))
+    return tuple(names)
 
 
 def load_toml(cls: type[T], path: str | Path, section: str | None = None) -> T:
-    """Read ``cls`` from a TOML file (optionally from one top-level table of it).
+    """Read ``cls`` from a TOML file (optionally from one top-level table of it), merged field by
+    field into ``cls()``.
 
     Raises:
         ConfigError: the file is missing or unreadable, is not valid TOML, or a field is wrong.
     """
+    return load_toml_named(cls, path, section)[0]
+
+
+def load_toml_named(cls: type[T], path: str | Path, section: str | None = None) -> tuple[T, tuple[str, ...]]:
+    """:func:`load_toml`, and the dotted fields the file sets (:func:`named_fields`)."""
     path = Path(path)
     try:
         data = tomllib.loads(path.read_text())
@@ -144,7 +182,7 @@ def load_toml(cls: type[T], path: str | Path, section: str | None = None) -> T:
         if section not in data:
             raise ConfigError(str(path), section, "missing table")
         data = data[section]
-    return from_mapping(cls, data, str(path))
+    return from_mapping(cls, data, str(path)), named_fields(data)
 
 
 def replace_checked(obj: T, **changes: Any) -> T:

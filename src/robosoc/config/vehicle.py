@@ -82,6 +82,14 @@ class VehicleConfig:
     ``com`` is the centre of mass in the body frame; the propulsion and drag wrenches act at the
     body origin and are moved to the CoM by the physics.  ``name`` prefixes every MuJoCo element of
     this vehicle, so several vehicles with distinct names can share one world.
+
+    ``idle_pwm`` is the lowest PWM count the flight controller commands to any motor while armed
+    (on the ground after arming and in the air): its mixer never goes below it.  This motor model
+    holds a rotor at its free-spinning speed (297 rad/s, 1.36 N) even at PWM 0, and its thrust
+    rises only slowly over the first counts, so a motor commanded below a few tens of counts
+    gives no usable differential thrust: attitude control loses its authority.  50 counts give
+    1.67 N per rotor in steady state (46 % of the default vehicle's hover thrust; four of them
+    still let it sink at up to 5.3 m/s²).
     """
 
     name: str = "quad"
@@ -99,6 +107,7 @@ class VehicleConfig:
     spawn_yaw_deg: float = 0.0
     motor: MotorConfig = field(default_factory=MotorConfig)
     drag: DragConfig = field(default_factory=DragConfig)
+    idle_pwm: int = 50
 
     def __post_init__(self) -> None:
         _require(
@@ -153,6 +162,11 @@ class VehicleConfig:
             f"z = {self.spawn_position[2]} puts the skids below the ground (skid_bottom_z = {self.skid_bottom_z})",
         )
         _require(math.isfinite(self.spawn_yaw_deg), "spawn_yaw_deg", "must be finite")
+        _require(
+            isinstance(self.idle_pwm, int) and 0 <= self.idle_pwm < 255,
+            "idle_pwm",
+            f"must be a PWM count in [0, 254], got {self.idle_pwm!r}",
+        )
 
     @property
     def rest_height(self) -> float:

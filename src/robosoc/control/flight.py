@@ -60,6 +60,11 @@ ROW_FIELDS = (
 """Columns of one flight row (angles in radians, lengths in metres, time in seconds)."""
 
 
+OVERSHOOT_WINDOW_S = 1.0
+"""How long after a height move its overshoot is looked for [s]: the height loop approaches a
+target with time constant K_d/K_p = 0.4 s, so an overshoot peaks well within this."""
+
+
 class Controller(Protocol):
     """Anything that turns sensor samples and setpoints into PWM bytes."""
 
@@ -140,11 +145,20 @@ class FlightMetrics:
     """Figures of merit of a flight (angles in degrees, lengths in metres)."""
 
     hover_rms: float
-    """RMS of true height − height setpoint after the climb (+0.5 s settling)."""
+    """RMS of true height − height setpoint while hovering: from the end of the take-off climb
+    (+0.5 s settling) on, leaving out every later height move and 0.5 s after it."""
     hover_max: float
     """Largest |true height − height setpoint| over the same span."""
+    overshoot: float
+    """Largest excursion of the true height beyond the target of a height move (above it for a
+    climb, below it for a descent; 0 if the vehicle never passes it), from the move's start until
+    :data:`OVERSHOOT_WINDOW_S` after its end (or the next move's start).  Later excursions are
+    hover errors (``hover_max``)."""
+    min_pwm_armed: int
+    """Lowest PWM count of any motor while armed (-1 if never armed)."""
     tracking_rms: tuple[float, float, float]
-    """RMS of true − setpoint roll, pitch, yaw after the climb, leaving out 0.5 s after each step."""
+    """RMS of true − setpoint roll, pitch, yaw from take-off + ``climb_s`` on (whether or not the
+    height is still moving), leaving out 0.5 s after each step of that axis."""
     step_rise: tuple[tuple[str, float, float], ...]
     """(axis, step time, 90 % rise time [s] or nan) for every roll/pitch/yaw step of the plan."""
     ekf_rms: float
@@ -165,14 +179,32 @@ def _wrap(values: np.ndarray) -> np.ndarray:
     return (values + np.pi) % (2 * np.pi) - np.pi
 
 
-def flight_metrics(rows: np.ndarray, plan: FlightPlan, settle_s: float = 0.5) -> FlightMetrics:
-    """Hover, tracking and estimation errors of a flight array."""
+def flight_metrics(rows: np.ndarray, plan: FlightPlan, rest_height: float, settle_s: float = 0.5) -> FlightMetrics:
+    """Hover, overshoot, motor, tracking and estimation figures of a flight array.
+
+    ``rest_height`` is the vehicle's (it fixes the take-off climb of ``plan``).
+    """
     t = column(rows, "t")
-    hover = t >= plan.hover_from_s + settle_s
-    height_error = column(rows, "z") - column(rows, "sp_height")
+    z = column(rows, "z")
+    moves = plan.height_moves(rest_height)
+    hover = t >= moves[0].end_s + settle_s
+    for move in moves[1:]:
+        hover &= ~((t >= move.start_s - 1e-9) & (t < move.end_s + settle_s))
+    height_error = z - column(rows, "sp_height")
+    overshoot = 0.0
+    for i, move in enumerate(moves):
+        until = move.end_s + OVERSHOOT_WINDOW_S
+        if i + 1 < len(moves):
+            until = min(until, moves[i + 1].start_s)
+        span = (t >= move.start_s - 1e-9) & (t < until - 1e-9)
+        if span.any():
+            beyond = z[span] - move.to_m if move.to_m >= move.from_m else move.to_m - z[span]
+            overshoot = max(overshoot, float(beyond.max()))
+    armed = column(rows, "armed") > 0.5
+    pwm = rows[:, [ROW_FIELDS.index(f"pwm{i}") for i in range(4)]]
     tracking = []
     for axis in ("roll", "pitch", "yaw"):
-        mask = t >= plan.hover_from_s
+        mask = t >= plan.attitude_from_s
         for step in plan.steps:
             if step.axis == axis:
                 mask &= ~((t >= step.time_s - 1e-9) & (t < step.time_s + settle_s))
@@ -194,7 +226,6 @@ def flight_metrics(rows: np.ndarray, plan: FlightPlan, settle_s: float = 0.5) ->
             if hit.size:
                 rise = float(t[after][hit[0]] - step.time_s)
         rises.append((step.axis, step.time_s, rise))
-    armed = column(rows, "armed") > 0.5
     q_true = rows[:, [ROW_FIELDS.index(n) for n in ("qw", "qx", "qy", "qz")]]
     q_est = rows[:, [ROW_FIELDS.index(n) for n in ("est_qw", "est_qx", "est_qy", "est_qz")]]
     angle = np.array([quat.angle_between(a, b) for a, b in zip(q_est, q_true, strict=True)])
@@ -205,6 +236,8 @@ def flight_metrics(rows: np.ndarray, plan: FlightPlan, settle_s: float = 0.5) ->
     return FlightMetrics(
         hover_rms=_rms(height_error[hover]),
         hover_max=float(np.max(np.abs(height_error[hover]))) if hover.any() else math.nan,
+        overshoot=overshoot,
+        min_pwm_armed=int(pwm[armed].min()) if armed.any() else -1,
         tracking_rms=(tracking[0], tracking[1], tracking[2]),
         step_rise=tuple(rises),
         ekf_rms=math.degrees(_rms(angle[armed])),

@@ -1,39 +1,79 @@
-"""The controller's setpoint: attitude angles, height and whether the motors may run."""
+"""The controller's setpoint: attitude angles, the height profile and whether the motors may run.
+
+The flight plan's height moves (:meth:`~robosoc.config.scenario.FlightPlan.height_moves`) are
+half cosines.  A move from h₀ to h₁ = h₀ + Δ over T seconds from t₀ gives, with s = (t − t₀)/T::
+
+    h(t) = h₀ + Δ·(1 − cos πs)/2
+    ḣ(t) = Δ·π/(2T)·sin πs
+    ḧ(t) = Δ·π²/(2T²)·cos πs
+
+and outside the move h = h₁ (after) or h₀ (before), ḣ = ḧ = 0.  The controller receives all
+three: ḣ and ḧ are the feed-forward of the profile (see :mod:`robosoc.control.pid`).
+"""
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
+
+from robosoc.config.scenario import FlightPlan, HeightMove
 
 
 @dataclass(frozen=True, slots=True)
 class Setpoint:
-    """Desired roll α, pitch β, yaw θ [rad] and height z [m]; ``armed = False`` keeps the motors off."""
+    """Desired roll α, pitch β, yaw θ [rad], height z [m] with its rate [m/s] and acceleration [m/s²].
+
+    ``armed = False`` keeps the motors off.
+    """
 
     roll: float = 0.0
     pitch: float = 0.0
     yaw: float = 0.0
     height: float = 0.0
     armed: bool = False
+    height_rate: float = 0.0
+    height_accel: float = 0.0
 
 
-def setpoint_at(plan, rest_height: float, t: float) -> Setpoint:
+def move_profile(move: HeightMove, t: float) -> tuple[float, float, float]:
+    """Height [m], rate [m/s] and acceleration [m/s²] of ``move`` at time ``t`` [s]."""
+    if t <= move.start_s:
+        return move.from_m, 0.0, 0.0
+    if t >= move.end_s:
+        return move.to_m, 0.0, 0.0
+    delta = move.to_m - move.from_m
+    w = math.pi / move.duration_s
+    phase = w * (t - move.start_s)
+    return (
+        move.from_m + 0.5 * delta * (1.0 - math.cos(phase)),
+        0.5 * delta * w * math.sin(phase),
+        0.5 * delta * w * w * math.cos(phase),
+    )
+
+
+@functools.lru_cache(maxsize=16)
+def _moves(plan: FlightPlan, rest_height: float) -> tuple[HeightMove, ...]:
+    return plan.height_moves(rest_height)
+
+
+def setpoint_at(plan: FlightPlan, rest_height: float, t: float) -> Setpoint:
     """The setpoint of a :class:`~robosoc.config.scenario.FlightPlan` at time ``t`` [s].
 
     Before ``takeoff_s``: disarmed (motors off, controller calibrating).  Then the height
-    ramps from ``rest_height`` to ``height_m`` over ``climb_s`` along a half cosine (zero
-    speed at both ends); attitude setpoints
-    start at zero and each step sets one axis from its time on (degrees → radians).
+    follows the plan's height moves, the take-off climb from ``rest_height`` first; attitude
+    setpoints start at zero and each step sets one axis from its time on (degrees → radians).
     """
     if t < plan.takeoff_s - 1e-9:
         return Setpoint(height=rest_height, armed=False)
-    if plan.climb_s > 0 and t < plan.takeoff_s + plan.climb_s:
-        frac = (t - plan.takeoff_s) / plan.climb_s
-        height = rest_height + 0.5 * (1.0 - math.cos(math.pi * frac)) * (plan.height_m - rest_height)
-    else:
-        height = plan.height_m
-    values = {"roll": 0.0, "pitch": 0.0, "yaw": 0.0, "height": height}
+    moves = _moves(plan, rest_height)
+    current = moves[0]
+    for move in moves[1:]:
+        if move.start_s <= t + 1e-9:
+            current = move
+    height, rate, accel = move_profile(current, t)
+    values = {"roll": 0.0, "pitch": 0.0, "yaw": 0.0}
     for step in sorted(plan.steps, key=lambda s: s.time_s):
-        if step.time_s <= t + 1e-9:
-            values[step.axis] = step.value if step.axis == "height" else math.radians(step.value)
-    return Setpoint(values["roll"], values["pitch"], values["yaw"], values["height"], armed=True)
+        if step.axis != "height" and step.time_s <= t + 1e-9:
+            values[step.axis] = math.radians(step.value)
+    return Setpoint(values["roll"], values["pitch"], values["yaw"], height, True, rate, accel)
