@@ -16,6 +16,7 @@ import pytest
 from robosoc.chip.elf import load_elf
 from robosoc.chip.mpsoc import MPSoC
 from robosoc.config.chip import ChipConfig, NocConfig
+from robosoc.kernels import chip as kc
 from robosoc.toolchain import build_elf
 
 TRAFFIC = Path(__file__).parent / "programs" / "traffic.c"
@@ -93,3 +94,39 @@ def test_send_status_polls_see_the_network_of_their_cycle(arbiter: str):
     fast, slow = one(False), one(True)
     assert len(fast[1]) == 20
     assert fast == slow
+
+
+def test_a_breakpoint_stops_the_chip_without_changing_any_cycle():
+    # the traffic program with a breakpoint on one tile's receive handler: the chip stops there
+    # (mid-quantum), the host looks, clears the mark and lets it go on; outputs, counters and the
+    # network's activity must equal an undisturbed run
+    program = load_elf(build_elf([TRAFFIC], mul=True, defines={"ROUNDS": 3}))
+    handler = program.address_of("irq_handler")
+
+    def undisturbed():
+        chip = MPSoC(ChipConfig())
+        chip.load_all(program)
+        result = chip.run(max_cycles=20_000_000)
+        return result.output, result.cycles, {xy: chip.counters(xy) for xy in chip.core_tiles()}, chip.noc_counters()
+
+    chip = MPSoC(ChipConfig())
+    chip.load_all(program)
+    chip.set_breakpoint((1, 1), handler)
+    stops = []
+    while (why := chip.step(20_000_000)) == kc.CHIP_BREAK:
+        xy = chip.break_tile()
+        stops.append((chip.tile_cycle(xy), chip.pc(xy)))
+        assert xy == (1, 1) and chip.pc(xy) == handler
+        chip.set_breakpoint(xy, handler, on=False)
+        chip.resume_from_break()
+        if len(stops) < 3:  # stop at the next three handler entries too
+            chip.step(chip.cycle + 1)
+            chip.set_breakpoint(xy, handler)
+    assert why == kc.CHIP_DONE
+    assert len(stops) == 3 and stops == sorted(stops)
+    output = chip.drain_output()
+    result = undisturbed()
+    assert result[0] == output
+    assert result[2] == {xy: chip.counters(xy) for xy in chip.core_tiles()}
+    assert result[3] == chip.noc_counters()
+    assert result[1] == chip.cycle

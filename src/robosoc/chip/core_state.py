@@ -9,7 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from robosoc.isa.table import OP_FETCH_FAULT
+from robosoc.isa.table import OP_BREAK, OP_FETCH_FAULT
 from robosoc.kernels.core_layout import (
     CTR_SIZE,
     ERRATA_SPEC,
@@ -128,6 +128,21 @@ class CoreState:
             end = 2 * (int(self.st[t, S_CODE_SIZE]) // 4)
             self.dec[t, :] = 0
             self.dec[t, end] = OP_FETCH_FAULT
+
+    def set_breakpoint(self, addr: int, on: bool, tile: int = 0) -> None:
+        """Mark (or unmark) the instruction at ``addr``: the core stops before it (RUN_BREAK).
+
+        The mark lives in the predecode row, so it costs nothing while not hit; a store into the
+        word clears it with the row (a debugger sets it again).  Raises ValueError for an address
+        that is not a word of the loaded code.
+        """
+        off = addr - self.base
+        if off % 4 or not 0 <= off < self.code_size(tile):
+            raise ValueError(
+                f"0x{addr:08x} is not an instruction of the loaded code "
+                f"(0x{self.base:08x}..0x{self.base + self.code_size(tile):08x}, word aligned)"
+            )
+        self.dec[tile, 2 * (off // 4)] = OP_BREAK if on else 0
 
     def code_size(self, tile: int = 0) -> int:
         """Bytes of a tile's SRAM that have predecode rows (the loaded code)."""

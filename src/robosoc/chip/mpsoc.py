@@ -30,11 +30,13 @@ from robosoc.kernels.core_layout import (
     CTR_SIZE,
     ERRATA_MODES,
     OPC_SIZE,
+    RUN_CHUNK,
     S_CYCLE,
     S_EXIT_CODE,
     S_MEM_SIZE,
     S_NI,
     S_PC,
+    S_RUN,
 )
 
 XOUT_CAPACITY = 1 << 20
@@ -266,6 +268,10 @@ class MPSoC:
                 raise self._error()
             if why == kc.CHIP_STUCK:
                 raise ChipError(self._stuck_message(), None)
+            if why == kc.CHIP_BREAK:
+                xy = self.break_tile()
+                pc = self.pc(xy)
+                raise ChipError(f"tile {xy} stopped at a breakpoint at pc 0x{pc:08x} ({self.symbolize(xy, pc)})", xy)
             if max_cycles is not None and self.cycle >= max_cycles:
                 raise ChipError(
                     f"cycle budget of {max_cycles} cycles exhausted; still running: "
@@ -296,6 +302,26 @@ class MPSoC:
         return errata_report(
             self.cores.st[t], lambda pc: self.symbolize(xy, pc), self.config.errata, where=f"tile {xy}: "
         )
+
+    # --- debugging -------------------------------------------------------------------------
+    def set_breakpoint(self, xy: tuple[int, int], addr: int, on: bool = True) -> None:
+        """Stop the whole chip when tile ``xy`` is about to execute ``addr`` (``step`` returns CHIP_BREAK).
+
+        Simulated time only moves while the chip runs, so stopping changes no cycle of anything.
+        """
+        self.cores.set_breakpoint(addr, on, tile=self.config.tile_index(xy))
+
+    def break_tile(self) -> tuple[int, int]:
+        """The tile that stopped at a breakpoint (after ``step`` returned CHIP_BREAK)."""
+        return self.config.tile_xy(int(self.gst[kc.G_BREAK_TILE]))
+
+    def resume_from_break(self) -> None:
+        """Let the stopped tile execute its instruction when the chip runs again.
+
+        Clear or move the breakpoint first, or the tile stops at it again at once.  The next
+        ``step`` continues the suspended quantum exactly where it stopped.
+        """
+        self.cores.st[self.config.tile_index(self.break_tile()), S_RUN] = RUN_CHUNK
 
     # --- inspection ------------------------------------------------------------------------
     def state(self, xy: tuple[int, int]) -> str:

@@ -222,6 +222,10 @@ class SingleCoreSoC:
         run_cores(s.st, s.ctr, s.opc, s.regs, s.m8, s.m16, s.m32, s.dec, s.out, _TILE0, until)
         return int(s.st[0, S_RUN])
 
+    def set_breakpoint(self, addr: int, on: bool = True) -> None:
+        """Stop before the instruction at ``addr``: ``step_until`` then returns RUN_BREAK."""
+        self.state.set_breakpoint(addr, on)
+
     def drain_output(self) -> bytes:
         n = int(self.state.st[0, S_OUT_LEN])
         data = self.state.out[0, :n].tobytes()

@@ -32,6 +32,7 @@ from robosoc.kernels.core_layout import (
     CTR_SIZE,
     NEVER,
     OPC_SIZE,
+    RUN_BREAK,
     RUN_CHUNK,
     RUN_ERROR,
     RUN_EXIT,
@@ -92,7 +93,10 @@ G_LOOK_ACTIVE = 5
 G_LOOK_SINGLE = 8  # longest quantum of a lone awake core
 G_QUANTA = 6
 G_IO_COUNT = 7  # rows used in io_out
-GST_SIZE = 10
+G_SUSPEND_H = 9  # > 0: a breakpoint suspended the quantum ending here; the next call continues it
+G_SUSPEND_FLAGS = 10  # 1: that quantum is active (NoC first), 2: quiet
+G_BREAK_TILE = 11  # the tile that stopped at a breakpoint (CHIP_BREAK)
+GST_SIZE = 12
 
 # return reasons
 CHIP_UNTIL = 0
@@ -101,6 +105,7 @@ CHIP_OUTPUT = 2  # some tile's output needs draining
 CHIP_ERROR = 3
 CHIP_IO_FULL = 4  # io_out needs draining
 CHIP_STUCK = 5  # nothing can happen any more, but not every core has exited
+CHIP_BREAK = 6  # a core stopped before an instruction a debugger marked (tile in G_BREAK_TILE)
 
 # network-interface misuse (K_ERR)
 CE_NONE = 0
@@ -439,80 +444,93 @@ def run_chip(
     status = CHIP_UNTIL
     quiet = False  # known to have nothing in flight or pending (recomputed on every call)
     while True:
-        if io_out.shape[0] - gst[G_IO_COUNT] < n:
-            status = CHIP_IO_FULL
-            break
-        nrun = 0
-        nsleep = 0
-        wake = NEVER
-        for t in range(n):
-            state = cst[t, K_STATE]
-            if state == K_RUN:
-                nrun += 1
-            elif state == K_SLEEP:
-                nsleep += 1
-                if cst[t, K_WAKE] < wake:
-                    wake = cst[t, K_WAKE]
-        # the NoC's next activity; a quiet NoC stays quiet until a core sends or receives
-        nxt = NEVER if quiet else _noc_next(cfg, glob, tile, queue, cst)
-        quiet = nxt >= NEVER
-        if nrun == 0 and nsleep == 0:
-            status = CHIP_DONE
-            break
-        if nrun == 0 and wake >= NEVER and nxt >= NEVER:
-            status = CHIP_STUCK
-            break
-        if T >= until:  # noqa: SIM300
-            status = CHIP_UNTIL
-            break
-        # --- the quantum -------------------------------------------------------------------
-        active = nxt <= T
-        if active:
-            H = T + look_active
-        elif nrun >= 2:
-            H = T + look_idle
-            if nxt < H:
-                H = nxt
-        elif nrun == 1:
-            H = min(nxt, T + gst[G_LOOK_SINGLE])
+        if gst[G_SUSPEND_H] > 0:
+            # continue the quantum a breakpoint suspended: every core is where it stopped
+            H = gst[G_SUSPEND_H]
+            active = (gst[G_SUSPEND_FLAGS] & 1) != 0
+            quiet = (gst[G_SUSPEND_FLAGS] & 2) != 0
+            gst[G_SUSPEND_H] = 0
+            k = 0
+            for t in range(n):
+                if cst[t, K_STATE] == K_RUN:
+                    run[k] = t
+                    k += 1
         else:
-            H = nxt  # nobody runs: jump to the next NoC activity or wake-up
-        if wake < H:
-            if wake > T:
-                H = wake  # the sleeper starts with the next quantum
-            else:
-                waking = 0
-                for t in range(n):
-                    if cst[t, K_STATE] == K_SLEEP and cst[t, K_WAKE] <= T:
-                        waking += 1
-                if nrun + waking >= 2:
-                    H = min(H, T + look_idle)
-        if until < H:
-            H = until
-        gst[G_QUANTA] += 1
-        if active:
-            _noc_advance(cfg, glob, buf, port, tile, mem, ev, queue, cst, H)
-            if glob[nk.G_STATUS] != nk.STATUS_OK:
-                status = CHIP_ERROR
-                gst[G_ERR_TILE] = -1
+            if io_out.shape[0] - gst[G_IO_COUNT] < n:
+                status = CHIP_IO_FULL
                 break
-            _take_deliveries(st, cst, gst, glob, ev, io_out)
-        # wake sleeping cores due in this quantum
-        for t in range(n):
-            if cst[t, K_STATE] == K_SLEEP and cst[t, K_WAKE] < H:
-                _wake_if_due(t, st, cst, H)
-        # run the awake cores to H; NI accesses are performed here, then the core goes on
-        k = 0
-        for t in range(n):
-            if cst[t, K_STATE] == K_RUN:
-                run[k] = t
-                k += 1
-        run_cores(st, ctr, opc, regs, m8, m16, m32, dec, out, run[:k], H)
+            nrun = 0
+            nsleep = 0
+            wake = NEVER
+            for t in range(n):
+                state = cst[t, K_STATE]
+                if state == K_RUN:
+                    nrun += 1
+                elif state == K_SLEEP:
+                    nsleep += 1
+                    if cst[t, K_WAKE] < wake:
+                        wake = cst[t, K_WAKE]
+            # the NoC's next activity; a quiet NoC stays quiet until a core sends or receives
+            nxt = NEVER if quiet else _noc_next(cfg, glob, tile, queue, cst)
+            quiet = nxt >= NEVER
+            if nrun == 0 and nsleep == 0:
+                status = CHIP_DONE
+                break
+            if nrun == 0 and wake >= NEVER and nxt >= NEVER:
+                status = CHIP_STUCK
+                break
+            if T >= until:  # noqa: SIM300
+                status = CHIP_UNTIL
+                break
+            # --- the quantum -------------------------------------------------------------------
+            active = nxt <= T
+            if active:
+                H = T + look_active
+            elif nrun >= 2:
+                H = T + look_idle
+                if nxt < H:
+                    H = nxt
+            elif nrun == 1:
+                H = min(nxt, T + gst[G_LOOK_SINGLE])
+            else:
+                H = nxt  # nobody runs: jump to the next NoC activity or wake-up
+            if wake < H:
+                if wake > T:
+                    H = wake  # the sleeper starts with the next quantum
+                else:
+                    waking = 0
+                    for t in range(n):
+                        if cst[t, K_STATE] == K_SLEEP and cst[t, K_WAKE] <= T:
+                            waking += 1
+                    if nrun + waking >= 2:
+                        H = min(H, T + look_idle)
+            if until < H:
+                H = until
+            gst[G_QUANTA] += 1
+            if active:
+                _noc_advance(cfg, glob, buf, port, tile, mem, ev, queue, cst, H)
+                if glob[nk.G_STATUS] != nk.STATUS_OK:
+                    status = CHIP_ERROR
+                    gst[G_ERR_TILE] = -1
+                    break
+                _take_deliveries(st, cst, gst, glob, ev, io_out)
+            # wake sleeping cores due in this quantum
+            for t in range(n):
+                if cst[t, K_STATE] == K_SLEEP and cst[t, K_WAKE] < H:
+                    _wake_if_due(t, st, cst, H)
+            # run the awake cores to H; NI accesses are performed here, then the core goes on
+            k = 0
+            for t in range(n):
+                if cst[t, K_STATE] == K_RUN:
+                    run[k] = t
+                    k += 1
+            run_cores(st, ctr, opc, regs, m8, m16, m32, dec, out, run[:k], H)
         # Stopped cores are handled in global cycle order, so that an NI access sees the network
         # exactly as it is in its cycle: in an idle quantum the NoC is brought up to the access
         # first, with every packet sent before it by any core (a send cannot reach another tile
         # within the quantum, but it can hold up the sender's own injection, which NI_STATUS shows).
         failed = -1
+        suspended = False
         while True:
             t = -1
             for r in range(k):
@@ -559,14 +577,25 @@ def run_chip(
                 cst[t, K_STATE] = K_FAULT
                 failed = t
                 break
+            elif why == RUN_BREAK:
+                # a debugger's breakpoint: hand the chip to the host in the middle of the quantum;
+                # the next call continues it exactly (the host clears the stop to go on)
+                gst[G_SUSPEND_H] = H
+                gst[G_SUSPEND_FLAGS] = (1 if active else 0) | (2 if quiet else 0)
+                gst[G_BREAK_TILE] = t
+                suspended = True
+                break
             one[0] = t
             run_cores(st, ctr, opc, regs, m8, m16, m32, dec, out, one, H)
+        for r in range(k):
+            _keep_output(run[r], st, cst, out, xout)
+        if suspended:
+            status = CHIP_BREAK
+            break
         if glob[nk.G_STATUS] != nk.STATUS_OK:
             status = CHIP_ERROR
             gst[G_ERR_TILE] = -1
             break
-        for r in range(k):
-            _keep_output(run[r], st, cst, out, xout)
         if failed >= 0:
             gst[G_ERR_TILE] = failed
             status = CHIP_ERROR
