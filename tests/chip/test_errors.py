@@ -7,7 +7,7 @@ import pytest
 
 import rv32_asm as A
 from core_harness import exit_with, make_soc
-from robosoc.chip.single import CoreError, CycleBudgetExceeded, MulhsuErratum, run_elf
+from robosoc.chip.single import CoreError, CycleBudgetExceeded, MulhsuErratum, SingleCoreSoC, run_elf
 
 SRAM = 0x40000000
 
@@ -107,3 +107,27 @@ def test_error_names_the_symbol_of_a_compiled_program(tmp_path):
         run_elf(elf)
     assert "load from unmapped address 0x30000000" in str(info.value)
     assert "(peek+0x" in str(info.value)
+
+
+def test_an_interrupt_vector_outside_the_code_is_an_error_not_a_crash():
+    # IRQ_VECTOR left at 0 (the boot ROM, not SRAM): the first interrupt must stop the run with an
+    # error naming the address, not read the predecode table out of bounds
+    words = [
+        *A.li(28, 0xF0000000),
+        *A.li(29, 0xE1020800),
+        *A.li(6, 1),
+        A.store("sw", 6, 29, 0x400),  # TIMERMASK: TIMER0 bit 16 cause ...
+        A.store("sw", 6, 29, 0x000),  # ... inverted: the line is high at once
+        A.store("sw", 6, 28, 0x20),  # IRQ_MASK
+        A.store("sw", 6, 28, 0x30),  # IRQ_STATUS: enable
+        *[A.NOP] * 20,
+        *exit_with(0),
+    ]
+    soc = make_soc(words)
+    with pytest.raises(CoreError, match="instruction fetch outside memory: pc 0x00000000 is not in SRAM"):
+        soc.run(max_cycles=10_000)
+
+
+def test_running_without_a_program_is_an_error():
+    with pytest.raises(CoreError, match=r"pc 0x00000000 .* is not an instruction of the loaded code"):
+        SingleCoreSoC().run(max_cycles=100)

@@ -10,6 +10,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from robosoc.isa.table import OP_BREAK, OP_FETCH_FAULT
+from robosoc.kernels.core import CoreArrays
 from robosoc.kernels.core_layout import (
     CTR_SIZE,
     ERRATA_SPEC,
@@ -147,6 +148,10 @@ class CoreState:
     def code_size(self, tile: int = 0) -> int:
         """Bytes of a tile's SRAM that have predecode rows (the loaded code)."""
         return int(self.st[tile, S_CODE_SIZE])
+
+    def arrays(self) -> CoreArrays:
+        """The arrays as the numba kernels take them (a named bundle, no copies)."""
+        return CoreArrays(self.st, self.ctr, self.opc, self.regs, self.m8, self.m16, self.m32, self.dec, self.out)
 
     @property
     def tiles(self) -> int:

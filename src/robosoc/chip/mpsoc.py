@@ -20,7 +20,7 @@ import numpy as np
 from robosoc.chip.core_state import SRAM_BASE, CoreState
 from robosoc.chip.counters import counters_dict
 from robosoc.chip.elf import Program, Region
-from robosoc.chip.single import ERRATUM_WARNINGS, core_error, errata_counts, errata_report
+from robosoc.chip.single import ERRATUM_WARNINGS, check_pc, core_error, errata_counts, errata_report
 from robosoc.config.chip import MIN_PACKET_FLITS, ChipConfig
 from robosoc.isa.disasm import disassemble
 from robosoc.isa.table import MEMORY_CYCLES
@@ -164,8 +164,9 @@ class MPSoC:
         for addr, data in program.segments:
             self.cores.write(addr, data, tile=t)
         self.cores.st[t, S_PC] = program.entry
-        self.cst[t, kc.K_STATE] = kc.K_RUN
         self.programs[t] = program
+        check_pc(self.cores, t, program.symbolize, f"tile {xy}: entry point: ")
+        self.cst[t, kc.K_STATE] = kc.K_RUN
 
     def load_all(self, program: Program) -> None:
         """The same program on every core tile (it tells tiles apart by reading NI_TILE)."""
@@ -221,14 +222,21 @@ class MPSoC:
         self.gst[kc.G_IO_COUNT] = 0
 
     # --- running ---------------------------------------------------------------------------
+    def _book(self) -> kc.ChipBook:
+        return kc.ChipBook(self.cst, self.acc, self.snap, self.gst, self.xout, self.io_out)
+
     def step(self, until: int) -> int:
-        """Advance the chip to ``until`` (or a host event); returns the CHIP_* reason."""
-        c, n = self.cores, self.noc
-        kc.run_chip(
-            c.st, c.ctr, c.opc, c.regs, c.m8, c.m16, c.m32, c.dec, c.out,
-            n.cfg, n.glob, n.buf, n.port, n.tile, n.mem, n.ev, n.queue,
-            self.cst, self.acc, self.snap, self.gst, self.xout, self.io_out, until,
-        )  # fmt: skip
+        """Advance the chip to ``until`` (or a host event); returns the CHIP_* reason.
+
+        Raises:
+            CoreError: a running tile's pc is not an instruction of its loaded code.
+        """
+        for xy in self.core_tiles():
+            if self.state(xy) in ("running", "sleeping"):
+                check_pc(
+                    self.cores, self.config.tile_index(xy), lambda pc, xy=xy: self.symbolize(xy, pc), f"tile {xy}: "
+                )
+        kc.run_chip(self.cores.arrays(), self.noc, self._book(), until)
         self._drain_io()
         return int(self.gst[kc.G_STATUS])
 
@@ -357,8 +365,7 @@ class MPSoC:
         """Attribute everything not yet attributed to the tasks running now."""
         for t in range(self.config.n_tiles):
             if self.cst[t, kc.K_STATE] not in (kc.K_OFF, kc.K_IO):
-                kc.account(t, self.cores.st, self.cores.ctr, self.cores.opc, self.cst, self.acc, self.snap,
-                            int(self.cores.st[t, S_CYCLE]))  # fmt: skip
+                kc.account(t, self.cores.arrays(), self._book(), int(self.cores.st[t, S_CYCLE]))
 
     def task_counters(self, xy: tuple[int, int]) -> dict[int, dict[str, int]]:
         """Counters per task id of one tile (task 0 is the kernel/idle), for tasks that ran."""

@@ -41,6 +41,7 @@ from robosoc.kernels.core_layout import (
     S_MULHSU_COUNT,
     S_MULHSU_PC,
     S_OUT_LEN,
+    S_PC,
     S_RUN,
 )
 
@@ -141,6 +142,20 @@ def core_error(st: np.ndarray, symbolize: Callable[[int], str], sram_size: int, 
     return CoreError(msg, kind=text, pc=pc, addr=addr if has_addr else None, word=word, cycle=cycle)
 
 
+def check_pc(state: CoreState, tile: int, symbolize: Callable[[int], str], where: str = "") -> None:
+    """Raise a :class:`CoreError` unless the tile's pc is a word of its loaded code."""
+    pc = int(state.st[tile, S_PC])
+    off = pc - state.base
+    if off % 4 == 0 and 0 <= off < state.code_size(tile):
+        return
+    code_end = state.base + state.code_size(tile)
+    raise CoreError(
+        f"{where}pc 0x{pc:08x} ({symbolize(pc)}) is not an instruction of the loaded code "
+        f"0x{state.base:08x}..0x{code_end:08x} (was a program loaded?)",
+        kind="bad pc", pc=pc, addr=pc, word=0, cycle=int(state.st[tile, S_CYCLE]),
+    )  # fmt: skip
+
+
 class CycleBudgetExceeded(RuntimeError):
     """The program did not exit within the cycle budget."""
 
@@ -217,10 +232,15 @@ class SingleCoreSoC:
         return counters_dict(self.state.ctr[0], self.state.opc[0], self.cycle)
 
     def step_until(self, until: int) -> int:
-        """Run the kernel to cycle ``until`` (or an event); returns its RUN_* status."""
-        s = self.state
-        run_cores(s.st, s.ctr, s.opc, s.regs, s.m8, s.m16, s.m32, s.dec, s.out, _TILE0, until)
-        return int(s.st[0, S_RUN])
+        """Run the kernel to cycle ``until`` (or an event); returns its RUN_* status.
+
+        Raises:
+            CoreError: the pc is not an instruction of the loaded code (nothing loaded, or a pc
+                set from outside); the kernel itself trusts the pc it starts from.
+        """
+        check_pc(self.state, 0, self.symbolize)
+        run_cores(self.state.arrays(), _TILE0, until)
+        return int(self.state.st[0, S_RUN])
 
     def set_breakpoint(self, addr: int, on: bool = True) -> None:
         """Stop before the instruction at ``addr``: ``step_until`` then returns RUN_BREAK."""

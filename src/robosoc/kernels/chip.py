@@ -20,13 +20,15 @@ wake-up cycle is computed from their timers and the deliveries.
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 from numba import njit
 
 from robosoc.isa.table import MEMORY_CYCLES
 from robosoc.kernels import ni_registers as ni
 from robosoc.kernels import noc as nk
-from robosoc.kernels.core import LW, SW, U1, U2, fields, run_cores
+from robosoc.kernels.core import LW, SW, U1, U2, CoreArrays, fields, run_cores
 from robosoc.kernels.core_layout import (
     C_MMIO,
     CTR_SIZE,
@@ -131,9 +133,27 @@ IO_COLS = 3 + nk.MEM_FLITS  # io_out rows: cycle, length, first-flit cycle, flit
 SINGLE_QUANTUM = 1 << 20  # default G_LOOK_SINGLE (bounds the output of one quantum)
 
 
+class ChipBook(NamedTuple):
+    """The chip loop's own arrays (built by ``MPSoC``).
+
+    ``cst`` per-tile chip state (K_* columns), ``acc`` per-task accounting vectors (A_*), ``snap``
+    the counters at the last attribution, ``gst`` global scalars (G_*), ``xout`` per-tile output
+    kept for the host, ``io_out`` packets that reached the I/O tile (IO_COLS per row).
+    """
+
+    cst: np.ndarray
+    acc: np.ndarray
+    snap: np.ndarray
+    gst: np.ndarray
+    xout: np.ndarray
+    io_out: np.ndarray
+
+
 @njit(cache=True)
-def account(t, st, ctr, opc, cst, acc, snap, now):
+def account(t, core, book, now):
     """Attribute everything since the last snapshot to the current task of tile t."""
+    ctr, opc = core.ctr, core.opc
+    cst, acc, snap = book.cst, book.acc, book.snap
     task = cst[t, K_TASK]
     for k in range(OPC_SIZE):
         v = opc[t, k]
@@ -192,8 +212,11 @@ def _fault(cst, t, code, addr, info):
 
 
 @njit(cache=True)
-def ni_access(t, st, ctr, opc, regs, m16, dec, cst, acc, snap, gst, cfg, glob, tile, mem):
+def ni_access(t, core, book, noc):
     """Perform the NI-register load or store tile t stopped before; returns False on a fault."""
+    st, ctr, opc, regs, m16, dec = core.st, core.ctr, core.opc, core.regs, core.m16, core.dec
+    cst, gst = book.cst, book.gst
+    cfg, glob, tile, mem = noc.cfg, noc.glob, noc.tile, noc.mem
     base = st[t, S_MEM_BASE]
     size = st[t, S_MEM_SIZE]
     pc = st[t, S_PC]
@@ -256,7 +279,7 @@ def ni_access(t, st, ctr, opc, regs, m16, dec, cst, acc, snap, gst, cfg, glob, t
             return False
         st[t, S_CYCLE] = end
         st[t, S_PC] = pc + 4
-        account(t, st, ctr, opc, cst, acc, snap, end)
+        account(t, core, book, end)
         cst[t, K_TASK] = v
         return True
     elif off == ni.SLEEP:
@@ -374,8 +397,9 @@ def _keep_output(t, st, cst, out, xout):
 
 
 @njit(cache=True)
-def _noc_advance(cfg, glob, buf, port, tile, mem, ev, queue, cst, to):
+def _noc_advance(noc, cst, to):
     """Run the NoC up to cycle ``to``, freeing receive memories at the cycles RECV made them free."""
+    cfg, glob, buf, port, tile, mem, ev, queue = noc
     n = cfg[nk.C_NTILES]
     while glob[nk.G_CYCLE] < to:
         nxt = to
@@ -394,9 +418,10 @@ def _noc_advance(cfg, glob, buf, port, tile, mem, ev, queue, cst, to):
 
 
 @njit(cache=True)
-def _noc_next(cfg, glob, tile, queue, cst):
+def _noc_next(noc, cst):
     """First cycle at which the NoC can change by itself (BIG if it is idle with nothing pending)."""
-    best = nk.noc_next_activity(cfg, glob, tile, queue)
+    cfg = noc.cfg
+    best = nk.noc_next_activity(cfg, noc.glob, noc.tile, noc.queue)
     for t in range(cfg[nk.C_NTILES]):
         if cst[t, K_RX_FREE_AT] < best:
             best = cst[t, K_RX_FREE_AT]
@@ -404,8 +429,10 @@ def _noc_next(cfg, glob, tile, queue, cst):
 
 
 @njit(cache=True)
-def _take_deliveries(st, cst, gst, glob, ev, io_out):
+def _take_deliveries(st, book, noc):
     """Move NoC delivery events to the receiving cores (interrupt line) or to io_out."""
+    cst, gst, io_out = book.cst, book.gst, book.io_out
+    glob, ev = noc.glob, noc.ev
     io = gst[G_IO_TILE]
     for r in range(glob[nk.G_NEV]):
         d = ev[r, nk.EV_TILE]
@@ -428,12 +455,11 @@ def _take_deliveries(st, cst, gst, glob, ev, io_out):
 
 
 @njit(cache=True)
-def run_chip(
-    st, ctr, opc, regs, m8, m16, m32, dec, out,
-    cfg, glob, buf, port, tile, mem, ev, queue,
-    cst, acc, snap, gst, xout, io_out, until,
-):  # fmt: skip
+def run_chip(core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int) -> int:
     """Advance the whole chip to cycle ``until`` or an event that needs the host (CHIP_* in gst)."""
+    st, out = core.st, core.out
+    glob = noc.glob
+    cst, gst, xout, io_out = book.cst, book.gst, book.xout, book.io_out
     n = cst.shape[0]
     look_idle = gst[G_LOOK_IDLE]
     look_active = gst[G_LOOK_ACTIVE]
@@ -471,7 +497,7 @@ def run_chip(
                     if cst[t, K_WAKE] < wake:
                         wake = cst[t, K_WAKE]
             # the NoC's next activity; a quiet NoC stays quiet until a core sends or receives
-            nxt = NEVER if quiet else _noc_next(cfg, glob, tile, queue, cst)
+            nxt = NEVER if quiet else _noc_next(noc, cst)
             quiet = nxt >= NEVER
             if nrun == 0 and nsleep == 0:
                 status = CHIP_DONE
@@ -508,12 +534,12 @@ def run_chip(
                 H = until
             gst[G_QUANTA] += 1
             if active:
-                _noc_advance(cfg, glob, buf, port, tile, mem, ev, queue, cst, H)
+                _noc_advance(noc, cst, H)
                 if glob[nk.G_STATUS] != nk.STATUS_OK:
                     status = CHIP_ERROR
                     gst[G_ERR_TILE] = -1
                     break
-                _take_deliveries(st, cst, gst, glob, ev, io_out)
+                _take_deliveries(st, book, noc)
             # wake sleeping cores due in this quantum
             for t in range(n):
                 if cst[t, K_STATE] == K_SLEEP and cst[t, K_WAKE] < H:
@@ -524,7 +550,7 @@ def run_chip(
                 if cst[t, K_STATE] == K_RUN:
                     run[k] = t
                     k += 1
-            run_cores(st, ctr, opc, regs, m8, m16, m32, dec, out, run[:k], H)
+            run_cores(core, run[:k], H)
         # Stopped cores are handled in global cycle order, so that an NI access sees the network
         # exactly as it is in its cycle: in an idle quantum the NoC is brought up to the access
         # first, with every packet sent before it by any core (a send cannot reach another tile
@@ -547,12 +573,12 @@ def run_chip(
                 sent = cst[t, K_SENT]
                 received = cst[t, K_RECEIVED]
                 if not active and not quiet:
-                    _noc_advance(cfg, glob, buf, port, tile, mem, ev, queue, cst, s0)
+                    _noc_advance(noc, cst, s0)
                     if glob[nk.G_STATUS] != nk.STATUS_OK:
                         break
                     if glob[nk.G_NEV] != 0:
-                        _take_deliveries(st, cst, gst, glob, ev, io_out)
-                if not ni_access(t, st, ctr, opc, regs, m16, dec, cst, acc, snap, gst, cfg, glob, tile, mem):
+                        _take_deliveries(st, book, noc)
+                if not ni_access(t, core, book, noc):
                     failed = t
                     break
                 if cst[t, K_SENT] != sent or cst[t, K_RECEIVED] != received:
@@ -586,7 +612,7 @@ def run_chip(
                 suspended = True
                 break
             one[0] = t
-            run_cores(st, ctr, opc, regs, m8, m16, m32, dec, out, one, H)
+            run_cores(core, one, H)
         for r in range(k):
             _keep_output(run[r], st, cst, out, xout)
         if suspended:
@@ -613,13 +639,13 @@ def run_chip(
         if quiet:
             glob[nk.G_CYCLE] = H  # nothing in or entering the network: time just passes
         elif not active:
-            _noc_advance(cfg, glob, buf, port, tile, mem, ev, queue, cst, H)
+            _noc_advance(noc, cst, H)
             if glob[nk.G_STATUS] != nk.STATUS_OK:
                 status = CHIP_ERROR
                 gst[G_ERR_TILE] = -1
                 break
             if glob[nk.G_NEV] != 0:
-                _take_deliveries(st, cst, gst, glob, ev, io_out)
+                _take_deliveries(st, book, noc)
         T = H
         full = False
         for t in range(n):
@@ -633,4 +659,4 @@ def run_chip(
     return status
 
 
-__all__ = ["account", "ni_access", "run_chip", "wake_time"]
+__all__ = ["ChipBook", "account", "ni_access", "run_chip", "wake_time"]

@@ -21,6 +21,8 @@ sentinel row), so the table grows with the program rather than with the SRAM.
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 from numba import njit
 
@@ -276,20 +278,27 @@ def store_device(
     return RUN_CHUNK, 0, pc + 4, cyc + MEMORY_CYCLES
 
 
+class CoreArrays(NamedTuple):
+    """The arrays of a set of cores, one row per core (tile); built by ``CoreState.arrays()``.
+
+    ``st`` state (layout: core_layout.S_*), ``ctr`` event counters (C_*), ``opc`` instructions per
+    operation in two banks, ``regs`` x0..x31 and a sink, ``m8``/``m16``/``m32`` three views of the
+    SRAM bytes, ``dec`` the predecode rows of the loaded code, ``out`` the output buffer.
+    """
+
+    st: np.ndarray
+    ctr: np.ndarray
+    opc: np.ndarray
+    regs: np.ndarray
+    m8: np.ndarray
+    m16: np.ndarray
+    m32: np.ndarray
+    dec: np.ndarray
+    out: np.ndarray
+
+
 @njit(cache=True, inline="always")
-def run_cores(
-    st: np.ndarray,
-    ctr: np.ndarray,
-    opc: np.ndarray,
-    regs: np.ndarray,
-    m8: np.ndarray,
-    m16: np.ndarray,
-    m32: np.ndarray,
-    dec: np.ndarray,
-    out: np.ndarray,
-    tiles: np.ndarray,
-    until: int,
-) -> None:
+def run_cores(core: CoreArrays, tiles: np.ndarray, until: int) -> None:
     """Run each core in ``tiles`` until cycle ``until`` or until it must stop.
 
     Every array has one row per core (tile).  A core stops at the first instruction boundary at or
@@ -306,6 +315,7 @@ def run_cores(
     are indexed in two dimensions, because every view costs reference counting on entry and exit,
     which dominates the short time slices of a busy many-core chip.
     """
+    st, ctr, opc, regs, m8, m16, m32, dec, out = core
     for k in range(tiles.shape[0]):
         t = tiles[k]
         opc_t = opc[t]
@@ -334,6 +344,10 @@ def run_cores(
             if cyc >= next_event:
                 if cyc >= st[t, S_IRQ_CHECK]:
                     pc, cyc = irq_event(st[t], ctr[t], pc, cyc)
+                    err = fetch_error(pc, base, code, size)
+                    if err != 0:  # IRQ_VECTOR outside the loaded code
+                        err_addr = pc
+                        break
                 if cyc >= stop:
                     status = RUN_MAX_CYCLES if (budget >= 0 and cyc >= budget) else RUN_CHUNK
                     break
