@@ -84,6 +84,12 @@ void ekf_process_noise(const real_t q[4], real_t dt, real_t noise[N * N])
     }
 }
 
+/*
+ * F = [[transition, -dt/2 Xi(q)], [0, I]]: only its top four rows are computed (f_top, 4 x 7), and
+ * F P F^T uses the identity block: the last three rows of F P are those of P, and the last three
+ * columns of (F P) F^T those of F P.  Same products as the golden model's, without the ones
+ * known to be 0 or 1 (392 multiply-adds instead of 686).
+ */
 void ekf_predict(ekf_t *ekf, const real_t gyro[3], real_t dt)
 {
     real_t q[4] = {ekf->x[0], ekf->x[1], ekf->x[2], ekf->x[3]};
@@ -103,55 +109,50 @@ void ekf_predict(ekf_t *ekf, const real_t gyro[3], real_t dt)
     for (int i = 0; i < 4; i++) {
         transition[i * 5] = real_add(transition[i * 5], REAL_ONE);
     }
-    /* jacobian = I; jacobian[:4, :4] = transition; jacobian[:4, 4:] = -dt/2 Xi(q) */
+    /* jacobian[:4, :4] = transition; jacobian[:4, 4:] = -dt/2 Xi(q); jacobian[4:] = [0 I] */
     real_t xi[12];
     quat_xi_matrix(q, xi);
-    real_t jacobian[N * N];
-    mat_identity(jacobian, N);
+    real_t f_top[4 * N];
     real_t minus_half_dt = real_neg(half_dt);
     for (int i = 0; i < 4; i++) {
         for (int j = 0; j < 4; j++) {
-            jacobian[i * N + j] = transition[i * 4 + j];
+            f_top[i * N + j] = transition[i * 4 + j];
         }
         for (int j = 0; j < 3; j++) {
-            jacobian[i * N + 4 + j] = real_mul(minus_half_dt, xi[i * 3 + j]);
+            f_top[i * N + 4 + j] = real_mul(minus_half_dt, xi[i * 3 + j]);
         }
     }
     /* x[:4] = transition q */
     mat_vec(transition, q, ekf->x, 4, 4, 0);
-    /* P = jacobian P jacobian^T + process_noise(q, dt) */
+    /* fp = jacobian P: the top rows computed, the bottom rows copied */
     real_t fp[N * N];
-    real_t fpf[N * N];
+    mat_mul(f_top, ekf->p, fp, 4, N, N, 0);
+    mat_copy(ekf->p + 4 * N, fp + 4 * N, N - 4, N);
+    /* P = fp jacobian^T + process_noise(q, dt): the left columns computed, the right copied */
+    real_t left[N * 4];
+    mat_mul_bt(fp, f_top, left, N, N, 4, 0);
     real_t noise[N * N];
-    mat_mul(jacobian, ekf->p, fp, N, N, N, 0);
-    mat_mul_bt(fp, jacobian, fpf, N, N, N, 0);
     ekf_process_noise(q, dt, noise);
-    mat_add(fpf, noise, ekf->p, N, N);
+    for (int i = 0; i < N; i++) {
+        for (int j = 0; j < N; j++) {
+            real_t v = j < 4 ? left[i * 4 + j] : fp[i * N + j];
+            ekf->p[i * N + j] = real_add(v, noise[i * N + j]);
+        }
+    }
 }
 
 /*
- * h(q) = [R^T(q) e_z, R^T(q) m_ref] and H = [d(R^T e_z)/dq, d(R^T m_ref)/dq | 0] (6 x 7).  The
- * accelerometer rows come out in units of 2^-EKF_ACCEL_SHIFT because e_z is given in them.
+ * h(q) = [R^T(q) e_z, R^T(q) m_ref] and the quaternion columns of H (6 x 4); H's bias columns are
+ * zero, so H is kept as these four columns.  The accelerometer rows come out in units of
+ * 2^-EKF_ACCEL_SHIFT because e_z is given in them.
  */
-static void measurement(const ekf_t *ekf, const real_t q[4], real_t h[M], real_t jac[M * N])
+static void measurement(const ekf_t *ekf, const real_t q[4], real_t h[M], real_t jac_q[M * 4])
 {
     const real_t up_scaled[3] = {REAL_ZERO, REAL_ZERO, REAL_C(1.0 / (1 << EKF_ACCEL_SHIFT))};
-    real_t block[12];
     quat_rotate_to_body(q, up_scaled, h);
     quat_rotate_to_body(q, ekf->mag_reference, h + 3);
-    mat_zero(jac, M, N);
-    quat_rotate_to_body_jacobian(q, up_scaled, block);
-    for (int i = 0; i < 3; i++) {
-        for (int j = 0; j < 4; j++) {
-            jac[i * N + j] = block[i * 4 + j];
-        }
-    }
-    quat_rotate_to_body_jacobian(q, ekf->mag_reference, block);
-    for (int i = 0; i < 3; i++) {
-        for (int j = 0; j < 4; j++) {
-            jac[(3 + i) * N + j] = block[i * 4 + j];
-        }
-    }
+    quat_rotate_to_body_jacobian(q, up_scaled, jac_q);
+    quat_rotate_to_body_jacobian(q, ekf->mag_reference, jac_q + 12);
 }
 
 /*
@@ -159,7 +160,8 @@ static void measurement(const ekf_t *ekf, const real_t q[4], real_t h[M], real_t
  * S K^T = H P (S symmetric), so K is never formed from an explicit inverse (the golden model's
  * inv(S) is the same mathematics).  S is formed in units of 2^(P_SHIFT - K_SHIFT): the solve then
  * yields K^T * 2^K_SHIFT directly.  Then x += K nu and P = P - K (H P), the golden model's
- * (I - K H) P by distributivity.
+ * (I - K H) P by distributivity.  H's zero bias columns are left out of H P and H P H^T: H P is
+ * H_q times the top four rows of P, and H P H^T is the first four columns of H P times H_q^T.
  */
 int ekf_update(ekf_t *ekf, const real_t accel[3], const real_t mag[3])
 {
@@ -176,8 +178,8 @@ int ekf_update(ekf_t *ekf, const real_t accel[3], const real_t mag[3])
         z[3 + i] = real_div(mag[i], mag_norm);
     }
     real_t h[M];
-    real_t jac[M * N];
-    measurement(ekf, ekf->x, h, jac);
+    real_t jac_q[M * 4];
+    measurement(ekf, ekf->x, h, jac_q);
     real_t innovation[M];
     for (int i = 0; i < M; i++) {
         innovation[i] = real_sub(z[i], h[i]);
@@ -192,9 +194,15 @@ int ekf_update(ekf_t *ekf, const real_t accel[3], const real_t mag[3])
         REAL_C(EKF_MAG_NOISE * EKF_MAG_NOISE * (1 << (EKF_P_SHIFT - EKF_K_SHIFT))),
     };
     real_t hp[M * N];
+    mat_mul(jac_q, ekf->p, hp, M, 4, N, 0);
+    real_t hp_q[M * 4];
+    for (int i = 0; i < M; i++) {
+        for (int j = 0; j < 4; j++) {
+            hp_q[i * 4 + j] = hp[i * N + j];
+        }
+    }
     real_t cov[M * M];
-    mat_mul(jac, ekf->p, hp, M, N, N, 0);
-    mat_mul_bt(hp, jac, cov, M, N, M, -EKF_K_SHIFT);
+    mat_mul_bt(hp_q, jac_q, cov, M, 4, M, -EKF_K_SHIFT);
     for (int i = 0; i < M; i++) {
         cov[i * M + i] = real_add(cov[i * M + i], noise_diag[i]);
     }

@@ -8,6 +8,36 @@
 #include <string.h>
 
 /*
+ * Shift and add, one bit of the smaller magnitude per step (the loop ends at its highest set
+ * bit): a Q16.16 value near 1 costs 17 steps, a zero none.  Signs are applied at the end.
+ */
+int64_t fix16_mul64_soft(int32_t a, int32_t b)
+{
+    uint32_t ua = a < 0 ? 0u - (uint32_t)a : (uint32_t)a;
+    uint32_t ub = b < 0 ? 0u - (uint32_t)b : (uint32_t)b;
+    if (ua < ub) {
+        uint32_t t = ua;
+        ua = ub;
+        ub = t;
+    }
+    uint32_t lo = 0;
+    uint32_t hi = 0;
+    uint32_t add_lo = ua; /* ua shifted left by the step number, as a 64-bit (add_hi:add_lo) */
+    uint32_t add_hi = 0;
+    while (ub != 0) {
+        if (ub & 1u) {
+            lo += add_lo;
+            hi += add_hi + (lo < add_lo);
+        }
+        add_hi = (add_hi << 1) | (add_lo >> 31);
+        add_lo <<= 1;
+        ub >>= 1;
+    }
+    uint64_t p = ((uint64_t)hi << 32) | lo;
+    return (a < 0) != (b < 0) ? -(int64_t)p : (int64_t)p;
+}
+
+/*
  * Division without a divider: long division of |a| * 2^16 (48 bits) by |b|, one quotient bit per
  * step.  The remainder stays below |b| <= 2^31, so shifting it left by one still fits 32 bits.
  * The loop starts at the highest set bit of |a| (leading zeros would only shift zeros), so a
@@ -102,7 +132,7 @@ fix16_t fix16_sqrt(fix16_t a)
 /* Q2.30 product, rounded: the internal format of the sine/cosine polynomials. */
 static int32_t mul_q30(int32_t a, int32_t b)
 {
-    return (int32_t)(((int64_t)a * b + (1 << 29)) >> 30);
+    return (int32_t)((fix16_mul64(a, b) + (1 << 29)) >> 30);
 }
 
 #define Q30_HALF_PI 1686629713        /* pi/2 * 2^30 */
@@ -119,9 +149,9 @@ static int32_t mul_q30(int32_t a, int32_t b)
  */
 static fix16_t sin_quadrant(fix16_t x, int32_t quadrant)
 {
-    int64_t scaled = (int64_t)x * Q30_TWO_OVER_PI;                 /* x * 2/pi in Q.46 */
+    int64_t scaled = fix16_mul64(x, Q30_TWO_OVER_PI);                 /* x * 2/pi in Q.46 */
     int32_t k = (int32_t)((scaled + ((int64_t)1 << 45)) >> 46);     /* nearest quadrant */
-    int32_t r = (int32_t)(((int64_t)x << 14) - (int64_t)k * Q30_HALF_PI);
+    int32_t r = (int32_t)(((int64_t)x << 14) - fix16_mul64(k, Q30_HALF_PI));
     int32_t r2 = mul_q30(r, r);
     int32_t v;
     uint32_t q = (uint32_t)(k + quadrant) & 3u;
@@ -231,7 +261,7 @@ fix16_t fix16_asin(fix16_t x)
     if (x <= -FIX16_ONE) {
         return -FIX16_HALF_PI;
     }
-    uint64_t one_minus_x2 = (uint64_t)(FIX16_ONE - x) * (uint64_t)(FIX16_ONE + x); /* Q32 */
+    uint64_t one_minus_x2 = (uint64_t)fix16_mul64(FIX16_ONE - x, FIX16_ONE + x); /* Q32 */
     fix16_t c = (fix16_t)fix16_isqrt64(one_minus_x2);
     return fix16_atan2(x, c);
 }

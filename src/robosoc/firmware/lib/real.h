@@ -67,7 +67,7 @@ static inline real_t real_scale2(real_t a, int shift)
 }
 
 static inline real_acc_t real_acc_zero(void) { return 0; }
-static inline real_acc_t real_acc_mac(real_acc_t acc, real_t a, real_t b) { return acc + (int64_t)a * b; }
+static inline real_acc_t real_acc_mac(real_acc_t acc, real_t a, real_t b) { return acc + fix16_mul64(a, b); }
 
 /* The accumulated sum times 2^shift (shift <= 16), rounded once and saturated. */
 static inline real_t real_acc_get(real_acc_t acc, int shift)
