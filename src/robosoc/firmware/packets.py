@@ -274,12 +274,14 @@ def c_header() -> str:
         for f in fmt.fields:
             dims = f"[{f.count}]" if f.count > 1 else ""
             unit = "" if f.unit == "-" else f" [{f.unit}]"
-            lines.append(f"    {_C_TYPE[f.type]} {f.name}{dims}; /* {f.doc}{unit}{' (Q16.16)' if f.type == 'q16' else ''} */")
+            lines.append(
+                f"    {_C_TYPE[f.type]} {f.name}{dims}; /* {f.doc}{unit}{' (Q16.16)' if f.type == 'q16' else ''} */"
+            )
         lines.append("};")
-        lines.append(f"_Static_assert(sizeof(struct {fmt.c_name}) == {fmt.size}, \"{fmt.name} packet size\");")
+        lines.append(f'_Static_assert(sizeof(struct {fmt.c_name}) == {fmt.size}, "{fmt.name} packet size");')
         for name, offset in fmt.offsets.items():
             lines.append(
-                f"_Static_assert(offsetof(struct {fmt.c_name}, {name}) == {offset}, \"{fmt.name}.{name} offset\");"
+                f'_Static_assert(offsetof(struct {fmt.c_name}, {name}) == {offset}, "{fmt.name}.{name} offset");'
             )
     lines += ["", "#endif /* ROBOSOC_PACKETS_H */", ""]
     return "\n".join(lines)

@@ -58,12 +58,11 @@ void ekf_process_noise(const real_t q[4], real_t dt, real_t noise[N * N])
         REAL_C(EKF_GYRO_NOISE_Y * (1 << P_HALF_SHIFT)),
         REAL_C(EKF_GYRO_NOISE_Z * (1 << P_HALF_SHIFT)),
     };
-    real_t half_dt = real_mul(dt, REAL_C(0.5));
     real_t xi[12];
     quat_xi_matrix(q, xi);
     real_t g[12];
     for (int j = 0; j < 3; j++) {
-        real_t a = real_mul(half_dt, sigma_scaled[j]);
+        real_t a = real_mul_scaled(dt, sigma_scaled[j], -1);
         for (int i = 0; i < 4; i++) {
             g[i * 3 + j] = real_mul(xi[i * 3 + j], a);
         }
@@ -98,13 +97,12 @@ void ekf_predict(ekf_t *ekf, const real_t gyro[3], real_t dt)
     for (int i = 0; i < 3; i++) {
         rate[i] = real_sub(gyro[i], ekf->x[4 + i]);
     }
-    /* transition = I + dt/2 Omega(rate) */
-    real_t half_dt = real_mul(dt, REAL_C(0.5));
+    /* transition = I + dt/2 Omega(rate); dt/2 times a value is one rounding (real_mul_scaled) */
     real_t omega[16];
     quat_omega_matrix(rate, omega);
     real_t transition[16];
     for (int i = 0; i < 16; i++) {
-        transition[i] = real_mul(half_dt, omega[i]);
+        transition[i] = real_mul_scaled(dt, omega[i], -1);
     }
     for (int i = 0; i < 4; i++) {
         transition[i * 5] = real_add(transition[i * 5], REAL_ONE);
@@ -113,13 +111,13 @@ void ekf_predict(ekf_t *ekf, const real_t gyro[3], real_t dt)
     real_t xi[12];
     quat_xi_matrix(q, xi);
     real_t f_top[4 * N];
-    real_t minus_half_dt = real_neg(half_dt);
+    real_t minus_dt = real_neg(dt);
     for (int i = 0; i < 4; i++) {
         for (int j = 0; j < 4; j++) {
             f_top[i * N + j] = transition[i * 4 + j];
         }
         for (int j = 0; j < 3; j++) {
-            f_top[i * N + 4 + j] = real_mul(minus_half_dt, xi[i * 3 + j]);
+            f_top[i * N + 4 + j] = real_mul_scaled(minus_dt, xi[i * 3 + j], -1);
         }
     }
     /* x[:4] = transition q */

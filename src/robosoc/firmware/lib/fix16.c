@@ -100,11 +100,12 @@ fix16_t fix16_div(fix16_t a, fix16_t b)
  */
 uint32_t fix16_isqrt64(uint64_t n)
 {
-    uint64_t root = 0;
-    uint64_t bit = (uint64_t)1 << 62;
-    while (bit > n) {
-        bit >>= 2;
+    if (n == 0) {
+        return 0;
     }
+    uint64_t root = 0;
+    /* the highest power of 4 not above n */
+    uint64_t bit = (uint64_t)1 << ((63 - __builtin_clzll(n)) & ~1);
     while (bit != 0) {
         if (n >= root + bit) {
             n -= root + bit;
@@ -144,8 +145,8 @@ static int32_t mul_q30(int32_t a, int32_t b)
  * mod 4.  Shifting by whole quadrants is exact, so cosine costs the same as sine and is as
  * accurate.  r is formed in Q2.30 from a 30-bit pi/2 (k is at most 20861, so the constant's
  * rounding adds at most 1.3e-6 rad, 0.08 LSB); the Taylor polynomials to r^7 (sine) and r^8
- * (cosine) are below 3.2e-7 off on |r| <= pi/4, and the Q2.30 arithmetic adds a few 2^-30:
- * total error <= 1 LSB after the final rounding to Q16.16.
+ * (cosine) are below 3.2e-7 off on |r| <= pi/4 (0.02 LSB), and the Q2.30 arithmetic adds a few
+ * 2^-30: with the final rounding to Q16.16, error <= 0.65 LSB.
  */
 static fix16_t sin_quadrant(fix16_t x, int32_t quadrant)
 {
@@ -199,8 +200,8 @@ static const int32_t cordic_atan_q29[] = {
  * adding up the angles turned.  Shifts and adds only, so the multiplier-less core pays no
  * multiplication.  The vector is first turned into the right half plane (by pi) and scaled so
  * that its larger component lies in [2^28, 2^29): the CORDIC gain (1.65) and sqrt(2) then keep
- * it below 2^31, and 24 steps leave an angle error near 2^-23 rad, below the final rounding:
- * error <= 1 LSB.
+ * it below 2^31, and 24 steps leave an angle error near 2^-23 rad (0.01 LSB) besides the final
+ * rounding: error <= 0.55 LSB.
  */
 fix16_t fix16_atan2(fix16_t y, fix16_t x)
 {
@@ -250,8 +251,8 @@ fix16_t fix16_atan2(fix16_t y, fix16_t x)
 /*
  * asin(x) = atan2(x, sqrt(1 - x^2)), with 1 - x^2 formed exactly as (1 - x)(1 + x) in Q32 and its
  * root rounded once: the cosine is within 0.5 LSB, which moves the angle by at most 0.5 LSB
- * (d atan2(x, c)/dc = -x / (x^2 + c^2) is at most 1 near |x| = 1), plus atan2's own error:
- * error <= 2 LSB.  |x| > 1 clamps to +-pi/2, as the golden model clamps its argument.
+ * (|d atan2(x, c)/dc| = |x| / (x^2 + c^2) <= 1 with x^2 + c^2 = 1), plus atan2's own error:
+ * error <= 1.1 LSB.  |x| > 1 clamps to +-pi/2, as the golden model clamps its argument.
  */
 fix16_t fix16_asin(fix16_t x)
 {
@@ -308,8 +309,37 @@ fix16_t fix16_from_float(float f)
     return negative ? -(fix16_t)mag : (fix16_t)mag;
 }
 
-/* Q16.16 -> float: int -> float (rounded to nearest by compiler-rt), then an exact * 2^-16. */
+/*
+ * Q16.16 -> float from the bits (no soft-float call): the magnitude's highest set bit gives the
+ * exponent; below 2^24 LSB (|a| < 256) the mantissa is exact, above it rounds to nearest even,
+ * as an int -> float conversion would.
+ */
 float fix16_to_float(fix16_t a)
 {
-    return (float)a * (1.0f / 65536.0f);
+    if (a == 0) {
+        return 0.0f;
+    }
+    uint32_t sign = a < 0 ? 0x80000000u : 0u;
+    uint32_t mag = a < 0 ? 0u - (uint32_t)a : (uint32_t)a;
+    int32_t top = 31 - __builtin_clz(mag); /* mag's highest set bit; the value is 2^(top - 16) x 1.f */
+    uint32_t mant;
+    if (top <= 23) {
+        mant = mag << (23 - top);
+    } else {
+        int32_t shift = top - 23;
+        uint32_t rest = mag & ((1u << shift) - 1u);
+        uint32_t half = 1u << (shift - 1);
+        mant = mag >> shift;
+        if (rest > half || (rest == half && (mant & 1u))) {
+            mant++;
+            if (mant == 0x1000000u) { /* rounded up to the next power of two */
+                mant >>= 1;
+                top++;
+            }
+        }
+    }
+    uint32_t bits = sign | ((uint32_t)(top - 16 + 127) << 23) | (mant & 0x7fffffu);
+    float f;
+    memcpy(&f, &bits, sizeof f);
+    return f;
 }

@@ -113,12 +113,12 @@ static inline int32_t fix16_to_int(fix16_t a)
 
 fix16_t fix16_div(fix16_t a, fix16_t b);        /* a / b, error <= 0.5 LSB; b == 0 saturates */
 fix16_t fix16_sqrt(fix16_t a);                  /* sqrt(a), error <= 0.5 LSB; a <= 0 gives 0 */
-fix16_t fix16_sin(fix16_t x);                   /* any x; error <= 1 LSB */
-fix16_t fix16_cos(fix16_t x);                   /* any x; error <= 1 LSB */
-fix16_t fix16_atan2(fix16_t y, fix16_t x);      /* in [-pi, pi]; error <= 1 LSB; (0, 0) gives 0 */
-fix16_t fix16_asin(fix16_t x);                  /* in [-pi/2, pi/2]; |x| > 1 clamps; error <= 2 LSB */
-fix16_t fix16_from_float(float f);              /* rounded, saturating; NaN gives 0 */
-float fix16_to_float(fix16_t a);                /* exact for |a| < 256 */
+fix16_t fix16_sin(fix16_t x);                   /* any x; error <= 0.65 LSB */
+fix16_t fix16_cos(fix16_t x);                   /* any x; error <= 0.65 LSB */
+fix16_t fix16_atan2(fix16_t y, fix16_t x);      /* in [-pi, pi]; error <= 0.55 LSB; (0, 0) gives 0 */
+fix16_t fix16_asin(fix16_t x);                  /* in [-pi/2, pi/2]; |x| > 1 clamps; error <= 1.1 LSB */
+fix16_t fix16_from_float(float f);              /* error <= 0.5 LSB, saturating; NaN gives 0 */
+float fix16_to_float(fix16_t a);                /* correctly rounded (exact for |a| < 256) */
 
 /* Rounded integer square root of a 64-bit value (sqrt(n) to nearest), the digit-by-digit core
  * shared by fix16_sqrt, fix16_asin and the float square root of real.h. */

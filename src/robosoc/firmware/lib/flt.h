@@ -12,9 +12,9 @@
 
 float flt_sqrt(float x);                 /* correctly rounded; x < 0 or NaN gives NaN */
 float flt_pow2(int32_t n);               /* 2^n exactly, n in [-126, 127] */
-float flt_sin(float x);                  /* |x| <= 2^15; error <= 2 ulp of 1 (2.4e-7) */
-float flt_cos(float x);                  /* |x| <= 2^15; error <= 2 ulp of 1 (2.4e-7) */
-float flt_atan2(float y, float x);       /* in [-pi, pi]; error <= 4e-7 rad; (0, 0) gives 0 */
-float flt_asin(float x);                 /* in [-pi/2, pi/2]; |x| > 1 clamps; error <= 5e-7 rad */
+float flt_sin(float x);                  /* |x| <= 8192; error <= 1.2e-7 */
+float flt_cos(float x);                  /* |x| <= 8192; error <= 1.2e-7 */
+float flt_atan2(float y, float x);       /* in [-pi, pi]; error <= 3.6e-7 rad; (0, 0) gives 0 */
+float flt_asin(float x);                 /* in [-pi/2, pi/2]; |x| > 1 clamps; error <= 3.6e-7 rad */
 
 #endif /* FLT_H */

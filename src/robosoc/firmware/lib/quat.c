@@ -158,14 +158,15 @@ void quat_xi_matrix(const real_t q[4], real_t out[12])
     mat_copy(m, out, 4, 3);
 }
 
+/* dt/2 * Omega(rate) entries are formed as dt * w halved in the same rounding: rounding dt/2 first
+ * would cost Q16.16 up to 0.5 LSB of dt (0.08 % of a 10 ms step). */
 void quat_integrate(const real_t q[4], const real_t rate[3], real_t dt, real_t out[4])
 {
-    real_t half_dt = real_mul(dt, REAL_C(0.5));
     real_t omega[16];
     quat_omega_matrix(rate, omega);
     real_t transition[16];
     for (int i = 0; i < 16; i++) {
-        transition[i] = real_mul(half_dt, omega[i]);
+        transition[i] = real_mul_scaled(dt, omega[i], -1);
     }
     for (int i = 0; i < 4; i++) {
         transition[i * 5] = real_add(transition[i * 5], REAL_ONE);

@@ -79,6 +79,12 @@ static inline real_t real_acc_get(real_acc_t acc, int shift)
     return fix16_sat64((acc + ((int64_t)1 << (right - 1))) >> right);
 }
 
+/* a * b * 2^shift rounded once (e.g. dt/2 * w without first rounding dt/2). */
+static inline real_t real_mul_scaled(real_t a, real_t b, int shift)
+{
+    return real_acc_get(fix16_mul64(a, b), shift);
+}
+
 /* sqrt of the accumulated sum (a sum of squares), from the exact Q32 value: one rounding. */
 static inline real_t real_acc_sqrt(real_acc_t acc)
 {
@@ -130,6 +136,7 @@ static inline real_acc_t real_acc_zero(void) { return 0.0f; }
 static inline real_acc_t real_acc_mac(real_acc_t acc, real_t a, real_t b) { return acc + a * b; }
 static inline real_t real_acc_get(real_acc_t acc, int shift) { return real_scale2(acc, shift); }
 static inline real_t real_acc_sqrt(real_acc_t acc) { return flt_sqrt(acc); }
+static inline real_t real_mul_scaled(real_t a, real_t b, int shift) { return real_scale2(a * b, shift); }
 
 #endif /* ROBOSOC_ARITH_FIXED */
 
