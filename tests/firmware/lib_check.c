@@ -85,6 +85,14 @@ static NOINLINE uint32_t op_add(uint32_t a, uint32_t b) { return (uint32_t)fix16
 static NOINLINE uint32_t op_sub(uint32_t a, uint32_t b) { return (uint32_t)fix16_sub((fix16_t)a, (fix16_t)b); }
 static NOINLINE uint32_t op_mul(uint32_t a, uint32_t b) { return (uint32_t)fix16_mul((fix16_t)a, (fix16_t)b); }
 static NOINLINE uint32_t op_div(uint32_t a, uint32_t b) { return (uint32_t)fix16_div((fix16_t)a, (fix16_t)b); }
+/* the alternative fix16_div replaces: compiler-rt's 64-bit division (truncating), for the cost table */
+static NOINLINE uint32_t op_divdi3(uint32_t a, uint32_t b)
+{
+    if (b == 0) {
+        return 0;
+    }
+    return (uint32_t)fix16_sat64(((int64_t)(int32_t)a * 65536) / (int32_t)b);
+}
 static NOINLINE uint32_t op_sqrt(uint32_t a, uint32_t b) { (void)b; return (uint32_t)fix16_sqrt((fix16_t)a); }
 static NOINLINE uint32_t op_sin(uint32_t a, uint32_t b) { (void)b; return (uint32_t)fix16_sin((fix16_t)a); }
 static NOINLINE uint32_t op_cos(uint32_t a, uint32_t b) { (void)b; return (uint32_t)fix16_cos((fix16_t)a); }
@@ -166,6 +174,7 @@ int main(void)
     run_fixed("sub", op_sub, g_log, g_log);
     run_fixed("mul", op_mul, g_log, g_log);
     run_fixed("div", op_div, g_log, g_log);
+    run("divdi3", op_divdi3, g_log, g_log);
     run_fixed("sqrt", op_sqrt, g_log, g_zero);
     run_fixed("sin", op_sin, g_angle, g_zero);
     run_fixed("cos", op_cos, g_angle, g_zero);

@@ -67,6 +67,13 @@ def err_div(a: int, b: int, r: int) -> float:
     return _fixed_error(s32(a) * Q / s32(b), s32(r))
 
 
+def err_divdi3(a: int, b: int, r: int) -> float:
+    """compiler-rt's truncating 64-bit division: error < 1 LSB (b == 0 is skipped, result 0)."""
+    if s32(b) == 0:
+        return 0.0 if r == 0 else math.inf
+    return _fixed_error(s32(a) * Q / s32(b), s32(r))
+
+
 def err_sqrt(a: int, _b: int, r: int) -> float:
     if s32(a) <= 0:
         return 0.0 if r == 0 else math.inf
@@ -162,6 +169,7 @@ BOUNDS: dict[str, Bound] = {
     "sub": Bound(err_sub, 0.0, "LSB"),
     "mul": Bound(err_mul, 0.5, "LSB"),
     "div": Bound(err_div, 0.5, "LSB"),
+    "divdi3": Bound(err_divdi3, 1.0, "LSB"),
     "sqrt": Bound(err_sqrt, 0.5, "LSB"),
     "sin": Bound(err_sin, 0.65, "LSB"),
     "cos": Bound(err_cos, 0.65, "LSB"),

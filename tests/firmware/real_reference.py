@@ -36,7 +36,7 @@ BOUNDS: dict[str, dict[str, float]] = {
         "qrotate": 2.0,
         "qrotate_to_body": 2.0,
         "qjacobian": 0.5,
-        "qintegrate": 1.5,
+        "qintegrate": 0.6,
         "qeuler": 4.0,
     },
     "float": {

@@ -120,8 +120,8 @@ void ekf_predict(ekf_t *ekf, const real_t gyro[3], real_t dt)
             f_top[i * N + 4 + j] = real_mul_scaled(minus_dt, xi[i * 3 + j], -1);
         }
     }
-    /* x[:4] = transition q */
-    mat_vec(transition, q, ekf->x, 4, 4, 0);
+    /* x[:4] = transition q (quat_integrate forms the same product, to more bits in Q16.16) */
+    quat_integrate(q, rate, dt, ekf->x);
     /* fp = jacobian P: the top rows computed, the bottom rows copied */
     real_t fp[N * N];
     mat_mul(f_top, ekf->p, fp, 4, N, N, 0);
