@@ -7,7 +7,8 @@
  *   init x0 .. x6
  *   step <k> <cycles of ekf_step> <status> x0 .. x6
  *   p <49 covariance entries, in the EKF's units>
- * Cycles come from TIMER0 on the core and are 0 on the host.
+ * Cycles come from TIMER0 on the core and are 0 on the host.  With ZERO_ACCEL_AT=k the
+ * accelerometer reading of step k is replaced by zeros (a reading the update must refuse).
  */
 #include <stdint.h>
 #include <string.h>
@@ -64,6 +65,11 @@ int main(void)
             accel[i] = real_from_fix16(packet.accel[i]);
             mag[i] = real_from_fix16(packet.mag[i]);
         }
+#ifdef ZERO_ACCEL_AT
+        if (k == ZERO_ACCEL_AT) {
+            accel[0] = accel[1] = accel[2] = REAL_ZERO;
+        }
+#endif
         real_t dt = real_from_us(packet.dt_us);
         uint32_t start = cycles();
         int status = ekf_step(&ekf, gyro, accel, mag, dt);

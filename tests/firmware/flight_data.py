@@ -111,15 +111,19 @@ def write_data_header(record: EkfRecord, folder: Path) -> Path:
     return path
 
 
-def golden_replay(record: EkfRecord) -> tuple[np.ndarray, np.ndarray]:
-    """States (steps × 7) and the final covariance of the float64 model on the quantised inputs."""
+def golden_replay(record: EkfRecord, predict_only_at: int | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """States (steps × 7) and the final covariance of the float64 model on the quantised inputs
+    (at step ``predict_only_at`` the update is left out)."""
     init = record.init / Q16_ONE
     ekf = AttitudeEkf()
     ekf.reset(init[:4], init[4:7], quat_sigma=init[7], bias_sigma=init[8])
     states = np.empty((record.steps, 7))
     for k in range(record.steps):
         dt = int(record.dt_us[k]) * 1e-6
-        ekf.step(record.gyro[k] / Q16_ONE, record.accel[k] / Q16_ONE, record.mag[k] / Q16_ONE, dt)
+        if k == predict_only_at:
+            ekf.predict(record.gyro[k] / Q16_ONE, dt)
+        else:
+            ekf.step(record.gyro[k] / Q16_ONE, record.accel[k] / Q16_ONE, record.mag[k] / Q16_ONE, dt)
         states[k] = ekf.x
     return states, ekf.P.copy()
 
@@ -178,5 +182,8 @@ def build_harness_elf(data_dir: Path, arith: str, mul: bool) -> Path:
     )
 
 
-def build_harness_native(data_dir: Path, arith: str) -> Path:
-    return compile_native(harness_sources(), defines=arith_defines(arith), include_dirs=[data_dir, MATH_DIR, APP_DIR])
+def build_harness_native(data_dir: Path, arith: str, zero_accel_at: int | None = None) -> Path:
+    defines = arith_defines(arith)
+    if zero_accel_at is not None:
+        defines["ZERO_ACCEL_AT"] = zero_accel_at
+    return compile_native(harness_sources(), defines=defines, include_dirs=[data_dir, MATH_DIR, APP_DIR])

@@ -107,6 +107,20 @@ def test_two_seconds_accuracy(flight_2s: Flight) -> None:
     _check_accuracy(flight_2s, flight_2s.native("float")[1], flight_2s.native("fixed")[1])
 
 
+@pytest.mark.parametrize("arith", ARITHS)
+def test_a_zero_reading_skips_the_update(flight_2s: Flight, arith: str) -> None:
+    """A zero-length accelerometer reading (no direction) returns -1 and leaves the predicted state."""
+    skipped = 50
+    code, out = run_native(build_harness_native(flight_2s.folder, arith, zero_accel_at=skipped))
+    assert code == 0
+    run = parse_output(out.decode(), arith)
+    assert run.status[skipped] == -1
+    assert np.all(np.delete(run.status, skipped) == 0)
+    golden, _ = golden_replay(flight_2s.record, predict_only_at=skipped)
+    tolerance = FLOAT_TOLERANCE if arith == "float" else FIXED_MEAN_TOLERANCE
+    assert np.max(np.abs(run.states - golden)) <= tolerance
+
+
 def test_parameters_are_the_golden_models() -> None:
     params = EkfParams()
     assert [_define(f"EKF_GYRO_NOISE_{a}") for a in "XYZ"] == list(params.gyro_noise)

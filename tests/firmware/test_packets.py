@@ -114,3 +114,10 @@ def test_c_structs_decode_in_python_host() -> None:
     code, out = run_native(compile_native([PACKET_CHECK]))
     assert code == 0
     _check_output(out.decode())
+
+
+def test_docs_show_the_formats_as_defined() -> None:
+    docs = Path(__file__).resolve().parents[2] / "docs" / "firmware-libraries.md"
+    text = docs.read_text()
+    start = text.index("<!-- packets:begin -->\n") + len("<!-- packets:begin -->\n")
+    assert text[start : text.index("<!-- packets:end -->")] == packets.markdown_tables()

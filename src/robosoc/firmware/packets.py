@@ -287,6 +287,25 @@ def c_header() -> str:
     return "\n".join(lines)
 
 
+def markdown_tables() -> str:
+    """The formats as markdown tables (docs/firmware-libraries.md quotes this text; a test checks it)."""
+    out: list[str] = []
+    for fmt in FORMATS:
+        out += [
+            f"**{fmt.name}** (`struct {fmt.c_name}`, kind 0x{fmt.kind:04x}, {fmt.size} bytes, {fmt.flits} flits): "
+            f"{fmt.doc}",
+            "",
+            "| byte | field | type | unit | meaning |",
+            "|---|---|---|---|---|",
+        ]
+        offsets = fmt.offsets
+        for f in fmt.fields:
+            kind = f"{f.type}[{f.count}]" if f.count > 1 else f.type
+            out.append(f"| {offsets[f.name]} | {f.name} | {kind} | {f.unit} | {f.doc} |")
+        out.append("")
+    return "\n".join(out)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Write (or with ``--check`` compare) ``include/robosoc_packets.h``."""
     args = list(sys.argv[1:] if argv is None else argv)

@@ -33,9 +33,9 @@ typedef int32_t fix16_t;
 
 /*
  * The exact 64-bit product of two 32-bit integers.  With a multiplier this is MUL + MULH.
- * Without one, compiler-rt offers only the general 64 x 64-bit __muldi3 (about 600 cycles on
- * HF-RISCV); fix16_mul64_soft is a shift-and-add over the bits of the smaller magnitude, so small
- * and zero operands (frequent in matrices) cost little.
+ * Without one, compiler-rt offers only the general 64 x 64-bit __muldi3 (about 470 cycles on
+ * HF-RISCV); fix16_mul64_soft is a shift-and-add over the bits of the smaller magnitude (about
+ * 190 cycles), so small and zero operands (frequent in matrices) cost little.
  */
 int64_t fix16_mul64_soft(int32_t a, int32_t b);
 
