@@ -10,6 +10,13 @@ Layout (all plain files inside the package):
 - ``include/hf_print.h`` + ``lib/hf_print.c``: debug-port text output (host: stdout).
 - ``libc/include/string.h`` + ``libc/string.c``: memcpy, memset, strlen, ... for core builds.
 - ``bench/matrix_bench.c``: the EKF-like 7x7 matrix workload of ``robosoc bench core``.
+- ``lib/fix16.[ch]``, ``lib/flt.[ch]``, ``lib/real.h``, ``lib/linalg.[ch]``, ``lib/quat.[ch]``: the
+  math libraries (Q16.16, single-precision helpers, ``real_t``, matrices, quaternions); see
+  docs/firmware-libraries.md.  Not part of the runtime: a program links :func:`math_sources`.
+- ``app/ekf.[ch]``: the attitude EKF (:func:`ekf_sources`).
+- ``include/robosoc_packets.h``: the application packets, generated from :mod:`robosoc.firmware.packets`.
+
+Builds choose the arithmetic with :func:`arith_defines`: ``float`` (soft-float) or ``fixed`` (Q16.16).
 """
 
 from pathlib import Path
@@ -27,6 +34,19 @@ LIB_SOURCES: tuple[Path, ...] = (FIRMWARE_DIR / "lib" / "hf_print.c",)
 LIBC_INCLUDE_DIR = FIRMWARE_DIR / "libc" / "include"
 LIBC_SOURCES: tuple[Path, ...] = (FIRMWARE_DIR / "libc" / "string.c",)
 MATRIX_BENCH_SOURCE = FIRMWARE_DIR / "bench" / "matrix_bench.c"
+#: Folder of the math libraries' headers and sources (pass it as an include folder).
+MATH_DIR = FIRMWARE_DIR / "lib"
+MATH_SOURCES: tuple[Path, ...] = (
+    MATH_DIR / "fix16.c",
+    MATH_DIR / "flt.c",
+    MATH_DIR / "linalg.c",
+    MATH_DIR / "quat.c",
+)
+#: Folder of the application modules (the EKF).
+APP_DIR = FIRMWARE_DIR / "app"
+EKF_SOURCES: tuple[Path, ...] = (APP_DIR / "ekf.c",)
+#: The two number formats of real_t (lib/real.h).
+ARITHS = ("float", "fixed")
 
 #: Symbol of the interrupt entry: the one place allowed to write x27 (s11).
 IRQ_ENTRY_SYMBOL = "_irq_entry"
@@ -42,8 +62,32 @@ def host_sources() -> tuple[Path, ...]:
     return LIB_SOURCES
 
 
+def math_sources() -> tuple[Path, ...]:
+    """The math libraries (include folder :data:`MATH_DIR`); they build for the core and the host."""
+    return MATH_SOURCES
+
+
+def ekf_sources() -> tuple[Path, ...]:
+    """The EKF and the libraries it needs (include folders :data:`MATH_DIR` and :data:`APP_DIR`)."""
+    return EKF_SOURCES + MATH_SOURCES
+
+
+def arith_defines(arith: str) -> dict[str, str | int | None]:
+    """Preprocessor defines selecting real_t: ``float`` (soft-float) or ``fixed`` (Q16.16).
+
+    Raises:
+        ValueError: another name.
+    """
+    if arith not in ARITHS:
+        raise ValueError(f"arithmetic must be float or fixed, got {arith!r}")
+    return {"ROBOSOC_ARITH_FIXED": None} if arith == "fixed" else {}
+
+
 __all__ = [
+    "APP_DIR",
+    "ARITHS",
     "CRT_SOURCES",
+    "EKF_SOURCES",
     "FIRMWARE_DIR",
     "INCLUDE_DIR",
     "IRQ_ENTRY_SYMBOL",
@@ -51,7 +95,12 @@ __all__ = [
     "LIBC_SOURCES",
     "LIB_SOURCES",
     "LINKER_SCRIPT_TEMPLATE",
+    "MATH_DIR",
+    "MATH_SOURCES",
     "MATRIX_BENCH_SOURCE",
+    "arith_defines",
+    "ekf_sources",
     "host_sources",
+    "math_sources",
     "runtime_sources",
 ]

@@ -1,0 +1,92 @@
+/*
+ * robosoc_packets.h - the application packets' layout and units.
+ *
+ * GENERATED from src/robosoc/firmware/packets.py (python -m robosoc.firmware.packets): edit
+ * that file, not this one.  Little-endian structs without padding; q16 fields are Q16.16
+ * (int32 holding value * 65536).  On the NoC a packet's bytes are 16-bit flits in memory order.
+ * The asserts make every build check the layout the Python side uses.
+ */
+#ifndef ROBOSOC_PACKETS_H
+#define ROBOSOC_PACKETS_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#define ROBOSOC_NOC_HEADER_FLITS 2
+#define ROBOSOC_MESSAGE_HEADER_FLITS 4
+#define ROBOSOC_MAX_PAYLOAD_FLITS 58
+#define ROBOSOC_FLAG_ARMED 1u
+
+/* One sensor sample, I/O tile -> estimator task (body frame FLU). */
+#define ROBOSOC_SENSOR_KIND 0x5201u
+#define ROBOSOC_SENSOR_BYTES 72u
+#define ROBOSOC_SENSOR_FLITS 36u
+struct robosoc_sensor_packet {
+    uint16_t kind; /* format tag (ROBOSOC_*_KIND): a packet with another tag is malformed */
+    uint16_t flags; /* bit 0 armed (ROBOSOC_FLAG_ARMED); other bits 0 */
+    uint32_t seq; /* sample number, 0 for the first sample of a flight */
+    uint32_t time_us; /* sample time since the start of the flight [us] */
+    uint32_t dt_us; /* time since the previous sample (the sample period for the first) [us] */
+    int32_t gyro[3]; /* body rates p, q, r [rad/s] (Q16.16) */
+    int32_t accel[3]; /* specific force (at rest: +g along body up) [m/s^2] (Q16.16) */
+    int32_t mag[3]; /* magnetic field [unit field] (Q16.16) */
+    int32_t baro_altitude; /* barometric altitude [m] (Q16.16) */
+    int32_t setpoint[4]; /* roll, pitch, yaw and height setpoints [rad, rad, rad, m] (Q16.16) */
+};
+_Static_assert(sizeof(struct robosoc_sensor_packet) == 72, "sensor packet size");
+_Static_assert(offsetof(struct robosoc_sensor_packet, kind) == 0, "sensor.kind offset");
+_Static_assert(offsetof(struct robosoc_sensor_packet, flags) == 2, "sensor.flags offset");
+_Static_assert(offsetof(struct robosoc_sensor_packet, seq) == 4, "sensor.seq offset");
+_Static_assert(offsetof(struct robosoc_sensor_packet, time_us) == 8, "sensor.time_us offset");
+_Static_assert(offsetof(struct robosoc_sensor_packet, dt_us) == 12, "sensor.dt_us offset");
+_Static_assert(offsetof(struct robosoc_sensor_packet, gyro) == 16, "sensor.gyro offset");
+_Static_assert(offsetof(struct robosoc_sensor_packet, accel) == 28, "sensor.accel offset");
+_Static_assert(offsetof(struct robosoc_sensor_packet, mag) == 40, "sensor.mag offset");
+_Static_assert(offsetof(struct robosoc_sensor_packet, baro_altitude) == 52, "sensor.baro_altitude offset");
+_Static_assert(offsetof(struct robosoc_sensor_packet, setpoint) == 56, "sensor.setpoint offset");
+
+/* The state estimate after one sensor sample, estimator task -> PID task. */
+#define ROBOSOC_ESTIMATE_KIND 0x5202u
+#define ROBOSOC_ESTIMATE_BYTES 68u
+#define ROBOSOC_ESTIMATE_FLITS 34u
+struct robosoc_estimate_packet {
+    uint16_t kind; /* format tag (ROBOSOC_*_KIND): a packet with another tag is malformed */
+    uint16_t flags; /* bit 0 armed (ROBOSOC_FLAG_ARMED); other bits 0 */
+    uint32_t seq; /* the sensor sample's number */
+    uint32_t time_us; /* the sensor sample's time [us] */
+    uint32_t dt_us; /* the sensor sample's dt_us [us] */
+    int32_t quaternion[4]; /* attitude w, x, y, z (body -> world) (Q16.16) */
+    int32_t rate[3]; /* bias-corrected body rates p, q, r [rad/s] (Q16.16) */
+    int32_t height; /* estimated height [m] (Q16.16) */
+    int32_t vertical_velocity; /* estimated vertical velocity [m/s] (Q16.16) */
+    int32_t setpoint[4]; /* the sensor sample's setpoints, forwarded [rad, rad, rad, m] (Q16.16) */
+};
+_Static_assert(sizeof(struct robosoc_estimate_packet) == 68, "estimate packet size");
+_Static_assert(offsetof(struct robosoc_estimate_packet, kind) == 0, "estimate.kind offset");
+_Static_assert(offsetof(struct robosoc_estimate_packet, flags) == 2, "estimate.flags offset");
+_Static_assert(offsetof(struct robosoc_estimate_packet, seq) == 4, "estimate.seq offset");
+_Static_assert(offsetof(struct robosoc_estimate_packet, time_us) == 8, "estimate.time_us offset");
+_Static_assert(offsetof(struct robosoc_estimate_packet, dt_us) == 12, "estimate.dt_us offset");
+_Static_assert(offsetof(struct robosoc_estimate_packet, quaternion) == 16, "estimate.quaternion offset");
+_Static_assert(offsetof(struct robosoc_estimate_packet, rate) == 32, "estimate.rate offset");
+_Static_assert(offsetof(struct robosoc_estimate_packet, height) == 44, "estimate.height offset");
+_Static_assert(offsetof(struct robosoc_estimate_packet, vertical_velocity) == 48, "estimate.vertical_velocity offset");
+_Static_assert(offsetof(struct robosoc_estimate_packet, setpoint) == 52, "estimate.setpoint offset");
+
+/* The motor command for one sensor sample, PID task -> I/O tile. */
+#define ROBOSOC_PWM_KIND 0x5203u
+#define ROBOSOC_PWM_BYTES 16u
+#define ROBOSOC_PWM_FLITS 8u
+struct robosoc_pwm_packet {
+    uint16_t kind; /* format tag (ROBOSOC_*_KIND): a packet with another tag is malformed */
+    uint16_t flags; /* bit 0 armed (ROBOSOC_FLAG_ARMED); other bits 0 */
+    uint32_t seq; /* the sensor sample's number */
+    uint16_t pwm[4]; /* motors 0-3 [PWM count (0-255)] */
+};
+_Static_assert(sizeof(struct robosoc_pwm_packet) == 16, "pwm packet size");
+_Static_assert(offsetof(struct robosoc_pwm_packet, kind) == 0, "pwm.kind offset");
+_Static_assert(offsetof(struct robosoc_pwm_packet, flags) == 2, "pwm.flags offset");
+_Static_assert(offsetof(struct robosoc_pwm_packet, seq) == 4, "pwm.seq offset");
+_Static_assert(offsetof(struct robosoc_pwm_packet, pwm) == 8, "pwm.pwm offset");
+
+#endif /* ROBOSOC_PACKETS_H */

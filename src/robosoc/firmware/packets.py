@@ -1,0 +1,325 @@
+"""Packet formats between the I/O tile and the firmware tasks, written once.
+
+This module is the single source of the three application packets' layout and units:
+
+- ``sensor``: one sensor sample, I/O tile → estimator (EKF) task;
+- ``estimate``: the state estimate, estimator task → PID task;
+- ``pwm``: four PWM values and the sample's sequence number, PID task → I/O tile.
+
+``include/robosoc_packets.h`` (the C structs) is generated from it (``python -m
+robosoc.firmware.packets``); a test checks the file is up to date, and the header's own
+``_Static_assert`` lines make every C build check each offset and size.
+
+**Encoding.**  A packet is a little-endian C struct without padding: ``u16`` and ``u32`` are
+unsigned integers, ``q16`` a signed Q16.16 number (an ``int32`` holding value · 65536, rounded to
+nearest), the number format of the seed's firmware.  On the NoC the struct's bytes are 16-bit
+flits in memory order (flit k = byte 2k | byte 2k+1 << 8), as the network interface's DMA copies
+them.  A packet must fit one NoC packet: 64 flits, minus the 2-flit NoC header (destination, size)
+and the 4 flits reserved for the on-chip messaging header, leaves :data:`MAX_PAYLOAD_FLITS` = 58.
+Every packet starts with ``kind`` (a per-format tag, so that a stray or malformed packet is
+recognised) and ``flags``.
+"""
+
+from __future__ import annotations
+
+import struct
+import sys
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Literal
+
+FieldType = Literal["u16", "u32", "q16"]
+
+NOC_HEADER_FLITS = 2
+"""Flit 0 destination, flit 1 size (platform.md §4)."""
+MESSAGE_HEADER_FLITS = 4
+"""Reserved for the on-chip messaging layer's header (ports, length, sequence)."""
+MAX_PACKET_FLITS = 64
+"""Longest NoC packet, header included (the network interface's memories hold 64 flits)."""
+MAX_PAYLOAD_FLITS = MAX_PACKET_FLITS - NOC_HEADER_FLITS - MESSAGE_HEADER_FLITS
+"""Flits left for an application packet."""
+Q16_ONE = 65536
+Q16_MIN = -(2**31)
+Q16_MAX = 2**31 - 1
+
+_STRUCT_CODE: dict[str, str] = {"u16": "H", "u32": "I", "q16": "i"}
+_C_TYPE: dict[str, str] = {"u16": "uint16_t", "u32": "uint32_t", "q16": "int32_t"}
+_SIZE: dict[str, int] = {"u16": 2, "u32": 4, "q16": 4}
+
+Value = int | float | tuple[int, ...] | tuple[float, ...]
+
+
+@dataclass(frozen=True)
+class Field:
+    """One field: ``count`` values of ``type`` in ``unit``."""
+
+    name: str
+    type: FieldType
+    unit: str
+    doc: str
+    count: int = 1
+
+    @property
+    def size(self) -> int:
+        """Bytes."""
+        return _SIZE[self.type] * self.count
+
+
+@dataclass(frozen=True)
+class PacketFormat:
+    """The layout of one application packet (a C struct without padding)."""
+
+    name: str
+    kind: int
+    doc: str
+    fields: tuple[Field, ...]
+
+    def __post_init__(self) -> None:
+        offset = 0
+        for f in self.fields:
+            if offset % _SIZE[f.type]:
+                raise ValueError(f"{self.name}.{f.name}: offset {offset} is not aligned to its type {f.type}")
+            offset += f.size
+        if offset % 4:
+            raise ValueError(f"{self.name}: size {offset} is not a multiple of 4 (the C struct would be padded)")
+        if offset // 2 > MAX_PAYLOAD_FLITS:
+            raise ValueError(f"{self.name}: {offset // 2} flits exceed the {MAX_PAYLOAD_FLITS} available")
+        if self.fields[:2] != HEAD_FIELDS:
+            raise ValueError(f"{self.name}: must start with the kind and flags fields")
+
+    @property
+    def size(self) -> int:
+        """Bytes."""
+        return sum(f.size for f in self.fields)
+
+    @property
+    def flits(self) -> int:
+        """16-bit flits."""
+        return self.size // 2
+
+    @property
+    def offsets(self) -> dict[str, int]:
+        """Byte offset of every field."""
+        out: dict[str, int] = {}
+        offset = 0
+        for f in self.fields:
+            out[f.name] = offset
+            offset += f.size
+        return out
+
+    @property
+    def c_name(self) -> str:
+        """The C struct's name."""
+        return f"robosoc_{self.name}_packet"
+
+    @property
+    def _struct(self) -> struct.Struct:
+        return struct.Struct("<" + "".join(f"{f.count}{_STRUCT_CODE[f.type]}" for f in self.fields))
+
+    def pack(self, values: Mapping[str, Value]) -> bytes:
+        """The packet's bytes.  ``kind`` is filled in; missing fields are 0; q16 fields take floats.
+
+        Raises:
+            ValueError: an unknown field, a wrong number of values, or a value out of range.
+        """
+        unknown = set(values) - {f.name for f in self.fields}
+        if unknown:
+            raise ValueError(f"{self.name}: unknown fields {sorted(unknown)}")
+        raw: list[int] = []
+        for f in self.fields:
+            value = self.kind if f.name == "kind" else values.get(f.name, 0 if f.count == 1 else (0,) * f.count)
+            items = list(value) if isinstance(value, Sequence) else [value]
+            if len(items) != f.count:
+                raise ValueError(f"{self.name}.{f.name}: {len(items)} values, expected {f.count}")
+            raw.extend(_encode(f, v) for v in items)
+        return self._struct.pack(*raw)
+
+    def unpack(self, data: bytes) -> dict[str, Value]:
+        """The fields of a packet's bytes (q16 fields as floats, arrays as tuples).
+
+        Raises:
+            ValueError: wrong length or wrong kind.
+        """
+        if len(data) != self.size:
+            raise ValueError(f"{self.name}: {len(data)} bytes, expected {self.size}")
+        raw = list(self._struct.unpack(data))
+        out: dict[str, Value] = {}
+        for f in self.fields:
+            items, raw = raw[: f.count], raw[f.count :]
+            decoded = [v / Q16_ONE for v in items] if f.type == "q16" else items
+            out[f.name] = decoded[0] if f.count == 1 else tuple(decoded)
+        if out["kind"] != self.kind:
+            raise ValueError(f"{self.name}: kind 0x{out['kind']:04x}, expected 0x{self.kind:04x}")
+        return out
+
+
+def _encode(f: Field, value: float) -> int:
+    if f.type == "q16":
+        scaled = round(float(value) * Q16_ONE)
+        if not Q16_MIN <= scaled <= Q16_MAX:
+            raise ValueError(f"{f.name}: {value} is outside the Q16.16 range")
+        return scaled
+    limit = 0xFFFF if f.type == "u16" else 0xFFFFFFFF
+    if int(value) != value or not 0 <= int(value) <= limit:
+        raise ValueError(f"{f.name}: {value} is not a {f.type}")
+    return int(value)
+
+
+def to_flits(data: bytes) -> list[int]:
+    """A packet's bytes as 16-bit flits (little-endian pairs, as the DMA copies memory)."""
+    if len(data) % 2:
+        raise ValueError("a packet is a whole number of flits")
+    return list(struct.unpack(f"<{len(data) // 2}H", data))
+
+
+def from_flits(flits: Sequence[int]) -> bytes:
+    """Inverse of :func:`to_flits`."""
+    return struct.pack(f"<{len(flits)}H", *flits)
+
+
+def q16(value: float) -> int:
+    """A value in Q16.16 (rounded to nearest), as the packets carry it."""
+    return round(value * Q16_ONE)
+
+
+HEAD_FIELDS = (
+    Field("kind", "u16", "-", "format tag (ROBOSOC_*_KIND): a packet with another tag is malformed"),
+    Field("flags", "u16", "-", "bit 0 armed (ROBOSOC_FLAG_ARMED); other bits 0"),
+)
+
+SENSOR = PacketFormat(
+    "sensor",
+    0x5201,
+    "One sensor sample, I/O tile -> estimator task (body frame FLU).",
+    (
+        *HEAD_FIELDS,
+        Field("seq", "u32", "-", "sample number, 0 for the first sample of a flight"),
+        Field("time_us", "u32", "us", "sample time since the start of the flight"),
+        Field("dt_us", "u32", "us", "time since the previous sample (the sample period for the first)"),
+        Field("gyro", "q16", "rad/s", "body rates p, q, r", 3),
+        Field("accel", "q16", "m/s^2", "specific force (at rest: +g along body up)", 3),
+        Field("mag", "q16", "unit field", "magnetic field", 3),
+        Field("baro_altitude", "q16", "m", "barometric altitude"),
+        Field("setpoint", "q16", "rad, rad, rad, m", "roll, pitch, yaw and height setpoints", 4),
+    ),
+)
+
+ESTIMATE = PacketFormat(
+    "estimate",
+    0x5202,
+    "The state estimate after one sensor sample, estimator task -> PID task.",
+    (
+        *HEAD_FIELDS,
+        Field("seq", "u32", "-", "the sensor sample's number"),
+        Field("time_us", "u32", "us", "the sensor sample's time"),
+        Field("dt_us", "u32", "us", "the sensor sample's dt_us"),
+        Field("quaternion", "q16", "-", "attitude w, x, y, z (body -> world)", 4),
+        Field("rate", "q16", "rad/s", "bias-corrected body rates p, q, r", 3),
+        Field("height", "q16", "m", "estimated height"),
+        Field("vertical_velocity", "q16", "m/s", "estimated vertical velocity"),
+        Field("setpoint", "q16", "rad, rad, rad, m", "the sensor sample's setpoints, forwarded", 4),
+    ),
+)
+
+PWM = PacketFormat(
+    "pwm",
+    0x5203,
+    "The motor command for one sensor sample, PID task -> I/O tile.",
+    (
+        *HEAD_FIELDS,
+        Field("seq", "u32", "-", "the sensor sample's number"),
+        Field("pwm", "u16", "PWM count (0-255)", "motors 0-3", 4),
+    ),
+)
+
+FORMATS: tuple[PacketFormat, ...] = (SENSOR, ESTIMATE, PWM)
+FLAG_ARMED = 1
+
+HEADER_PATH = Path(__file__).resolve().parent / "include" / "robosoc_packets.h"
+
+
+def c_header() -> str:
+    """The text of ``include/robosoc_packets.h``."""
+    lines = [
+        "/*",
+        " * robosoc_packets.h - the application packets' layout and units.",
+        " *",
+        " * GENERATED from src/robosoc/firmware/packets.py (python -m robosoc.firmware.packets): edit",
+        " * that file, not this one.  Little-endian structs without padding; q16 fields are Q16.16",
+        " * (int32 holding value * 65536).  On the NoC a packet's bytes are 16-bit flits in memory order.",
+        " * The asserts make every build check the layout the Python side uses.",
+        " */",
+        "#ifndef ROBOSOC_PACKETS_H",
+        "#define ROBOSOC_PACKETS_H",
+        "",
+        "#include <stddef.h>",
+        "#include <stdint.h>",
+        "",
+        f"#define ROBOSOC_NOC_HEADER_FLITS {NOC_HEADER_FLITS}",
+        f"#define ROBOSOC_MESSAGE_HEADER_FLITS {MESSAGE_HEADER_FLITS}",
+        f"#define ROBOSOC_MAX_PAYLOAD_FLITS {MAX_PAYLOAD_FLITS}",
+        f"#define ROBOSOC_FLAG_ARMED {FLAG_ARMED}u",
+    ]
+    for fmt in FORMATS:
+        upper = fmt.name.upper()
+        lines += [
+            "",
+            f"/* {fmt.doc} */",
+            f"#define ROBOSOC_{upper}_KIND 0x{fmt.kind:04x}u",
+            f"#define ROBOSOC_{upper}_BYTES {fmt.size}u",
+            f"#define ROBOSOC_{upper}_FLITS {fmt.flits}u",
+            f"struct {fmt.c_name} {{",
+        ]
+        for f in fmt.fields:
+            dims = f"[{f.count}]" if f.count > 1 else ""
+            unit = "" if f.unit == "-" else f" [{f.unit}]"
+            lines.append(
+                f"    {_C_TYPE[f.type]} {f.name}{dims}; /* {f.doc}{unit}{' (Q16.16)' if f.type == 'q16' else ''} */"
+            )
+        lines.append("};")
+        lines.append(f'_Static_assert(sizeof(struct {fmt.c_name}) == {fmt.size}, "{fmt.name} packet size");')
+        for name, offset in fmt.offsets.items():
+            lines.append(
+                f'_Static_assert(offsetof(struct {fmt.c_name}, {name}) == {offset}, "{fmt.name}.{name} offset");'
+            )
+    lines += ["", "#endif /* ROBOSOC_PACKETS_H */", ""]
+    return "\n".join(lines)
+
+
+def markdown_tables() -> str:
+    """The formats as markdown tables (docs/firmware-libraries.md quotes this text; a test checks it)."""
+    out: list[str] = []
+    for fmt in FORMATS:
+        out += [
+            f"**{fmt.name}** (`struct {fmt.c_name}`, kind 0x{fmt.kind:04x}, {fmt.size} bytes, {fmt.flits} flits): "
+            f"{fmt.doc}",
+            "",
+            "| byte | field | type | unit | meaning |",
+            "|---|---|---|---|---|",
+        ]
+        offsets = fmt.offsets
+        for f in fmt.fields:
+            kind = f"{f.type}[{f.count}]" if f.count > 1 else f.type
+            out.append(f"| {offsets[f.name]} | {f.name} | {kind} | {f.unit} | {f.doc} |")
+        out.append("")
+    return "\n".join(out)
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Write (or with ``--check`` compare) ``include/robosoc_packets.h``."""
+    args = list(sys.argv[1:] if argv is None else argv)
+    text = c_header()
+    if args == ["--check"]:
+        current = HEADER_PATH.read_text() if HEADER_PATH.is_file() else ""
+        if current != text:
+            print(f"{HEADER_PATH} is out of date: run python -m robosoc.firmware.packets", file=sys.stderr)
+            return 1
+        return 0
+    HEADER_PATH.write_text(text)
+    print(HEADER_PATH)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
