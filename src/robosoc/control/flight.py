@@ -24,6 +24,12 @@ from robosoc.control.host import Estimate
 from robosoc.control.setpoint import Setpoint, setpoint_at
 from robosoc.physics import SensorSample, World
 
+SAMPLE_FIELDS = (
+    "gyro_x", "gyro_y", "gyro_z", "accel_x", "accel_y", "accel_z", "mag_x", "mag_y", "mag_z",
+    "baro_altitude", "baro_pressure",
+)  # fmt: skip
+"""Columns of the sensor sample in a flight row: rad/s, m/s², unit field, m, hPa (body frame FLU)."""
+
 ROW_FIELDS = (
     "t",
     "x",
@@ -56,8 +62,13 @@ ROW_FIELDS = (
     "wind_x",
     "wind_y",
     "wind_z",
+    # what the controller was given, so that a log can be replayed into firmware
+    "sp_height_rate",
+    "sp_height_accel",
+    *SAMPLE_FIELDS,
 )
-"""Columns of one flight row (angles in radians, lengths in metres, time in seconds)."""
+"""Columns of one flight row (angles in radians, lengths in metres, time in seconds); the last
+ones are the sensor sample the controller received (:data:`SAMPLE_FIELDS`)."""
 
 
 OVERSHOOT_WINDOW_S = 1.0
@@ -124,6 +135,11 @@ def fly(
                 [est.height, setpoint.roll, setpoint.pitch, setpoint.yaw, setpoint.height, float(setpoint.armed)],
                 quad.pwm,
                 world.wind.velocity,
+                [setpoint.height_rate, setpoint.height_accel],
+                sample.gyro,
+                sample.accel,
+                sample.mag,
+                [sample.baro_altitude, sample.baro_pressure],
             )
         )
         rows[k] = row
