@@ -40,5 +40,5 @@ def test_sections_and_symbols_of_a_known_program(tmp_path: Path):
 def test_a_file_that_is_not_an_elf_is_named_in_the_error(tmp_path: Path):
     bad = tmp_path / "notes.txt"
     bad.write_text("not an ELF")
-    with pytest.raises(ElfError, match="notes.txt"):
+    with pytest.raises(ElfError, match=r"notes\.txt"):
         code_size(bad)
