@@ -1,0 +1,111 @@
+"""Firmware configuration: which build, which kernel settings, which task runs on which tile.
+
+A frozen dataclass checked in ``__post_init__`` (errors ``ValueError("field: reason")``) and
+loadable from TOML with :func:`load_firmware_config`, whose errors name the file and the field::
+
+    arith = "fixed"          # "float" (soft-float) or "fixed" (Q16.16)
+    multiplier = true        # build for cores with the iterative multiplier
+    release = "event"        # "event": a job per sensor message; "periodic": the seed's periodic tasks
+    scheduler = "edf"        # "edf" or "rm"
+    tick_cycles = 262144     # the kernel's tick (the seed's 1 ms at 250 MHz)
+    period_ticks = 10        # periodic release: the tasks' period (and relative deadline) in ticks
+    ekf_tile = [0, 1]
+    pid_tile = [1, 0]
+
+The defaults are the seed's case study on its 2×2 chip: the I/O tile at (0, 0), the estimator
+(EKF and altitude filter) on (0, 1), the PID controller on (1, 0), the fourth tile powered off
+(see :func:`seed_chip`), Q16.16 with the multiplier.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+from robosoc.config.chip import ChipConfig
+from robosoc.config.validate import load_toml
+
+__all__ = ["ARITH_CHOICES", "RELEASE_CHOICES", "SCHEDULER_CHOICES", "FirmwareConfig", "load_firmware_config"]
+
+ARITH_CHOICES = ("float", "fixed")
+RELEASE_CHOICES = ("event", "periodic")
+SCHEDULER_CHOICES = ("edf", "rm")
+#: The kernel's tick must be a multiple of 16 cycles in this range (kernel/os_config.h explains why).
+TICK_CYCLES_RANGE = (4096, 1 << 30)
+
+
+def _choice(name: str, value: str, choices: tuple[str, ...]) -> None:
+    if value not in choices:
+        raise ValueError(f"{name}: must be one of {', '.join(map(repr, choices))}, got {value!r}")
+
+
+@dataclass(frozen=True)
+class FirmwareConfig:
+    """One build of the control firmware and where its tasks run.
+
+    Attributes:
+        arith: ``"float"`` (soft-float, compiler-rt) or ``"fixed"`` (Q16.16).
+        multiplier: compile for cores with the iterative multiplier (RV32I+Zmmul) or without.
+        release: ``"event"`` (each sensor message releases an estimator job, whose estimate
+            releases a PID job) or ``"periodic"`` (both tasks periodic, the seed's setup).
+        scheduler: the kernel's real-time policy, ``"edf"`` or ``"rm"``.
+        tick_cycles: the kernel's tick in core cycles.
+        period_ticks: period and relative deadline of the tasks in ticks (periodic release); the
+            relative deadline of event-released jobs too.
+        ekf_tile: the tile of the estimator task.
+        pid_tile: the tile of the PID task (may equal ``ekf_tile``).
+    """
+
+    arith: str = "fixed"
+    multiplier: bool = True
+    release: str = "event"
+    scheduler: str = "edf"
+    tick_cycles: int = 262144
+    period_ticks: int = 10
+    ekf_tile: tuple[int, int] = (0, 1)
+    pid_tile: tuple[int, int] = (1, 0)
+
+    def __post_init__(self) -> None:
+        _choice("arith", self.arith, ARITH_CHOICES)
+        _choice("release", self.release, RELEASE_CHOICES)
+        _choice("scheduler", self.scheduler, SCHEDULER_CHOICES)
+        low, high = TICK_CYCLES_RANGE
+        if not low <= self.tick_cycles <= high or self.tick_cycles % 16:
+            raise ValueError(f"tick_cycles: must be a multiple of 16 from {low} to {high}, got {self.tick_cycles}")
+        if not 1 <= self.period_ticks <= 1_000_000:
+            raise ValueError(f"period_ticks: must be between 1 and 1000000, got {self.period_ticks}")
+        for name in ("ekf_tile", "pid_tile"):
+            xy = getattr(self, name)
+            if len(xy) != 2 or min(xy) < 0:
+                raise ValueError(f"{name}: must be a tile [x, y] with x, y >= 0, got {list(xy)}")
+
+    @property
+    def label(self) -> str:
+        """``fixed+mul``, ``float-no-mul``...: how tables and file names name a build."""
+        return f"{self.arith}{'+mul' if self.multiplier else '-no-mul'}"
+
+    def check_chip(self, chip: ChipConfig) -> None:
+        """Raise ValueError unless both task tiles are powered core tiles of ``chip``."""
+        for name in ("ekf_tile", "pid_tile"):
+            xy = tuple(getattr(self, name))
+            if not chip.contains(xy):
+                raise ValueError(f"{name}: {list(xy)} is outside the {chip.width}x{chip.height} mesh")
+            if xy == tuple(chip.io_tile):
+                raise ValueError(f"{name}: {list(xy)} is the I/O tile, which has no core")
+            if not chip.is_powered(xy):
+                raise ValueError(f"{name}: {list(xy)} is powered off in the chip configuration")
+
+    def seed_chip(self) -> ChipConfig:
+        """The seed's 2×2 chip for this mapping: I/O tile (0, 0), every unused core tile powered off."""
+        used = {tuple(self.ekf_tile), tuple(self.pid_tile)}
+        off = tuple(xy for xy in ((0, 1), (1, 0), (1, 1)) if xy not in used)
+        return ChipConfig(width=2, height=2, io_tile=(0, 0), powered_off=off)
+
+
+def load_firmware_config(path: str | Path, section: str | None = None) -> FirmwareConfig:
+    """Read a :class:`FirmwareConfig` from TOML (optionally from one top-level table).
+
+    Raises:
+        robosoc.config.ConfigError: naming the file and the dotted field.
+    """
+    return load_toml(FirmwareConfig, path, section)
