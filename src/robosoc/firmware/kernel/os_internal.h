@@ -45,6 +45,7 @@ typedef struct os_tcb {
     uint32_t period_cycles, deadline_cycles, budget_cycles;
     uint32_t release, abs_deadline, start, exec; /* the active job, TIMER0 cycles */
     uint32_t used;                                 /* cycles used in the current period */
+    uint32_t last_run;                             /* os_dispatches when last dispatched */
     uint32_t *stack_base;                          /* lowest word: a canary */
 } os_tcb_t;
 

@@ -9,8 +9,9 @@
  * arrive one after the other from their source: reassembly needs one context per source tile.
  *
  * A received packet whose header does not fit (too short, no such port, a fragment out of turn,
- * more or fewer data flits than the length says) is counted in os_stats.pkt_malformed and
- * dropped; a well-formed message the tile cannot hold is counted in os_stats.msg_dropped.
+ * more data flits than the length leaves) is counted in os_stats.pkt_malformed and dropped; so is,
+ * once, a message cut short (its source starts another one before it is complete).  A well-formed
+ * message the tile cannot hold is counted in os_stats.msg_dropped.
  */
 #include "os_internal.h"
 
@@ -176,11 +177,9 @@ static void os_rx_packet(uint32_t cycle)
     os_rx_ctx_t *c = os_rx_find(src_tile);
 
     if (frag == 0u) {
-        if (c != 0) { /* the source's previous message lost a packet: it cannot complete */
-            if (c->slot >= 0) {
-                os_stats.msg_dropped++;
-            }
+        if (c != 0) { /* the source's previous message stopped short: its packets were malformed */
             os_rx_abort(c);
+            os_stats.pkt_malformed++;
         }
         int32_t take = os_rx_take(n - OS_MSG_HEADER_FLITS, len);
         if (take < 0) {

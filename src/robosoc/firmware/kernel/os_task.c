@@ -29,7 +29,7 @@ static uint32_t os_tick;            /* number of the last tick handled */
 static uint32_t os_next_tick_cycle; /* TIMER0 cycle the next tick rises in */
 static uint32_t os_dispatched_at;   /* TIMER0 when os_current was dispatched (or last charged) */
 static uint32_t os_be_rotate;       /* the next pick moves on among best-effort equals */
-static uint32_t os_be_last;         /* os_tcb index of the best-effort task dispatched last */
+static uint32_t os_dispatches;      /* counts dispatches: os_tcb_t.last_run */
 static uint32_t os_log_next;        /* os_job_log.rec index of the next record */
 static uint8_t *os_stack_next;      /* task stacks are carved upwards from the end of .bss */
 
@@ -328,12 +328,20 @@ static os_tcb_t *os_pick(void)
     if (top < 0) {
         return &os_tcb[0];
     }
-    os_tcb_t *cur = os_current;
-    if (!os_be_rotate && cur->kind == OS_KIND_BEST_EFFORT && cur->state == OS_ST_READY && cur->prio == top) {
-        return cur;
+    /* the task of that priority that ran last goes on (it may have been preempted); at a tick or
+     * an os_yield, if it is the running task, the next one of that priority takes its turn */
+    os_tcb_t *recent = 0;
+    for (uint32_t i = 1; i < os_ntasks; i++) {
+        os_tcb_t *t = &os_tcb[i];
+        if (t->kind == OS_KIND_BEST_EFFORT && t->state == OS_ST_READY && t->prio == top &&
+            (recent == 0 || (int32_t)(t->last_run - recent->last_run) > 0)) {
+            recent = t;
+        }
     }
-    /* round robin: the next best-effort task of the top priority after the last one dispatched */
-    uint32_t i = os_be_last;
+    if (!os_be_rotate || recent != os_current) {
+        return recent;
+    }
+    uint32_t i = (uint32_t)(recent - os_tcb);
     for (uint32_t k = 1; k < os_ntasks; k++) {
         i = i + 1u >= os_ntasks ? 1u : i + 1u;
         os_tcb_t *t = &os_tcb[i];
@@ -341,7 +349,7 @@ static os_tcb_t *os_pick(void)
             return t;
         }
     }
-    return &os_tcb[0]; /* not reached */
+    return recent;
 }
 
 static void os_check_stack(const os_tcb_t *t)
@@ -357,9 +365,7 @@ static void os_dispatch(void)
     os_tcb_t *next = os_pick();
     if (next != os_current) {
         os_stats.switches++;
-        if (next->kind == OS_KIND_BEST_EFFORT) {
-            os_be_last = (uint32_t)(next - os_tcb);
-        }
+        next->last_run = ++os_dispatches;
         os_current = next;
     }
     os_be_rotate = 0;
