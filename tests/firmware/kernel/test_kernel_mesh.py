@@ -3,8 +3,8 @@
 import struct
 
 import pytest
-
 from kernel_harness import BUILDS, build, run
+
 from robosoc.chip.mpsoc import ChipError
 from robosoc.config.chip import ChipConfig
 from robosoc.firmware.images import read_stats, reassemble, tile_address

@@ -11,8 +11,8 @@ TIMER0 load starts in b + 97, reading b + 96: the arrival stamp of the message i
 import struct
 
 import pytest
-
 from kernel_harness import BUILDS, CORE, build, packet_visible, run
+
 from robosoc.firmware.images import (
     FIRST_TASK_ID,
     IDLE_TASK_ID,

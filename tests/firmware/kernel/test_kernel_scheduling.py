@@ -6,9 +6,11 @@ writes TIMER1 so that it holds floor((x - 2) / p) mod N in every cycle x, so the
 toggles into view in cycle k * p * N + 2 = k * L + 2: tick k.
 """
 
-import pytest
+import itertools
 
+import pytest
 from kernel_harness import BUILDS, CORE, build, run
+
 from robosoc.firmware.images import FIRST_TASK_ID, read_job_log, read_stats
 from robosoc.toolchain import CompileError
 
@@ -24,7 +26,7 @@ TICKS = {
 
 
 def spec(*tasks: tuple[int, int, int, int]) -> str:
-    return "{" + ",".join("{%d,%d,%d,%d}" % t for t in tasks) + "}"
+    return "{" + ",".join("{" + ",".join(map(str, t)) + "}" for t in tasks) + "}"
 
 
 def first_tick(start_cycle: int, tick: int) -> int:
@@ -90,7 +92,7 @@ def test_edf_preempts_a_long_job_for_an_earlier_deadline(mul):
     elf = build(
         "periodic.c", mul, TASK_SPEC=spec((1, 1, 1, 200), (8, 8, 8, long_work)), STOP_JOBS=12, OS_TICK_CYCLES=tick
     )
-    chip, result = run({CORE: elf})
+    chip, _ = run({CORE: elf})
     log = read_job_log(chip, CORE).records
     short = [r for r in log if r.task == FIRST_TASK_ID]
     long = [r for r in log if r.task == FIRST_TASK_ID + 1]
@@ -125,7 +127,7 @@ def test_edf_and_rm_order(mul, policy, order):
     by_start = sorted(first, key=lambda r: r.start)
     assert "".join("ABC"[r.task - FIRST_TASK_ID] for r in by_start) == order
     # one after the other, none preempted: each starts after the previous completed
-    for before, after in zip(by_start, by_start[1:], strict=False):
+    for before, after in itertools.pairwise(by_start):
         assert before.completion < after.start
 
 

@@ -1,8 +1,8 @@
 """Semaphores, delays, yields and best-effort round robin (programs/sync.c)."""
 
 import pytest
-
 from kernel_harness import BUILDS, CORE, build, run
+
 from robosoc.firmware.images import read_stats
 
 TICK = 262_144  # the default
