@@ -274,6 +274,7 @@ int32_t os_send(uint32_t tile, uint32_t port, const void *data, uint32_t len)
     uint32_t state = os_enter();
     uint32_t me = port_tile();
     uint32_t src_port = os_current->id;
+    uint32_t received = os_stats.msg_received;
     int32_t result = (int32_t)len;
     if (tile == me) { /* the NI cannot send to its own tile: deliver here */
         int slot = -1;
@@ -318,7 +319,9 @@ int32_t os_send(uint32_t tile, uint32_t port, const void *data, uint32_t len)
         } while (sent < len);
         os_stats.msg_sent++;
     }
-    os_reschedule(); /* a local message, or packets taken while waiting, may have readied a task */
+    if (os_stats.msg_received != received) { /* a local message, or one completed while waiting */
+        os_reschedule();
+    }
     os_leave(state);
     return result;
 }

@@ -392,15 +392,19 @@ void os_block(os_wait_t wait, const void *obj)
     port_irq_disable();
 }
 
-static void os_wake(os_wait_t wait, const void *obj)
+/* Make every task blocked on (wait, obj) ready; returns how many. */
+static uint32_t os_wake(os_wait_t wait, const void *obj)
 {
+    uint32_t woken = 0;
     for (uint32_t i = 1; i < os_ntasks; i++) {
         os_tcb_t *t = &os_tcb[i];
         if (t->state == OS_ST_BLOCKED && t->wait == wait && t->wait_obj == obj) {
             t->state = OS_ST_READY;
             t->wait = OS_WAIT_NONE;
+            woken++;
         }
     }
+    return woken;
 }
 
 /* ---- The tick ----------------------------------------------------------------------------- */
@@ -575,8 +579,9 @@ void os_sem_post(os_sem_t *sem)
 {
     uint32_t state = os_enter();
     sem->count++;
-    os_wake(OS_WAIT_SEM, sem); /* all waiters: the scheduler lets the most urgent one take it */
-    os_reschedule();
+    if (os_wake(OS_WAIT_SEM, sem) != 0u) { /* all waiters: the most urgent one takes it */
+        os_reschedule();
+    }
     os_leave(state);
 }
 

@@ -146,6 +146,7 @@ port_yield:
     .globl  port_restore
     .globl  port_start_first
     .type   port_restore, @function
+    .type   port_start_first, @function
 port_start_first:
 port_restore:
     la      t0, os_current
@@ -187,6 +188,7 @@ port_restore:
     sw      tp, IRQ_STATUS - 1(tp)      /* re-enable: IRQ_STATUS keeps the low byte, 1 */
     jalr    x0, 0(s11)                  /* nothing may stand between these two */
     .size   port_restore, . - port_restore
+    .size   port_start_first, . - port_start_first
     .size   port_yield, . - port_yield
     .size   _irq_entry, . - _irq_entry
 
