@@ -10,15 +10,18 @@ chip (TIMER0, per-task counters), the same on every host.
 from __future__ import annotations
 
 import statistics
-import sys
-from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).parent))
-
-from kernel_harness import build, run
+from kernel_harness import build, packet_visible, run  # the script's folder is on sys.path
 
 from robosoc.config.chip import ChipConfig
-from robosoc.firmware.images import FIRST_TASK_ID, IDLE_TASK_ID, KERNEL_TASK_ID, read_job_log
+from robosoc.firmware.images import (
+    FIRST_TASK_ID,
+    IDLE_TASK_ID,
+    KERNEL_TASK_ID,
+    message_packets,
+    read_job_log,
+    read_stats,
+)
 
 A, B = (1, 0), (0, 1)
 TICK = 65536
@@ -52,13 +55,23 @@ def measure(mul: bool) -> dict[str, float]:
     out["os_probe"] = tail[1]
     out["os_recv of a waiting 16 B message"] = tail[2]
 
+    # event release: a packet from the I/O tile wakes the sleeping core and releases a job
+    sends = [300_000 + 100_000 * k for k in range(4)]
+    payload = message_packets(b"\0\1\2\3", port=3, src_tile=0)[0]
+    elf = build("echo.c", mul, OS_TICK_CYCLES=TICK, EVENT=None, EXPECT=len(sends))
+    chip, _ = run({(1, 0): elf}, injections=[((1, 0), payload, x) for x in sends])
+    jobs = read_job_log(chip, (1, 0)).records
+    visible = [packet_visible(x, hops=1, flits=len(payload) + 2) for x in sends]
+    out["packet visible to release stamp (event task, core asleep)"] = statistics.median(
+        r.release - v for r, v in zip(jobs, visible, strict=True)
+    )
+    out["release stamp to event job start"] = statistics.median(r.start - r.release for r in jobs)
+
     # load: one periodic job of 10 % of a tick every tick, default tick
     work = LOAD_TICK // 10 // 4
     elf = build("periodic.c", mul, TASK_SPEC="{{1,1,1,%d}}" % work, STOP_JOBS=20)  # noqa: UP031
     chip, result = run({(1, 0): elf})
     per = chip.task_counters((1, 0))
-    from robosoc.firmware.images import read_stats
-
     stats = read_stats(chip, (1, 0))
     span = result.cycles - stats.start_cycle
     boot = stats.start_cycle
