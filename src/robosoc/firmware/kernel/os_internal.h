@@ -83,7 +83,6 @@ void os_block(os_wait_t wait, const void *obj);
 void os_panic(const char *why) __attribute__((noreturn));
 
 /* Messaging (os_msg.c) called by the scheduler */
-void os_msg_init(void);
 void os_msg_receive_all(uint32_t cycle);     /* take every packet waiting in the NI */
 const os_msg_t *os_msg_slot_view(int slot);  /* the message in a slot, for an event job */
 void os_msg_slot_free(int slot);

@@ -57,13 +57,6 @@ static void os_copy(void *dst, const void *src, uint32_t n)
     }
 }
 
-void os_msg_init(void)
-{
-    for (uint32_t i = 0; i < OS_MSG_SLOTS; i++) {
-        os_slots[i].msg.data = (const uint8_t *)os_slots[i].payload;
-    }
-}
-
 /* ---- Slots -------------------------------------------------------------------------------- */
 
 static int os_slot_alloc(uint32_t port, uint32_t src_tile, uint32_t src_port, uint32_t len)
@@ -76,6 +69,7 @@ static int os_slot_alloc(uint32_t port, uint32_t src_tile, uint32_t src_port, ui
             s->msg.src_tile = src_tile;
             s->msg.src_port = src_port;
             s->msg.len = len;
+            s->msg.data = (const uint8_t *)s->payload;
             return (int)i;
         }
     }

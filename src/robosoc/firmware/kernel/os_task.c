@@ -495,7 +495,6 @@ void os_start(void)
     }
     os_task_entry_init(&os_tcb[0], OS_IDLE_TASK_ID, OS_KIND_IDLE, os_idle_main, stack, OS_IDLE_STACK_BYTES);
     os_tcb[0].state = OS_ST_READY;
-    os_msg_init();
 
     uint32_t aligned_at = 0;
     uint32_t first = port_tick_start(&aligned_at);
