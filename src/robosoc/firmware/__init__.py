@@ -17,6 +17,10 @@ Layout (all plain files inside the package):
 - ``include/robosoc_packets.h``: the application packets, generated from :mod:`robosoc.firmware.packets`.
 
 Builds choose the arithmetic with :func:`arith_defines`: ``float`` (soft-float) or ``fixed`` (Q16.16).
+- ``kernel/``: the portable real-time kernel (``os.h``, ``os_config.h``, tasks, messaging).
+- ``port/``: its HF-RISCV port (context switch and interrupt entry, tick timer, NI driver).
+  Kernel images link these instead of ``crt/irq_entry.S`` and ``crt/irq_default.c``
+  (:mod:`robosoc.firmware.images`).
 """
 
 from pathlib import Path
@@ -47,6 +51,10 @@ APP_DIR = FIRMWARE_DIR / "app"
 EKF_SOURCES: tuple[Path, ...] = (APP_DIR / "ekf.c",)
 #: The two number formats of real_t (lib/real.h).
 ARITHS = ("float", "fixed")
+KERNEL_DIR = FIRMWARE_DIR / "kernel"
+PORT_DIR = FIRMWARE_DIR / "port"
+KERNEL_SOURCES: tuple[Path, ...] = (KERNEL_DIR / "os_task.c", KERNEL_DIR / "os_msg.c")
+PORT_SOURCES: tuple[Path, ...] = (PORT_DIR / "port_asm.S", PORT_DIR / "port_hfriscv.c")
 
 #: Symbol of the interrupt entry: the one place allowed to write x27 (s11).
 IRQ_ENTRY_SYMBOL = "_irq_entry"
@@ -55,6 +63,12 @@ IRQ_ENTRY_SYMBOL = "_irq_entry"
 def runtime_sources() -> tuple[Path, ...]:
     """Sources linked into every RISC-V program: start-up code, interrupt entry, print library."""
     return CRT_SOURCES + LIB_SOURCES + LIBC_SOURCES
+
+
+def kernel_runtime_sources() -> tuple[Path, ...]:
+    """Sources linked into every kernel image: start-up code, the port's interrupt entry in place of
+    the runtime's, the kernel, the print library and libc (build with ``runtime=False``)."""
+    return (CRT_SOURCES[0], *PORT_SOURCES, *KERNEL_SOURCES, *LIB_SOURCES, *LIBC_SOURCES)
 
 
 def host_sources() -> tuple[Path, ...]:
@@ -91,6 +105,8 @@ __all__ = [
     "FIRMWARE_DIR",
     "INCLUDE_DIR",
     "IRQ_ENTRY_SYMBOL",
+    "KERNEL_DIR",
+    "KERNEL_SOURCES",
     "LIBC_INCLUDE_DIR",
     "LIBC_SOURCES",
     "LIB_SOURCES",
@@ -98,9 +114,12 @@ __all__ = [
     "MATH_DIR",
     "MATH_SOURCES",
     "MATRIX_BENCH_SOURCE",
+    "PORT_DIR",
+    "PORT_SOURCES",
     "arith_defines",
     "ekf_sources",
     "host_sources",
+    "kernel_runtime_sources",
     "math_sources",
     "runtime_sources",
 ]
