@@ -6,21 +6,52 @@ from typing import Annotated
 
 import typer
 
+from robosoc.cli import exit_codes, files, options
 from robosoc.cli.app import app
+from robosoc.cli.errors import CliError
 
-Files = Annotated[list[Path], typer.Argument(help="C (.c) and assembly (.S, .s) sources.")]
-Output = Annotated[Path, typer.Option("--output", "-o", help="The ELF file to write.")]
+
+def _opt_level(value: str) -> str:
+    from robosoc.toolchain import ToolchainError
+    from robosoc.toolchain.options import normalize_opt
+
+    try:
+        return normalize_opt(value)
+    except ToolchainError:
+        return value
+
+
+Files = Annotated[
+    list[Path], typer.Argument(metavar="FILES", help="C (.c) and assembly (.S, .s) sources.", show_default=False)
+]
+Output = Annotated[Path, typer.Option("--output", "-o", help="The ELF file to write.", show_default=False)]
 Mul = Annotated[bool, typer.Option("--mul/--no-mul", help="Core with the iterative multiplier (Zmmul).")]
-Opt = Annotated[str, typer.Option("--opt", "-O", help="Optimisation level: 0 1 2 3 s z (-O2, -Os, ...).")]
+Opt = Annotated[
+    str,
+    typer.Option(
+        "--opt",
+        "-O",
+        help="Optimisation level: 0 1 2 3 s z (-O2, -Os, ...).",
+        callback=options.choice("-O0", "-O1", "-O2", "-O3", "-Os", "-Oz", normalize=_opt_level),
+    ),
+]
 Define = Annotated[list[str] | None, typer.Option("--define", "-D", help="Preprocessor NAME[=VALUE].")]
 Include = Annotated[list[Path] | None, typer.Option("--include", "-I", help="Extra include folder.")]
-SramSize = Annotated[int, typer.Option(help="SRAM size in bytes (the stack starts at its top).")]
+SramSize = Annotated[
+    int,
+    typer.Option(
+        help="SRAM size in bytes, a multiple of 4 in 4096..2**30 (the stack starts at its top).",
+        callback=options.sram_bytes(),
+    ),
+]
 NoRuntime = Annotated[bool, typer.Option("--no-runtime", help="Do not link crt0, IRQ entry, print library.")]
 
+SOURCE_SUFFIXES = (".c", ".S", ".s")
 
-@app.command("cc")
+
+@app.command("cc", epilog=exit_codes.EPILOG + " A program that does not compile is an input error (2).")
 def cc(
-    files: Files,
+    files_: Files,
     output: Output,
     mul: Mul = True,
     opt: Opt = "2",
@@ -31,26 +62,37 @@ def cc(
 ) -> None:
     """Compile FILES for the HF-RISCV core (RV32I, soft-float) and link them into OUTPUT."""
     from robosoc.toolchain import CompileError, ToolchainError, build_elf
+    from robosoc.toolchain.options import define_flags
+
+    sources = [files.input_file(f, None, "C or assembly source") for f in files_]
+    for f in sources:
+        if f.suffix not in SOURCE_SUFFIXES:
+            raise CliError(f"{f}: unsupported source type '{f.suffix}' (expected .c, .S or .s)")
+    try:
+        define_flags(define or [])
+    except ToolchainError as exc:
+        raise CliError(f"--define: {exc}") from exc
+    includes = [files.input_dir(d, "--include") for d in include or []]
+    target = files.output_file(output, "--output", inputs=sources)
 
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         try:
             elf = build_elf(
-                files,
-                output,
+                sources,
+                target,
                 mul=mul,
                 opt=opt,
                 defines=define or [],
-                include_dirs=include or [],
+                include_dirs=includes,
                 sram_size=sram_size,
                 runtime=not no_runtime,
             )
         except CompileError as exc:
             typer.echo(str(exc), err=True)
-            raise typer.Exit(1) from exc
+            raise typer.Exit(exit_codes.USAGE) from exc
         except ToolchainError as exc:
-            typer.echo(f"robosoc cc: {exc}", err=True)
-            raise typer.Exit(2) from exc
+            raise CliError(str(exc)) from exc
     for warning in caught:
         typer.echo(f"warning: {warning.message}", err=True)
     typer.echo(str(elf))
