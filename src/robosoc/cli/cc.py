@@ -1,5 +1,6 @@
 """``robosoc cc``: compile C/assembly for one HF-RISCV core into an ELF."""
 
+import re
 import warnings
 from pathlib import Path
 from typing import Annotated
@@ -12,13 +13,9 @@ from robosoc.cli.errors import CliError
 
 
 def _opt_level(value: str) -> str:
-    from robosoc.toolchain import ToolchainError
-    from robosoc.toolchain.options import normalize_opt
-
-    try:
-        return normalize_opt(value)
-    except ToolchainError:
-        return value
+    """``2``, ``O2`` or ``-O2`` -> ``-O2`` (anything else is left for the choice check to refuse)."""
+    match = re.fullmatch(r"(-?O)?([0123sz])", value)
+    return f"-O{match[2]}" if match else value
 
 
 Files = Annotated[
@@ -35,7 +32,15 @@ Opt = Annotated[
         callback=options.choice("-O0", "-O1", "-O2", "-O3", "-Os", "-Oz", normalize=_opt_level),
     ),
 ]
-Define = Annotated[list[str] | None, typer.Option("--define", "-D", help="Preprocessor NAME[=VALUE].")]
+Define = Annotated[
+    list[str] | None,
+    typer.Option(
+        "--define",
+        "-D",
+        help="Preprocessor NAME[=VALUE] (NAME a C identifier).",
+        callback=options.pattern(r"[A-Za-z_]\w*(=.*)?", "NAME or NAME=VALUE with NAME a C identifier"),
+    ),
+]
 Include = Annotated[list[Path] | None, typer.Option("--include", "-I", help="Extra include folder.")]
 SramSize = Annotated[
     int,
@@ -62,16 +67,11 @@ def cc(
 ) -> None:
     """Compile FILES for the HF-RISCV core (RV32I, soft-float) and link them into OUTPUT."""
     from robosoc.toolchain import CompileError, ToolchainError, build_elf
-    from robosoc.toolchain.options import define_flags
 
     sources = [files.input_file(f, None, "C or assembly source") for f in files_]
     for f in sources:
         if f.suffix not in SOURCE_SUFFIXES:
             raise CliError(f"{f}: unsupported source type '{f.suffix}' (expected .c, .S or .s)")
-    try:
-        define_flags(define or [])
-    except ToolchainError as exc:
-        raise CliError(f"--define: {exc}") from exc
     includes = [files.input_dir(d, "--include") for d in include or []]
     target = files.output_file(output, "--output", inputs=sources)
 
@@ -89,8 +89,7 @@ def cc(
                 runtime=not no_runtime,
             )
         except CompileError as exc:
-            typer.echo(str(exc), err=True)
-            raise typer.Exit(exit_codes.USAGE) from exc
+            raise CliError(str(exc)) from exc
         except ToolchainError as exc:
             raise CliError(str(exc)) from exc
     for warning in caught:

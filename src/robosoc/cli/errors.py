@@ -82,7 +82,8 @@ def _click_message(exc: BaseException) -> str:
     if param is not None and type(exc).__name__ == "MissingParameter":
         kind = getattr(param, "param_type_name", "parameter")
         name = (getattr(param, "opts", None) or [param.name])[0]
-        return f"missing {kind} {name if kind == 'option' else str(param.name).upper()}"
+        shown = name if kind == "option" else (getattr(param, "metavar", None) or str(param.name).upper())
+        return f"missing {kind} {shown}"
     if param is not None:
         opts = [o for o in getattr(param, "opts", []) if o.startswith("--")] or list(getattr(param, "opts", []))
         name = opts[0] if opts and getattr(param, "param_type_name", "") == "option" else (param.name or "").upper()

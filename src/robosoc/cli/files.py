@@ -1,6 +1,6 @@
 """Every file a command reads or writes goes through here, so that a bad path is an error naming it.
 
-Inputs (:func:`input_file`, :func:`read_text`, :func:`load_toml`, :func:`load_program`,
+Inputs (:func:`input_file`, :func:`read_text`, :func:`read_toml`, :func:`load_toml`, :func:`load_program`,
 :func:`input_dir`): missing, a folder, unreadable, not UTF-8 and malformed contents each give a
 :class:`~robosoc.cli.errors.CliError` such as ``--scenario: runs/: is a folder, expected a TOML file``.
 
@@ -37,6 +37,7 @@ __all__ = [
     "output_dir",
     "output_file",
     "read_text",
+    "read_toml",
 ]
 
 
@@ -91,6 +92,15 @@ def read_text(path: Path | str, label: str | None = None, kind: str = "text file
         ) from exc
 
 
+def read_toml(path: Path | str, label: str | None = None) -> dict[str, Any]:
+    """The parsed contents of a TOML file."""
+    text = read_text(path, label, "TOML file")
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise _error(label, path, f"invalid TOML: {exc}") from exc
+
+
 def load_toml(cls: type[T], path: Path | str, label: str | None = None) -> tuple[T, tuple[str, ...]]:
     """A configuration dataclass from a TOML file, and the dotted fields the file sets.
 
@@ -98,11 +108,7 @@ def load_toml(cls: type[T], path: Path | str, label: str | None = None) -> tuple
     """
     from robosoc.config.validate import ConfigError, from_mapping, named_fields
 
-    text = read_text(path, label, "TOML file")
-    try:
-        data: dict[str, Any] = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise _error(label, path, f"invalid TOML: {exc}") from exc
+    data = read_toml(path, label)
     try:
         return from_mapping(cls, data, str(path)), named_fields(data)
     except ConfigError as exc:

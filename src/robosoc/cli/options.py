@@ -38,6 +38,7 @@ __all__ = [
     "parse_floats",
     "parse_mesh",
     "parse_tile",
+    "pattern",
     "seed",
     "sram_bytes",
 ]
@@ -100,6 +101,18 @@ def choice(*choices: str, normalize: Callable[[str], str] | None = None) -> Call
         if v not in choices:
             raise ValueError(f"{name}: must be one of {', '.join(choices)}, got {value!r}")
         return v
+
+    return _checked(check)
+
+
+def pattern(regex: str, expected: str) -> Callback:
+    """Text matching ``regex`` as a whole; ``expected`` says what is wanted (``"NAME or NAME=VALUE"``)."""
+    compiled = re.compile(regex, re.DOTALL)
+
+    def check(name: str, value: str) -> str:
+        if not compiled.fullmatch(value):
+            raise ValueError(f"{name}: expected {expected}, got {value!r}")
+        return value
 
     return _checked(check)
 

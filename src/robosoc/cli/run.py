@@ -144,7 +144,7 @@ def run(
                 raise options.fail(option, f"has no effect with --chip: set {field} in {chip}")
     inputs = [files.input_file(p, None, "ELF file") for p in programs]
     if energy is not None:
-        files.read_text(energy, "--energy", "TOML file")
+        files.read_toml(energy, "--energy")
         inputs.append(energy)
     try:
         model = EnergyModel.load(energy)
@@ -281,7 +281,7 @@ def _chip_config(ctx: typer.Context, mul: bool, sram_size: int, mesh: str | None
     if chip_file is not None:
         config, _ = files.load_toml(ChipConfig, chip_file, "--chip")
     else:
-        w, h = options.parse_mesh("--mesh", mesh or "2x2")
+        w, h = options.parse_mesh("--mesh", "2x2" if mesh is None else mesh)
         config = ChipConfig(width=w, height=h, tile=TileConfig(multiplier=mul, sram_bytes=sram_size))
     changes = {}
     if off:
