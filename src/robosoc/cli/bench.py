@@ -98,7 +98,7 @@ def bench_noc(
         packet_flits=packet_flits,
         seed=seed,
         plot_path=plot_path,
-        console=make_console(),
+        console=make_console(min_width=100),  # the table needs ~90 columns
         arbiters=ARBITERS if arbiter == "both" else (arbiter,),
     )
 

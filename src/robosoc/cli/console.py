@@ -10,6 +10,7 @@ then turns wrapping off and leaves tables room to lay out on one line each.  Tex
 from __future__ import annotations
 
 import os
+import sys
 
 from rich.console import Console
 from rich.markup import escape
@@ -20,17 +21,32 @@ __all__ = ["PIPE_WIDTH", "make_console", "note", "plain"]
 PIPE_WIDTH = 200
 
 
-def make_console(stderr: bool = False) -> Console:
+class _Console(Console):
+    """A rich console that reports a closed pipe as :class:`BrokenPipeError` (exit code 141), where
+    rich would exit with 1, the code robosoc keeps for its own bugs."""
+
+    def on_broken_pipe(self) -> None:
+        self.quiet = True
+        try:
+            devnull = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(devnull, sys.stdout.fileno())
+        except (OSError, ValueError, AttributeError):
+            pass
+        raise BrokenPipeError
+
+
+def make_console(stderr: bool = False, min_width: int = 0) -> Console:
     """A console on stdout (or stderr) that wraps only on a terminal.
 
-    ``COLUMNS`` in the environment still sets the width, as with plain rich.
+    ``COLUMNS`` in the environment still sets the width, as with plain rich; on a terminal the
+    console is at least ``min_width`` wide (for tables that need it).
     """
-    probe = Console(stderr=stderr)
+    probe = _Console(stderr=stderr)
     if probe.is_terminal:
-        return probe
+        return _Console(stderr=stderr, width=max(probe.width, min_width)) if probe.width < min_width else probe
     columns = os.environ.get("COLUMNS", "")
     width = int(columns) if columns.isdigit() and int(columns) > 0 else PIPE_WIDTH
-    return Console(stderr=stderr, soft_wrap=True, width=width, highlight=False)
+    return _Console(stderr=stderr, soft_wrap=True, width=max(width, min_width), highlight=False)
 
 
 def plain(console: Console, text: str, style: str | None = None) -> None:
