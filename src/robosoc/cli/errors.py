@@ -95,14 +95,35 @@ def _is_click_exception(exc: BaseException) -> bool:
     return any(cls.__name__ == "ClickException" for cls in type(exc).__mro__)
 
 
+def _stdout_identity() -> tuple[int, int] | None:
+    try:
+        st = os.fstat(sys.stdout.fileno())
+    except (OSError, ValueError, AttributeError):
+        return None
+    return st.st_dev, st.st_ino
+
+
+def _rich_closed_pipe(before: tuple[int, int] | None) -> bool:
+    """Whether rich met a closed pipe: it points stdout at /dev/null and exits with 1."""
+    after = _stdout_identity()
+    try:
+        null = os.stat(os.devnull)
+    except OSError:
+        return False
+    return before is not None and after != before and after == (null.st_dev, null.st_ino)
+
+
 def run_guarded(main: Callable[[], object], default_command: str = PROGRAM) -> int:
     """Call ``main`` (a click ``main`` in non-standalone mode) and map what it raises to an exit code."""
+    stdout_before = _stdout_identity()
     try:
         result = main()
     except CliError as exc:
         print_error(getattr(exc, "robosoc_command", default_command), exc.message)
         return exc.code
     except SystemExit as exc:
+        if exc.code == 1 and _rich_closed_pipe(stdout_before):  # typer's help, printed by rich
+            return exit_codes.BROKEN_PIPE
         return exc.code if isinstance(exc.code, int) else (exit_codes.OK if exc.code is None else exit_codes.USAGE)
     except KeyboardInterrupt:
         print_error(default_command, "interrupted")
