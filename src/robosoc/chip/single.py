@@ -263,6 +263,7 @@ class SingleCoreSoC:
                 sample points and it is called after each slice.
 
         Raises:
+            ValueError: ``max_cycles`` or ``chunk`` out of range.
             CoreError: illegal/unsupported instruction, bad access or fetch (with pc and symbol).
             CycleBudgetExceeded: ``max_cycles`` reached before the exit.
         """

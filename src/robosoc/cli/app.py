@@ -48,7 +48,7 @@ class RobosocGroup(TyperGroup):
             if not hasattr(exc, "robosoc_command") and not isinstance(exc, typer.Exit | SystemExit):
                 sub = ctx.invoked_subcommand
                 exc.robosoc_command = command_path(ctx) + (f" {sub}" if sub else "")  # type: ignore[attr-defined]
-                if isinstance(exc, KeyboardInterrupt) and not getattr(exc, "reported", False):
+                if isinstance(exc, KeyboardInterrupt):
                     from robosoc.cli.errors import print_error
 
                     print_error(exc.robosoc_command, "interrupted")  # type: ignore[attr-defined]

@@ -4,17 +4,13 @@ A command (or a helper of :mod:`robosoc.cli.options` and :mod:`robosoc.cli.files
 :class:`CliError`; :func:`run_guarded` (called by the application's group, :mod:`robosoc.cli.app`)
 turns it and everything else into a message on stderr and an exit code (:mod:`robosoc.cli.exit_codes`):
 
-==================================  ===============================================================
-what                                printed on stderr, exit code
-==================================  ===============================================================
-``CliError("--seed: must be ...")``  ``robosoc fly: --seed: must be between 0 and 2**63-1, got -1``, 2
-a click usage error (unknown option, ``robosoc run: --max-cycles: input should be a valid integer``
-not a number, missing argument)      and a pointer to ``--help``, 2
-``typer.Exit(n)``                   nothing more, ``n``
-Ctrl-C                              ``robosoc CMD: interrupted``, 130
-a closed output pipe                nothing, 141
-any other exception                 the traceback and a request to report the bug, 1
-==================================  ===============================================================
+* ``CliError("--seed: must be ...")``: ``robosoc fly: --seed: must be between 0 and 2**63-1, got -1``, 2;
+* a click usage error (unknown option, not a number, missing argument): the same style
+  (``robosoc run: --max-cycles: input should be a valid integer ...``) and a pointer to ``--help``, 2;
+* ``typer.Exit(n)``: nothing more, ``n``;
+* Ctrl-C: ``robosoc CMD: interrupted``, 130;
+* a closed output pipe: nothing, 141;
+* any other exception: the traceback and a request to report the bug, 1.
 
 Messages are plain text (never rich markup), so brackets and paths come out as written.
 """
