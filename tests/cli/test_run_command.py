@@ -32,7 +32,7 @@ def elf(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 def test_run_prints_output_and_returns_the_exit_code(elf: Path, tmp_path: Path):
     stats = tmp_path / "stats.json"
-    result = CliRunner().invoke(app, ["run", str(elf), "--stats", str(stats)])
+    result = CliRunner().invoke(app, ["run", str(elf), "--stats", str(stats), "--exit-code", "program"])
     assert result.exit_code == 42
     assert "product 7006652" in result.stdout
     record = json.loads(stats.read_text())
@@ -50,7 +50,8 @@ def test_summary_line_goes_to_stderr(elf: Path):
     proc = subprocess.run(
         [sys.executable, "-m", "robosoc", "run", str(elf)], capture_output=True, text=True, timeout=120
     )
-    assert proc.returncode == 42
+    assert proc.returncode == 4  # --exit-code status: the program exited with a non-zero code
+    assert "exit code 42" in proc.stderr
     assert proc.stdout == "product 7006652\n"
     assert "cycles" in proc.stderr and "CPI" in proc.stderr and "nJ" in proc.stderr and "MIPS" in proc.stderr
 

@@ -48,7 +48,9 @@ def elf(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 def run(elf: Path, tmp_path: Path, *extra: str):
     stats = tmp_path / "stats.json"
-    result = CliRunner().invoke(app, ["run", str(elf), "--mesh", "2x2", "--stats", str(stats), *extra])
+    result = CliRunner().invoke(
+        app, ["run", str(elf), "--mesh", "2x2", "--stats", str(stats), "--exit-code", "program", *extra]
+    )
     return result, json.loads(stats.read_text())
 
 

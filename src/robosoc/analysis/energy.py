@@ -50,9 +50,11 @@ class EnergyModel:
         else:
             where = str(path)
             try:
-                text = Path(path).read_text()
+                text = Path(path).read_text(encoding="utf-8")
             except OSError as exc:
                 raise ConfigError(where, "", f"cannot read: {exc.strerror}") from exc
+            except UnicodeDecodeError as exc:
+                raise ConfigError(where, "", f"not UTF-8 text (offset {exc.start}): expected a TOML file") from exc
         try:
             data = tomllib.loads(text)
         except tomllib.TOMLDecodeError as exc:

@@ -63,9 +63,20 @@ def _sleeping(ticks: int, runs: int) -> tuple[list[float], float]:
     return factors, awake
 
 
-def run_chip_benchmark(runs: int = 5, cycles: int = 2_000_000, ticks: int = 40, noc: bool = True) -> float:
-    """Print the figures; returns the median M core-cycles/s of the busy 4x4 mesh."""
-    console = Console()
+def run_chip_benchmark(
+    runs: int = 5, cycles: int = 2_000_000, ticks: int = 40, noc: bool = True, console: Console | None = None
+) -> float:
+    """Print the figures; returns the median M core-cycles/s of the busy 4x4 mesh.
+
+    Raises:
+        ValueError: ``runs``, ``cycles`` or ``ticks`` below 1 (or ``cycles`` beyond 2**62).
+    """
+    from robosoc.config.ranges import MAX_CYCLES, check_int
+
+    check_int("runs", runs, 1)
+    check_int("cycles", cycles, 1, MAX_CYCLES, "cycles")
+    check_int("ticks", ticks, 1)
+    console = console or Console()
     table = Table(title="robosoc bench chip")
     table.add_column("case")
     table.add_column("median", justify="right")

@@ -18,14 +18,23 @@ from rich.table import Table
 ITERATIONS = 300  # about 34 M instructions with the multiplier
 
 
-def run_core_benchmark(runs: int = 7, mul: bool = True, iterations: int = ITERATIONS) -> float:
-    """Print per-run figures, median and spread; returns the median MIPS."""
+def run_core_benchmark(
+    runs: int = 7, mul: bool = True, iterations: int = ITERATIONS, console: Console | None = None
+) -> float:
+    """Print per-run figures, median and spread; returns the median MIPS.
+
+    Raises:
+        ValueError: ``runs`` or ``iterations`` below 1.
+    """
     from robosoc.chip.elf import load_elf
     from robosoc.chip.single import SingleCoreSoC
+    from robosoc.config.ranges import check_int
     from robosoc.firmware import MATRIX_BENCH_SOURCE
     from robosoc.toolchain import build_elf
 
-    console = Console(stderr=False)
+    check_int("runs", runs, 1)
+    check_int("iterations", iterations, 1)
+    console = console or Console(stderr=False)
     elf = build_elf([MATRIX_BENCH_SOURCE], mul=mul, defines={"BENCH_ITERATIONS": iterations, "BENCH_QUIET": None})
     program = load_elf(elf)
 

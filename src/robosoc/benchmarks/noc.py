@@ -26,6 +26,7 @@ from rich.table import Table
 
 from robosoc.chip.noc import Mesh
 from robosoc.config.chip import ARBITERS, HERMES_ROUTING_LATENCY, ChipConfig, NocConfig
+from robosoc.config.ranges import MAX_CYCLES, check_float, check_int, check_seed
 
 __all__ = ["NocBenchmarkRow", "run_noc_benchmark"]
 
@@ -107,8 +108,11 @@ def run_noc_benchmark(
     Returns:
         one :class:`NocBenchmarkRow` per rate. The last printed line is ``noc: <median> Mflits/s``.
     """
-    if not 5 <= packet_flits <= 64:
-        raise ValueError(f"packet_flits: must be between 5 and 64, got {packet_flits}")
+    check_int("packet_flits", packet_flits, 5, 64)
+    check_int("cycles", cycles, 1, MAX_CYCLES, "cycles")
+    check_seed("seed", seed)
+    for rate in rates:
+        check_float("rates", rate, 0.0, 1.0, lo_open=True)
     for arbiter in arbiters:
         if arbiter not in ARBITERS:
             raise ValueError(f"arbiter: must be one of {', '.join(ARBITERS)}, got {arbiter!r}")

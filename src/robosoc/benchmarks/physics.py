@@ -47,11 +47,17 @@ def measure_physics(seconds: float, runs: int, seed: int = 0, airborne: bool = T
     return factors
 
 
-def run_physics_benchmark(seconds: float, runs: int) -> None:
-    """Measure and print the physics real-time factor (median and spread over ``runs``)."""
-    if seconds <= 0 or runs < 1:
-        raise ValueError("seconds must be positive and runs at least 1")
-    console = Console()
+def run_physics_benchmark(seconds: float, runs: int, console: Console | None = None) -> None:
+    """Measure and print the physics real-time factor (median and spread over ``runs``).
+
+    Raises:
+        ValueError: ``seconds`` not a finite number of at least one 1 ms step, or ``runs`` below 1.
+    """
+    from robosoc.config.ranges import check_float, check_int
+
+    check_float("seconds", seconds, 0.001, unit="s")
+    check_int("runs", runs, 1)
+    console = console or Console()
     console.print(
         f"physics alone: 1 default quadrotor hovering at fixed PWM, 1 ms steps, {seconds:g} s per run, {runs} runs"
     )

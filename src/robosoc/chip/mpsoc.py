@@ -20,7 +20,15 @@ import numpy as np
 from robosoc.chip.core_state import SRAM_BASE, CoreState
 from robosoc.chip.counters import counters_dict
 from robosoc.chip.elf import Program, Region
-from robosoc.chip.single import ERRATUM_WARNINGS, check_pc, core_error, errata_counts, errata_report
+from robosoc.chip.single import (
+    ERRATUM_WARNINGS,
+    check_budget,
+    check_pc,
+    core_error,
+    errata_counts,
+    errata_report,
+    exit_word,
+)
 from robosoc.config.chip import MIN_PACKET_FLITS, ChipConfig
 from robosoc.isa.disasm import disassemble
 from robosoc.isa.table import MEMORY_CYCLES
@@ -70,6 +78,7 @@ class ChipError(RuntimeError):
 @dataclass
 class ChipResult:
     cycles: int
+    #: per tile that exited, its exit word, unsigned (0..0xffffffff)
     exit_codes: dict[tuple[int, int], int]
     output: dict[tuple[int, int], bytes]
     host_seconds: float
@@ -257,10 +266,17 @@ class MPSoC:
     ) -> ChipResult:
         """Run until every core has exited.
 
+        Args:
+            max_cycles: cycle budget, 1..2**62 (None: none).
+            on_output: called with (tile, bytes) as output comes.
+            chunk: cycles per kernel call (output and Ctrl-C are seen between calls).
+
         Raises:
+            ValueError: ``max_cycles`` or ``chunk`` out of range.
             CoreError / ChipError: a tile failed (message names tile, pc, symbol, instruction),
                 or the budget ran out, or every core waits for something that cannot come.
         """
+        check_budget(max_cycles, chunk)
         outputs: dict[tuple[int, int], bytearray] = {}
         start = time.perf_counter()
         while True:
@@ -345,7 +361,8 @@ class MPSoC:
         return self.cores.regs[self.config.tile_index(xy), :32]
 
     def exit_code(self, xy: tuple[int, int]) -> int:
-        return int(self.cores.st[self.config.tile_index(xy), S_EXIT_CODE])
+        """The exit word tile ``xy`` stored, unsigned (0..0xffffffff), as :attr:`RunResult.exit_code`."""
+        return exit_word(self.cores.st[self.config.tile_index(xy), S_EXIT_CODE])
 
     def symbolize(self, xy: tuple[int, int], pc: int) -> str:
         program = self.programs.get(self.config.tile_index(xy))

@@ -19,6 +19,7 @@ import numpy as np
 from robosoc.chip.core_state import DEFAULT_SRAM_SIZE, SRAM_BASE, CoreState
 from robosoc.chip.counters import counters_dict
 from robosoc.chip.elf import Program, Region, load_elf
+from robosoc.config.ranges import DEVICE_MAP_BASE, MAX_CYCLES, check_int
 from robosoc.isa.disasm import disassemble
 from robosoc.kernels.core import run_cores
 from robosoc.kernels.core_layout import (
@@ -165,8 +166,21 @@ class CycleBudgetExceeded(RuntimeError):
         self.cycle = cycle
 
 
+def exit_word(value: int) -> int:
+    """An exit code as the program stored it: the 32-bit word, 0..0xffffffff (``return -1`` gives 0xffffffff)."""
+    return int(value) & 0xFFFFFFFF
+
+
+def check_budget(max_cycles: int | None, chunk: int) -> None:
+    """The arguments of the ``run`` methods: a budget of 1..2**62 cycles or ``None``, a chunk of at least 1."""
+    if max_cycles is not None:
+        check_int("max_cycles", max_cycles, 1, MAX_CYCLES, "cycles")
+    check_int("chunk", chunk, 1, MAX_CYCLES, "cycles")
+
+
 @dataclass
 class RunResult:
+    #: the exit word the program stored, unsigned (0..0xffffffff); a shell would see ``exit_code & 0xff``
     exit_code: int
     output: bytes
     counters: dict[str, int]
@@ -192,12 +206,13 @@ class SingleCoreSoC:
 
         Args:
             mul: with the iterative multiplier.
-            sram_size: bytes of SRAM at 0x40000000.
+            sram_size: bytes of SRAM at 0x40000000, a multiple of 4 ending below the devices at 0xe0000000.
             errata: "spec" (RISC-V results, each RTL erratum the program hits is counted and warned
                 about) or "rtl" (reproduce the RTL's errata, still counted).
         """
         if errata not in ERRATA_MODES:
             raise ValueError(f"errata: must be one of {', '.join(map(repr, ERRATA_MODES))}, got {errata!r}")
+        check_int("sram_size", sram_size, 4, DEVICE_MAP_BASE - SRAM_BASE, "bytes")
         self.mul = mul
         self.errata = errata
         self.state = CoreState.new(mul=mul, sram_size=sram_size, base=SRAM_BASE, errata=ERRATA_MODES[errata])
@@ -265,16 +280,18 @@ class SingleCoreSoC:
         """Run until the program exits.
 
         Args:
-            max_cycles: cycle budget (None: none).
+            max_cycles: cycle budget, 1..2**62 (None: none).
             on_output: called with output bytes as they come.
             chunk: cycles per kernel call (output and Ctrl-C are seen between calls).
             sampler: a profiler (:class:`robosoc.chip.profile.Sampler`): the run is sliced at its
                 sample points and it is called after each slice.
 
         Raises:
+            ValueError: ``max_cycles`` or ``chunk`` out of range.
             CoreError: illegal/unsupported instruction, bad access or fetch (with pc and symbol).
             CycleBudgetExceeded: ``max_cycles`` reached before the exit.
         """
+        check_budget(max_cycles, chunk)
         st = self.state.st[0]
         st[S_MAX_CYCLES] = -1 if max_cycles is None else max_cycles
         output = bytearray()
@@ -310,7 +327,7 @@ class SingleCoreSoC:
             for name, (_, note) in errata.items():
                 warnings.warn(note, ERRATUM_WARNINGS[name], stacklevel=2)
         return RunResult(
-            exit_code=int(st[S_EXIT_CODE]),
+            exit_code=exit_word(st[S_EXIT_CODE]),
             output=bytes(output),
             counters=self.counters(),
             host_seconds=elapsed,

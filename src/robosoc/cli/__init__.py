@@ -1,6 +1,10 @@
-"""Command line: one module per command, each a thin typed function over the library."""
+"""Command line: one module per command, each a thin typed function over the library.
 
-from robosoc.cli import bench, cc, fly, run  # noqa: F401  (modules register their commands)
+The rules every command follows (option checks, files, exit codes, errors) and the helpers that
+implement them are described in docs/cli.md.
+"""
+
+from robosoc.cli import bench, cc, exit_codes, fly, run  # noqa: F401  (modules register their commands)
 from robosoc.cli.app import app
 
 
@@ -9,4 +13,4 @@ def main() -> None:
     app()
 
 
-__all__ = ["app", "main"]
+__all__ = ["app", "exit_codes", "main"]

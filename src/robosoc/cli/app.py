@@ -1,13 +1,74 @@
-"""The typer applications that every command module registers itself on."""
+"""The typer applications that every command module registers itself on.
+
+Both are built on :class:`RobosocGroup`, whose ``main`` runs every command through
+:func:`robosoc.cli.errors.run_guarded`: one error format and one set of exit codes
+(:mod:`robosoc.cli.exit_codes`) for every command, also under ``typer.testing.CliRunner``.
+"""
+
+from __future__ import annotations
+
+import sys
+from typing import Any
 
 import typer
+from typer.core import TyperGroup
+
+from robosoc.cli import exit_codes
+from robosoc.cli.errors import PROGRAM, command_path, run_guarded
+
+
+class RobosocGroup(TyperGroup):
+    """A typer group whose commands fail the robosoc way (see :mod:`robosoc.cli.errors`)."""
+
+    def main(  # type: ignore[override]
+        self,
+        args: Any = None,
+        prog_name: str | None = None,
+        complete_var: str | None = None,
+        standalone_mode: bool = True,
+        **extra: Any,
+    ) -> Any:
+        def call() -> object:
+            return super(RobosocGroup, self).main(
+                args=args, prog_name=PROGRAM, complete_var=complete_var, standalone_mode=False, **extra
+            )
+
+        code = run_guarded(call)
+        if standalone_mode:
+            sys.exit(code)
+        return code
+
+    def invoke(self, ctx: typer.Context) -> Any:
+        try:
+            return super().invoke(ctx)
+        except BrokenPipeError:
+            raise typer.Exit(exit_codes.BROKEN_PIPE) from None
+        except BaseException as exc:
+            # the innermost group names the command: "robosoc bench noc"
+            if not hasattr(exc, "robosoc_command") and not isinstance(exc, typer.Exit | SystemExit):
+                sub = ctx.invoked_subcommand
+                exc.robosoc_command = command_path(ctx) + (f" {sub}" if sub else "")  # type: ignore[attr-defined]
+                if isinstance(exc, KeyboardInterrupt):
+                    from robosoc.cli.errors import print_error
+
+                    print_error(exc.robosoc_command, "interrupted")  # type: ignore[attr-defined]
+                    raise typer.Exit(exit_codes.INTERRUPTED) from None
+            raise
+
 
 app = typer.Typer(
-    name="robosoc",
+    name=PROGRAM,
+    cls=RobosocGroup,
     help="Robot control firmware on a cycle-accurate RISC-V MPSoC, closed-loop with physics.",
+    epilog=exit_codes.EPILOG,
     no_args_is_help=True,
     add_completion=False,
     pretty_exceptions_enable=False,
 )
-bench_app = typer.Typer(help="Benchmarks that print simulated speed figures.", no_args_is_help=True)
+bench_app = typer.Typer(
+    cls=RobosocGroup,
+    help="Benchmarks that print simulated speed figures.",
+    epilog=exit_codes.EPILOG,
+    no_args_is_help=True,
+)
 app.add_typer(bench_app, name="bench")

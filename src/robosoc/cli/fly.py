@@ -8,7 +8,10 @@ from typing import Annotated
 
 import typer
 
+from robosoc.cli import exit_codes, files, options
 from robosoc.cli.app import app
+from robosoc.cli.console import make_console, note, plain
+from robosoc.config.vehicle import VEHICLE_PRESETS
 
 VIDEO_FPS = 25.0
 
@@ -17,63 +20,92 @@ def _fmt(value: float, unit: str, digits: int = 2) -> str:
     return "n/a" if math.isnan(value) else f"{value:.{digits}f} {unit}"
 
 
-@app.command("fly")
+CONTROLLERS = ("host", "chip")
+
+Controller = Annotated[
+    str, typer.Option(help="Who flies: host (float64 Python) or chip.", callback=options.choice(*CONTROLLERS))
+]
+Seconds = Annotated[
+    float | None,
+    typer.Option(
+        help="Flight length in seconds, whole ms in 0.001..3600, at least one sensor period (default: the scenario's).",
+        callback=options.float_range(0.001, 3600.0, unit="s"),
+    ),
+]
+Seed = Annotated[
+    int, typer.Option(help="Seeds every random number (noise, biases, gusts), 0..2**63-1.", callback=options.seed())
+]
+Scenario = Annotated[Path | None, typer.Option(help="Scenario TOML file (default: built-in).")]
+Vehicle = Annotated[
+    str | None,
+    typer.Option(help="default or laser (default: the scenario's).", callback=options.choice(*VEHICLE_PRESETS)),
+]
+Out = Annotated[
+    Path | None,
+    typer.Option(help="Folder for flight.csv (written as it flies) and flight.png (default: runs/fly-NAME-sSEED)."),
+]
+NoOut = Annotated[bool, typer.Option("--no-out", help="Write no log and no plot.")]
+Video = Annotated[Path | None, typer.Option(help="Render to FILE.mp4, or to a folder of PNG frames.")]
+
+
+@app.command("fly", epilog=exit_codes.EPILOG)
 def fly_command(
-    controller: Annotated[str, typer.Option(help="Who flies: host (float64 Python) or chip.")] = "host",
-    seconds: Annotated[float | None, typer.Option(help="Flight length in seconds (default: the scenario's).")] = None,
-    seed: Annotated[int, typer.Option(help="Seeds every random number (noise, biases, gusts).")] = 1,
-    scenario: Annotated[Path | None, typer.Option(help="Scenario TOML file (default: built-in).")] = None,
-    vehicle: Annotated[str | None, typer.Option(help="default or laser (default: the scenario's).")] = None,
-    out: Annotated[
-        Path | None,
-        typer.Option(help="Folder for flight.csv (written as it flies) and flight.png [default: runs/fly-NAME-sSEED]."),
-    ] = None,
-    no_out: Annotated[bool, typer.Option("--no-out", help="Write no log and no plot.")] = False,
-    video: Annotated[Path | None, typer.Option(help="Render to FILE.mp4, or to a folder of PNG frames.")] = None,
+    ctx: typer.Context,
+    controller: Controller = "host",
+    seconds: Seconds = None,
+    seed: Seed = 1,
+    scenario: Scenario = None,
+    vehicle: Vehicle = None,
+    out: Out = None,
+    no_out: NoOut = False,
+    video: Video = None,
 ) -> None:
     """Fly the scenario (default: take off to 1 m, hover, 10° roll/pitch/yaw steps, a gust; 10 s)."""
-    from rich.console import Console
     from rich.markup import escape
     from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
 
     from robosoc.config.scenario import ScenarioConfig
-    from robosoc.config.validate import ConfigError, load_toml_named, replace_checked
     from robosoc.config.vehicle import vehicle_preset
     from robosoc.control.flight import flight_metrics, fly
     from robosoc.control.flight_log import CsvFlightLog
     from robosoc.control.flight_plot import plot_flight
     from robosoc.control.host import HostController
 
-    console = Console()
+    console = make_console()
     if controller == "chip":
-        console.print("[red]the chip controller is not available yet[/red] (use --controller host)")
-        raise typer.Exit(2)
-    if controller != "host":
-        console.print(f"[red]--controller: must be host or chip, got {controller!r}[/red]")
-        raise typer.Exit(2)
+        raise options.fail("--controller", "the chip controller is not available yet (use --controller host)")
+    options.exclusive(out=out is not None, no_out=no_out)
     sources: list[tuple[str, tuple[str, ...]]] = []
-    try:
-        config = ScenarioConfig()
-        if scenario:
-            config, named = load_toml_named(ScenarioConfig, scenario)
-            sources.append((str(scenario), named))
-        if seconds is not None:
-            config = replace_checked(config, duration_s=seconds)
-            sources.append(("--seconds", ("duration_s",)))
-        if vehicle is not None:
-            config = replace_checked(config, vehicle=vehicle)
-            sources.append(("--vehicle", ("vehicle",)))
-        craft = vehicle_preset(config.vehicle)
-    except (ConfigError, ValueError) as exc:
-        console.print(escape(str(exc)), style="red")
-        raise typer.Exit(2) from exc
+    config = ScenarioConfig()
+    if scenario is not None:
+        config, named = files.load_toml(ScenarioConfig, scenario, "--scenario")
+        sources.append((str(scenario), named))
+    changes = {}
+    if seconds is not None:
+        changes["--seconds"] = ("duration_s", seconds)
+    if vehicle is not None:
+        changes["--vehicle"] = ("vehicle", vehicle)
+    config = options.override(config, changes, [str(scenario)] if scenario is not None else ())
+    sources.extend((option, (field,)) for option, (field, _) in changes.items())
+    period = 1.0 / config.sensors.rate_hz
+    if round(config.duration_s * config.sensors.rate_hz) < 1:
+        where = "--seconds" if seconds is not None else f"--scenario: {scenario}: duration_s"
+        raise options.fail(
+            where,
+            f"a flight lasts at least one sensor period ({period:g} s at {config.sensors.rate_hz:g} Hz), "
+            f"got {config.duration_s:g}",
+        )
+    craft = vehicle_preset(config.vehicle)
 
     if out is None and not no_out:
         out = Path("runs") / f"fly-{config.name}-s{seed}"
-    if no_out:
-        out = None
     if out is not None:
-        out.mkdir(parents=True, exist_ok=True)
+        out = files.output_dir(out, "--out", inputs=[scenario] if scenario else ())
+    if video is not None:
+        if video.suffix.lower() == ".mp4":
+            video = files.output_file(video, "--video", inputs=[scenario] if scenario else ())
+        else:
+            video = files.output_dir(video, "--video")
     pilot = HostController.for_scenario(config, craft)
     log = CsvFlightLog(out / "flight.csv") if out else None
     renderer = sink = None
@@ -94,7 +126,7 @@ def fly_command(
         sink.add(state["renderer"][0].render(world.data))
 
     console.print(
-        f"flying scenario [bold]{config.name}[/bold] for {config.duration_s:g} s, vehicle {config.vehicle}, "
+        f"flying scenario [bold]{escape(config.name)}[/bold] for {config.duration_s:g} s, vehicle {config.vehicle}, "
         f"controller host, seed {seed}, sensors at {config.sensors.rate_hz:g} Hz"
     )
     for source, named in sources:
@@ -112,8 +144,8 @@ def fly_command(
             task = progress.add_task("fly", total=samples)
             rows = fly(config, craft, pilot, seed, on_row=log.write if log else None, on_sample=on_sample)
     except KeyboardInterrupt:
-        console.print("[yellow]interrupted[/yellow]" + (f"; the log so far is in {log.path}" if log else ""))
-        raise typer.Exit(130) from None
+        note(console, "interrupted" + (f"; the log so far is in {log.path}" if log else ""))
+        raise typer.Exit(exit_codes.INTERRUPTED) from None
     finally:
         if log:
             log.close()
@@ -143,9 +175,9 @@ def fly_command(
     console.print(f"height estimate error (RMS while flying): {_fmt(m.height_estimate_rms * 100, 'cm')}")
     if out:
         plot_flight(rows, out / "flight.png", title=f"{config.name}, seed {seed}")
-        console.print(f"log: {out / 'flight.csv'}  plot: {out / 'flight.png'}")
+        plain(console, f"log: {out / 'flight.csv'}  plot: {out / 'flight.png'}")
     if sink is not None and sink.frames:
-        console.print(f"video: {sink.path} ({sink.frames} frames at {VIDEO_FPS:g} fps)")
+        plain(console, f"video: {sink.path} ({sink.frames} frames at {VIDEO_FPS:g} fps)")
 
 
 def _open_video(console, video: Path):
@@ -156,7 +188,7 @@ def _open_video(console, video: Path):
         backend = find_backend()
         sink = FrameSink(video, VIDEO_FPS)
     except RenderUnavailable as exc:
-        console.print(f"[yellow]no video: {exc}[/yellow]")
+        note(console, f"no video: {exc}")
         return None, None
     return backend, sink
 
@@ -169,5 +201,5 @@ def _start_renderer(console, world, backend: str):
         width, height = RENDER_SIZE
         return (OffscreenRenderer(world.model, world.quadrotors[0].body_id, width, height, backend),)
     except RenderUnavailable as exc:
-        console.print(f"[yellow]no video: {exc}[/yellow]")
+        note(console, f"no video: {exc}")
         return None

@@ -10,86 +10,154 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
+from robosoc.cli import exit_codes, files, options
 from robosoc.cli.app import app
+from robosoc.cli.errors import CliError
+from robosoc.config.ranges import MAX_CYCLES
 
 if TYPE_CHECKING:
     from robosoc.analysis.energy import EnergyModel
 
+ERRATA_CHOICES = ("spec", "rtl")
+EXIT_CODE_CHOICES = (exit_codes.EXIT_CODE_STATUS, exit_codes.EXIT_CODE_PROGRAM)
+
+Programs = Annotated[
+    list[Path], typer.Argument(help="ELF file(s) built for the core (robosoc cc).", show_default=False)
+]
+Mul = Annotated[bool, typer.Option("--mul/--no-mul", help="Cores with or without the iterative multiplier.")]
+MaxCycles = Annotated[
+    int,
+    typer.Option(
+        "--max-cycles",
+        help="Cycle budget, 1..2**62: stop a hung program (exit code 3).",
+        callback=options.int_range(1, MAX_CYCLES, "cycles"),
+    ),
+]
+Stats = Annotated[Path | None, typer.Option("--stats", help="Write counters and energy to this JSON file.")]
+Energy = Annotated[Path | None, typer.Option("--energy", help="Energy coefficients (TOML) to use.")]
+SramSize = Annotated[
+    int,
+    typer.Option(
+        "--sram-size", help="SRAM bytes (per tile), a multiple of 4 in 4096..2**30.", callback=options.sram_bytes()
+    ),
+]
+Mesh = Annotated[str | None, typer.Option("--mesh", help="Run on a WxH MPSoC (I/O tile at 0,0), 2 to 256 tiles.")]
+Chip = Annotated[Path | None, typer.Option("--chip", help="MPSoC configuration file (TOML).")]
+Off = Annotated[list[str] | None, typer.Option("--off", help="Power off tile X,Y (repeatable).")]
+Trace = Annotated[
+    int,
+    typer.Option(
+        "--trace",
+        help="Print the first N instructions to stderr (one core; within the cycle budget).",
+        callback=options.int_range(0, MAX_CYCLES),
+    ),
+]
+Profile = Annotated[
+    int,
+    typer.Option(
+        "--profile",
+        help="Sample the pc every ~N cycles (0: off); print cycles by function (one core).",
+        callback=options.int_range(0, MAX_CYCLES // 2, "cycles"),
+    ),
+]
+Errata = Annotated[
+    str,
+    typer.Option(
+        "--errata",
+        help="spec: RISC-V results, report each HF-RISCV RTL erratum hit; rtl: reproduce the RTL's errata.",
+        callback=options.choice(*ERRATA_CHOICES),
+    ),
+]
+ExitCode = Annotated[
+    str,
+    typer.Option(
+        "--exit-code",
+        help="status: 0 if the program exited with 0, 4 if with another code, 3 if the simulator stopped it; "
+        "program: the program's own exit code (mod 256).",
+        callback=options.choice(*EXIT_CODE_CHOICES),
+    ),
+]
+
 
 def _write_json(path: Path, record: dict) -> None:
-    tmp = path.with_suffix(path.suffix + ".tmp")
-    tmp.write_text(json.dumps(record, indent=2) + "\n")
-    tmp.replace(path)
-
-
-def _parse_mesh(mesh: str) -> tuple[int, int]:
+    tmp = path.with_name(path.name + ".tmp")
     try:
-        w, h = (int(v) for v in mesh.lower().split("x"))
-    except ValueError as exc:
-        raise typer.BadParameter(f"expected WxH such as 2x2, got {mesh!r}", param_hint="--mesh") from exc
-    return w, h
+        tmp.write_text(json.dumps(record, indent=2) + "\n")
+        tmp.replace(path)
+    except OSError as exc:  # checked at the start; the disk may still fill up or the folder vanish
+        raise CliError(f"--stats: {path}: cannot write: {exc.strerror or exc}") from exc
 
 
-def _parse_tile(text: str) -> tuple[int, int]:
-    try:
-        x, y = (int(v) for v in text.split(","))
-    except ValueError as exc:
-        raise typer.BadParameter(f"expected X,Y such as 1,1, got {text!r}", param_hint="--off") from exc
-    return x, y
+def exit_status(code: int, mode: str) -> int:
+    """The exit status of ``robosoc run`` for a program that exited with ``code`` (its exit word)."""
+    if mode == exit_codes.EXIT_CODE_PROGRAM:
+        return code & 0xFF
+    return exit_codes.OK if code == 0 else exit_codes.PROGRAM_FAILED
 
 
-@app.command("run")
+def _exit_note(code: int, mode: str) -> str | None:
+    if mode == exit_codes.EXIT_CODE_PROGRAM and code != 0 and code & 0xFF == 0:
+        return f"the program's exit code {code} (0x{code:08x}) reads as 0 modulo 256; use --exit-code status"
+    return None
+
+
+RUN_HELP = (
+    "Run bare-metal programs on one HF-RISCV core, or on the MPSoC with --mesh/--chip.\n\n"
+    "Program output (debug port, UART) goes to stdout, prefixed by the tile on the MPSoC; a summary "
+    "with the program's exit code goes to stderr.\n\n"
+    "On the MPSoC one ELF runs on every core tile (tiles tell themselves apart by reading NI_TILE), "
+    "or one ELF per core tile in tile order (x fastest)."
+)
+
+
+@app.command("run", help=RUN_HELP, epilog=exit_codes.RUN_EPILOG)
 def run(
-    programs: Annotated[list[Path], typer.Argument(help="ELF file(s) built for the core (robosoc cc).")],
-    mul: Annotated[bool, typer.Option("--mul/--no-mul", help="Cores with or without the iterative multiplier.")] = True,
-    max_cycles: Annotated[int, typer.Option("--max-cycles", help="Cycle budget: stop a hung program.")] = 10**10,
-    stats: Annotated[Path | None, typer.Option("--stats", help="Write counters and energy to this JSON file.")] = None,
-    energy: Annotated[Path | None, typer.Option("--energy", help="Energy coefficients (TOML) to use.")] = None,
-    sram_size: Annotated[int, typer.Option("--sram-size", help="SRAM bytes (per tile).")] = 2 * 1024 * 1024,
-    mesh: Annotated[str | None, typer.Option("--mesh", help="Run on a WxH MPSoC (I/O tile at 0,0).")] = None,
-    chip: Annotated[Path | None, typer.Option("--chip", help="MPSoC configuration file (TOML).")] = None,
-    off: Annotated[list[str] | None, typer.Option("--off", help="Power off tile X,Y (repeatable).")] = None,
-    trace: Annotated[int, typer.Option("--trace", help="Print the first N instructions to stderr (one core).")] = 0,
-    profile: Annotated[
-        int, typer.Option("--profile", help="Sample the pc every ~N cycles; print cycles by function (one core).")
-    ] = 0,
-    errata: Annotated[
-        str,
-        typer.Option(
-            "--errata",
-            help="spec: RISC-V results, report each HF-RISCV RTL erratum hit; rtl: reproduce the RTL's errata.",
-        ),
-    ] = "spec",
+    ctx: typer.Context,
+    programs: Programs,
+    mul: Mul = True,
+    max_cycles: MaxCycles = 10**10,
+    stats: Stats = None,
+    energy: Energy = None,
+    sram_size: SramSize = 2 * 1024 * 1024,
+    mesh: Mesh = None,
+    chip: Chip = None,
+    off: Off = None,
+    trace: Trace = 0,
+    profile: Profile = 0,
+    errata: Errata = "spec",
+    exit_code: ExitCode = exit_codes.EXIT_CODE_STATUS,
 ) -> None:
-    """Run bare-metal programs on one HF-RISCV core, or on the MPSoC with --mesh/--chip.
-
-    Program output (debug port, UART) goes to stdout, prefixed by the tile on the MPSoC; a
-    summary goes to stderr; the exit code is the program's (the first non-zero one on the MPSoC).
-    On the MPSoC one ELF runs on every core tile (tiles tell themselves apart by reading
-    NI_TILE), or one ELF per core tile in tile order (x fastest).
-    """
+    """``robosoc run`` (help: :data:`RUN_HELP`)."""
     from robosoc.analysis.energy import EnergyModel
     from robosoc.config import ConfigError
-    from robosoc.config.chip import ERRATA_CHOICES
 
-    if errata not in ERRATA_CHOICES:
-        typer.echo(f"robosoc run: --errata: must be one of {', '.join(ERRATA_CHOICES)}, got {errata!r}", err=True)
-        raise typer.Exit(2)
+    on_chip = mesh is not None or chip is not None or bool(off)
+    if not on_chip and len(programs) != 1:
+        raise CliError("several programs need --mesh WxH or --chip FILE")
+    if on_chip and (trace or profile):
+        raise options.fail("--trace" if trace else "--profile", "works on one core (without --mesh/--chip/--off)")
+    options.exclusive(mesh=mesh is not None, chip=chip is not None)
+    if chip is not None:
+        for name, field in (("sram_size", "tile.sram_bytes"), ("mul", "tile.multiplier")):
+            if options.given(ctx, name):
+                option = "--sram-size" if name == "sram_size" else "--mul/--no-mul"
+                raise options.fail(option, f"has no effect with --chip: set {field} in {chip}")
+    inputs = [files.input_file(p, None, "ELF file") for p in programs]
+    if energy is not None:
+        files.read_toml(energy, "--energy")
+        inputs.append(energy)
     try:
         model = EnergyModel.load(energy)
     except ConfigError as exc:
-        typer.echo(f"robosoc run: {exc}", err=True)
-        raise typer.Exit(2) from exc
-    if mesh is None and chip is None and not off:
-        if len(programs) != 1:
-            typer.echo("robosoc run: several programs need --mesh WxH or --chip FILE", err=True)
-            raise typer.Exit(2)
-        _run_single(programs[0], mul, max_cycles, stats, model, sram_size, trace, profile, errata)
+        raise CliError(f"--energy: {exc}") from exc
+    if chip is not None:
+        inputs.append(chip)
+    if on_chip:
+        _run_chip(ctx, programs, mul, max_cycles, stats, model, sram_size, mesh, chip, off or [], errata,
+                  exit_code, inputs)  # fmt: skip
     else:
-        if trace or profile:
-            typer.echo("robosoc run: --trace and --profile work on one core (without --mesh/--chip/--off)", err=True)
-            raise typer.Exit(2)
-        _run_chip(programs, mul, max_cycles, stats, model, sram_size, mesh, chip, off or [], errata)
+        _run_single(programs[0], mul, max_cycles, stats, model, sram_size, trace, profile, errata, exit_code,
+                    inputs)  # fmt: skip
 
 
 def _run_single(
@@ -99,53 +167,55 @@ def _run_single(
     stats: Path | None,
     model: EnergyModel,
     sram_size: int,
-    trace: int = 0,
-    profile_every: int = 0,
-    errata: str = "spec",
+    trace: int,
+    profile_every: int,
+    errata: str,
+    exit_mode: str,
+    inputs: list[Path],
 ) -> None:
-    from robosoc.chip.elf import ElfError, load_elf
-    from robosoc.chip.single import (
-        CoreError,
-        CycleBudgetExceeded,
-        RtlErratum,
-        SingleCoreSoC,
-        errata_counts,
-        errata_report,
-    )
+    from robosoc.chip.single import RtlErratum, SingleCoreSoC
 
-    warnings.simplefilter("ignore", RtlErratum)  # reported below, in the summary's words
     try:
         soc = SingleCoreSoC(mul=mul, sram_size=sram_size, errata=errata)
-        soc.load(load_elf(program, soc.regions()))
-    except (ElfError, ValueError, OSError) as exc:
-        typer.echo(f"robosoc run: {exc}", err=True)
-        raise typer.Exit(2) from exc
+    except ValueError as exc:
+        raise CliError(str(exc)) from exc
+    soc.load(files.load_program(program, None, soc.regions()))
+    if stats is not None:
+        stats = files.output_file(stats, "--stats", inputs=inputs)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RtlErratum)  # reported below, in the summary's words
+        _simulate_single(soc, program, mul, max_cycles, stats, model, trace, profile_every, errata, exit_mode)
+
+
+def _simulate_single(soc, program, mul, max_cycles, stats, model, trace, profile_every, errata, exit_mode) -> None:
+    from robosoc.chip.profile import Profile, Sampler
+    from robosoc.chip.single import CoreError, CycleBudgetExceeded, errata_counts, errata_report
 
     def write_out(data: bytes) -> None:
         sys.stdout.buffer.write(data)
         sys.stdout.buffer.flush()
 
-    if trace > 0:
-        from robosoc.chip.trace import trace as trace_steps
-
-        typer.echo(f"{'cycle':>10}  {'pc':8}  {'word':8}  {'instruction':<28} {'symbol':<24} writes", err=True)
-        for record in trace_steps(soc, trace):
-            typer.echo(str(record), err=True)
-        write_out(soc.drain_output())
-
-    from robosoc.chip.profile import Profile, Sampler
-
-    profile = Profile(profile_every) if profile_every > 0 else None
-    sampler = Sampler(soc, profile) if profile is not None else None
-    failure: Exception | None = None
+    failure: BaseException | None = None
     result = None
+    seconds = 0.0
+    profile = Profile(profile_every) if profile_every > 0 else None
     try:
+        if trace > 0:
+            from robosoc.chip.trace import trace as trace_steps
+
+            typer.echo(f"{'cycle':>10}  {'pc':8}  {'word':8}  {'instruction':<28} {'symbol':<24} writes", err=True)
+            for record in trace_steps(soc, trace):
+                typer.echo(str(record), err=True)
+                if soc.cycle >= max_cycles:
+                    break  # the budget holds for the trace too: run() reports it
+            write_out(soc.drain_output())
+        sampler = Sampler(soc, profile) if profile is not None else None
         result = soc.run(max_cycles=max_cycles, on_output=write_out, sampler=sampler)
         seconds = result.host_seconds
     except (CoreError, CycleBudgetExceeded) as exc:
-        failure, seconds = exc, 0.0
+        failure = exc
     except KeyboardInterrupt:
-        failure, seconds = KeyboardInterrupt("interrupted"), 0.0
+        failure = KeyboardInterrupt("interrupted")
     counters = soc.counters()
     errata_hit = result.errata if result else errata_counts(errata_report(soc.state.st[0], soc.symbolize, errata))
     energy_pj = model.breakdown_pj(counters)
@@ -175,16 +245,27 @@ def _run_single(
     mips = instr / seconds / 1e6 if seconds > 0 else float("nan")
     typer.echo(
         f"robosoc: {cycles} cycles, {instr} instructions, CPI {cpi:.3f}, "
-        f"energy {total_nj:.3f} nJ, host {mips:.0f} MIPS{_errata_summary(errata_hit)}",
+        f"energy {total_nj:.3f} nJ, host {mips:.0f} MIPS{_errata_summary(errata_hit)}"
+        + (f"; exit code {_code_text(result.exit_code)}" if result else ""),
         err=True,
     )
     for note in result.warnings if result else []:
         typer.echo(f"robosoc run: erratum: {note}", err=True)
     if failure is not None:
         typer.echo(f"robosoc run: {failure}", err=True)
-        raise typer.Exit(130 if isinstance(failure, KeyboardInterrupt) else 3)
+        raise typer.Exit(
+            exit_codes.INTERRUPTED if isinstance(failure, KeyboardInterrupt) else exit_codes.SIMULATOR_STOP
+        )
     assert result is not None
-    raise typer.Exit(result.exit_code & 0xFF)
+    note = _exit_note(result.exit_code, exit_mode)
+    if note:
+        typer.echo(f"robosoc run: {note}", err=True)
+    raise typer.Exit(exit_status(result.exit_code, exit_mode))
+
+
+def _code_text(code: int) -> str:
+    """``"3"``, or ``"3507801690 (0xd114ce5a)"`` for an exit word beyond a byte."""
+    return str(code) if code <= 0xFF else f"{code} (0x{code:08x})"
 
 
 def _errata_summary(errata: dict[str, int]) -> str:
@@ -193,44 +274,62 @@ def _errata_summary(errata: dict[str, int]) -> str:
     return f", RTL errata: {hit}" if hit else ""
 
 
+def _chip_config(ctx: typer.Context, mul: bool, sram_size: int, mesh: str | None, chip_file: Path | None,
+                 off: list[str], errata: str):  # fmt: skip
+    from robosoc.config.chip import ChipConfig, TileConfig
+
+    if chip_file is not None:
+        config, _ = files.load_toml(ChipConfig, chip_file, "--chip")
+    else:
+        w, h = options.parse_mesh("--mesh", "2x2" if mesh is None else mesh)
+        config = ChipConfig(width=w, height=h, tile=TileConfig(multiplier=mul, sram_bytes=sram_size))
+    changes = {}
+    if off:
+        changes["--off"] = ("powered_off", tuple(options.parse_tile("--off", t) for t in off))
+    if chip_file is None or options.given(ctx, "errata"):
+        changes["--errata"] = ("errata", errata)
+    return options.override(config, changes, [str(chip_file)] if chip_file else ())
+
+
 def _run_chip(
-    programs: list[Path], mul: bool, max_cycles: int, stats: Path | None, model: EnergyModel, sram_size: int,
-    mesh: str | None, chip_file: Path | None, off: list[str], errata: str = "spec",
+    ctx: typer.Context, programs: list[Path], mul: bool, max_cycles: int, stats: Path | None, model: EnergyModel,
+    sram_size: int, mesh: str | None, chip_file: Path | None, off: list[str], errata: str, exit_mode: str,
+    inputs: list[Path],
 ) -> None:  # fmt: skip
-    import dataclasses
+    from robosoc.chip.mpsoc import MPSoC
+    from robosoc.chip.single import RtlErratum
 
-    from robosoc.chip.elf import ElfError, load_elf
-    from robosoc.chip.mpsoc import ChipError, MPSoC
-    from robosoc.chip.single import CoreError, RtlErratum, errata_counts
-    from robosoc.config import ConfigError
-    from robosoc.config.chip import ChipConfig, TileConfig, load_chip_config
-
+    config = _chip_config(ctx, mul, sram_size, mesh, chip_file, off, errata)
     try:
-        if chip_file is not None:
-            config = load_chip_config(chip_file)
-        else:
-            w, h = _parse_mesh(mesh or "2x2")
-            config = ChipConfig(width=w, height=h, tile=TileConfig(multiplier=mul, sram_bytes=sram_size))
-        if off:
-            config = dataclasses.replace(config, powered_off=tuple(_parse_tile(t) for t in off))
-        if chip_file is None or errata != "spec":
-            config = dataclasses.replace(config, errata=errata)
-        warnings.simplefilter("ignore", RtlErratum)  # reported below, in the summary's words
         chip = MPSoC(config)
-        tiles = chip.core_tiles()
-        if len(programs) == 1:
-            chip.load_all(load_elf(programs[0], chip.regions()))
-        elif len(programs) == len(tiles):
-            for xy, path in zip(tiles, programs, strict=True):
-                chip.load(xy, load_elf(path, chip.regions(xy)))
-        else:
-            raise ValueError(
-                f"{len(programs)} programs for {len(tiles)} core tiles {tiles}: give one program, or one per tile"
-            )
-    except (ConfigError, ElfError, ValueError, OSError) as exc:
-        typer.echo(f"robosoc run: {exc}", err=True)
-        raise typer.Exit(2) from exc
+    except ValueError as exc:
+        raise CliError(f"{chip_file}: {exc}" if chip_file else str(exc)) from exc
+    tiles = chip.core_tiles()
+    if not tiles:
+        where = "--off" if off else "--chip"
+        raise options.fail(where, f"no core tile left to run on the {config.width}x{config.height} mesh "
+                                  f"(I/O tile {config.io_tile}, powered off: {list(config.powered_off)})")  # fmt: skip
+    if len(programs) == 1:
+        chip.load_all(files.load_program(programs[0], None, chip.regions()))
+    elif len(programs) == len(tiles):
+        for xy, path in zip(tiles, programs, strict=True):
+            chip.load(xy, files.load_program(path, None, chip.regions(xy)))
+    else:
+        raise CliError(
+            f"{len(programs)} programs for {len(tiles)} core tiles {tiles}: give one program, or one per tile"
+        )
+    if stats is not None:
+        stats = files.output_file(stats, "--stats", inputs=inputs)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RtlErratum)  # reported below, in the summary's words
+        _simulate_chip(chip, config, programs, max_cycles, stats, model, exit_mode)
 
+
+def _simulate_chip(chip, config, programs, max_cycles, stats, model, exit_mode) -> None:
+    from robosoc.chip.mpsoc import ChipError
+    from robosoc.chip.single import CoreError, errata_counts
+
+    tiles = chip.core_tiles()
     pending: dict[tuple[int, int], bytearray] = {}
 
     def write_out(xy: tuple[int, int], data: bytes) -> None:
@@ -243,7 +342,7 @@ def _run_chip(
             buf[:] = rest
         sys.stdout.buffer.flush()
 
-    failure: Exception | None = None
+    failure: BaseException | None = None
     result = None
     try:
         result = chip.run(max_cycles=max_cycles, on_output=write_out)
@@ -273,8 +372,10 @@ def _run_chip(
             "state": chip.state(xy), "counters": c, "energy_nj": e, "tasks": tasks, "errata": hit,
         }  # fmt: skip
         cpi = c["cycles"] / c["instructions"] if c["instructions"] else float("nan")
+        state = chip.state(xy)
+        exited = f" with exit code {_code_text(chip.exit_code(xy))}" if state == "exited" else ""
         typer.echo(
-            f"robosoc: tile {xy}: {chip.state(xy)}, {c['cycles']} cycles, {c['instructions']} instructions, "
+            f"robosoc: tile {xy}: {state}{exited}, {c['cycles']} cycles, {c['instructions']} instructions, "
             f"CPI {cpi:.3f}, sleep {c['sleep_cycle']}, energy {e:.3f} nJ{_errata_summary(hit)}",
             err=True,
         )
@@ -290,7 +391,7 @@ def _run_chip(
         + f"; chip {chip.cycle} cycles, energy {total_nj + noc_nj:.3f} nJ",
         err=True,
     )
-    exit_codes = result.exit_codes if result else {}
+    exit_words = result.exit_codes if result else {}
     if stats is not None:
         _write_json(
             stats,
@@ -298,7 +399,7 @@ def _run_chip(
                 "programs": [str(p) for p in programs],
                 "mesh": [config.width, config.height],
                 "cycles": chip.cycle,
-                "exit_codes": {f"{x},{y}": v for (x, y), v in exit_codes.items()},
+                "exit_codes": {f"{x},{y}": v for (x, y), v in exit_words.items()},
                 "error": str(failure) if failure else None,
                 "tiles": per_tile,
                 "noc": {"counters": noc, "energy_pj": noc_pj, "energy_nj": noc_nj},
@@ -309,6 +410,11 @@ def _run_chip(
         )
     if failure is not None:
         typer.echo(f"robosoc run: {failure}", err=True)
-        raise typer.Exit(130 if isinstance(failure, KeyboardInterrupt) else 3)
-    code = next((v for v in exit_codes.values() if v), 0)
-    raise typer.Exit(code & 0xFF)
+        raise typer.Exit(
+            exit_codes.INTERRUPTED if isinstance(failure, KeyboardInterrupt) else exit_codes.SIMULATOR_STOP
+        )
+    code = next((v for v in exit_words.values() if v), 0)
+    note = _exit_note(code, exit_mode)
+    if note:
+        typer.echo(f"robosoc run: {note}", err=True)
+    raise typer.Exit(exit_status(code, exit_mode))

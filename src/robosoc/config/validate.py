@@ -173,9 +173,15 @@ def load_toml_named(cls: type[T], path: str | Path, section: str | None = None) 
     """:func:`load_toml`, and the dotted fields the file sets (:func:`named_fields`)."""
     path = Path(path)
     try:
-        data = tomllib.loads(path.read_text())
+        data = tomllib.loads(path.read_text(encoding="utf-8"))
     except FileNotFoundError as exc:
         raise ConfigError(str(path), "", "file not found") from exc
+    except IsADirectoryError as exc:
+        raise ConfigError(str(path), "", "is a folder, expected a TOML file") from exc
+    except OSError as exc:
+        raise ConfigError(str(path), "", f"cannot read: {exc.strerror or exc}") from exc
+    except UnicodeDecodeError as exc:
+        raise ConfigError(str(path), "", f"not UTF-8 text (offset {exc.start}): expected a TOML file") from exc
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(str(path), "", f"invalid TOML: {exc}") from exc
     if section is not None:

@@ -17,6 +17,7 @@ from typing import Protocol
 
 import numpy as np
 
+from robosoc.config.ranges import check_seed
 from robosoc.config.scenario import FlightPlan, ScenarioConfig
 from robosoc.config.vehicle import VehicleConfig
 from robosoc.control import quaternion as quat
@@ -107,7 +108,13 @@ def fly(
         seed: seeds every random number of the physics.
         on_row: called with each row as soon as it is computed (logging).
         on_sample: called with the world and the sample index after each row (progress, video).
+
+    Raises:
+        ValueError: a negative seed, or a flight shorter than one sensor period.
     """
+    check_seed("seed", seed)
+    if round(scenario.duration_s * scenario.sensors.rate_hz) < 1:
+        raise ValueError(f"duration_s: a flight lasts at least one sensor period, got {scenario.duration_s:g} s")
     world = World([vehicle], scenario.sensors, scenario.wind)
     world.reset(seed)
     quad = world.quadrotors[0]

@@ -1,0 +1,281 @@
+"""Every option of every command, given bad values: a usage error naming it, fast, never a traceback.
+
+:data:`OPTIONS` describes each option (and argument) of every command; a test checks it against the
+command tree, so a new option must be described here before the suite passes (docs/cli.md).  Each
+option gets a fixed list of bad values for its kind (negative, zero, huge, NaN, wrong type, missing
+file, folder, binary file, read-only target, a file where a folder is wanted), then hypothesis draws
+more.  The base command lines are short good runs (``--max-cycles`` small, 0.01 s flights, one
+benchmark run), so that a bad value let through would still end quickly -- and fail the test.
+"""
+
+from __future__ import annotations
+
+import signal
+import string
+from collections.abc import Iterator
+from contextlib import chdir, contextmanager
+from dataclasses import dataclass
+from pathlib import Path
+
+import pytest
+import typer.main
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from typer.testing import CliRunner
+
+from robosoc.cli import app
+
+TIME_LIMIT_S = 60  # per command line; the first ones import numba, mujoco and the toolchain
+HUGE = str(10**40)
+
+
+class Hang(BaseException):
+    """A command line ran past :data:`TIME_LIMIT_S` (a BaseException: no command may catch it)."""
+
+
+@contextmanager
+def time_limit(seconds: int) -> Iterator[None]:
+    def expired(signum, frame):
+        raise Hang(f"still running after {seconds} s")
+
+    previous = signal.signal(signal.SIGALRM, expired)
+    signal.alarm(seconds)
+    try:
+        yield
+    finally:
+        signal.alarm(0)
+        signal.signal(signal.SIGALRM, previous)
+
+
+@dataclass(frozen=True)
+class Spec:
+    """One option: its kind and, for numbers, the allowed range (bad values are drawn outside it)."""
+
+    kind: str
+    lo: float | None = None
+    hi: float | None = None
+    choices: tuple[str, ...] = ()
+
+
+# (command, option or argument metavar) -> Spec
+OPTIONS: dict[tuple[str, str], Spec] = {
+    ("run", "PROGRAMS"): Spec("in_file"),
+    ("run", "--mul"): Spec("flag"),
+    ("run", "--max-cycles"): Spec("int", 1, 2**62),
+    ("run", "--stats"): Spec("out_file"),
+    ("run", "--energy"): Spec("in_file"),
+    ("run", "--sram-size"): Spec("sram"),
+    ("run", "--mesh"): Spec("mesh"),
+    ("run", "--chip"): Spec("in_file"),
+    ("run", "--off"): Spec("tile"),
+    ("run", "--trace"): Spec("int", 0, 2**62),
+    ("run", "--profile"): Spec("int", 0, 2**61),
+    ("run", "--errata"): Spec("choice", choices=("spec", "rtl")),
+    ("run", "--exit-code"): Spec("choice", choices=("status", "program")),
+    ("cc", "FILES"): Spec("in_file"),
+    ("cc", "--output"): Spec("out_file"),
+    ("cc", "--mul"): Spec("flag"),
+    ("cc", "--opt"): Spec("choice", choices=tuple(f"{p}{o}" for p in ("", "O", "-O") for o in "0123sz")),
+    ("cc", "--define"): Spec("define"),
+    ("cc", "--include"): Spec("in_dir"),
+    ("cc", "--sram-size"): Spec("sram"),
+    ("cc", "--no-runtime"): Spec("flag"),
+    ("fly", "--controller"): Spec("choice", choices=("host",)),  # "chip": refused until it exists
+    ("fly", "--seconds"): Spec("float", 0.01, 3600.0),  # at least one sensor period of 10 ms
+    ("fly", "--seed"): Spec("int", 0, 2**63 - 1),
+    ("fly", "--scenario"): Spec("in_file"),
+    ("fly", "--vehicle"): Spec("choice", choices=("default", "laser")),
+    ("fly", "--out"): Spec("out_dir"),
+    ("fly", "--no-out"): Spec("flag"),
+    ("fly", "--video"): Spec("out_any"),
+    ("bench core", "--runs"): Spec("int", 1, 1000),
+    ("bench core", "--mul"): Spec("flag"),
+    ("bench physics", "--seconds"): Spec("float", 0.001, 3600.0),
+    ("bench physics", "--runs"): Spec("int", 1, 1000),
+    ("bench noc", "--size"): Spec("mesh"),
+    ("bench noc", "--cycles"): Spec("int", 1, 1_000_000),
+    ("bench noc", "--plot"): Spec("out_file"),
+    ("bench noc", "--seed"): Spec("int", 0, 2**63 - 1),
+    ("bench noc", "--arbiter"): Spec("choice", choices=("hermes", "per-output", "both")),
+    ("bench noc", "--rates"): Spec("rates"),
+    ("bench noc", "--packet-flits"): Spec("int", 5, 64),
+    ("bench chip", "--runs"): Spec("int", 1, 1000),
+    ("bench chip", "--cycles"): Spec("int", 1, 10**10),
+    ("bench chip", "--ticks"): Spec("int", 1, 100_000),
+    ("bench chip", "--noc"): Spec("flag"),
+}
+
+PATH = "\0"  # "\0dir": one of the bad_paths fixture's paths
+BINARY = "\x01"  # "\x01<hex>": a file with these bytes
+NO_DIGITS = string.ascii_letters + string.punctuation + " "
+
+BAD_VALUES: dict[str, list[str]] = {
+    "int": ["-5", "0", HUGE, "nan", "inf", "abc", "1.5", ""],
+    "float": ["-1", "0", "1e308", "nan", "inf", "-inf", "abc", ""],
+    "sram": ["-4", "0", "4098", str(2**40), "nan", "abc"],
+    "choice": ["", "nope", "-1", "nan", HUGE],
+    "mesh": ["", "0x0", "1x1", "-2x2", "99999x99999", "nan", "2x", "2x2x2"],
+    "tile": ["", "a,b", "-1,0", "99,99", "nan", "0,0", "1"],
+    "rates": ["", "0", "-0.1", "2", "nan", "inf", "a", "0.1,,0.2"],
+    "define": ["", "-x", "A B=1", "=1", "1X", "A-B"],
+    "flag": ["=1"],
+    "in_file": ["\0missing", "\0dir", "\0binary", "\0under_file"],
+    "in_dir": ["\0missing", "\0file"],
+    "out_file": ["\0dir", "\0read_only", "\0under_file"],
+    "out_dir": ["\0file", "\0read_only", "\0under_file"],
+    "out_any": ["\0dir", "\0file", "\0read_only", "\0under_file"],
+}
+
+
+def base_command(command: str, option: str, elves: dict[str, Path], tmp: Path) -> list[str]:
+    """A short good command line for ``command``, without ``option`` where the base would set it."""
+    if command == "run":
+        return ["run", *([] if option == "PROGRAMS" else [str(elves["ok"])]), "--max-cycles", "100000"]
+    if command == "cc":
+        source = tmp / "ok.c"
+        source.write_text("int main(void) { return 0; }\n")
+        return [
+            "cc",
+            *([] if option == "FILES" else [str(source)]),
+            *([] if option == "--output" else ["-o", str(tmp / "ok.elf")]),
+        ]
+    if command == "fly":
+        return ["fly", "--seconds", "0.01", *([] if option in ("--out", "--no-out") else ["--no-out"])]
+    return {
+        "bench core": ["bench", "core", "--runs", "1"],
+        "bench physics": ["bench", "physics", "--seconds", "0.01", "--runs", "1"],
+        "bench noc": ["bench", "noc", "--size", "2x2", "--cycles", "10", "--rates", "0.1", "--arbiter", "hermes"],
+        "bench chip": ["bench", "chip", "--runs", "1", "--cycles", "10", "--ticks", "1", "--no-noc"],
+    }[command]
+
+
+def command_line(command: str, option: str, value: str, elves, bad_paths, tmp: Path) -> list[str]:
+    if value.startswith(PATH):
+        value = str(bad_paths[value[1:]])
+    args = base_command(command, option, elves, tmp)
+    if not option.startswith("-"):
+        return [*args, value]
+    if OPTIONS[(command, option)].kind == "flag":
+        return [*args, option + value]
+    return [*args, option, value]
+
+
+def check_refused(args: list[str], option: str) -> None:
+    with time_limit(TIME_LIMIT_S):
+        result = CliRunner().invoke(app, args)
+    output = result.output
+    assert "Traceback" not in output, (args, output)
+    assert result.exit_code == 2, (args, result.exit_code, output)
+    first = output.strip().splitlines()[0] if output.strip() else ""
+    assert first.startswith("robosoc"), (args, output)
+    name = option if option.startswith("-") else Path(args[-1]).name
+    assert name in output, (args, output)
+
+
+def walk(command, path: tuple[str, ...] = ()) -> Iterator[tuple[str, str]]:
+    subcommands = getattr(command, "commands", None)
+    if subcommands:
+        for name, sub in subcommands.items():
+            yield from walk(sub, (*path, name))
+        return
+    for param in command.params:
+        if param.name == "help":
+            continue
+        if param.param_type_name == "argument":
+            yield " ".join(path), param.metavar or param.name.upper()
+        else:
+            yield " ".join(path), next(o for o in [*param.opts, *param.secondary_opts] if o.startswith("--"))
+
+
+def test_every_option_of_every_command_is_described() -> None:
+    found = set(walk(typer.main.get_command(app)))
+    assert found - set(OPTIONS) == set(), "describe the new options in OPTIONS (and see docs/cli.md)"
+    assert set(OPTIONS) - found == set(), "options described here that no command has"
+
+
+CASES = [
+    (command, option, value)
+    for (command, option), spec in OPTIONS.items()
+    for value in BAD_VALUES[spec.kind]
+    if not (spec.kind == "int" and spec.lo == 0 and value == "0")
+]
+
+
+@pytest.mark.parametrize(
+    ("command", "option", "value"), CASES, ids=[f"{c}|{o}|{v.replace(PATH, '@')}" for c, o, v in CASES]
+)
+def test_bad_value_is_refused(command, option, value, elves, bad_paths, tmp_path, monkeypatch) -> None:
+    monkeypatch.chdir(tmp_path)
+    check_refused(command_line(command, option, value, elves, bad_paths, tmp_path), option)
+
+
+def _number_text(spec: Spec) -> st.SearchStrategy[str]:
+    """Numbers outside the spec's range, as text."""
+    lo, hi = spec.lo, spec.hi
+    if spec.kind == "int":
+        below = st.integers(max_value=int(lo) - 1).map(str)
+        above = st.integers(min_value=int(hi) + 1, max_value=10**40).map(str)
+        fractional = st.floats(allow_nan=False, allow_infinity=False).filter(lambda v: v != int(v)).map(repr)
+        return st.one_of(below, above, fractional)
+    below = st.floats(max_value=lo, exclude_max=True, allow_nan=False, allow_infinity=False).map(repr)
+    above = st.floats(min_value=hi, exclude_min=True, allow_nan=False, allow_infinity=False).map(repr)
+    return st.one_of(below, above)
+
+
+def bad_text(spec: Spec) -> st.SearchStrategy[str]:
+    words = st.text(alphabet=NO_DIGITS, max_size=12)
+    special = st.sampled_from(["nan", "-nan", "inf", "-inf", "NaN", "1e999", HUGE, "-" + HUGE, "0x10", ""])
+    if spec.kind in ("int", "float"):
+        return st.one_of(_number_text(spec), words, special)
+    if spec.kind == "choice":
+        return st.one_of(words, special, st.integers().map(str)).filter(lambda v: v not in spec.choices)
+    if spec.kind == "sram":
+        return st.one_of(
+            st.integers(max_value=4095).map(str),
+            st.integers(min_value=2**30 + 1, max_value=10**30).map(str),
+            st.integers(min_value=1024, max_value=2**28).map(lambda v: str(4 * v + 2)),
+            words,
+            special,
+        )
+    if spec.kind == "mesh":
+        side = st.one_of(st.integers(max_value=0), st.integers(min_value=17, max_value=10**9))
+        return st.one_of(words, special, st.tuples(side, st.integers(1, 16)).map(lambda t: f"{t[0]}x{t[1]}"))
+    if spec.kind == "tile":
+        far = st.integers(min_value=2, max_value=10**9)
+        return st.one_of(words, special, st.tuples(far, far).map(lambda t: f"{t[0]},{t[1]}"))
+    if spec.kind == "rates":
+        out = st.one_of(st.floats(max_value=0.0), st.floats(min_value=1.0, exclude_min=True)).map(repr)
+        return st.one_of(words, special, st.lists(out, min_size=1, max_size=3).map(",".join))
+    if spec.kind == "define":
+        return st.one_of(
+            st.sampled_from(["", "-x", "A B", "=1", "-DX"]),
+            st.text(alphabet=string.digits + string.punctuation + " ", min_size=1, max_size=6),
+        )
+    if spec.kind == "flag":
+        return st.sampled_from(["=1", "=yes", "=", "=nan"])
+    # files: a bad path, or a binary file (not UTF-8; for ELF files: with or without the ELF magic)
+    paths = st.sampled_from(BAD_VALUES[spec.kind])
+    if spec.kind != "in_file":
+        return paths
+    junk = st.binary(max_size=200).map(lambda b: b + b"\xff\xfe\x00")
+    elf_like = st.binary(min_size=0, max_size=120).map(lambda b: b"\x7fELF\x01\x01\x01" + b + b"\xff")
+    return st.one_of(paths, st.one_of(junk, elf_like).map(lambda b: BINARY + b.hex()))
+
+
+@st.composite
+def bad_case(draw) -> tuple[str, str, str]:
+    (command, option), spec = draw(st.sampled_from(sorted(OPTIONS.items())))
+    return command, option, draw(bad_text(spec))
+
+
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(case=bad_case())
+def test_generated_bad_values_are_refused(case, elves, bad_paths, tmp_path_factory) -> None:
+    command, option, value = case
+    tmp = tmp_path_factory.mktemp("fuzz")
+    if value.startswith(BINARY):
+        path = tmp / ("input" + (".c" if command == "cc" else ".toml"))
+        path.write_bytes(bytes.fromhex(value[1:]))
+        value = str(path)
+    with chdir(tmp):
+        check_refused(command_line(command, option, value, elves, bad_paths, tmp), option)
