@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING, Annotated
 import typer
 
 from robosoc.cli.app import app
+from robosoc.cli.gdb_option import GDB_HELP, TILE_HELP, check_gdb_options, gdb_session
 
 if TYPE_CHECKING:
     from robosoc.analysis.energy import EnergyModel
@@ -60,6 +61,8 @@ def run(
             help="spec: RISC-V results, report each HF-RISCV RTL erratum hit; rtl: reproduce the RTL's errata.",
         ),
     ] = "spec",
+    gdb: Annotated[int | None, typer.Option("--gdb", help=GDB_HELP)] = None,
+    tile: Annotated[str | None, typer.Option("--tile", help=TILE_HELP)] = None,
 ) -> None:
     """Run bare-metal programs on one HF-RISCV core, or on the MPSoC with --mesh/--chip.
 
@@ -80,16 +83,19 @@ def run(
     except ConfigError as exc:
         typer.echo(f"robosoc run: {exc}", err=True)
         raise typer.Exit(2) from exc
+    check_gdb_options(gdb, tile, one_core=mesh is None and chip is None and not off, trace=trace, profile=profile)
     if mesh is None and chip is None and not off:
         if len(programs) != 1:
             typer.echo("robosoc run: several programs need --mesh WxH or --chip FILE", err=True)
             raise typer.Exit(2)
-        _run_single(programs[0], mul, max_cycles, stats, model, sram_size, trace, profile, errata)
+        _run_single(programs[0], mul, max_cycles, stats, model, sram_size, trace, profile, errata,
+                    gdb=gdb)  # fmt: skip
     else:
         if trace or profile:
             typer.echo("robosoc run: --trace and --profile work on one core (without --mesh/--chip/--off)", err=True)
             raise typer.Exit(2)
-        _run_chip(programs, mul, max_cycles, stats, model, sram_size, mesh, chip, off or [], errata)
+        _run_chip(programs, mul, max_cycles, stats, model, sram_size, mesh, chip, off or [], errata,
+                  gdb=gdb, gdb_tile=tile)  # fmt: skip
 
 
 def _run_single(
@@ -102,6 +108,7 @@ def _run_single(
     trace: int = 0,
     profile_every: int = 0,
     errata: str = "spec",
+    gdb: int | None = None,
 ) -> None:
     from robosoc.chip.elf import ElfError, load_elf
     from robosoc.chip.single import (
@@ -140,7 +147,8 @@ def _run_single(
     failure: Exception | None = None
     result = None
     try:
-        result = soc.run(max_cycles=max_cycles, on_output=write_out, sampler=sampler)
+        with gdb_session(gdb, soc, program) as advance:
+            result = soc.run(max_cycles=max_cycles, on_output=write_out, sampler=sampler, advance=advance)
         seconds = result.host_seconds
     except (CoreError, CycleBudgetExceeded) as exc:
         failure, seconds = exc, 0.0
@@ -196,6 +204,7 @@ def _errata_summary(errata: dict[str, int]) -> str:
 def _run_chip(
     programs: list[Path], mul: bool, max_cycles: int, stats: Path | None, model: EnergyModel, sram_size: int,
     mesh: str | None, chip_file: Path | None, off: list[str], errata: str = "spec",
+    gdb: int | None = None, gdb_tile: str | None = None,
 ) -> None:  # fmt: skip
     import dataclasses
 
@@ -246,7 +255,8 @@ def _run_chip(
     failure: Exception | None = None
     result = None
     try:
-        result = chip.run(max_cycles=max_cycles, on_output=write_out)
+        with gdb_session(gdb, chip, programs[0], gdb_tile) as advance:
+            result = chip.run(max_cycles=max_cycles, on_output=write_out, advance=advance)
     except (ChipError, CoreError) as exc:
         failure = exc
     except KeyboardInterrupt:
