@@ -28,5 +28,10 @@ def spin_elf() -> Path:
 
 
 @pytest.fixture(scope="session")
+def self_loop_elf() -> Path:
+    return build_elf([PROGRAMS / "self_loop.c"], mul=True, opt="-O1")
+
+
+@pytest.fixture(scope="session")
 def traffic_elf() -> Path:
     return build_elf([TRAFFIC], mul=True, defines={"ROUNDS": 2})

@@ -106,6 +106,28 @@ def test_stepping_through_interrupts_and_sleep_changes_no_cycle(traffic_elf: Pat
     assert chip_facts(chip) == chip_facts(reference)
 
 
+@pytest.mark.parametrize("where", ["single", "tile"])
+def test_a_step_of_a_jump_to_itself_comes_back(self_loop_elf: Path, where: str):
+    if where == "single":
+        target = SingleCoreTarget(single(self_loop_elf))
+    else:
+        target = ChipTarget(chip_with(self_loop_elf), (1, 0))
+    previous = -1
+    for _ in range(100):
+        target.start_step()
+        cycle = target.cycle
+        while (progress := target.run(10**9)).outcome in (Outcome.SLICE, Outcome.HOST):
+            pass
+        assert progress.outcome == Outcome.STOPPED and target.cycle > cycle
+        if target.pc == previous:
+            break
+        previous = target.pc
+    else:
+        pytest.fail("the steps never reached the loop")
+    word = target.word(target.pc)
+    assert word is not None and word & 0x7F == 0x6F  # jal x0, 0: j .
+
+
 def test_a_mark_stops_the_tile_before_the_instruction(mesh_elf: Path):
     chip = chip_with(mesh_elf)
     target = ChipTarget(chip, (1, 0))

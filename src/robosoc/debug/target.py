@@ -307,6 +307,7 @@ class ChipTarget(Target):
         self.xy = xy
         self._saved: np.ndarray | None = None  # predecode rows while a step has marked every word
         self._step_word = -1
+        self._step_cycle = 0
         self._suspended = False  # the chip stopped mid-quantum at one of our marks
 
     @property
@@ -344,6 +345,7 @@ class ChipTarget(Target):
         self._saved = self.cores.dec[self.t, : 2 * len(rows)].copy()
         rows[:] = OP_BREAK
         self._step_word = (self.pc - self.code_base) // 4 if self.is_code(self.pc) else -1
+        self._step_cycle = self.cycle
         if self._step_word >= 0:
             rows[self._step_word] = 0
 
@@ -380,5 +382,14 @@ class ChipTarget(Target):
             self.cancel_step()
             return Progress(Outcome.FAILED, why)
         if why == kc.CHIP_UNTIL:
+            if self._saved is not None and self._jumped_to_itself():
+                self.cancel_step()
+                return Progress(Outcome.STOPPED, why)
             return Progress(Outcome.SLICE, why)
         return Progress(Outcome.HOST, why)
+
+    def _jumped_to_itself(self) -> bool:
+        """Whether the stepped instruction ran and came back to itself (``j .``): the only fetch
+        a step does not stop at.  The step then ends with the chip's time slice."""
+        here = (self.pc - self.code_base) // 4 if self.is_code(self.pc) else -1
+        return here == self._step_word >= 0 and self.cycle > self._step_cycle
