@@ -135,3 +135,20 @@ def test_a_gdb_session_on_a_tile_of_a_2x2_mesh(tmp_path: Path, mesh_elf: Path):
     assert stats == plain_stats
     assert stats["tiles"]["1,1"]["counters"]["cycles"] == plain_stats["tiles"]["1,1"]["counters"]["cycles"]
     assert re.findall(r"chip (\d+) cycles", stderr) == re.findall(r"chip (\d+) cycles", plain.stderr) != []
+
+
+def test_a_gdb_session_through_interrupts_and_sleep(tmp_path: Path, traffic_elf: Path):
+    # the traffic program receives in its interrupt handler and sleeps while it waits: stops in
+    # the handler, steps and a watchpoint on a variable the handler writes
+    args = [str(traffic_elf), "--mesh", "2x2"]
+    plain, plain_stats = plain_run(tmp_path, args)
+    commands = ["break irq_handler", "continue", "continue", *["stepi"] * 5, "finish", "delete",
+                "watch got", "continue", "delete", "continue"]  # fmt: skip
+    code, stdout, _, stats, gdb = gdb_session(tmp_path, traffic_elf, [*args, "--tile", "1,1"], commands)
+    assert gdb.count("Breakpoint 1, irq_handler (cause=2)") == 2, gdb
+    assert re.search(r"Hardware watchpoint 2: got\s+Old value = (\d+)\s+New value = (\d+)", gdb), gdb
+    assert "[Inferior 1 (Remote target) exited normally]" in gdb
+    assert code == plain.returncode == 0
+    assert stdout == plain.stdout
+    assert stats == plain_stats
+    assert stats["tiles"]["1,1"]["counters"]["sleep_cycle"] > 0

@@ -18,7 +18,7 @@ from robosoc.chip.mpsoc import MPSoC
 from robosoc.chip.single import SingleCoreSoC
 from robosoc.config.chip import ChipConfig
 from robosoc.debug.points import Kind, Points, memory_access
-from robosoc.debug.target import ChipTarget, MemoryRefused, Outcome, SingleCoreTarget
+from robosoc.debug.target import ChipTarget, MemoryRefused, Outcome, Progress, SingleCoreTarget, Target
 from robosoc.isa.table import OP_BREAK
 from robosoc.kernels.core_layout import S_IRQ_VECTOR, S_MAX_CYCLES
 from robosoc.kernels.dev_irq import IRQ_VECTOR
@@ -51,13 +51,20 @@ def chip_facts(chip: MPSoC) -> tuple:
     )
 
 
-def step_to_the_end(target, until: int) -> tuple[int, Outcome, list[int]]:
+def run_until_stop(target: Target, until: int = 10**9) -> Progress:
+    """Run in the slices the GDB server uses until the target stops, exits or fails."""
+    while True:
+        progress = target.run(min(until, target.now() + target.slice_cycles))
+        if progress.outcome not in (Outcome.SLICE, Outcome.HOST):
+            return progress
+
+
+def step_to_the_end(target: Target, until: int) -> tuple[int, Outcome, list[int]]:
     """Step until the core exits; (steps, final outcome, pcs it stopped at)."""
     steps, pcs = 0, []
     while True:
         target.start_step()
-        while (progress := target.run(until)).outcome in (Outcome.SLICE, Outcome.HOST):
-            pass
+        progress = run_until_stop(target, until)
         if progress.outcome != Outcome.STOPPED:
             return steps, progress.outcome, pcs
         steps += 1
@@ -116,8 +123,7 @@ def test_a_step_of_a_jump_to_itself_comes_back(self_loop_elf: Path, where: str):
     for _ in range(100):
         target.start_step()
         cycle = target.cycle
-        while (progress := target.run(10**9)).outcome in (Outcome.SLICE, Outcome.HOST):
-            pass
+        progress = run_until_stop(target)
         assert progress.outcome == Outcome.STOPPED and target.cycle > cycle
         if target.pc == previous:
             break
@@ -137,8 +143,7 @@ def test_a_mark_stops_the_tile_before_the_instruction(mesh_elf: Path):
     points.insert(Kind.SOFTWARE, addr, 4)
     target.apply_marks(points.marks(target.code_words(), target.code_base))
     assert target.is_marked(addr)
-    while (progress := target.run(10**9)).outcome == Outcome.SLICE:
-        pass
+    progress = run_until_stop(target)
     assert progress.outcome == Outcome.STOPPED and target.pc == addr
     assert chip.counters((1, 0))["instructions"] > 0
 
@@ -194,7 +199,6 @@ def test_failure_signals(one_core_elf: Path):
     soc = single(one_core_elf)
     target = SingleCoreTarget(soc)
     soc.state.st[0, S_MAX_CYCLES] = 20  # a budget the program cannot make
-    while (progress := target.run(10**9)).outcome == Outcome.SLICE:
-        pass
+    progress = run_until_stop(target)
     assert progress.outcome == Outcome.FAILED
     assert target.failure_signal(progress.status) == signal.SIGXCPU

@@ -48,7 +48,7 @@ def ni_register(chip: MPSoC, t: int, addr: int, cycle: int) -> int | None:
     width = chip.config.width
     x = cycle - 1  # registered read: the value of the cycle before the load
     if off == ni.NI_STATUS:
-        busy = kc._send_done(chip.noc.tile, t) > x
+        busy = kc._send_done(chip.noc.tile, t) > x  # the chip loop's own (pure) function, as ni_access uses it
         waiting = cst[kc.K_RX_READY] <= x
         return (ni.STATUS_SEND_BUSY if busy else 0) | (ni.STATUS_PACKET_WAITING if waiting else 0)
     if off == ni.RECV_SIZE:
