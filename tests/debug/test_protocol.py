@@ -179,6 +179,29 @@ def test_ctrl_c_watchpoint_step_and_kill(spin_elf: Path, where: str):
     client.close()
 
 
+def test_stop_replies_name_the_breakpoint_or_watchpoint_kind(one_core_elf: Path):
+    soc, client, background = serve_single(one_core_elf)
+    reference = single(one_core_elf).run()
+    program = soc.program
+    assert program is not None
+    work, main, counter = (program.address_of(name) for name in ("work", "main", "counter"))
+    assert client.ask(b"qSupported:swbreak+;hwbreak+").startswith(b"PacketSize=")
+    assert client.ask(f"Z1,{main:x},4".encode()) == b"OK"
+    assert client.ask(b"c") == b"T05thread:1;hwbreak:;"
+    assert client.ask(f"z1,{main:x},4".encode()) == b"OK"
+    assert client.ask(f"Z0,{work:x},4".encode()) == b"OK"
+    assert client.ask(b"c") == b"T05thread:1;swbreak:;"
+    assert client.ask(b"p20") == work.to_bytes(4, "little").hex().encode()
+    assert client.ask(f"z0,{work:x},4".encode()) == b"OK"
+    assert client.ask(f"Z4,{counter:x},4".encode()) == b"OK"
+    assert client.ask(b"c") == f"T05thread:1;awatch:{counter:x};".encode()
+    assert client.ask(f"z4,{counter:x},4".encode()) == b"OK"
+    assert client.ask(b"c") == b"W07"  # the program's exit code; the stub detaches
+    result = background.join(JOIN_SECONDS)
+    client.close()
+    assert result.counters == reference.counters and result.output == reference.output
+
+
 def test_gdb_going_away_lets_the_program_finish(one_core_elf: Path):
     soc, client, background = serve_single(one_core_elf)
     reference = single(one_core_elf).run()
