@@ -72,6 +72,8 @@ OPTIONS: dict[tuple[str, str], Spec] = {
     ("run", "--profile"): Spec("int", 0, 2**61),
     ("run", "--errata"): Spec("choice", choices=("spec", "rtl")),
     ("run", "--exit-code"): Spec("choice", choices=("status", "program")),
+    ("run", "--gdb"): Spec("int", 0, 65535),  # 0: any free port (never tried: it would wait for GDB)
+    ("run", "--tile"): Spec("tile"),
     ("cc", "FILES"): Spec("in_file"),
     ("cc", "--output"): Spec("out_file"),
     ("cc", "--mul"): Spec("flag"),

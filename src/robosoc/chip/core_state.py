@@ -145,6 +145,14 @@ class CoreState:
             )
         self.dec[tile, 2 * (off // 4)] = OP_BREAK if on else 0
 
+    def op_rows(self, tile: int = 0) -> np.ndarray:
+        """The operation row of every word of a tile's loaded code (a view, one int32 per word).
+
+        0 is a word not decoded yet (the core decodes it when it gets there, at no cycle cost) and
+        OP_BREAK a breakpoint; a debugger may write either (robosoc.debug marks many words at once).
+        """
+        return self.dec[tile, 0 : 2 * (self.code_size(tile) // 4) : 2]
+
     def code_size(self, tile: int = 0) -> int:
         """Bytes of a tile's SRAM that have predecode rows (the loaded code)."""
         return int(self.st[tile, S_CODE_SIZE])
@@ -176,9 +184,10 @@ class CoreState:
     def write(self, addr: int, data: bytes, tile: int = 0) -> None:
         """Copy bytes into a tile's SRAM (and forget any predecoded instructions there)."""
         off = addr - self.base
-        if off < 0 or off + len(data) > self.size:
+        size = int(self.st[tile, S_MEM_SIZE])
+        if off < 0 or off + len(data) > size:
             raise ValueError(
-                f"address 0x{addr:08x}+{len(data)} is outside SRAM 0x{self.base:08x}..0x{self.base + self.size:08x}"
+                f"address 0x{addr:08x}+{len(data)} is outside SRAM 0x{self.base:08x}..0x{self.base + size:08x}"
             )
         self.m8[tile, off : off + len(data)] = np.frombuffer(data, dtype=np.uint8)
         words = self.code_size(tile) // 4
@@ -186,7 +195,7 @@ class CoreState:
 
     def read(self, addr: int, length: int, tile: int = 0) -> bytes:
         off = addr - self.base
-        if off < 0 or off + length > self.size:
+        if off < 0 or off + length > int(self.st[tile, S_MEM_SIZE]):
             raise ValueError(f"address 0x{addr:08x}+{length} is outside SRAM")
         return self.m8[tile, off : off + length].tobytes()
 

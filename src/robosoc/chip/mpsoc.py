@@ -263,6 +263,7 @@ class MPSoC:
         max_cycles: int | None = None,
         on_output: Callable[[tuple[int, int], bytes], object] | None = None,
         chunk: int = 1 << 22,
+        advance: Callable[[int], int] | None = None,
     ) -> ChipResult:
         """Run until every core has exited.
 
@@ -271,6 +272,10 @@ class MPSoC:
             on_output: called with (tile, bytes) as output comes.
             chunk: cycles per kernel call (output and Ctrl-C are seen between calls).
 
+        ``advance`` runs the chip to a cycle and returns the CHIP_* reason, in place of :meth:`step`:
+        a debugger's (:meth:`robosoc.debug.GdbServer.advance`), which holds the whole chip while
+        the debugged tile is halted and may return before the cycle.
+
         Raises:
             ValueError: ``max_cycles`` or ``chunk`` out of range.
             CoreError / ChipError: a tile failed (message names tile, pc, symbol, instruction),
@@ -278,10 +283,11 @@ class MPSoC:
         """
         check_budget(max_cycles, chunk)
         outputs: dict[tuple[int, int], bytearray] = {}
+        advance = advance or self.step
         start = time.perf_counter()
         while True:
             limit = self.cycle + chunk if max_cycles is None else min(self.cycle + chunk, max_cycles)
-            why = self.step(limit)
+            why = advance(limit)
             for xy, data in self.drain_output().items():
                 outputs.setdefault(xy, bytearray()).extend(data)
                 if on_output is not None:

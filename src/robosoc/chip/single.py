@@ -276,6 +276,7 @@ class SingleCoreSoC:
         on_output: Callable[[bytes], object] | None = None,
         chunk: int = CHUNK_CYCLES,
         sampler: Sampler | None = None,
+        advance: Callable[[int], int] | None = None,
     ) -> RunResult:
         """Run until the program exits.
 
@@ -285,6 +286,9 @@ class SingleCoreSoC:
             chunk: cycles per kernel call (output and Ctrl-C are seen between calls).
             sampler: a profiler (:class:`robosoc.chip.profile.Sampler`): the run is sliced at its
                 sample points and it is called after each slice.
+            advance: what runs the core to a cycle and returns its RUN_* status, in place of
+                :meth:`step_until`: a debugger's (:meth:`robosoc.debug.GdbServer.advance`), which
+                holds the core while it is halted and may return before the cycle.
 
         Raises:
             ValueError: ``max_cycles`` or ``chunk`` out of range.
@@ -296,11 +300,12 @@ class SingleCoreSoC:
         st[S_MAX_CYCLES] = -1 if max_cycles is None else max_cycles
         output = bytearray()
         self.step_until(self.cycle)  # loads the compiled kernel (not counted as simulation time)
+        advance = advance or self.step_until
         start = time.perf_counter()
         try:
             step = chunk if sampler is None else sampler.first()
             while True:
-                status = self.step_until(self.cycle + step)
+                status = advance(self.cycle + step)
                 if sampler is not None:
                     step = sampler()
                 data = self.drain_output()

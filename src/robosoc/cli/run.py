@@ -13,6 +13,7 @@ import typer
 from robosoc.cli import exit_codes, files, options
 from robosoc.cli.app import app
 from robosoc.cli.errors import CliError
+from robosoc.cli.gdb_option import GDB_HELP, TILE_HELP, check_gdb_options, gdb_session
 from robosoc.config.ranges import MAX_CYCLES
 
 if TYPE_CHECKING:
@@ -126,12 +127,15 @@ def run(
     profile: Profile = 0,
     errata: Errata = "spec",
     exit_code: ExitCode = exit_codes.EXIT_CODE_STATUS,
+    gdb: Annotated[int | None, typer.Option("--gdb", help=GDB_HELP, callback=options.int_range(0, 65535, ""))] = None,
+    tile: Annotated[str | None, typer.Option("--tile", help=TILE_HELP)] = None,
 ) -> None:
     """``robosoc run`` (help: :data:`RUN_HELP`)."""
     from robosoc.analysis.energy import EnergyModel
     from robosoc.config import ConfigError
 
     on_chip = mesh is not None or chip is not None or bool(off)
+    check_gdb_options(gdb, tile, one_core=not on_chip, trace=trace, profile=profile)
     if not on_chip and len(programs) != 1:
         raise CliError("several programs need --mesh WxH or --chip FILE")
     if on_chip and (trace or profile):
@@ -154,10 +158,10 @@ def run(
         inputs.append(chip)
     if on_chip:
         _run_chip(ctx, programs, mul, max_cycles, stats, model, sram_size, mesh, chip, off or [], errata,
-                  exit_code, inputs)  # fmt: skip
+                  exit_code, inputs, gdb=gdb, gdb_tile=tile)  # fmt: skip
     else:
         _run_single(programs[0], mul, max_cycles, stats, model, sram_size, trace, profile, errata, exit_code,
-                    inputs)  # fmt: skip
+                    inputs, gdb=gdb)  # fmt: skip
 
 
 def _run_single(
@@ -172,6 +176,7 @@ def _run_single(
     errata: str,
     exit_mode: str,
     inputs: list[Path],
+    gdb: int | None = None,
 ) -> None:
     from robosoc.chip.single import RtlErratum, SingleCoreSoC
 
@@ -184,10 +189,12 @@ def _run_single(
         stats = files.output_file(stats, "--stats", inputs=inputs)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RtlErratum)  # reported below, in the summary's words
-        _simulate_single(soc, program, mul, max_cycles, stats, model, trace, profile_every, errata, exit_mode)
+        _simulate_single(soc, program, mul, max_cycles, stats, model, trace, profile_every, errata, exit_mode, gdb)
 
 
-def _simulate_single(soc, program, mul, max_cycles, stats, model, trace, profile_every, errata, exit_mode) -> None:
+def _simulate_single(
+    soc, program, mul, max_cycles, stats, model, trace, profile_every, errata, exit_mode, gdb=None
+) -> None:
     from robosoc.chip.profile import Profile, Sampler
     from robosoc.chip.single import CoreError, CycleBudgetExceeded, errata_counts, errata_report
 
@@ -210,7 +217,8 @@ def _simulate_single(soc, program, mul, max_cycles, stats, model, trace, profile
                     break  # the budget holds for the trace too: run() reports it
             write_out(soc.drain_output())
         sampler = Sampler(soc, profile) if profile is not None else None
-        result = soc.run(max_cycles=max_cycles, on_output=write_out, sampler=sampler)
+        with gdb_session(gdb, soc, program) as advance:
+            result = soc.run(max_cycles=max_cycles, on_output=write_out, sampler=sampler, advance=advance)
         seconds = result.host_seconds
     except (CoreError, CycleBudgetExceeded) as exc:
         failure = exc
@@ -294,7 +302,7 @@ def _chip_config(ctx: typer.Context, mul: bool, sram_size: int, mesh: str | None
 def _run_chip(
     ctx: typer.Context, programs: list[Path], mul: bool, max_cycles: int, stats: Path | None, model: EnergyModel,
     sram_size: int, mesh: str | None, chip_file: Path | None, off: list[str], errata: str, exit_mode: str,
-    inputs: list[Path],
+    inputs: list[Path], gdb: int | None = None, gdb_tile: str | None = None,
 ) -> None:  # fmt: skip
     from robosoc.chip.mpsoc import MPSoC
     from robosoc.chip.single import RtlErratum
@@ -322,10 +330,10 @@ def _run_chip(
         stats = files.output_file(stats, "--stats", inputs=inputs)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RtlErratum)  # reported below, in the summary's words
-        _simulate_chip(chip, config, programs, max_cycles, stats, model, exit_mode)
+        _simulate_chip(chip, config, programs, max_cycles, stats, model, exit_mode, gdb, gdb_tile)
 
 
-def _simulate_chip(chip, config, programs, max_cycles, stats, model, exit_mode) -> None:
+def _simulate_chip(chip, config, programs, max_cycles, stats, model, exit_mode, gdb=None, gdb_tile=None) -> None:
     from robosoc.chip.mpsoc import ChipError
     from robosoc.chip.single import CoreError, errata_counts
 
@@ -345,7 +353,8 @@ def _simulate_chip(chip, config, programs, max_cycles, stats, model, exit_mode) 
     failure: BaseException | None = None
     result = None
     try:
-        result = chip.run(max_cycles=max_cycles, on_output=write_out)
+        with gdb_session(gdb, chip, programs[0], gdb_tile) as advance:
+            result = chip.run(max_cycles=max_cycles, on_output=write_out, advance=advance)
     except (ChipError, CoreError) as exc:
         failure = exc
     except KeyboardInterrupt:

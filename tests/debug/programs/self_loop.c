@@ -1,0 +1,8 @@
+/* Ends in a jump to itself, as idle loops do. */
+volatile int ready;
+
+int main(void) {
+    ready = 1;
+    for (;;) {
+    }
+}

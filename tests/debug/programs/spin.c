@@ -1,0 +1,6 @@
+/* Runs until stopped from outside: for Ctrl-C and kill. */
+volatile unsigned counter;
+
+int main(void) {
+    for (;;) counter++;
+}
