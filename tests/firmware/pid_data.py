@@ -128,7 +128,9 @@ def write_data_header(record: PidRecord, folder: Path) -> Path:
         "#include <stdint.h>",
         f"#define PID_DATA_STEPS {record.steps}",
         "static const int32_t alt_data_reset[3] = {" + ", ".join(str(int(v)) for v in record.alt_reset) + "};",
-        "static const uint32_t pid_data_dt_us[PID_DATA_STEPS] = {" + ", ".join(str(int(v)) for v in record.dt_us) + "};",
+        "static const uint32_t pid_data_dt_us[PID_DATA_STEPS] = {"
+        + ", ".join(str(int(v)) for v in record.dt_us)
+        + "};",
         f"static const int32_t pid_data[PID_DATA_STEPS][{PID_COLUMNS}] = {{",
         *("    {" + ", ".join(str(int(v)) for v in row) + "}," for row in record.pid),
         "};",

@@ -81,7 +81,8 @@ def _loop_lines(name: str, gains: PidGains) -> list[str]:
         value = getattr(gains, field)
         if math.isfinite(value):
             _check_fits(f"{name}.{field}", value)
-    _check_fits(f"{name}.integral_limit (stored · 2^{PID_INTEGRAL_SHIFT})", gains.integral_limit * 2**PID_INTEGRAL_SHIFT)
+    stored = gains.integral_limit * 2**PID_INTEGRAL_SHIFT
+    _check_fits(f"{name}.integral_limit (stored · 2^{PID_INTEGRAL_SHIFT})", stored)
     return lines
 
 
@@ -112,8 +113,8 @@ def control_header(vehicle: VehicleConfig | None = None, scenario: ScenarioConfi
         "MIX_YAW_GAIN": (1.0 / (4.0 * mixer.yaw_k), "y = u_yaw / (4 k), k the yaw coefficient at hover [N per N m]"),
         "MIX_MIN_FORCE": (mixer.min_force, "thrust at idle_pwm in steady state [N]"),
         "MIX_MAX_FORCE": (mixer.max_force, "thrust at full supply voltage [N]"),
-        "MIX_CURRENT_PER_FORCE": (motor.k_t / motor.psi, "k_t / Psi: I = this * f + MIX_CURRENT_PER_ROOT_FORCE * sqrt(f)"),
-        "MIX_CURRENT_PER_ROOT_FORCE": (motor.k_m / (motor.psi * root_ct0s), "k_m / (Psi sqrt(CT0s)), omega = sqrt(f / CT0s)"),
+        "MIX_CURRENT_PER_FORCE": (motor.k_t / motor.psi, "k_t / Psi: I = this f + MIX_CURRENT_PER_ROOT_FORCE sqrt(f)"),
+        "MIX_CURRENT_PER_ROOT_FORCE": (motor.k_m / (motor.psi * root_ct0s), "k_m / (Psi sqrt(CT0s)), w = sqrt(f/CT0s)"),
         "MIX_COUNTS_PER_SQUARE_CURRENT": (motor.r_a * counts_per_volt, "R_A * 255 / V_s"),
         "MIX_COUNTS_PER_CURRENT_ROOT_FORCE": (motor.psi / root_ct0s * counts_per_volt, "Psi / sqrt(CT0s) * 255 / V_s"),
         "MIX_ALPHA_M": (motor.alpha_m, "alpha_m of the current model"),
