@@ -132,6 +132,15 @@ def test_disarming_stops_the_motors_and_rearming_restarts_the_loops(flight_2s: F
     assert not np.array_equal(golden.pwm[disarmed.stop :], flight_2s.golden.pwm[disarmed.stop :])
 
 
+@pytest.mark.parametrize("arith", ARITHS)
+def test_a_packet_of_another_kind_is_refused_and_changes_nothing(flight_2s: Flight, arith: str) -> None:
+    code, out = run_native(build_harness_native(flight_2s.folder, arith, malformed_at=40))
+    assert code == 0
+    run = parse_output(out.decode(), arith, ALT_P_SHIFT)
+    assert run.malformed == 1
+    assert np.array_equal(run.pwm, flight_2s.native(arith).pwm)
+
+
 def _mixer_inputs(count: int, seed: int = 3) -> np.ndarray:
     """Thrust [N] and torques [N m] over and beyond the controller's limits: every desaturation case."""
     rng = np.random.default_rng(seed)

@@ -170,3 +170,30 @@ void pid_step(pid_controller_t *ctl, const real_t q[4], const real_t rate[3], re
     ctl->u[3] = u_yaw;
     mix_pwm(&ctl->mixer, u_z, u_roll, u_pitch, u_yaw, pwm);
 }
+
+int pid_packet_step(pid_controller_t *ctl, const struct robosoc_estimate_packet *in, struct robosoc_pwm_packet *out)
+{
+    if (in->kind != ROBOSOC_ESTIMATE_KIND) {
+        return -1;
+    }
+    real_t q[4];
+    real_t rate[3];
+    for (int i = 0; i < 4; i++) {
+        q[i] = real_from_fix16(in->quaternion[i]);
+    }
+    for (int i = 0; i < 3; i++) {
+        rate[i] = real_from_fix16(in->rate[i]);
+    }
+    pid_setpoint_t sp = {
+        real_from_fix16(in->setpoint[0]),           real_from_fix16(in->setpoint[1]),
+        real_from_fix16(in->setpoint[2]),           real_from_fix16(in->setpoint[3]),
+        real_from_fix16(in->height_feedforward[0]), real_from_fix16(in->height_feedforward[1]),
+    };
+    int armed = (in->flags & ROBOSOC_FLAG_ARMED) != 0;
+    out->kind = ROBOSOC_PWM_KIND;
+    out->flags = armed ? ROBOSOC_FLAG_ARMED : 0;
+    out->seq = in->seq;
+    pid_step(ctl, q, rate, real_from_fix16(in->height), real_from_fix16(in->vertical_velocity), &sp, armed,
+             real_from_us(in->dt_us), out->pwm);
+    return 0;
+}

@@ -16,6 +16,7 @@
 
 #include "mixer.h"
 #include "real.h"
+#include "robosoc_packets.h"
 
 typedef struct {
     real_t kp, ki, kd;
@@ -79,5 +80,12 @@ void pid_reset(pid_controller_t *ctl);
  */
 void pid_step(pid_controller_t *ctl, const real_t q[4], const real_t rate[3], real_t height, real_t velocity,
               const pid_setpoint_t *setpoint, int armed, real_t dt, uint16_t pwm[4]);
+
+/*
+ * The PID task's work for one estimate packet: pid_step on its fields (Q16.16, dt from dt_us) and
+ * the PWM packet for the I/O tile (same seq and armed flag).  Returns 0, or -1 for a packet of
+ * another kind (malformed: the caller counts and drops it; nothing changes).
+ */
+int pid_packet_step(pid_controller_t *ctl, const struct robosoc_estimate_packet *in, struct robosoc_pwm_packet *out);
 
 #endif /* PID_H */
