@@ -26,7 +26,7 @@ from pid_data import (
     write_data_header,
 )
 
-from robosoc.config.scenario import ScenarioConfig
+from robosoc.config.scenario import FlightPlan, ScenarioConfig
 from robosoc.config.vehicle import MotorConfig, VehicleConfig, laser_vehicle, vehicle_preset
 from robosoc.control.host import HostController
 from robosoc.control.mixer import Mixer
@@ -194,7 +194,7 @@ def _defines(text: str) -> dict[str, float]:
 
 @pytest.mark.parametrize("vehicle", [vehicle_preset("default"), laser_vehicle()], ids=["default", "laser"])
 def test_parameters_are_the_golden_models(vehicle: VehicleConfig) -> None:
-    scenario = ScenarioConfig(flight=ScenarioConfig().flight.__class__(climb_rate_mps=1.5, descent_rate_mps=0.5))
+    scenario = ScenarioConfig(flight=FlightPlan(climb_rate_mps=1.5, descent_rate_mps=0.5))
     defines = _defines(control_header(vehicle, scenario))
     host = HostController.for_scenario(scenario, vehicle)
     for name in ("roll", "pitch", "yaw", "height"):
