@@ -45,6 +45,9 @@ int main(void)
     for (int i = 0; i < 4; i++) {
         s.setpoint[i] = value(4, i);
     }
+    for (int i = 0; i < 2; i++) {
+        s.height_feedforward[i] = value(5, i);
+    }
     put_flits("sensor", &s, ROBOSOC_SENSOR_FLITS);
 
     struct robosoc_estimate_packet e;
@@ -60,6 +63,9 @@ int main(void)
     }
     for (int i = 0; i < 3; i++) {
         e.rate[i] = value(1, i);
+    }
+    for (int i = 0; i < 2; i++) {
+        e.height_feedforward[i] = value(5, i);
     }
     e.height = value(2, 0);
     e.vertical_velocity = value(3, 0);

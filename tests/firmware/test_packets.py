@@ -74,6 +74,7 @@ def _expected() -> dict[str, dict[str, object]]:
             "mag": vec(2, 3),
             "baro_altitude": _value(3, 0),
             "setpoint": vec(4, 4),
+            "height_feedforward": vec(5, 2),
         },
         "estimate": {
             "kind": ESTIMATE.kind,
@@ -86,6 +87,7 @@ def _expected() -> dict[str, dict[str, object]]:
             "height": _value(2, 0),
             "vertical_velocity": _value(3, 0),
             "setpoint": vec(4, 4),
+            "height_feedforward": vec(5, 2),
         },
         "pwm": {"kind": PWM.kind, "flags": 0, "seq": 65537, "pwm": (100, 150, 200, 250)},
     }

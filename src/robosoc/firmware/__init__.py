@@ -14,6 +14,12 @@ Layout (all plain files inside the package):
   math libraries (Q16.16, single-precision helpers, ``real_t``, matrices, quaternions); see
   docs/firmware-libraries.md.  Not part of the runtime: a program links :func:`math_sources`.
 - ``app/ekf.[ch]``: the attitude EKF (:func:`ekf_sources`).
+- ``app/altitude.[ch]``: the altitude filter, run by the estimator task after the EKF
+  (:func:`estimator_sources`).
+- ``app/pid.[ch]``, ``app/mixer.[ch]``: the PID task's control law and mixer (:func:`pid_sources`).
+  They and the altitude filter include ``robosoc_control.h``, generated from the Python configs by
+  :mod:`robosoc.firmware.control_params` (pass :func:`~robosoc.firmware.control_params.control_include_dir`
+  as an include folder).
 - ``include/robosoc_packets.h``: the application packets, generated from :mod:`robosoc.firmware.packets`.
 
 Builds choose the arithmetic with :func:`arith_defines`: ``float`` (soft-float) or ``fixed`` (Q16.16).
@@ -49,6 +55,8 @@ MATH_SOURCES: tuple[Path, ...] = (
 #: Folder of the application modules (the EKF).
 APP_DIR = FIRMWARE_DIR / "app"
 EKF_SOURCES: tuple[Path, ...] = (APP_DIR / "ekf.c",)
+ALTITUDE_SOURCES: tuple[Path, ...] = (APP_DIR / "altitude.c",)
+PID_SOURCES: tuple[Path, ...] = (APP_DIR / "pid.c", APP_DIR / "mixer.c")
 #: The two number formats of real_t (lib/real.h).
 ARITHS = ("float", "fixed")
 KERNEL_DIR = FIRMWARE_DIR / "kernel"
@@ -86,6 +94,18 @@ def ekf_sources() -> tuple[Path, ...]:
     return EKF_SOURCES + MATH_SOURCES
 
 
+def estimator_sources() -> tuple[Path, ...]:
+    """The estimator task's modules (EKF and altitude filter) and the libraries they need (include
+    folders :data:`MATH_DIR`, :data:`APP_DIR` and the control header's)."""
+    return EKF_SOURCES + ALTITUDE_SOURCES + MATH_SOURCES
+
+
+def pid_sources() -> tuple[Path, ...]:
+    """The PID task's modules (PID loops and mixer) and the libraries they need (include folders
+    :data:`MATH_DIR`, :data:`APP_DIR` and the control header's)."""
+    return PID_SOURCES + MATH_SOURCES
+
+
 def arith_defines(arith: str) -> dict[str, str | int | None]:
     """Preprocessor defines selecting real_t: ``float`` (soft-float) or ``fixed`` (Q16.16).
 
@@ -98,6 +118,7 @@ def arith_defines(arith: str) -> dict[str, str | int | None]:
 
 
 __all__ = [
+    "ALTITUDE_SOURCES",
     "APP_DIR",
     "ARITHS",
     "CRT_SOURCES",
@@ -114,12 +135,15 @@ __all__ = [
     "MATH_DIR",
     "MATH_SOURCES",
     "MATRIX_BENCH_SOURCE",
+    "PID_SOURCES",
     "PORT_DIR",
     "PORT_SOURCES",
     "arith_defines",
     "ekf_sources",
+    "estimator_sources",
     "host_sources",
     "kernel_runtime_sources",
     "math_sources",
+    "pid_sources",
     "runtime_sources",
 ]

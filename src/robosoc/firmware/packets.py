@@ -202,6 +202,7 @@ SENSOR = PacketFormat(
         Field("mag", "q16", "unit field", "magnetic field", 3),
         Field("baro_altitude", "q16", "m", "barometric altitude"),
         Field("setpoint", "q16", "rad, rad, rad, m", "roll, pitch, yaw and height setpoints", 4),
+        Field("height_feedforward", "q16", "m/s, m/s^2", "the height setpoint profile's rate and acceleration", 2),
     ),
 )
 
@@ -219,6 +220,7 @@ ESTIMATE = PacketFormat(
         Field("height", "q16", "m", "estimated height"),
         Field("vertical_velocity", "q16", "m/s", "estimated vertical velocity"),
         Field("setpoint", "q16", "rad, rad, rad, m", "the sensor sample's setpoints, forwarded", 4),
+        Field("height_feedforward", "q16", "m/s, m/s^2", "the sensor sample's height_feedforward, forwarded", 2),
     ),
 )
 

@@ -19,8 +19,8 @@
 
 /* One sensor sample, I/O tile -> estimator task (body frame FLU). */
 #define ROBOSOC_SENSOR_KIND 0x5201u
-#define ROBOSOC_SENSOR_BYTES 72u
-#define ROBOSOC_SENSOR_FLITS 36u
+#define ROBOSOC_SENSOR_BYTES 80u
+#define ROBOSOC_SENSOR_FLITS 40u
 struct robosoc_sensor_packet {
     uint16_t kind; /* format tag (ROBOSOC_*_KIND): a packet with another tag is malformed */
     uint16_t flags; /* bit 0 armed (ROBOSOC_FLAG_ARMED); other bits 0 */
@@ -32,8 +32,9 @@ struct robosoc_sensor_packet {
     int32_t mag[3]; /* magnetic field [unit field] (Q16.16) */
     int32_t baro_altitude; /* barometric altitude [m] (Q16.16) */
     int32_t setpoint[4]; /* roll, pitch, yaw and height setpoints [rad, rad, rad, m] (Q16.16) */
+    int32_t height_feedforward[2]; /* the height setpoint profile's rate and acceleration [m/s, m/s^2] (Q16.16) */
 };
-_Static_assert(sizeof(struct robosoc_sensor_packet) == 72, "sensor packet size");
+_Static_assert(sizeof(struct robosoc_sensor_packet) == 80, "sensor packet size");
 _Static_assert(offsetof(struct robosoc_sensor_packet, kind) == 0, "sensor.kind offset");
 _Static_assert(offsetof(struct robosoc_sensor_packet, flags) == 2, "sensor.flags offset");
 _Static_assert(offsetof(struct robosoc_sensor_packet, seq) == 4, "sensor.seq offset");
@@ -44,11 +45,12 @@ _Static_assert(offsetof(struct robosoc_sensor_packet, accel) == 28, "sensor.acce
 _Static_assert(offsetof(struct robosoc_sensor_packet, mag) == 40, "sensor.mag offset");
 _Static_assert(offsetof(struct robosoc_sensor_packet, baro_altitude) == 52, "sensor.baro_altitude offset");
 _Static_assert(offsetof(struct robosoc_sensor_packet, setpoint) == 56, "sensor.setpoint offset");
+_Static_assert(offsetof(struct robosoc_sensor_packet, height_feedforward) == 72, "sensor.height_feedforward offset");
 
 /* The state estimate after one sensor sample, estimator task -> PID task. */
 #define ROBOSOC_ESTIMATE_KIND 0x5202u
-#define ROBOSOC_ESTIMATE_BYTES 68u
-#define ROBOSOC_ESTIMATE_FLITS 34u
+#define ROBOSOC_ESTIMATE_BYTES 76u
+#define ROBOSOC_ESTIMATE_FLITS 38u
 struct robosoc_estimate_packet {
     uint16_t kind; /* format tag (ROBOSOC_*_KIND): a packet with another tag is malformed */
     uint16_t flags; /* bit 0 armed (ROBOSOC_FLAG_ARMED); other bits 0 */
@@ -60,8 +62,9 @@ struct robosoc_estimate_packet {
     int32_t height; /* estimated height [m] (Q16.16) */
     int32_t vertical_velocity; /* estimated vertical velocity [m/s] (Q16.16) */
     int32_t setpoint[4]; /* the sensor sample's setpoints, forwarded [rad, rad, rad, m] (Q16.16) */
+    int32_t height_feedforward[2]; /* the sensor sample's height_feedforward, forwarded [m/s, m/s^2] (Q16.16) */
 };
-_Static_assert(sizeof(struct robosoc_estimate_packet) == 68, "estimate packet size");
+_Static_assert(sizeof(struct robosoc_estimate_packet) == 76, "estimate packet size");
 _Static_assert(offsetof(struct robosoc_estimate_packet, kind) == 0, "estimate.kind offset");
 _Static_assert(offsetof(struct robosoc_estimate_packet, flags) == 2, "estimate.flags offset");
 _Static_assert(offsetof(struct robosoc_estimate_packet, seq) == 4, "estimate.seq offset");
@@ -72,6 +75,7 @@ _Static_assert(offsetof(struct robosoc_estimate_packet, rate) == 32, "estimate.r
 _Static_assert(offsetof(struct robosoc_estimate_packet, height) == 44, "estimate.height offset");
 _Static_assert(offsetof(struct robosoc_estimate_packet, vertical_velocity) == 48, "estimate.vertical_velocity offset");
 _Static_assert(offsetof(struct robosoc_estimate_packet, setpoint) == 52, "estimate.setpoint offset");
+_Static_assert(offsetof(struct robosoc_estimate_packet, height_feedforward) == 68, "estimate.height_feedforward offset");
 
 /* The motor command for one sensor sample, PID task -> I/O tile. */
 #define ROBOSOC_PWM_KIND 0x5203u

@@ -32,7 +32,8 @@ typedef int32_t fix16_t;
 #define FIX16_HALF_PI FIX16_C(1.57079632679489661923)
 
 /*
- * The exact 64-bit product of two 32-bit integers.  With a multiplier this is MUL + MULH.
+ * The exact 64-bit product of two 32-bit integers.  With a multiplier this is MUL + MULH (never
+ * MULHSU, see below).
  * Without one, compiler-rt offers only the general 64 x 64-bit __muldi3 (about 470 cycles on
  * HF-RISCV); fix16_mul64_soft is a shift-and-add over the bits of the smaller magnitude (about
  * 190 cycles), so small and zero operands (frequent in matrices) cost little.
@@ -44,6 +45,13 @@ static inline int64_t fix16_mul64(int32_t a, int32_t b)
 #if defined(__riscv) && !defined(__riscv_mul)
     return fix16_mul64_soft(a, b);
 #else
+#if defined(__riscv)
+    /* The HF-RISCV RTL computes MULHSU as MULHU (docs/platform.md, errata).  A compiler that can
+     * prove one operand non-negative (a square, a value after a > 0 test) emits MULHSU for this
+     * product, which the RTL gets wrong when the other operand is negative; hiding the operands'
+     * values keeps it MUL + MULH. */
+    __asm__("" : "+r"(a), "+r"(b));
+#endif
     return (int64_t)a * b;
 #endif
 }

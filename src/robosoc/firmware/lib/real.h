@@ -49,6 +49,8 @@ static inline fix16_t real_to_fix16(real_t a) { return a; }
 static inline real_t real_from_float(float f) { return fix16_from_float(f); }
 static inline float real_to_float(real_t a) { return fix16_to_float(a); }
 static inline real_t real_from_int(int32_t i) { return fix16_from_int(i); }
+/* floor(a + 1/2): the nearest integer, halves up */
+static inline int32_t real_to_int(real_t a) { return fix16_to_int(a); }
 
 /* Seconds from microseconds: round(us * 65536 / 10^6) via 2^32 * 65536 / 10^6 = 281474976.7 (the
  * constant's rounding is 1e-9 relative). */
@@ -123,6 +125,13 @@ static inline fix16_t real_to_fix16(real_t a) { return fix16_from_float(a); }
 static inline real_t real_from_float(float f) { return f; }
 static inline float real_to_float(real_t a) { return a; }
 static inline real_t real_from_int(int32_t i) { return (float)i; }
+/* floor(a + 1/2): the nearest integer, halves up (|a| < 2^31) */
+static inline int32_t real_to_int(real_t a)
+{
+    float y = a + 0.5f;
+    int32_t t = (int32_t)y; /* truncates towards zero: one less below zero */
+    return (float)t > y ? t - 1 : t;
+}
 
 static inline real_t real_from_us(uint32_t us) { return (float)us * 1e-6f; }
 
