@@ -105,6 +105,22 @@ OPTIONS: dict[tuple[str, str], Spec] = {
     ("bench chip", "--cycles"): Spec("int", 1, 10**10),
     ("bench chip", "--ticks"): Spec("int", 1, 100_000),
     ("bench chip", "--noc"): Spec("flag"),
+    ("firmware build", "--arith"): Spec("choice", choices=("float", "fixed")),
+    ("firmware build", "--mul"): Spec("flag"),
+    ("firmware build", "--config"): Spec("in_file"),
+    ("firmware build", "--output"): Spec("out_file"),
+    ("firmware size", "ELF"): Spec("in_file"),
+    ("firmware size", "--arith"): Spec("choice", choices=("float", "fixed")),
+    ("firmware size", "--mul"): Spec("flag"),
+    ("firmware size", "--config"): Spec("in_file"),
+    ("firmware size", "--top"): Spec("int", 1, 10_000),
+    ("firmware replay", "LOG"): Spec("in_file"),
+    ("firmware replay", "--arith"): Spec("choice", choices=("float", "fixed")),
+    ("firmware replay", "--mul"): Spec("flag"),
+    ("firmware replay", "--config"): Spec("in_file"),
+    ("firmware replay", "--seconds"): Spec("float", 0.02, 600.0),
+    ("firmware replay", "--seed"): Spec("int", 0, 2**63 - 1),
+    ("firmware replay", "--out"): Spec("out_dir"),
 }
 
 PATH = "\0"  # "\0dir": one of the bad_paths fixture's paths
@@ -148,6 +164,9 @@ def base_command(command: str, option: str, elves: dict[str, Path], tmp: Path) -
         "bench physics": ["bench", "physics", "--seconds", "0.01", "--runs", "1"],
         "bench noc": ["bench", "noc", "--size", "2x2", "--cycles", "10", "--rates", "0.1", "--arbiter", "hermes"],
         "bench chip": ["bench", "chip", "--runs", "1", "--cycles", "10", "--ticks", "1", "--no-noc"],
+        "firmware build": ["firmware", "build"],
+        "firmware size": ["firmware", "size"],
+        "firmware replay": ["firmware", "replay", *([] if option in ("LOG", "--seconds") else ["--seconds", "0.02"])],
     }[command]
 
 

@@ -72,3 +72,10 @@ bench_app = typer.Typer(
     no_args_is_help=True,
 )
 app.add_typer(bench_app, name="bench")
+firmware_app = typer.Typer(
+    cls=RobosocGroup,
+    help="The control firmware: build its four variants, see their size, replay a flight into the chip.",
+    epilog=exit_codes.EPILOG,
+    no_args_is_help=True,
+)
+app.add_typer(firmware_app, name="firmware")

@@ -1,0 +1,247 @@
+"""``robosoc firmware build|size|replay``: the control firmware's builds, their size, a replay on the chip."""
+
+from __future__ import annotations
+
+import csv
+import json
+from pathlib import Path
+from typing import TYPE_CHECKING, Annotated
+
+import typer
+
+from robosoc.cli import exit_codes, files, options
+from robosoc.cli.app import firmware_app
+from robosoc.cli.console import make_console, plain
+from robosoc.cli.errors import CliError
+from robosoc.config.firmware import ARITH_CHOICES, FirmwareConfig
+
+if TYPE_CHECKING:
+    from robosoc.cosim.replay import ReplayResult
+
+Arith = Annotated[
+    str | None,
+    typer.Option(
+        help="float (soft-float) or fixed (Q16.16); default: the config's (fixed).",
+        callback=options.choice(*ARITH_CHOICES),
+    ),
+]
+Mul = Annotated[bool | None, typer.Option("--mul/--no-mul", help="For cores with or without the multiplier.")]
+Config = Annotated[Path | None, typer.Option("--config", help="Firmware configuration (TOML, docs/firmware-app.md).")]
+
+
+def _firmware(ctx: typer.Context, config: Path | None, arith: str | None, mul: bool | None) -> FirmwareConfig:
+    """The configuration: defaults, the file's fields, then the options the user gave."""
+    fw = files.load_toml(FirmwareConfig, config, "--config")[0] if config is not None else FirmwareConfig()
+    changes = {}
+    if arith is not None:
+        changes["arith"] = ("--arith", arith)
+    if mul is not None and options.given(ctx, "mul"):
+        changes["multiplier"] = ("--mul/--no-mul", mul)
+    return options.override(fw, changes)
+
+
+def _build(fw: FirmwareConfig) -> Path:
+    from robosoc.firmware import flight_app
+
+    return flight_app.build(fw)
+
+
+@firmware_app.command("build", epilog=exit_codes.EPILOG)
+def firmware_build(
+    ctx: typer.Context,
+    arith: Arith = None,
+    mul: Mul = None,
+    config: Config = None,
+    output: Annotated[Path | None, typer.Option("--output", "-o", help="Copy the ELF here.")] = None,
+) -> None:
+    """Build the flight firmware (estimator and PID tasks on the kernel) for the chip; print the ELF's path.
+
+    Builds are cached: the same configuration returns the same file without compiling.
+    """
+    import shutil
+
+    out = files.output_file(output, "--output") if output is not None else None
+    fw = _firmware(ctx, config, arith, mul)
+    elf = _build(fw)
+    if out is not None:
+        shutil.copyfile(elf, out)
+        elf = out
+    print(f"{fw.label}: {elf}")
+
+
+@firmware_app.command("size", epilog=exit_codes.EPILOG)
+def firmware_size(
+    ctx: typer.Context,
+    elf: Annotated[Path | None, typer.Argument(help="An ELF to measure (default: build the firmware).")] = None,
+    arith: Arith = None,
+    mul: Mul = None,
+    config: Config = None,
+    top: Annotated[
+        int, typer.Option(help="Functions and objects to list, 1..10000.", callback=options.int_range(1, 10_000))
+    ] = 25,
+) -> None:
+    """Code and data size of the firmware per section and per function (largest first)."""
+    from robosoc.analysis.code_size import code_size
+    from robosoc.chip.elf import ElfError
+
+    if elf is not None:
+        for name, on in (("--arith", arith is not None), ("--mul/--no-mul", options.given(ctx, "mul")),
+                         ("--config", config is not None)):  # fmt: skip
+            if on:
+                raise options.fail(name, f"chooses a build: it cannot be combined with an ELF ({elf})")
+        path = files.input_file(elf, None, "ELF file")
+        label = str(path)
+    else:
+        fw = _firmware(ctx, config, arith, mul)
+        path, label = _build(fw), fw.label
+    try:
+        size = code_size(path)
+    except ElfError as exc:
+        raise CliError(str(exc)) from exc
+    console = make_console()
+    plain(console, f"{label}: code {size.code_bytes} bytes, data {size.data_bytes} bytes")
+    for s in size.sections:
+        plain(console, f"  {s.name:<24} 0x{s.addr:08x} {s.size:>9} bytes  {s.kind}")
+    plain(console, f"largest functions and objects ({min(top, len(size.symbols))} of {len(size.symbols)}):")
+    for sym in size.symbols[:top]:
+        plain(console, f"  {sym.size:>9} {sym.kind:<6} {sym.name}")
+
+
+@firmware_app.command("replay", epilog=exit_codes.EPILOG)
+def firmware_replay(
+    ctx: typer.Context,
+    log: Annotated[
+        Path | None, typer.Argument(help="A flight log (flight.csv of robosoc fly); default: built in.")
+    ] = None,
+    arith: Arith = None,
+    mul: Mul = None,
+    config: Config = None,
+    seconds: Annotated[
+        float,
+        typer.Option(
+            help="Built-in stream: seconds of the default flight, 0.02..600.",
+            callback=options.float_range(0.02, 600.0, unit="s"),
+        ),
+    ] = 10.0,
+    seed: Annotated[int, typer.Option(help="Built-in stream: the flight's seed.", callback=options.seed())] = 1,
+    out: Annotated[Path | None, typer.Option("--out", help="Folder for jobs.csv and summary.json.")] = None,
+) -> None:
+    """Replay a flight's sensor samples into the firmware on the chip: per-job records, response times, energy.
+
+    Each sample is injected from the I/O tile at the cycle of its timestamp; the estimator and PID
+    tasks run on their tiles; their jobs are timed by the kernel and costed by the simulator.
+    """
+    from rich.progress import Progress
+
+    from robosoc.control.flight_log import read_flight_log
+    from robosoc.cosim.replay import built_in_rows, replay
+
+    folder = files.output_dir(out, "--out") if out is not None else None
+    fw = _firmware(ctx, config, arith, mul)
+    if log is not None:
+        options.exclusive(
+            LOG=True, **{"--seconds": options.given(ctx, "seconds"), "--seed": options.given(ctx, "seed")}
+        )
+        path = files.input_file(log, None, "flight log")
+        files.read_text(path, None, "flight log")  # a readable UTF-8 file, or an error naming it
+        try:
+            rows = read_flight_log(path)
+        except ValueError as exc:
+            raise CliError(f"{path}: not a flight log of robosoc fly: {exc}") from exc
+    else:
+        rows = built_in_rows(seconds, seed)
+    console = make_console(stderr=True)
+    with Progress(console=console, transient=True) as progress:
+        task = progress.add_task(f"replaying into {fw.label}", total=len(rows))
+        result = replay(rows, fw, on_sample=lambda done, _: progress.update(task, completed=done))
+    _report(result, folder)
+
+
+def _report(result: ReplayResult, folder: Path | None) -> None:
+    ns = result.clock_ns
+    console = make_console()
+    plain(
+        console,
+        f"{result.firmware.label}: {len(result.samples)} samples, {len(result.commands)} PWM commands, "
+        f"{result.deadline_misses} deadline misses, {result.cycles} cycles "
+        f"({result.cycles * ns * 1e-9:.2f} s simulated in {result.host_seconds:.1f} s)",
+    )
+    summary = {}
+    for name in ("estimator", "pid"):
+        jobs = result.jobs_of(name)
+        if not jobs:
+            continue
+        exec_c = [j.exec_cycles for j in jobs]
+        resp = [j.response_cycles for j in jobs]
+        energy = [j.energy_total_pj for j in jobs]
+        kernel = sum(j.energy_pj["kernel"] for j in jobs) / max(1e-12, sum(energy))
+        summary[name] = {
+            "jobs": len(jobs),
+            "exec_cycles_mean": sum(exec_c) / len(jobs),
+            "exec_cycles_max": max(exec_c),
+            "response_us_mean": sum(resp) / len(jobs) * ns / 1000,
+            "response_us_max": max(resp) * ns / 1000,
+            "energy_nj_mean": sum(energy) / len(jobs) / 1000,
+            "kernel_energy_share": kernel,
+            "deadline_misses": sum(not j.deadline_met for j in jobs),
+        }
+        s = summary[name]
+        plain(
+            console,
+            f"  {name:<9} {s['jobs']} jobs: exec mean {s['exec_cycles_mean']:.0f} max {s['exec_cycles_max']} "
+            f"cycles; response mean {s['response_us_mean']:.1f} max {s['response_us_max']:.1f} us; "
+            f"energy {s['energy_nj_mean']:.1f} nJ/job (kernel {kernel:.1%}); "
+            f"misses {s['deadline_misses']}",
+        )
+    if folder is None:
+        return
+    with (folder / "jobs.csv").open("w", newline="") as handle:
+        writer = csv.writer(handle)
+        writer.writerow(
+            [
+                "task",
+                "tile",
+                "job",
+                "release_cycle",
+                "start_cycle",
+                "completion_cycle",
+                "response_cycles",
+                "exec_cycles",
+                "instructions",
+                "task_pj",
+                "kernel_pj",
+                "noc_pj",
+                "idle_pj",
+                "deadline_met",
+            ]
+        )
+        for j in result.jobs:
+            writer.writerow(
+                [
+                    j.task,
+                    f"{j.tile[0]},{j.tile[1]}",
+                    j.job,
+                    j.release_cycle,
+                    j.start_cycle,
+                    j.completion_cycle,
+                    j.response_cycles,
+                    j.exec_cycles,
+                    j.instructions,
+                    f"{j.energy_pj['task']:.3f}",
+                    f"{j.energy_pj['kernel']:.3f}",
+                    f"{j.energy_pj['noc']:.3f}",
+                    f"{j.energy_pj['idle']:.3f}",
+                    int(j.deadline_met),
+                ]
+            )
+    record = {
+        "firmware": result.firmware.label,
+        "samples": len(result.samples),
+        "commands": len(result.commands),
+        "cycles": result.cycles,
+        "clock_ns": ns,
+        "tasks": summary,
+        "energy_pj": result.energy_pj,
+    }
+    (folder / "summary.json").write_text(json.dumps(record, indent=2) + "\n")
+    plain(console, f"wrote {folder / 'jobs.csv'} and {folder / 'summary.json'}")
