@@ -614,7 +614,8 @@ def run_chip(core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int) -> 
             one[0] = t
             run_cores(core, one, H)
         for r in range(k):
-            _keep_output(run[r], st, cst, out, xout)
+            if st[run[r], S_OUT_LEN] > 0:
+                _keep_output(run[r], st, cst, out, xout)
         if suspended:
             status = CHIP_BREAK
             break
