@@ -77,9 +77,7 @@ def defines(fw: FirmwareConfig) -> dict[str, str | int | None]:
     }
 
 
-def build(
-    fw: FirmwareConfig, vehicle: VehicleConfig | None = None, scenario: ScenarioConfig | None = None
-) -> Path:
+def build(fw: FirmwareConfig, vehicle: VehicleConfig | None = None, scenario: ScenarioConfig | None = None) -> Path:
     """The flight application's ELF for ``fw`` (cached), with the controller parameters of
     ``vehicle`` flying ``scenario`` (defaults: the default scenario and its vehicle preset).
 
@@ -156,7 +154,9 @@ def read_app_stats(chip: MPSoC, xy: tuple[int, int]) -> AppStats:
         addr = program.address_of(APP_STATS_SYMBOL)
     except ValueError as exc:
         raise ValueError(f"tile {xy}: {program.path} is not the flight application") from exc
-    values = dict(zip(_APP_STATS_FIELDS, _APP_STATS.unpack(chip.cores.read(addr, _APP_STATS.size, tile=t)), strict=True))
+    values = dict(
+        zip(_APP_STATS_FIELDS, _APP_STATS.unpack(chip.cores.read(addr, _APP_STATS.size, tile=t)), strict=True)
+    )
     if values.pop("magic") != APP_STATS_MAGIC:
         raise ValueError(f"tile {xy}: the application has not started")
     return AppStats(**values)
