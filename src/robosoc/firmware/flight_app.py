@@ -35,8 +35,8 @@ from robosoc.firmware import (
     MATH_SOURCES,
     PID_SOURCES,
     arith_defines,
+    images,
 )
-from robosoc.firmware import images
 from robosoc.firmware.control_params import control_include_dir
 from robosoc.firmware.packets import ESTIMATE_PORT, PWM_PORT, SENSOR_PORT
 
