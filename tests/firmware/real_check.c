@@ -181,6 +181,17 @@ int main(void)
         quat_to_euler(q, r);
         spent = cycles() - start;
         line("qeuler", q, 4, r, 3, spent);
+
+        /* TRIAD: an accelerometer of up to 12 m/s^2 per axis, a field of up to 1 per axis */
+        real_t acc[3], field[3];
+        fill(acc, 3, 12 * ONE);
+        fill(field, 3, ONE);
+        memcpy(in, acc, sizeof acc);
+        memcpy(in + 3, field, sizeof field);
+        start = cycles();
+        quat_from_accel_mag(acc, field, r);
+        spent = cycles() - start;
+        line("qtriad", in, 6, r, 4, spent);
     }
     return 0;
 }

@@ -38,6 +38,7 @@ BOUNDS: dict[str, dict[str, float]] = {
         "qjacobian": 0.5,
         "qintegrate": 0.6,
         "qeuler": 4.0,
+        "qtriad": 4.0,
     },
     "float": {
         "mul": 1.0,
@@ -53,6 +54,7 @@ BOUNDS: dict[str, dict[str, float]] = {
         "qjacobian": 1.0,
         "qintegrate": 1.0,
         "qeuler": 1.0,
+        "qtriad": 1.0,
     },
 }
 
@@ -157,6 +159,19 @@ def _qeuler(ins: np.ndarray, out: np.ndarray, arith: str) -> float:
     return float(np.max(np.abs(out - ref)) / (16 * U32))
 
 
+def _qtriad(ins: np.ndarray, out: np.ndarray, arith: str) -> float:
+    acc, field = ins[:3], ins[3:6]
+    na, nf = np.linalg.norm(acc), np.linalg.norm(field)
+    if na < 1.0 or nf < 0.2 or np.linalg.norm(np.cross(acc, field)) < 0.3 * na * nf:
+        return 0.0  # a short or nearly parallel pair is ill-conditioned: not a library error
+    ref = quat.from_accel_mag(acc, field)
+    error = min(np.max(np.abs(out - ref)), np.max(np.abs(out + ref)))  # q and -q where w is near 0
+    if arith == "fixed":
+        return float(error / LSB)
+    # normalisations, cross products, a root and divisions: a few float roundings of size ~1
+    return float(error / (16 * U32))
+
+
 CHECKS: dict[str, Callable[[np.ndarray, np.ndarray, str], float]] = {
     "solve": _solve,
     "inverse": _inverse,
@@ -168,6 +183,7 @@ CHECKS: dict[str, Callable[[np.ndarray, np.ndarray, str], float]] = {
     "qjacobian": _qjacobian,
     "qintegrate": _qintegrate,
     "qeuler": _qeuler,
+    "qtriad": _qtriad,
 }
 
 

@@ -16,6 +16,9 @@ Layout (all plain files inside the package):
 - ``app/ekf.[ch]``: the attitude EKF (:func:`ekf_sources`).
 - ``app/altitude.[ch]``: the altitude filter, run by the estimator task after the EKF
   (:func:`estimator_sources`).
+- ``app/estimator.[ch]``: the estimator task's work: calibration while disarmed, then EKF and
+  altitude filter per sample, sensor packet in, estimate packet out (:func:`estimator_sources`).
+- ``app/flight_app.c``: the flight application's ``main`` (:mod:`robosoc.firmware.flight_app`).
 - ``app/pid.[ch]``, ``app/mixer.[ch]``: the PID task's control law and mixer (:func:`pid_sources`).
   They and the altitude filter include ``robosoc_control.h``, generated from the Python configs by
   :mod:`robosoc.firmware.control_params` (pass :func:`~robosoc.firmware.control_params.control_include_dir`
@@ -56,6 +59,7 @@ MATH_SOURCES: tuple[Path, ...] = (
 APP_DIR = FIRMWARE_DIR / "app"
 EKF_SOURCES: tuple[Path, ...] = (APP_DIR / "ekf.c",)
 ALTITUDE_SOURCES: tuple[Path, ...] = (APP_DIR / "altitude.c",)
+ESTIMATOR_SOURCES: tuple[Path, ...] = (APP_DIR / "estimator.c",)
 PID_SOURCES: tuple[Path, ...] = (APP_DIR / "pid.c", APP_DIR / "mixer.c")
 #: The two number formats of real_t (lib/real.h).
 ARITHS = ("float", "fixed")
@@ -95,9 +99,9 @@ def ekf_sources() -> tuple[Path, ...]:
 
 
 def estimator_sources() -> tuple[Path, ...]:
-    """The estimator task's modules (EKF and altitude filter) and the libraries they need (include
+    """The estimator task's modules (calibration, EKF and altitude filter) and the libraries they need (include
     folders :data:`MATH_DIR`, :data:`APP_DIR` and the control header's)."""
-    return EKF_SOURCES + ALTITUDE_SOURCES + MATH_SOURCES
+    return ESTIMATOR_SOURCES + EKF_SOURCES + ALTITUDE_SOURCES + MATH_SOURCES
 
 
 def pid_sources() -> tuple[Path, ...]:
@@ -123,6 +127,7 @@ __all__ = [
     "ARITHS",
     "CRT_SOURCES",
     "EKF_SOURCES",
+    "ESTIMATOR_SOURCES",
     "FIRMWARE_DIR",
     "INCLUDE_DIR",
     "IRQ_ENTRY_SYMBOL",

@@ -30,7 +30,7 @@ from pathlib import Path
 from robosoc.config.scenario import ScenarioConfig
 from robosoc.config.vehicle import VehicleConfig, vehicle_preset
 from robosoc.control.altitude import GRAVITY, AltitudeFilter
-from robosoc.control.host import HostController
+from robosoc.control.host import CALIBRATED_QUAT_SIGMA, GYRO_NOISE, MOTION_ACCEL, HostController
 from robosoc.control.pid import PidGains
 from robosoc.physics.propulsion import PWM_MAX
 
@@ -169,6 +169,11 @@ def control_header(vehicle: VehicleConfig | None = None, scenario: ScenarioConfi
     ]
     lines += [f"#define {name} {_c(value)} /* {doc} */" for name, (value, doc) in mix.items()]
     lines += [
+        "",
+        "/* Calibration while disarmed (control/host.py), the estimator task's (app/estimator.c) */",
+        f"#define CAL_MOTION_ACCEL {_c(MOTION_ACCEL)} /* |norm(a) - g| above this is motion [m/s^2] */",
+        f"#define CAL_QUAT_SIGMA {_c(CALIBRATED_QUAT_SIGMA)} /* sigma of each quaternion component, calibrated */",
+        f"#define CAL_GYRO_NOISE {_c(GYRO_NOISE)} /* one gyro sample: bias sigma * sqrt(n) [rad/s] */",
         "",
         "/* Altitude filter (control/altitude.py) */",
         f"#define ALT_ACCEL_NOISE {_c(alt.accel_noise)} /* [m/s^2] */",

@@ -1,6 +1,7 @@
 """Packet formats between the I/O tile and the firmware tasks, written once.
 
-This module is the single source of the three application packets' layout and units:
+This module is the single source of the three application packets' layout and units, and of the
+message ports they travel to (:data:`PORTS`):
 
 - ``sensor``: one sensor sample, I/O tile → estimator (EKF) task;
 - ``estimate``: the state estimate, estimator task → PID task;
@@ -238,6 +239,29 @@ PWM = PacketFormat(
 FORMATS: tuple[PacketFormat, ...] = (SENSOR, ESTIMATE, PWM)
 FLAG_ARMED = 1
 
+
+@dataclass(frozen=True)
+class Port:
+    """A kernel message port (``os_task_event``/``os_recv``) of the flight application."""
+
+    name: str
+    number: int
+    tile: str
+    doc: str
+
+
+SENSOR_PORT = 1
+"""Sensor packets arrive on this port of the estimator's tile."""
+ESTIMATE_PORT = 2
+"""Estimate packets arrive on this port of the PID task's tile."""
+PWM_PORT = 3
+"""PWM packets arrive on this port of the I/O tile."""
+PORTS: tuple[Port, ...] = (
+    Port("sensor", SENSOR_PORT, "estimator tile", "sensor packets, I/O tile -> estimator task"),
+    Port("estimate", ESTIMATE_PORT, "PID tile", "estimate packets, estimator task -> PID task"),
+    Port("pwm", PWM_PORT, "I/O tile", "PWM packets, PID task -> I/O tile"),
+)
+
 HEADER_PATH = Path(__file__).resolve().parent / "include" / "robosoc_packets.h"
 
 
@@ -262,6 +286,9 @@ def c_header() -> str:
         f"#define ROBOSOC_MESSAGE_HEADER_FLITS {MESSAGE_HEADER_FLITS}",
         f"#define ROBOSOC_MAX_PAYLOAD_FLITS {MAX_PAYLOAD_FLITS}",
         f"#define ROBOSOC_FLAG_ARMED {FLAG_ARMED}u",
+        "",
+        "/* Message ports of the flight application (kernel ports, below OS_MSG_PORTS) */",
+        *(f"#define ROBOSOC_{port.name.upper()}_PORT {port.number}u /* {port.tile}: {port.doc} */" for port in PORTS),
     ]
     for fmt in FORMATS:
         upper = fmt.name.upper()

@@ -17,6 +17,11 @@
 #define ROBOSOC_MAX_PAYLOAD_FLITS 58
 #define ROBOSOC_FLAG_ARMED 1u
 
+/* Message ports of the flight application (kernel ports, below OS_MSG_PORTS) */
+#define ROBOSOC_SENSOR_PORT 1u /* estimator tile: sensor packets, I/O tile -> estimator task */
+#define ROBOSOC_ESTIMATE_PORT 2u /* PID tile: estimate packets, estimator task -> PID task */
+#define ROBOSOC_PWM_PORT 3u /* I/O tile: PWM packets, PID task -> I/O tile */
+
 /* One sensor sample, I/O tile -> estimator task (body frame FLU). */
 #define ROBOSOC_SENSOR_KIND 0x5201u
 #define ROBOSOC_SENSOR_BYTES 80u

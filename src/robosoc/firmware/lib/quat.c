@@ -186,3 +186,77 @@ void quat_to_euler(const real_t q[4], real_t euler[3])
     euler[1] = real_asin(twice_sum(w, y, -1, z, x));
     euler[2] = real_atan2(twice_sum(w, z, 1, x, y), one_minus_twice_squares(y, z));
 }
+
+void quat_from_matrix(const real_t r[9], real_t q[4])
+{
+    /* Shepperd: divide by the largest of the four candidates 4w^2, 4x^2, 4y^2, 4z^2, so that s is
+     * never small (the branches and formulas of control/quaternion.py from_matrix) */
+    real_t trace = real_add(real_add(r[0], r[4]), r[8]);
+    real_t s;
+    if (real_lt(REAL_ZERO, trace)) {
+        s = real_scale2(real_sqrt(real_add(REAL_ONE, trace)), 1);
+        q[0] = real_scale2(s, -2);
+        q[1] = real_div(real_sub(r[7], r[5]), s);
+        q[2] = real_div(real_sub(r[2], r[6]), s);
+        q[3] = real_div(real_sub(r[3], r[1]), s);
+    } else if (real_lt(r[4], r[0]) && real_lt(r[8], r[0])) {
+        s = real_scale2(real_sqrt(real_sub(real_sub(real_add(REAL_ONE, r[0]), r[4]), r[8])), 1);
+        q[0] = real_div(real_sub(r[7], r[5]), s);
+        q[1] = real_scale2(s, -2);
+        q[2] = real_div(real_add(r[1], r[3]), s);
+        q[3] = real_div(real_add(r[2], r[6]), s);
+    } else if (real_lt(r[8], r[4])) {
+        s = real_scale2(real_sqrt(real_sub(real_sub(real_add(REAL_ONE, r[4]), r[0]), r[8])), 1);
+        q[0] = real_div(real_sub(r[2], r[6]), s);
+        q[1] = real_div(real_add(r[1], r[3]), s);
+        q[2] = real_scale2(s, -2);
+        q[3] = real_div(real_add(r[5], r[7]), s);
+    } else {
+        s = real_scale2(real_sqrt(real_sub(real_sub(real_add(REAL_ONE, r[8]), r[0]), r[4])), 1);
+        q[0] = real_div(real_sub(r[3], r[1]), s);
+        q[1] = real_div(real_add(r[2], r[6]), s);
+        q[2] = real_div(real_add(r[5], r[7]), s);
+        q[3] = real_scale2(s, -2);
+    }
+    quat_normalize(q);
+    if (real_lt(q[0], REAL_ZERO)) {
+        for (int i = 0; i < 4; i++) {
+            q[i] = real_neg(q[i]);
+        }
+    }
+}
+
+/* a x b, each component one rounded sum */
+static void cross(const real_t a[3], const real_t b[3], real_t out[3])
+{
+    for (int i = 0; i < 3; i++) {
+        int j = (i + 1) % 3;
+        int k = (i + 2) % 3;
+        out[i] = real_acc_get(real_acc_mac(real_acc_mac(real_acc_zero(), a[j], b[k]), real_neg(a[k]), b[j]), 0);
+    }
+}
+
+/* v / |v| in place */
+static void normalize3(real_t v[3])
+{
+    real_t norm = vec_norm(v, 3);
+    for (int i = 0; i < 3; i++) {
+        v[i] = real_div(v[i], norm);
+    }
+}
+
+void quat_from_accel_mag(const real_t accel[3], const real_t mag[3], real_t q[4])
+{
+    /* The rows of R are world north, west and up in body coordinates: up is the accelerometer's
+     * direction, west = up x field, north = west x up. */
+    real_t r[9];
+    real_t *north = &r[0], *west = &r[3], *up = &r[6];
+    for (int i = 0; i < 3; i++) {
+        up[i] = accel[i];
+    }
+    normalize3(up);
+    cross(up, mag, west);
+    normalize3(west);
+    cross(west, up, north);
+    quat_from_matrix(r, q);
+}

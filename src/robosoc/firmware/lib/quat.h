@@ -23,5 +23,10 @@ void quat_xi_matrix(const real_t q[4], real_t out[12]);                    /* q 
 void quat_integrate(const real_t q[4], const real_t rate[3], real_t dt, real_t out[4]);
 /* Z-Y-X Euler angles (roll, pitch, yaw) of a unit quaternion */
 void quat_to_euler(const real_t q[4], real_t euler[3]);
+/* The unit quaternion (w >= 0) of a rotation matrix, Shepperd's method (from_matrix) */
+void quat_from_matrix(const real_t r[9], real_t q[4]);
+/* Attitude from one accelerometer (world up in the body frame) and one magnetometer reading, by
+ * TRIAD: gravity exact, the field in its plane (from_accel_mag).  Neither may be zero or parallel. */
+void quat_from_accel_mag(const real_t accel[3], const real_t mag[3], real_t q[4]);
 
 #endif /* QUAT_H */

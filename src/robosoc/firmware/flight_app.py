@@ -1,0 +1,181 @@
+"""The flight application (``firmware/app/flight_app.c``): build it for a firmware configuration,
+and what the host needs to drive it and read it back (docs/firmware-app.md).
+
+    fw = FirmwareConfig(arith="float", multiplier=False)
+    elf = build(fw)
+    chip = MPSoC(fw.seed_chip())
+    for xy in app_tiles(fw):
+        chip.load(xy, load_elf(elf, chip.regions(xy)))
+    for k, packet in enumerate(sensor_packets):
+        for payload in sensor_payloads(packet, fw, chip.config, seq=k):
+            chip.inject(fw.ekf_tile, payload, sample_cycle(k))
+    ...
+    pwm = [m for m in images.reassemble(chip.received()) if m.port == PWM_PORT]
+
+One ELF serves every tile: ``main`` creates the tasks mapped to its tile (os_tile()).
+"""
+
+from __future__ import annotations
+
+import struct
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from robosoc.config.chip import ChipConfig
+from robosoc.config.firmware import FirmwareConfig
+from robosoc.config.scenario import ScenarioConfig
+from robosoc.config.vehicle import VehicleConfig
+from robosoc.firmware import (
+    ALTITUDE_SOURCES,
+    APP_DIR,
+    EKF_SOURCES,
+    ESTIMATOR_SOURCES,
+    MATH_DIR,
+    MATH_SOURCES,
+    PID_SOURCES,
+    arith_defines,
+    images,
+)
+from robosoc.firmware.control_params import control_include_dir
+from robosoc.firmware.packets import ESTIMATE_PORT, PWM_PORT, SENSOR_PORT
+
+if TYPE_CHECKING:
+    from robosoc.chip.mpsoc import MPSoC
+
+APP_SOURCE = APP_DIR / "flight_app.c"
+APP_STATS_SYMBOL = "app_stats"
+APP_STATS_MAGIC = 0x53505041
+_APP_STATS_FIELDS = (
+    "magic", "est_jobs", "est_foreign", "est_empty", "est_stale",
+    "pid_jobs", "pid_foreign", "pid_empty", "pid_stale", "send_errors",
+)  # fmt: skip
+_APP_STATS = struct.Struct("<" + "I" * len(_APP_STATS_FIELDS))
+
+SAMPLE_PERIOD_US = 10_000
+"""The sensor period of the default scenario (100 Hz)."""
+FIRST_SAMPLE_CYCLE = 500_000
+"""Cycle at which the host injects sample 0: every tile has started its kernel well before
+(``os_start`` runs within the first 100,000 cycles; read_stats().start_cycle tells)."""
+
+
+def sources() -> tuple[Path, ...]:
+    """The application's sources (the kernel comes with :func:`images.build`)."""
+    return (APP_SOURCE, *ESTIMATOR_SOURCES, *EKF_SOURCES, *ALTITUDE_SOURCES, *PID_SOURCES, *MATH_SOURCES)
+
+
+def defines(fw: FirmwareConfig) -> dict[str, str | int | None]:
+    """The preprocessor defines of ``fw``'s build: real_t, kernel tick and policy, mapping, release."""
+    return {
+        **arith_defines(fw.arith),
+        "OS_TICK_CYCLES": fw.tick_cycles,
+        "OS_SCHED_POLICY": "OS_SCHED_EDF" if fw.scheduler == "edf" else "OS_SCHED_RM",
+        "APP_EST_TILE": images.tile_address(tuple(fw.ekf_tile)),
+        "APP_PID_TILE": images.tile_address(tuple(fw.pid_tile)),
+        "APP_PERIODIC": int(fw.release == "periodic"),
+        "APP_PERIOD_TICKS": fw.period_ticks,
+    }
+
+
+def build(fw: FirmwareConfig, vehicle: VehicleConfig | None = None, scenario: ScenarioConfig | None = None) -> Path:
+    """The flight application's ELF for ``fw`` (cached), with the controller parameters of
+    ``vehicle`` flying ``scenario`` (defaults: the default scenario and its vehicle preset).
+
+    Raises:
+        CompileError: the compiler failed.
+        ValueError: a controller parameter does not fit its fixed-point unit.
+    """
+    return images.build(
+        list(sources()),
+        mul=fw.multiplier,
+        defines=defines(fw),
+        include_dirs=[MATH_DIR, APP_DIR, control_include_dir(vehicle, scenario)],
+    )
+
+
+def app_tiles(fw: FirmwareConfig) -> list[tuple[int, int]]:
+    """The tiles to load the ELF on (one, if both tasks share it)."""
+    est, pid = tuple(fw.ekf_tile), tuple(fw.pid_tile)
+    return [est] if est == pid else [est, pid]
+
+
+def task_ids(fw: FirmwareConfig, xy: tuple[int, int]) -> dict[str, int]:
+    """TASK_ID of each application task on tile ``xy``: ``estimator`` and/or ``pid`` (the estimator
+    is created first, so it has the lower id on a shared tile); empty for another tile."""
+    out: dict[str, int] = {}
+    next_id = images.FIRST_TASK_ID
+    for name, tile in (("estimator", fw.ekf_tile), ("pid", fw.pid_tile)):
+        if tuple(tile) == tuple(xy):
+            out[name] = next_id
+            next_id += 1
+    return out
+
+
+def sensor_payloads(packet: bytes, fw: FirmwareConfig, chip: ChipConfig, seq: int) -> list[list[int]]:
+    """The payloads for :meth:`MPSoC.inject` carrying one sensor packet to the estimator's port."""
+    return images.message_packets(
+        packet, SENSOR_PORT, src_tile=images.tile_address(tuple(chip.io_tile)), src_port=SENSOR_PORT, seq=seq
+    )
+
+
+def sample_cycle(k: int, period_us: int = SAMPLE_PERIOD_US, clock_period_ns: float = 4.0) -> int:
+    """The cycle at which sample ``k`` (taken at k · period) leaves the I/O tile:
+    :data:`FIRST_SAMPLE_CYCLE` + k · period in cycles (10 ms = 2,500,000 cycles at 4 ns)."""
+    per_sample = round(period_us * 1000 / clock_period_ns)
+    return FIRST_SAMPLE_CYCLE + k * per_sample
+
+
+@dataclass(frozen=True)
+class AppStats:
+    """``app_stats`` of one tile (meanings in flight_app.c)."""
+
+    est_jobs: int
+    est_foreign: int
+    est_empty: int
+    est_stale: int
+    pid_jobs: int
+    pid_foreign: int
+    pid_empty: int
+    pid_stale: int
+    send_errors: int
+
+
+def read_app_stats(chip: MPSoC, xy: tuple[int, int]) -> AppStats:
+    """The application's counters on tile ``xy``.
+
+    Raises:
+        ValueError: no program on the tile, not the flight application, or main has not run.
+    """
+    t = chip.config.tile_index(xy)
+    program = chip.programs.get(t)
+    if program is None:
+        raise ValueError(f"tile {xy} has no program loaded")
+    try:
+        addr = program.address_of(APP_STATS_SYMBOL)
+    except ValueError as exc:
+        raise ValueError(f"tile {xy}: {program.path} is not the flight application") from exc
+    values = dict(
+        zip(_APP_STATS_FIELDS, _APP_STATS.unpack(chip.cores.read(addr, _APP_STATS.size, tile=t)), strict=True)
+    )
+    if values.pop("magic") != APP_STATS_MAGIC:
+        raise ValueError(f"tile {xy}: the application has not started")
+    return AppStats(**values)
+
+
+__all__ = [
+    "APP_SOURCE",
+    "APP_STATS_SYMBOL",
+    "ESTIMATE_PORT",
+    "FIRST_SAMPLE_CYCLE",
+    "PWM_PORT",
+    "SAMPLE_PERIOD_US",
+    "SENSOR_PORT",
+    "AppStats",
+    "app_tiles",
+    "build",
+    "defines",
+    "read_app_stats",
+    "sample_cycle",
+    "sensor_payloads",
+    "task_ids",
+]
