@@ -34,9 +34,9 @@ def _firmware(ctx: typer.Context, config: Path | None, arith: str | None, mul: b
     fw = files.load_toml(FirmwareConfig, config, "--config")[0] if config is not None else FirmwareConfig()
     changes = {}
     if arith is not None:
-        changes["arith"] = ("--arith", arith)
+        changes["--arith"] = ("arith", arith)
     if mul is not None and options.given(ctx, "mul"):
-        changes["multiplier"] = ("--mul/--no-mul", mul)
+        changes["--mul/--no-mul"] = ("multiplier", mul)
     return options.override(fw, changes)
 
 

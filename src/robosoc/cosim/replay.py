@@ -16,7 +16,9 @@ those of its task in the sample period in which it was released:
 * ``kernel``: the kernel's TASK_ID on the job's tile in that period (interrupt entry and exit,
   scheduling, messaging), shared equally by the jobs of that tile in the period;
 * ``idle``: the idle task's on that tile (it sleeps: clock-gated cycles), shared likewise;
-* ``noc``: the routers' energy in that period, shared equally by every job of the period.
+* ``noc``: what the routers spent in that period beyond idling (the flits' share: active buffers
+  and switch control), shared equally by every job of the period; the routers' idle and leakage
+  energy is the chip's whether or not a job runs, and is in the run's totals only.
 
 With event release every job starts and ends within its sample period at 100 Hz (the issue's
 budget), so the split is exact; a job that runs past the next sample is still charged only its
@@ -45,7 +47,7 @@ from robosoc.control.host import HostController
 from robosoc.firmware import flight_app, images, packets
 
 #: Cycle of the first sample's injection: the firmware has booted by then.
-DEFAULT_FIRST_CYCLE = 500_000
+DEFAULT_FIRST_CYCLE = flight_app.FIRST_SAMPLE_CYCLE
 
 TASK_NAMES = ("estimator", "pid")
 
@@ -101,6 +103,8 @@ class ReplayResult:
     jobs: list[JobRecord]
     kernel_stats: dict[tuple[int, int], images.KernelStats]
     counters: dict[tuple[int, int], dict[str, int]]
+    #: energy of each (tile, TASK_ID) over the whole replay (the jobs' ``task`` parts add up to these)
+    task_energy_pj: dict[tuple[tuple[int, int], int], float]
     energy_pj: dict[str, float]
     cycles: int
     host_seconds: float
@@ -161,11 +165,6 @@ def built_in_rows(seconds: float = 10.0, seed: int = 1) -> np.ndarray:
 # --- the replay ---------------------------------------------------------------------------------
 
 
-def _task_ids(fw: FirmwareConfig) -> dict[str, tuple[tuple[int, int], int]]:
-    """Task name -> (tile, TASK_ID): tasks get ids in creation order on their tile."""
-    return {name: (tuple(xy), tid) for name, (xy, tid) in flight_app.task_ids(fw).items()}  # type: ignore[misc]
-
-
 def replay(
     rows: np.ndarray,
     fw: FirmwareConfig | None = None,
@@ -199,12 +198,11 @@ def replay(
     elf = flight_app.build(fw, vehicle=vehicle, scenario=scenario)
     chip_ = MPSoC(chip_config)
     program = load_elf(elf, chip_.regions())
-    tiles = sorted({tuple(fw.ekf_tile), tuple(fw.pid_tile)})
+    tiles = flight_app.app_tiles(fw)
     for xy in tiles:
-        chip_.load(xy, program)  # type: ignore[arg-type]
+        chip_.load(xy, program)
     samples = samples_from_rows(rows, chip_.clock_ns, first_cycle)
-    ids = _task_ids(fw)
-    io_address = images.tile_address(chip_config.io_tile)
+    names = {(xy, tid): name for xy in tiles for name, tid in flight_app.task_ids(fw, xy).items()}
 
     start = time.perf_counter()
     periods: list[dict] = []  # per sample period: counter deltas per (tile, task) and NoC energy
@@ -214,7 +212,7 @@ def replay(
     received: list[tuple[int, list[int]]] = []
     period = samples[1].cycle - samples[0].cycle if len(samples) > 1 else round(10e6 / chip_.clock_ns)
     for k, sample in enumerate(samples):
-        for payload in images.message_packets(sample.payload, flight_app.SENSOR_PORT, src_tile=io_address, seq=k):
+        for payload in flight_app.sensor_payloads(sample.payload, fw, chip_config, seq=k):
             chip_.inject(tuple(fw.ekf_tile), payload, sample.cycle)  # type: ignore[arg-type]
         chip_.step(samples[k + 1].cycle if k + 1 < len(samples) else sample.cycle + period)
         received += chip_.received()
@@ -234,7 +232,6 @@ def replay(
             on_sample(k + 1, len(samples))
     seconds = time.perf_counter() - start
 
-    names = {(xy, tid): name for name, (xy, tid) in ids.items()}
     per_period = Counter(p for _, _, p in logged)
     per_tile_period = Counter((xy, p) for xy, _, p in logged)
     jobs = []
@@ -262,14 +259,19 @@ def replay(
 
     commands = []
     for message in images.reassemble(received):
+        if message.port != packets.PWM_PORT:
+            continue
         values = packets.PWM.unpack(message.data)
         commands.append(PwmCommand(int(values["seq"]), tuple(int(v) for v in values["pwm"]), message.cycle))  # type: ignore[arg-type]
+    chip_.finish_accounting()
     counters = {xy: chip_.counters(xy) for xy in tiles}
+    task_energy = {(xy, task): _pj(model, c) for xy in tiles for task, c in chip_.task_counters(xy).items()}
     total = {f"tile {xy}": _pj(model, c) for xy, c in counters.items()}
     total["noc"] = sum(model.noc_pj(chip_.noc_counters()).values())
     return ReplayResult(
         firmware=fw, clock_ns=chip_.clock_ns, samples=samples, commands=commands, jobs=jobs,
-        kernel_stats={xy: images.read_stats(chip_, xy) for xy in tiles}, counters=counters, energy_pj=total,
+        kernel_stats={xy: images.read_stats(chip_, xy) for xy in tiles}, counters=counters,
+        task_energy_pj=task_energy, energy_pj=total,
         cycles=chip_.cycle, host_seconds=seconds,
     )  # fmt: skip
 
@@ -283,10 +285,19 @@ def _pj(model: EnergyModel, counters: dict[str, int]) -> float:
     return sum(model.breakdown_pj(counters).values()) if counters else 0.0
 
 
+def noc_traffic_pj(model: EnergyModel, noc: dict[str, int]) -> float:
+    """Router energy of ``noc`` counters beyond what the same routers spend idle for as long."""
+    idle = dict(noc)
+    idle["port_idle_cycles"] = noc["port_idle_cycles"] + noc["port_busy_cycles"]
+    idle["port_busy_cycles"] = 0
+    idle["router_busy_cycles"] = 0
+    return sum(model.noc_pj(noc).values()) - sum(model.noc_pj(idle).values())
+
+
 def _snapshot(chip: MPSoC, tiles: Sequence[tuple[int, int]], model: EnergyModel) -> dict:
     chip.finish_accounting()
     tasks = {(xy, task): c for xy in tiles for task, c in chip.task_counters(xy).items()}
-    return {"tasks": tasks, "noc_pj": sum(model.noc_pj(chip.noc_counters()).values())}
+    return {"tasks": tasks, "noc_pj": noc_traffic_pj(model, chip.noc_counters())}
 
 
 def _delta(before: dict, after: dict) -> dict:
