@@ -130,3 +130,36 @@ def test_a_breakpoint_stops_the_chip_without_changing_any_cycle():
     assert result[2] == {xy: chip.counters(xy) for xy in chip.core_tiles()}
     assert result[3] == chip.noc_counters()
     assert result[1] == chip.cycle
+
+
+def test_where_the_host_stops_the_chip_changes_nothing():
+    # The flight firmware on the seed's chip: both cores sleep most of the time, one wakes on a
+    # sensor packet while the other is due at its next tick.  Advancing the chip in one call or in
+    # many short ones must give the same jobs, cycles and counters (a sleeper due later once woke
+    # inside a long single-core quantum and ran ahead of the packet sent to it).
+    from robosoc.config.firmware import FirmwareConfig
+    from robosoc.cosim.replay import built_in_rows, samples_from_rows
+    from robosoc.firmware import flight_app, images
+
+    fw = FirmwareConfig()
+    program = load_elf(flight_app.build(fw))
+    samples = samples_from_rows(built_in_rows(0.03, seed=1), 4.0)
+    end = samples[-1].cycle + 2_500_000
+
+    def run(steps):
+        chip = MPSoC(fw.seed_chip())
+        for xy in flight_app.app_tiles(fw):
+            chip.load(xy, program)
+        for k, s in enumerate(samples):
+            for payload in flight_app.sensor_payloads(s.payload, fw, chip.config, seq=k):
+                chip.inject(tuple(fw.ekf_tile), payload, s.cycle)
+        for c in steps:
+            chip.step(c)
+        chip.finish_accounting()
+        logs = {xy: images.read_job_log(chip, xy).records for xy in flight_app.app_tiles(fw)}
+        return logs, {xy: chip.counters(xy) for xy in flight_app.app_tiles(fw)}, chip.received()
+
+    one_call = run([end])
+    assert sum(len(r) for r in one_call[0].values()) == 2 * len(samples)
+    assert one_call == run(range(100_000, end + 100_000, 100_000))
+    assert one_call == run([s.cycle for s in samples] + [end])

@@ -487,15 +487,18 @@ def run_chip(core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int) -> 
                 break
             nrun = 0
             nsleep = 0
-            wake = NEVER
+            wake = NEVER  # the earliest wake-up of a sleeping core
+            wake_later = NEVER  # the earliest one after T
             for t in range(n):
                 state = cst[t, K_STATE]
                 if state == K_RUN:
                     nrun += 1
                 elif state == K_SLEEP:
                     nsleep += 1
-                    if cst[t, K_WAKE] < wake:
-                        wake = cst[t, K_WAKE]
+                    w = cst[t, K_WAKE]
+                    wake = min(wake, w)
+                    if w > T:
+                        wake_later = min(wake_later, w)
             # the NoC's next activity; a quiet NoC stays quiet until a core sends or receives
             nxt = NEVER if quiet else _noc_next(noc, cst)
             quiet = nxt >= NEVER
@@ -530,6 +533,10 @@ def run_chip(core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int) -> 
                             waking += 1
                     if nrun + waking >= 2:
                         H = min(H, T + look_idle)
+            if wake_later < H:
+                # a core due to wake later starts with a later quantum: woken inside this one it could
+                # run ahead of a packet another core sends it before its wake-up
+                H = wake_later
             if until < H:
                 H = until
             gst[G_QUANTA] += 1
