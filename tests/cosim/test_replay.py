@@ -102,3 +102,17 @@ def test_firmware_build_and_size_commands(tmp_path: Path):
     assert ".text" in result.stdout and "largest functions and objects (5 of" in result.stdout
     result = CliRunner().invoke(app, ["firmware", "size", str(elf), "--arith", "fixed"])
     assert result.exit_code == 2 and "--arith: chooses a build" in result.output
+
+
+def test_job_stamps_are_placed_past_the_32_bit_wrap_of_timer0():
+    # TIMER0 wraps every 2**32 cycles (17 s at 4 ns): a record read at chip cycle `now` lies less
+    # than that before it
+    from robosoc.cosim.replay import _unwrapped
+    from robosoc.firmware.images import JobRecord
+
+    now = 5 * 2**32 + 1000
+    record = JobRecord(task=2, job=7, release=100, deadline=2**32 - 5, start=150, completion=900, exec_cycles=600,
+                       met=True, event=True, depleted=False)  # fmt: skip
+    placed = _unwrapped(record, now)
+    assert (placed.release, placed.start, placed.completion) == (5 * 2**32 + 100, 5 * 2**32 + 150, 5 * 2**32 + 900)
+    assert placed.deadline == 4 * 2**32 + 2**32 - 5  # before the wrap

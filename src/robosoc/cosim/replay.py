@@ -28,6 +28,7 @@ release period's counters, and the record says so (``spans_periods``).
 from __future__ import annotations
 
 import bisect
+import dataclasses
 import time
 from collections import Counter
 from collections.abc import Callable, Sequence
@@ -226,6 +227,7 @@ def replay(
             if fresh > len(log.records):
                 raise RuntimeError(f"tile {xy}: the job log overflowed between two samples")
             for r in log.records[len(log.records) - fresh :] if fresh else []:
+                r = _unwrapped(r, chip_.cycle)
                 logged.append((xy, r, _period_of(samples, r.release)))
             seen[xy] = count
         if on_sample is not None:
@@ -273,6 +275,19 @@ def replay(
         kernel_stats={xy: images.read_stats(chip_, xy) for xy in tiles}, counters=counters,
         task_energy_pj=task_energy, energy_pj=total,
         cycles=chip_.cycle, host_seconds=seconds,
+    )  # fmt: skip
+
+
+def _unwrapped(record: images.JobRecord, now: int) -> images.JobRecord:
+    """The record with its 32-bit TIMER0 stamps placed on the chip's 64-bit timeline (they are at
+    most 2**32 cycles, 17 s at 4 ns, before ``now``)."""
+
+    def full(value: int) -> int:
+        return now - ((now - value) & 0xFFFFFFFF)
+
+    return dataclasses.replace(
+        record, release=full(record.release), start=full(record.start), completion=full(record.completion),
+        deadline=full(record.deadline),
     )  # fmt: skip
 
 
