@@ -23,7 +23,7 @@ from robosoc.config.vehicle import VehicleConfig
 from robosoc.control import quaternion as quat
 from robosoc.control.host import Estimate
 from robosoc.control.setpoint import Setpoint, setpoint_at
-from robosoc.physics import SensorSample, World
+from robosoc.physics import SensorSample, Truth, World
 
 SAMPLE_FIELDS = (
     "gyro_x", "gyro_y", "gyro_z", "accel_x", "accel_y", "accel_z", "mag_x", "mag_y", "mag_z",
@@ -129,26 +129,7 @@ def fly(
         setpoint = setpoint_at(scenario.flight, rest, t)
         pwm = controller.step(sample, setpoint)
         quad.apply_pwm([int(v) for v in pwm])
-        truth = quad.truth()
-        est = controller.estimate
-        row = np.concatenate(
-            (
-                [t],
-                truth.position,
-                truth.euler,
-                truth.quaternion,
-                est.euler,
-                est.quaternion,
-                [est.height, setpoint.roll, setpoint.pitch, setpoint.yaw, setpoint.height, float(setpoint.armed)],
-                quad.pwm,
-                world.wind.velocity,
-                [setpoint.height_rate, setpoint.height_accel],
-                sample.gyro,
-                sample.accel,
-                sample.mag,
-                [sample.baro_altitude, sample.baro_pressure],
-            )
-        )
+        row = flight_row(sample, quad.truth(), controller.estimate, setpoint, quad.pwm, world.wind.velocity)
         rows[k] = row
         if on_row is not None:
             on_row(row)
@@ -156,6 +137,42 @@ def fly(
             on_sample(world, k)
         world.advance((k + 1) * period)
     return rows
+
+
+def flight_row(
+    sample: SensorSample,
+    truth: Truth,
+    estimate: Estimate,
+    setpoint: Setpoint,
+    pwm: Sequence[int],
+    wind: Sequence[float],
+) -> np.ndarray:
+    """One row of a flight (columns :data:`ROW_FIELDS`) at the time of ``sample``."""
+    return np.concatenate(
+        (
+            [sample.time],
+            truth.position,
+            truth.euler,
+            truth.quaternion,
+            estimate.euler,
+            estimate.quaternion,
+            [
+                estimate.height,
+                setpoint.roll,
+                setpoint.pitch,
+                setpoint.yaw,
+                setpoint.height,
+                float(setpoint.armed),
+            ],
+            pwm,
+            wind,
+            [setpoint.height_rate, setpoint.height_accel],
+            sample.gyro,
+            sample.accel,
+            sample.mag,
+            [sample.baro_altitude, sample.baro_pressure],
+        )
+    )
 
 
 def column(rows: np.ndarray, name: str) -> np.ndarray:

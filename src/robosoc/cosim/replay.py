@@ -122,6 +122,25 @@ class ReplayResult:
 # --- the sensor stream --------------------------------------------------------------------------
 
 
+def sensor_packet(row: np.ndarray, seq: int, dt_us: int) -> bytes:
+    """The sensor packet of one flight row (columns :data:`ROW_FIELDS`): its sample and setpoint."""
+    col = dict(zip(ROW_FIELDS, (float(v) for v in row), strict=True))
+    values = {
+        "kind": packets.SENSOR.kind,
+        "flags": packets.FLAG_ARMED if col["armed"] > 0.5 else 0,
+        "seq": seq,
+        "time_us": round(col["t"] * 1e6),
+        "dt_us": dt_us,
+        "gyro": tuple(col[f"gyro_{a}"] for a in "xyz"),
+        "accel": tuple(col[f"accel_{a}"] for a in "xyz"),
+        "mag": tuple(col[f"mag_{a}"] for a in "xyz"),
+        "baro_altitude": col["baro_altitude"],
+        "setpoint": tuple(col[f"sp_{n}"] for n in ("roll", "pitch", "yaw", "height")),
+        "height_feedforward": (col["sp_height_rate"], col["sp_height_accel"]),
+    }
+    return packets.SENSOR.pack(values)
+
+
 def samples_from_rows(rows: np.ndarray, clock_ns: float, first_cycle: int = DEFAULT_FIRST_CYCLE) -> list[SampleInput]:
     """Sensor messages of a flight (rows with the columns of :data:`ROW_FIELDS`, e.g. a flight log).
 
@@ -130,29 +149,15 @@ def samples_from_rows(rows: np.ndarray, clock_ns: float, first_cycle: int = DEFA
     """
     if rows.ndim != 2 or rows.shape[1] != len(ROW_FIELDS):
         raise ValueError(f"a flight has {len(ROW_FIELDS)} columns (robosoc.control.flight.ROW_FIELDS)")
-    col = {name: rows[:, k] for k, name in enumerate(ROW_FIELDS)}
-    times = col["t"]
+    times = rows[:, ROW_FIELDS.index("t")]
     if len(times) and (np.diff(times) <= 0).any():
         raise ValueError("sample times must increase")
     out = []
     for k in range(len(rows)):
         t = float(times[k])
         dt = float(times[k] - times[k - 1]) if k else float(times[1] - times[0]) if len(times) > 1 else 0.01
-        values = {
-            "kind": packets.SENSOR.kind,
-            "flags": packets.FLAG_ARMED if col["armed"][k] > 0.5 else 0,
-            "seq": k,
-            "time_us": round(t * 1e6),
-            "dt_us": round(dt * 1e6),
-            "gyro": tuple(float(col[f"gyro_{a}"][k]) for a in "xyz"),
-            "accel": tuple(float(col[f"accel_{a}"][k]) for a in "xyz"),
-            "mag": tuple(float(col[f"mag_{a}"][k]) for a in "xyz"),
-            "baro_altitude": float(col["baro_altitude"][k]),
-            "setpoint": tuple(float(col[f"sp_{n}"][k]) for n in ("roll", "pitch", "yaw", "height")),
-            "height_feedforward": (float(col["sp_height_rate"][k]), float(col["sp_height_accel"][k])),
-        }
         cycle = first_cycle + round(t * 1e9 / clock_ns)
-        out.append(SampleInput(k, t, cycle, packets.SENSOR.pack(values)))
+        out.append(SampleInput(k, t, cycle, sensor_packet(rows[k], k, round(dt * 1e6))))
     return out
 
 
@@ -164,6 +169,142 @@ def built_in_rows(seconds: float = 10.0, seed: int = 1) -> np.ndarray:
 
 
 # --- the replay ---------------------------------------------------------------------------------
+
+
+class FirmwareRun:
+    """The firmware on the chip, driven one sensor sample at a time: the part of :func:`replay`
+    that the lockstep co-simulation (:mod:`robosoc.cosim.lockstep`) shares.
+
+    Use: for each sample, :meth:`inject` it, :meth:`run_to` the chip (in one go or in pieces) up
+    to the next sample's cycle, then :meth:`close_period`; :meth:`result` at the end.  Job records
+    are charged to the sample period they were released in, from counter snapshots taken at
+    :meth:`close_period`.
+
+    Raises:
+        ValueError: the mapping does not fit the chip.
+    """
+
+    def __init__(
+        self,
+        fw: FirmwareConfig | None = None,
+        *,
+        vehicle: VehicleConfig | None = None,
+        scenario: ScenarioConfig | None = None,
+        chip: ChipConfig | None = None,
+        energy: EnergyModel | None = None,
+        first_cycle: int = DEFAULT_FIRST_CYCLE,
+    ) -> None:
+        self.fw = fw or FirmwareConfig()
+        self.chip_config = chip or self.fw.seed_chip()
+        self.fw.check_chip(self.chip_config)
+        self.model = energy or EnergyModel.load()
+        self.first_cycle = first_cycle
+        elf = flight_app.build(self.fw, vehicle=vehicle, scenario=scenario)
+        self.chip = MPSoC(self.chip_config)
+        program = load_elf(elf, self.chip.regions())
+        self.tiles = flight_app.app_tiles(self.fw)
+        for xy in self.tiles:
+            self.chip.load(xy, program)
+        self.names = {(xy, tid): name for xy in self.tiles for name, tid in flight_app.task_ids(self.fw, xy).items()}
+        self.samples: list[SampleInput] = []
+        self.commands: list[PwmCommand] = []
+        self._periods: list[dict] = []  # per sample period: counter deltas per (tile, task) and NoC energy
+        self._previous = _snapshot(self.chip, self.tiles, self.model)
+        self._seen = dict.fromkeys(self.tiles, 0)
+        self._logged: list[tuple[tuple[int, int], images.JobRecord, int]] = []  # (tile, record, period)
+        self._start = time.perf_counter()
+
+    @property
+    def clock_ns(self) -> float:
+        return self.chip.clock_ns
+
+    @property
+    def cycle(self) -> int:
+        return self.chip.cycle
+
+    def inject(self, sample: SampleInput) -> None:
+        """Send ``sample`` from the I/O tile to the estimator at ``sample.cycle``."""
+        for payload in flight_app.sensor_payloads(sample.payload, self.fw, self.chip_config, seq=sample.seq):
+            self.chip.inject(tuple(self.fw.ekf_tile), payload, sample.cycle)  # type: ignore[arg-type]
+        self.samples.append(sample)
+
+    def run_to(self, cycle: int) -> list[PwmCommand]:
+        """Run the chip to ``cycle``; the PWM commands that reached the I/O tile meanwhile.
+
+        Raises:
+            robosoc.chip.mpsoc.ChipError / CoreError: the firmware faulted (names tile, pc, symbol).
+        """
+        self.chip.step(cycle)
+        fresh = []
+        # a PWM message fits one NoC packet, so no message straddles two calls
+        for message in images.reassemble(self.chip.received()):
+            if message.port != packets.PWM_PORT:
+                continue
+            values = packets.PWM.unpack(message.data)
+            pwm = tuple(int(v) for v in values["pwm"])  # type: ignore[union-attr]
+            fresh.append(PwmCommand(int(values["seq"]), pwm, message.cycle))  # type: ignore[arg-type]
+        self.commands += fresh
+        return fresh
+
+    def close_period(self) -> None:
+        """End the period of the last injected sample (the chip is at the next sample's cycle):
+        snapshot the counters and collect the jobs the kernels logged.
+
+        Raises:
+            RuntimeError: a tile's job log overflowed since the last call.
+        """
+        current = _snapshot(self.chip, self.tiles, self.model)
+        self._periods.append(_delta(self._previous, current))
+        self._previous = current
+        for xy in self.tiles:
+            log = images.read_job_log(self.chip, xy)
+            count = log.lost + len(log.records)
+            fresh = count - self._seen[xy]
+            if fresh > len(log.records):
+                raise RuntimeError(f"tile {xy}: the job log overflowed between two samples")
+            for r in log.records[len(log.records) - fresh :] if fresh else []:
+                r = _unwrapped(r, self.chip.cycle)
+                self._logged.append((xy, r, _period_of(self.samples, r.release)))
+            self._seen[xy] = count
+
+    def result(self) -> ReplayResult:
+        """Job records with their energy, the PWM commands, and the run's totals."""
+        seconds = time.perf_counter() - self._start
+        model, chip_, samples = self.model, self.chip, self.samples
+        per_period = Counter(p for _, _, p in self._logged)
+        per_tile_period = Counter((xy, p) for xy, _, p in self._logged)
+        jobs = []
+        for xy, r, p in self._logged:
+            name = self.names.get((xy, r.task))
+            if name is None:
+                continue
+            delta = self._periods[p]
+            counters = delta["tasks"].get((xy, r.task), {})
+            shared = per_tile_period[(xy, p)]
+            energy_pj = {
+                "task": _pj(model, counters),
+                "kernel": _pj(model, delta["tasks"].get((xy, images.KERNEL_TASK_ID), {})) / shared,
+                "idle": _pj(model, delta["tasks"].get((xy, images.IDLE_TASK_ID), {})) / shared,
+                "noc": delta["noc_pj"] / per_period[p],
+            }
+            jobs.append(
+                JobRecord(
+                    task=name, tile=xy, job=r.job, release_cycle=r.release, start_cycle=r.start,
+                    completion_cycle=r.completion, exec_cycles=r.exec_cycles, deadline_met=r.met,
+                    instructions=int(counters.get("instructions", 0)), energy_pj=energy_pj,
+                    spans_periods=p + 1 < len(samples) and r.completion > samples[p + 1].cycle,
+                )
+            )  # fmt: skip
+        chip_.finish_accounting()
+        counters = {xy: chip_.counters(xy) for xy in self.tiles}
+        task_energy = {(xy, task): _pj(model, c) for xy in self.tiles for task, c in chip_.task_counters(xy).items()}
+        total = {f"tile {xy}": _pj(model, c) for xy, c in counters.items()}
+        total["noc"] = sum(model.noc_pj(chip_.noc_counters()).values())
+        return ReplayResult(
+            firmware=self.fw, clock_ns=chip_.clock_ns, samples=list(samples), commands=list(self.commands),
+            jobs=jobs, kernel_stats={xy: images.read_stats(chip_, xy) for xy in self.tiles}, counters=counters,
+            task_energy_pj=task_energy, energy_pj=total, cycles=chip_.cycle, host_seconds=seconds,
+        )  # fmt: skip
 
 
 def replay(
@@ -192,90 +333,16 @@ def replay(
         ValueError: the mapping does not fit the chip, or the rows are not a flight.
         robosoc.chip.mpsoc.ChipError / CoreError: the firmware faulted (names tile, pc, symbol).
     """
-    fw = fw or FirmwareConfig()
-    chip_config = chip or fw.seed_chip()
-    fw.check_chip(chip_config)
-    model = energy or EnergyModel.load()
-    elf = flight_app.build(fw, vehicle=vehicle, scenario=scenario)
-    chip_ = MPSoC(chip_config)
-    program = load_elf(elf, chip_.regions())
-    tiles = flight_app.app_tiles(fw)
-    for xy in tiles:
-        chip_.load(xy, program)
-    samples = samples_from_rows(rows, chip_.clock_ns, first_cycle)
-    names = {(xy, tid): name for xy in tiles for name, tid in flight_app.task_ids(fw, xy).items()}
-
-    start = time.perf_counter()
-    periods: list[dict] = []  # per sample period: counter deltas per (tile, task) and NoC energy
-    previous = _snapshot(chip_, tiles, model)
-    seen = dict.fromkeys(tiles, 0)
-    logged: list[tuple[tuple[int, int], images.JobRecord, int]] = []  # (tile, record, period)
-    received: list[tuple[int, list[int]]] = []
-    period = samples[1].cycle - samples[0].cycle if len(samples) > 1 else round(10e6 / chip_.clock_ns)
+    run = FirmwareRun(fw, vehicle=vehicle, scenario=scenario, chip=chip, energy=energy, first_cycle=first_cycle)
+    samples = samples_from_rows(rows, run.clock_ns, first_cycle)
+    period = samples[1].cycle - samples[0].cycle if len(samples) > 1 else round(10e6 / run.clock_ns)
     for k, sample in enumerate(samples):
-        for payload in flight_app.sensor_payloads(sample.payload, fw, chip_config, seq=k):
-            chip_.inject(tuple(fw.ekf_tile), payload, sample.cycle)  # type: ignore[arg-type]
-        chip_.step(samples[k + 1].cycle if k + 1 < len(samples) else sample.cycle + period)
-        received += chip_.received()
-        current = _snapshot(chip_, tiles, model)
-        periods.append(_delta(previous, current))
-        previous = current
-        for xy in tiles:
-            log = images.read_job_log(chip_, xy)
-            count = log.lost + len(log.records)
-            fresh = count - seen[xy]
-            if fresh > len(log.records):
-                raise RuntimeError(f"tile {xy}: the job log overflowed between two samples")
-            for r in log.records[len(log.records) - fresh :] if fresh else []:
-                r = _unwrapped(r, chip_.cycle)
-                logged.append((xy, r, _period_of(samples, r.release)))
-            seen[xy] = count
+        run.inject(sample)
+        run.run_to(samples[k + 1].cycle if k + 1 < len(samples) else sample.cycle + period)
+        run.close_period()
         if on_sample is not None:
             on_sample(k + 1, len(samples))
-    seconds = time.perf_counter() - start
-
-    per_period = Counter(p for _, _, p in logged)
-    per_tile_period = Counter((xy, p) for xy, _, p in logged)
-    jobs = []
-    for xy, r, p in logged:
-        name = names.get((xy, r.task))
-        if name is None:
-            continue
-        delta = periods[p]
-        counters = delta["tasks"].get((xy, r.task), {})
-        shared = per_tile_period[(xy, p)]
-        energy_pj = {
-            "task": _pj(model, counters),
-            "kernel": _pj(model, delta["tasks"].get((xy, images.KERNEL_TASK_ID), {})) / shared,
-            "idle": _pj(model, delta["tasks"].get((xy, images.IDLE_TASK_ID), {})) / shared,
-            "noc": delta["noc_pj"] / per_period[p],
-        }
-        jobs.append(
-            JobRecord(
-                task=name, tile=xy, job=r.job, release_cycle=r.release, start_cycle=r.start,
-                completion_cycle=r.completion, exec_cycles=r.exec_cycles, deadline_met=r.met,
-                instructions=int(counters.get("instructions", 0)), energy_pj=energy_pj,
-                spans_periods=p + 1 < len(samples) and r.completion > samples[p + 1].cycle,
-            )
-        )  # fmt: skip
-
-    commands = []
-    for message in images.reassemble(received):
-        if message.port != packets.PWM_PORT:
-            continue
-        values = packets.PWM.unpack(message.data)
-        commands.append(PwmCommand(int(values["seq"]), tuple(int(v) for v in values["pwm"]), message.cycle))  # type: ignore[arg-type]
-    chip_.finish_accounting()
-    counters = {xy: chip_.counters(xy) for xy in tiles}
-    task_energy = {(xy, task): _pj(model, c) for xy in tiles for task, c in chip_.task_counters(xy).items()}
-    total = {f"tile {xy}": _pj(model, c) for xy, c in counters.items()}
-    total["noc"] = sum(model.noc_pj(chip_.noc_counters()).values())
-    return ReplayResult(
-        firmware=fw, clock_ns=chip_.clock_ns, samples=samples, commands=commands, jobs=jobs,
-        kernel_stats={xy: images.read_stats(chip_, xy) for xy in tiles}, counters=counters,
-        task_energy_pj=task_energy, energy_pj=total,
-        cycles=chip_.cycle, host_seconds=seconds,
-    )  # fmt: skip
+    return run.result()
 
 
 def _unwrapped(record: images.JobRecord, now: int) -> images.JobRecord:

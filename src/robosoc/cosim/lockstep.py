@@ -1,0 +1,268 @@
+"""Lockstep co-simulation: the physics world and the firmware on the chip under one clock.
+
+One owner of time (PX4's lockstep idea): the loop of :func:`fly_lockstep` keeps simulated time as
+an integer number of nanoseconds, ``t_ns``; the physics advances in whole steps (1 ms) and the
+chip is run to the cycle of each step's end, so neither side ever waits on the host's clock and a
+flight is as fast as the host allows and bit-for-bit repeatable.
+
+Time mapping: ``t_ns`` is cycle ``first_cycle + round(t_ns / clock_ns)`` of the chip
+(:func:`ChipController.cycle_of`); ``first_cycle`` (:data:`flight_app.FIRST_SAMPLE_CYCLE`) leaves
+the firmware its boot, as in the replay harness.
+
+Per sensor sample k, taken at ``t_k`` (a multiple of the sensor period):
+
+1. the flight row of sample k is formed (truth at ``t_k``, the sample, the setpoint at ``t_k``);
+2. the controller is given the sample (:meth:`LockstepController.sense`): the chip controller
+   packs it exactly as :func:`robosoc.cosim.replay.samples_from_rows` would and injects it from
+   the I/O tile at the cycle of ``t_k``;
+3. for each physics step [t, t + 1 ms) of the sample period, the controller runs to ``t + 1 ms``
+   (:meth:`LockstepController.advance`); the newest PWM command that reached the I/O tile in that
+   step is applied to the motors from that step on and held until the next one (zero-order hold,
+   quantised to the physics step containing the arrival cycle); then the world takes the step.
+
+The row's PWM columns are the command in force during the sample's first physics step.  The chip's
+state estimate never leaves the chip (only PWM messages reach the I/O tile), so the rows' estimate
+columns are NaN for the chip controller.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+
+from robosoc.analysis.energy import EnergyModel
+from robosoc.config.chip import ChipConfig
+from robosoc.config.firmware import FirmwareConfig
+from robosoc.config.ranges import check_seed
+from robosoc.config.scenario import PHYSICS_DT_S, ScenarioConfig
+from robosoc.config.vehicle import VehicleConfig
+from robosoc.control.flight import ROW_FIELDS, flight_row
+from robosoc.control.host import Estimate
+from robosoc.control.setpoint import Setpoint, setpoint_at
+from robosoc.cosim.replay import DEFAULT_FIRST_CYCLE, FirmwareRun, ReplayResult, SampleInput, sensor_packet
+from robosoc.firmware import flight_app
+from robosoc.physics import SensorSample, World
+
+NS_PER_S = 1_000_000_000
+PHYSICS_STEP_NS = round(PHYSICS_DT_S * NS_PER_S)
+"""The physics step in nanoseconds (1 ms)."""
+
+PWM_COLUMNS = [ROW_FIELDS.index(f"pwm{i}") for i in range(4)]
+
+Pwm = tuple[int, int, int, int]
+
+
+class LockstepController(Protocol):
+    """A controller that lives in simulated time: it is told each sample and run step by step."""
+
+    def reset(self) -> None:
+        """Start a new flight."""
+
+    def sense(self, k: int, t_ns: int, sample: SensorSample, setpoint: Setpoint, row: np.ndarray) -> None:
+        """Sample ``k``, taken at ``t_ns``, the setpoint then, and the flight row holding both (its
+        PWM columns are not final yet)."""
+
+    def advance(self, t_ns: int) -> Pwm | None:
+        """Run to ``t_ns``; the newest command that arrived since the last call, or None."""
+
+    def finish(self) -> None:
+        """The flight is over (the controller has been advanced to its end)."""
+
+    @property
+    def estimate(self) -> Estimate:
+        """The controller's current state estimate (NaN where it cannot be seen)."""
+
+
+UNKNOWN_ESTIMATE = Estimate(np.full(4, math.nan), np.full(3, math.nan), math.nan, math.nan)
+"""What the host sees of the chip's estimate: nothing (it stays on the chip)."""
+
+
+class ChipController:
+    """The flight firmware on the chip (:mod:`robosoc.firmware.flight_app`) as a lockstep controller.
+
+    Args:
+        scenario, vehicle: what is flown (the firmware's control parameters come from them).
+        fw: the firmware build and task mapping (default: fixed point with the multiplier).
+        chip: the chip (default: the seed's 2×2 for the mapping).
+        energy: the energy model for the job records (default: the packaged coefficients).
+        first_cycle: the cycle of simulated time 0 (the firmware boots before it).
+
+    Raises:
+        ValueError: the mapping does not fit the chip; a controller parameter does not fit Q16.16.
+        CompileError: the firmware failed to build.
+    """
+
+    def __init__(
+        self,
+        scenario: ScenarioConfig,
+        vehicle: VehicleConfig,
+        fw: FirmwareConfig | None = None,
+        *,
+        chip: ChipConfig | None = None,
+        energy: EnergyModel | None = None,
+        first_cycle: int = DEFAULT_FIRST_CYCLE,
+    ) -> None:
+        self.scenario = scenario
+        self.vehicle = vehicle
+        self.fw = fw or FirmwareConfig()
+        self.chip = chip
+        self.energy = energy or EnergyModel.load()
+        self.first_cycle = first_cycle
+        self.sample_period_us = scenario.sensors.period_steps * PHYSICS_STEP_NS // 1000
+        flight_app.build(self.fw, vehicle=vehicle, scenario=scenario)  # compile (or hit the cache) now
+        self.run: FirmwareRun | None = None
+        self.result: ReplayResult | None = None
+
+    def reset(self) -> None:
+        """A freshly booted chip with the firmware loaded."""
+        self.run = FirmwareRun(
+            self.fw,
+            vehicle=self.vehicle,
+            scenario=self.scenario,
+            chip=self.chip,
+            energy=self.energy,
+            first_cycle=self.first_cycle,
+        )
+        self.result = None
+
+    def _run(self) -> FirmwareRun:
+        if self.run is None:
+            raise RuntimeError("reset the controller first")
+        return self.run
+
+    def cycle_of(self, t_ns: int) -> int:
+        """The chip cycle at simulated time ``t_ns``."""
+        return self.first_cycle + round(t_ns / self._run().clock_ns)
+
+    def sense(self, k: int, t_ns: int, sample: SensorSample, setpoint: Setpoint, row: np.ndarray) -> None:
+        run = self._run()
+        if k > 0:
+            run.close_period()  # the chip is at the cycle of t_k: the previous sample's period ends
+        packet = sensor_packet(row, k, self.sample_period_us)
+        run.inject(SampleInput(k, t_ns / NS_PER_S, self.cycle_of(t_ns), packet))
+
+    def advance(self, t_ns: int) -> Pwm | None:
+        fresh = self._run().run_to(self.cycle_of(t_ns))
+        return fresh[-1].pwm if fresh else None
+
+    def finish(self) -> None:
+        run = self._run()
+        if run.samples:
+            run.close_period()
+        self.result = run.result()
+
+    @property
+    def estimate(self) -> Estimate:
+        return UNKNOWN_ESTIMATE
+
+
+def fly_lockstep(
+    scenario: ScenarioConfig,
+    vehicle: VehicleConfig,
+    controller: LockstepController,
+    seed: int,
+    on_row: Callable[[np.ndarray], None] | None = None,
+    on_sample: Callable[[World, int], None] | None = None,
+) -> np.ndarray:
+    """Fly ``scenario`` with ``controller`` in lockstep; the flight with the columns :data:`ROW_FIELDS`.
+
+    Args:
+        scenario, vehicle, seed: as :func:`robosoc.control.flight.fly`.
+        controller: the controller, run in simulated time.
+        on_row: called with each row as soon as it is complete (logging).
+        on_sample: called with the world (at the sample's time) and the sample index (progress, video).
+
+    Raises:
+        ValueError: a negative seed, or a flight shorter than one sensor period.
+    """
+    check_seed("seed", seed)
+    if round(scenario.duration_s * scenario.sensors.rate_hz) < 1:
+        raise ValueError(f"duration_s: a flight lasts at least one sensor period, got {scenario.duration_s:g} s")
+    world = World([vehicle], scenario.sensors, scenario.wind)
+    world.reset(seed)
+    quad = world.quadrotors[0]
+    controller.reset()
+    steps_per_sample = world.sensor_steps
+    samples = round(scenario.duration_s * scenario.sensors.rate_hz)
+    rows = np.empty((samples, len(ROW_FIELDS)))
+    rest = vehicle.rest_height
+    for k in range(samples):
+        first_step = k * steps_per_sample
+        if world.steps != first_step:
+            raise AssertionError("the world is not at the sample's step")
+        t_ns = first_step * PHYSICS_STEP_NS
+        sample = quad.sensors()
+        setpoint = setpoint_at(scenario.flight, rest, sample.time)
+        row = flight_row(sample, quad.truth(), controller.estimate, setpoint, quad.pwm, world.wind.velocity)
+        controller.sense(k, t_ns, sample, setpoint, row)
+        for s in range(steps_per_sample):
+            pwm = controller.advance(t_ns + (s + 1) * PHYSICS_STEP_NS)
+            if pwm is not None:
+                quad.apply_pwm(pwm)
+            if s == 0:
+                row[PWM_COLUMNS] = quad.pwm
+                rows[k] = row
+                if on_row is not None:
+                    on_row(row)
+                if on_sample is not None:
+                    on_sample(world, k)
+            world.step()
+    controller.finish()
+    return rows
+
+
+@dataclass(frozen=True)
+class ChipFlight:
+    """A flight of the firmware on the chip: the rows, the firmware run, and its pace."""
+
+    rows: np.ndarray
+    run: ReplayResult
+    simulated_s: float
+    host_s: float
+
+    @property
+    def real_time_factor(self) -> float:
+        """Simulated seconds per host second."""
+        return self.simulated_s / self.host_s if self.host_s > 0 else math.inf
+
+
+def fly_chip(
+    scenario: ScenarioConfig,
+    vehicle: VehicleConfig,
+    seed: int,
+    fw: FirmwareConfig | None = None,
+    *,
+    chip: ChipConfig | None = None,
+    on_row: Callable[[np.ndarray], None] | None = None,
+    on_sample: Callable[[World, int], None] | None = None,
+) -> ChipFlight:
+    """Fly ``scenario`` with the firmware ``fw`` on the chip in lockstep (the firmware is built first,
+    outside the timed flight)."""
+    controller = ChipController(scenario, vehicle, fw, chip=chip)
+    start = time.perf_counter()
+    rows = fly_lockstep(scenario, vehicle, controller, seed, on_row=on_row, on_sample=on_sample)
+    host_s = time.perf_counter() - start
+    assert controller.result is not None
+    simulated = len(rows) * scenario.sensors.period_steps * PHYSICS_STEP_NS / NS_PER_S
+    return ChipFlight(rows, controller.result, simulated, host_s)
+
+
+def arrival_step(cycle: int, first_cycle: int, clock_ns: float) -> int:
+    """Index of the physics step whose span holds chip cycle ``cycle``."""
+    return math.floor((cycle - first_cycle) * clock_ns / PHYSICS_STEP_NS)
+
+
+__all__ = [
+    "PHYSICS_STEP_NS",
+    "ChipController",
+    "ChipFlight",
+    "LockstepController",
+    "arrival_step",
+    "fly_chip",
+    "fly_lockstep",
+]
