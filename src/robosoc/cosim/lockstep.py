@@ -11,7 +11,8 @@ the firmware its boot, as in the replay harness.
 
 Per sensor sample k, taken at ``t_k`` (a multiple of the sensor period):
 
-1. the flight row of sample k is formed (truth at ``t_k``, the sample, the setpoint at ``t_k``);
+1. the flight row of sample k is formed (truth at ``t_k``, the sample, the setpoint at ``t_k``,
+   the controller's estimate once it has the sample);
 2. the controller is given the sample (:meth:`LockstepController.sense`): the chip controller
    packs it exactly as :func:`robosoc.cosim.replay.samples_from_rows` would and injects it from
    the I/O tile at the cycle of ``t_k``;
@@ -198,8 +199,10 @@ def fly_lockstep(
         t_ns = first_step * PHYSICS_STEP_NS
         sample = quad.sensors()
         setpoint = setpoint_at(scenario.flight, rest, sample.time)
-        row = flight_row(sample, quad.truth(), controller.estimate, setpoint, quad.pwm, world.wind.velocity)
-        controller.sense(k, t_ns, sample, setpoint, row)
+        truth, wind = quad.truth(), world.wind.velocity
+        given = flight_row(sample, truth, UNKNOWN_ESTIMATE, setpoint, quad.pwm, wind)
+        controller.sense(k, t_ns, sample, setpoint, given)
+        row = flight_row(sample, truth, controller.estimate, setpoint, quad.pwm, wind)  # the estimate after it
         for s in range(steps_per_sample):
             pwm = controller.advance(t_ns + (s + 1) * PHYSICS_STEP_NS)
             if pwm is not None:
