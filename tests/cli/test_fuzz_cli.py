@@ -82,7 +82,9 @@ OPTIONS: dict[tuple[str, str], Spec] = {
     ("cc", "--include"): Spec("in_dir"),
     ("cc", "--sram-size"): Spec("sram"),
     ("cc", "--no-runtime"): Spec("flag"),
-    ("fly", "--controller"): Spec("choice", choices=("host",)),  # "chip": refused until it exists
+    ("fly", "--controller"): Spec("choice", choices=("host", "chip")),
+    ("fly", "--arith"): Spec("choice", choices=("float", "fixed")),
+    ("fly", "--mul"): Spec("flag"),
     ("fly", "--seconds"): Spec("float", 0.01, 3600.0),  # at least one sensor period of 10 ms
     ("fly", "--seed"): Spec("int", 0, 2**63 - 1),
     ("fly", "--scenario"): Spec("in_file"),

@@ -11,10 +11,11 @@ from robosoc.control.flight_log import read_flight_log
 runner = CliRunner()
 
 
-def test_chip_controller_is_not_available_yet() -> None:
-    result = runner.invoke(app, ["fly", "--controller", "chip"])
-    assert result.exit_code == 2
-    assert "the chip controller is not available yet" in result.output
+def test_firmware_options_need_the_chip_controller() -> None:
+    for args in (["--arith", "float"], ["--no-mul"], ["--mul"]):
+        result = runner.invoke(app, ["fly", "--seconds", "0.01", "--no-out", *args])
+        assert result.exit_code == 2, result.output
+        assert "only with --controller chip" in result.output and "flying scenario" not in result.output
 
 
 def test_fly_writes_log_and_plot_and_prints_errors(tmp_path: Path) -> None:

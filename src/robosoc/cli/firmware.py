@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import csv
 import json
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated
@@ -166,74 +165,20 @@ def _report(result: ReplayResult, folder: Path | None) -> None:
         f"{result.deadline_misses} deadline misses, {result.cycles} cycles "
         f"({result.cycles * ns * 1e-9:.2f} s simulated in {result.host_seconds:.1f} s)",
     )
-    summary = {}
-    for name in ("estimator", "pid"):
-        jobs = result.jobs_of(name)
-        if not jobs:
-            continue
-        exec_c = [j.exec_cycles for j in jobs]
-        resp = [j.response_cycles for j in jobs]
-        energy = [j.energy_total_pj for j in jobs]
-        kernel = sum(j.energy_pj["kernel"] for j in jobs) / max(1e-12, sum(energy))
-        summary[name] = {
-            "jobs": len(jobs),
-            "exec_cycles_mean": sum(exec_c) / len(jobs),
-            "exec_cycles_max": max(exec_c),
-            "response_us_mean": sum(resp) / len(jobs) * ns / 1000,
-            "response_us_max": max(resp) * ns / 1000,
-            "energy_nj_mean": sum(energy) / len(jobs) / 1000,
-            "kernel_energy_share": kernel,
-            "deadline_misses": sum(not j.deadline_met for j in jobs),
-        }
-        s = summary[name]
+    from robosoc.cosim.replay import task_summary, write_jobs_csv
+
+    summary = task_summary(result.jobs, ns)
+    for name, s in summary.items():
         plain(
             console,
             f"  {name:<9} {s['jobs']} jobs: exec mean {s['exec_cycles_mean']:.0f} max {s['exec_cycles_max']} "
             f"cycles; response mean {s['response_us_mean']:.1f} max {s['response_us_max']:.1f} us; "
-            f"energy {s['energy_nj_mean']:.1f} nJ/job (kernel {kernel:.1%}); "
+            f"energy {s['energy_nj_mean']:.1f} nJ/job (kernel {s['kernel_energy_share']:.1%}); "
             f"misses {s['deadline_misses']}",
         )
     if folder is None:
         return
-    with (folder / "jobs.csv").open("w", newline="") as handle:
-        writer = csv.writer(handle)
-        writer.writerow(
-            [
-                "task",
-                "tile",
-                "job",
-                "release_cycle",
-                "start_cycle",
-                "completion_cycle",
-                "response_cycles",
-                "exec_cycles",
-                "instructions",
-                "task_pj",
-                "kernel_pj",
-                "noc_pj",
-                "idle_pj",
-                "deadline_met",
-            ]
-        )
-        for j in result.jobs:
-            writer.writerow(
-                [
-                    j.task,
-                    f"{j.tile[0]},{j.tile[1]}",
-                    j.job,
-                    j.release_cycle,
-                    j.start_cycle,
-                    j.completion_cycle,
-                    j.response_cycles,
-                    j.exec_cycles,
-                    j.instructions,
-                    f"{j.energy_pj['task']:.3f}",
-                    f"{j.energy_pj['kernel']:.3f}",
-                    f"{j.energy_pj['noc']:.3f}",
-                    f"{j.energy_pj['idle']:.3f}",
-                    int(j.deadline_met),
-                ]
-            )
+    write_jobs_csv(result.jobs, folder / "jobs.csv")
     record = {
         "firmware": result.firmware.label,
         "samples": len(result.samples),

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import time
 from pathlib import Path
 from typing import Annotated
 
@@ -11,6 +12,8 @@ import typer
 from robosoc.cli import exit_codes, files, options
 from robosoc.cli.app import app
 from robosoc.cli.console import make_console, note, plain
+from robosoc.cli.errors import CliError
+from robosoc.config.firmware import ARITH_CHOICES, FirmwareConfig
 from robosoc.config.vehicle import VEHICLE_PRESETS
 
 VIDEO_FPS = 25.0
@@ -23,7 +26,24 @@ def _fmt(value: float, unit: str, digits: int = 2) -> str:
 CONTROLLERS = ("host", "chip")
 
 Controller = Annotated[
-    str, typer.Option(help="Who flies: host (float64 Python) or chip.", callback=options.choice(*CONTROLLERS))
+    str,
+    typer.Option(
+        help="Who flies: host (float64 Python) or chip (the firmware on the seed's 2x2 chip, in lockstep).",
+        callback=options.choice(*CONTROLLERS),
+    ),
+]
+Arith = Annotated[
+    str | None,
+    typer.Option(
+        help="With --controller chip: float (soft-float) or fixed (Q16.16) firmware (default: fixed).",
+        callback=options.choice(*ARITH_CHOICES),
+    ),
+]
+Mul = Annotated[
+    bool | None,
+    typer.Option(
+        "--mul/--no-mul", help="With --controller chip: cores with the multiplier or without (default: with)."
+    ),
 ]
 Seconds = Annotated[
     float | None,
@@ -59,21 +79,25 @@ def fly_command(
     out: Out = None,
     no_out: NoOut = False,
     video: Video = None,
+    arith: Arith = None,
+    mul: Mul = None,
 ) -> None:
     """Fly the scenario (default: take off to 1 m, hover, 10° roll/pitch/yaw steps, a gust; 10 s)."""
     from rich.markup import escape
     from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
 
+    from robosoc.chip.mpsoc import ChipError
+    from robosoc.chip.single import CoreError
     from robosoc.config.scenario import ScenarioConfig
     from robosoc.config.vehicle import vehicle_preset
     from robosoc.control.flight import flight_metrics, fly
     from robosoc.control.flight_log import CsvFlightLog
     from robosoc.control.flight_plot import plot_flight
     from robosoc.control.host import HostController
+    from robosoc.cosim.lockstep import fly_lockstep
 
     console = make_console()
-    if controller == "chip":
-        raise options.fail("--controller", "the chip controller is not available yet (use --controller host)")
+    fw = _firmware(ctx, controller, arith, mul)
     options.exclusive(out=out is not None, no_out=no_out)
     sources: list[tuple[str, tuple[str, ...]]] = []
     config = ScenarioConfig()
@@ -106,7 +130,15 @@ def fly_command(
             video = files.output_file(video, "--video", inputs=[scenario] if scenario else ())
         else:
             video = files.output_dir(video, "--video")
-    pilot = HostController.for_scenario(config, craft)
+    if fw is None:
+        pilot = HostController.for_scenario(config, craft)
+        flier = "host"
+    else:
+        from robosoc.cosim.lockstep import ChipController
+
+        note(console, f"building the firmware ({fw.label}) and loading the chip ...")
+        pilot = ChipController(config, craft, fw)
+        flier = f"chip ({fw.label}, lockstep)"
     log = CsvFlightLog(out / "flight.csv") if out else None
     renderer = sink = None
     if video is not None:
@@ -127,7 +159,7 @@ def fly_command(
 
     console.print(
         f"flying scenario [bold]{escape(config.name)}[/bold] for {config.duration_s:g} s, vehicle {config.vehicle}, "
-        f"controller host, seed {seed}, sensors at {config.sensors.rate_hz:g} Hz"
+        f"controller {flier}, seed {seed}, sensors at {config.sensors.rate_hz:g} Hz"
     )
     for source, named in sources:
         console.print(escape(f"from {source}: {', '.join(named) if named else '(no fields)'}"))
@@ -142,7 +174,14 @@ def fly_command(
             transient=True,
         ) as progress:
             task = progress.add_task("fly", total=samples)
-            rows = fly(config, craft, pilot, seed, on_row=log.write if log else None, on_sample=on_sample)
+            start = time.perf_counter()
+            if isinstance(pilot, HostController):
+                rows = fly(config, craft, pilot, seed, on_row=log.write if log else None, on_sample=on_sample)
+            else:
+                rows = fly_lockstep(config, craft, pilot, seed, on_row=log.write if log else None, on_sample=on_sample)
+            host_s = time.perf_counter() - start
+    except (ChipError, CoreError) as exc:
+        raise CliError(f"the firmware failed on the chip: {exc}") from exc
     except KeyboardInterrupt:
         note(console, "interrupted" + (f"; the log so far is in {log.path}" if log else ""))
         raise typer.Exit(exit_codes.INTERRUPTED) from None
@@ -168,16 +207,58 @@ def fly_command(
     )
     for axis, at, rise in m.step_rise:
         console.print(f"  {axis} step at {at:g} s: 90 % reached after {_fmt(rise * 1000, 'ms', 0)}")
-    console.print(
-        f"EKF attitude error vs truth (RMS while flying): {_fmt(m.ekf_rms, 'deg')} (max {_fmt(m.ekf_max, 'deg')}; "
-        f"roll {m.ekf_euler_rms[0]:.2f}, pitch {m.ekf_euler_rms[1]:.2f}, yaw {m.ekf_euler_rms[2]:.2f} deg)"
-    )
-    console.print(f"height estimate error (RMS while flying): {_fmt(m.height_estimate_rms * 100, 'cm')}")
+    if fw is None:
+        console.print(
+            f"EKF attitude error vs truth (RMS while flying): {_fmt(m.ekf_rms, 'deg')} "
+            f"(max {_fmt(m.ekf_max, 'deg')}; "
+            f"roll {m.ekf_euler_rms[0]:.2f}, pitch {m.ekf_euler_rms[1]:.2f}, yaw {m.ekf_euler_rms[2]:.2f} deg)"
+        )
+        console.print(f"height estimate error (RMS while flying): {_fmt(m.height_estimate_rms * 100, 'cm')}")
+    else:
+        _chip_report(console, pilot, out, config.duration_s, host_s)
     if out:
         plot_flight(rows, out / "flight.png", title=f"{config.name}, seed {seed}")
         plain(console, f"log: {out / 'flight.csv'}  plot: {out / 'flight.png'}")
     if sink is not None and sink.frames:
         plain(console, f"video: {sink.path} ({sink.frames} frames at {VIDEO_FPS:g} fps)")
+
+
+def _firmware(ctx: typer.Context, controller: str, arith: str | None, mul: bool | None) -> FirmwareConfig | None:
+    """The firmware build the chip flies (None for the host controller, which takes no build options)."""
+    arith_given = arith is not None
+    mul_given = mul is not None and options.given(ctx, "mul")
+    if controller == "host":
+        for option, given in (("--arith", arith_given), ("--mul/--no-mul", mul_given)):
+            if given:
+                raise options.fail(option, "only with --controller chip (the host controller has no firmware)")
+        return None
+    changes = {}
+    if arith_given:
+        changes["--arith"] = ("arith", arith)
+    if mul_given:
+        changes["--mul/--no-mul"] = ("multiplier", mul)
+    return options.override(FirmwareConfig(), changes)
+
+
+def _chip_report(console, pilot, out: Path | None, simulated_s: float, host_s: float) -> None:
+    """Per-task response times and deadline misses of the chip's flight; jobs.csv in ``out``."""
+    from robosoc.cosim.replay import task_summary, write_jobs_csv
+
+    result = pilot.result
+    console.print("state estimate: on the chip (only PWM commands reach the I/O tile)")
+    for name, s in task_summary(result.jobs, result.clock_ns).items():
+        console.print(
+            f"  {name:<9} {s['jobs']} jobs: response mean {s['response_us_mean']:.1f} us, "
+            f"max {s['response_us_max']:.1f} us; exec mean {s['exec_cycles_mean']:.0f} cycles; "
+            f"deadline misses {s['deadline_misses']}"
+        )
+    console.print(
+        f"deadline misses: {result.deadline_misses}; {len(result.commands)} PWM commands; "
+        f"real-time factor {simulated_s / host_s:.2f} ({simulated_s:g} s simulated in {host_s:.1f} s)"
+    )
+    if out:
+        write_jobs_csv(result.jobs, out / "jobs.csv")
+        plain(console, f"jobs: {out / 'jobs.csv'}")
 
 
 def _open_video(console, video: Path):

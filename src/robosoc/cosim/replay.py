@@ -28,11 +28,13 @@ release period's counters, and the record says so (``spans_periods``).
 from __future__ import annotations
 
 import bisect
+import csv
 import dataclasses
 import time
 from collections import Counter
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
@@ -343,6 +345,55 @@ def replay(
         if on_sample is not None:
             on_sample(k + 1, len(samples))
     return run.result()
+
+
+# --- the job records ----------------------------------------------------------------------------
+
+JOB_CSV_FIELDS = (
+    "task", "tile", "job", "release_cycle", "start_cycle", "completion_cycle", "response_cycles", "exec_cycles",
+    "instructions", "task_pj", "kernel_pj", "noc_pj", "idle_pj", "deadline_met",
+)  # fmt: skip
+"""Columns of ``jobs.csv`` (one job a row; tile as "x,y", energies in pJ, deadline_met 0/1)."""
+
+
+def write_jobs_csv(jobs: Sequence[JobRecord], path: Path) -> None:
+    """Write ``jobs`` to ``path`` with the columns :data:`JOB_CSV_FIELDS`."""
+    with path.open("w", newline="") as handle:
+        writer = csv.writer(handle)
+        writer.writerow(JOB_CSV_FIELDS)
+        for j in jobs:
+            writer.writerow(
+                [
+                    j.task, f"{j.tile[0]},{j.tile[1]}", j.job, j.release_cycle, j.start_cycle, j.completion_cycle,
+                    j.response_cycles, j.exec_cycles, j.instructions, f"{j.energy_pj['task']:.3f}",
+                    f"{j.energy_pj['kernel']:.3f}", f"{j.energy_pj['noc']:.3f}", f"{j.energy_pj['idle']:.3f}",
+                    int(j.deadline_met),
+                ]
+            )  # fmt: skip
+
+
+def task_summary(jobs: Sequence[JobRecord], clock_ns: float) -> dict[str, dict[str, float]]:
+    """Per task (of :data:`TASK_NAMES` that has jobs): job count, mean/max execution cycles and
+    response time [us], mean energy per job [nJ], the kernel's share of it, deadline misses."""
+    summary: dict[str, dict[str, float]] = {}
+    for name in TASK_NAMES:
+        mine = [j for j in jobs if j.task == name]
+        if not mine:
+            continue
+        exec_c = [j.exec_cycles for j in mine]
+        resp = [j.response_cycles for j in mine]
+        energy = [j.energy_total_pj for j in mine]
+        summary[name] = {
+            "jobs": len(mine),
+            "exec_cycles_mean": sum(exec_c) / len(mine),
+            "exec_cycles_max": max(exec_c),
+            "response_us_mean": sum(resp) / len(mine) * clock_ns / 1000,
+            "response_us_max": max(resp) * clock_ns / 1000,
+            "energy_nj_mean": sum(energy) / len(mine) / 1000,
+            "kernel_energy_share": sum(j.energy_pj["kernel"] for j in mine) / max(1e-12, sum(energy)),
+            "deadline_misses": sum(not j.deadline_met for j in mine),
+        }
+    return summary
 
 
 def _unwrapped(record: images.JobRecord, now: int) -> images.JobRecord:
