@@ -145,7 +145,7 @@ class ChipController:
         if k > 0:
             run.close_period()  # the chip is at the cycle of t_k: the previous sample's period ends
         packet = sensor_packet(row, k, self.sample_period_us)
-        run.inject(SampleInput(k, t_ns / NS_PER_S, self.cycle_of(t_ns), packet))
+        run.inject(SampleInput(k, sample.time, self.cycle_of(t_ns), packet))
 
     def advance(self, t_ns: int) -> Pwm | None:
         fresh = self._run().run_to(self.cycle_of(t_ns))
@@ -262,6 +262,7 @@ def arrival_step(cycle: int, first_cycle: int, clock_ns: float) -> int:
 
 __all__ = [
     "PHYSICS_STEP_NS",
+    "UNKNOWN_ESTIMATE",
     "ChipController",
     "ChipFlight",
     "LockstepController",
