@@ -5,6 +5,7 @@ Usage::
     python tools/mutation.py LAYER [LAYER ...]   # config, control, physics, analysis, cli
     python tools/mutation.py --list              # the layers, their sources and test subsets
     python tools/mutation.py --score LAYER       # re-read the score of a finished run
+    python tools/mutation.py --survivors LAYER   # after adding tests: check the last run's survivors again
 
 The layers and their test subsets live in ``pyproject.toml`` under ``[tool.robosoc-mutation.layers]``;
 the mutmut settings shared by every layer under ``[tool.mutmut]``.  For each layer the script copies
@@ -91,14 +92,25 @@ def report(layer: str, workdir: Path) -> float:
     return value
 
 
-def run(layer: str, spec: dict[str, list[str]], workdir: Path, resume: bool) -> int:
-    prepare(spec, workdir, resume)
+def run(layer: str, spec: dict[str, list[str]], workdir: Path, resume: bool, survivors: bool) -> int:
+    names: list[str] = []
+    if survivors:
+        names = [line.split()[-1] for line in score(workdir)[1]]
+        if not names:
+            print(f"[{layer}] no survivors to check again")
+            return 0
+        (workdir / "mutants" / "mutmut-stats.json").unlink(missing_ok=True)  # map the new tests too
+    prepare(spec, workdir, resume or survivors)
     env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}  # mutmut puts mutants/src first
     env["ROBOSOC_CACHE"] = str(workdir / "cache")  # numba and firmware builds, kept between runs
+    # mutmut forks a worker per mutant: a BLAS thread pool started before the fork deadlocks the child
+    for name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_NUM_THREADS"):
+        env[name] = "1"
     jobs = os.environ.get("ROBOSOC_MUTATION_JOBS", "1")
     mutmut = shutil.which("mutmut") or f"{sys.executable} -m mutmut"
-    cmd = ["nice", "-n", "10", *mutmut.split(), "run", "--max-children", jobs]
-    print(f"[{layer}] in {workdir}: {' '.join(cmd)} > mutmut.log", flush=True)
+    cmd = ["nice", "-n", "10", *mutmut.split(), "run", "--max-children", jobs, *names]
+    shown = " ".join(cmd[: len(cmd) - len(names)]) + (f" <{len(names)} survivors>" if names else "")
+    print(f"[{layer}] in {workdir}: {shown} > mutmut.log", flush=True)
     with open(workdir / "mutmut.log", "w") as log:
         return subprocess.run(cmd, cwd=workdir, env=env, stdout=log, stderr=subprocess.STDOUT, check=False).returncode
 
@@ -109,6 +121,7 @@ def main() -> int:
     parser.add_argument("--list", action="store_true", help="show the layers and their test subsets")
     parser.add_argument("--score", action="store_true", help="only report the score of a finished run")
     parser.add_argument("--resume", action="store_true", help="keep the previous run's mutants and results")
+    parser.add_argument("--survivors", action="store_true", help="check only the previous run's survivors again")
     args = parser.parse_args()
     layers = _layers()
     if args.list or not args.layers:
@@ -123,7 +136,7 @@ def main() -> int:
     for layer in args.layers:
         workdir = base / layer
         if not args.score:
-            code = run(layer, layers[layer], workdir, args.resume)
+            code = run(layer, layers[layer], workdir, args.resume, args.survivors)
             if code != 0:
                 print(f"[{layer}] mutmut exited with {code}", file=sys.stderr)
                 status = code
