@@ -17,7 +17,8 @@ import pytest
 
 from robosoc.config.scenario import HeightMove
 from robosoc.control import quaternion as quat
-from robosoc.control.pid import euler_rates, wrap_angle
+from robosoc.control.altitude import AltitudeFilter
+from robosoc.control.pid import HeightController, Pid, PidGains, euler_rates, wrap_angle
 from robosoc.control.setpoint import move_profile
 
 ONE, I, J, K = (np.eye(4)[k] for k in range(4))
@@ -109,3 +110,39 @@ def test_height_profile_derivatives_by_finite_differences() -> None:
     assert z == pytest.approx(0.8) and rate == pytest.approx(math.pi * 1.2 / 3.0) and accel == pytest.approx(0.0)
     # just after the start: the peak acceleration π²·Δ/(2T²)
     assert move_profile(MOVE, 2.0 + 1e-9)[2] == pytest.approx(math.pi**2 * 1.2 / (2 * 1.5**2), rel=1e-6)
+
+
+def test_pid_integrates_up_to_and_including_the_band() -> None:
+    gains = PidGains(kp=0.0, ki=1.0, kd=0.0, integral_limit=10.0, output_limit=10.0, integral_band=0.25)
+    pid = Pid(gains)
+    assert pid.step(0.25, 0.0, 2.0) == 0.5  # |e| = band: the integral learns
+    assert pid.step(0.26, 0.0, 2.0) == 0.5  # beyond the band: frozen
+    assert pid.step(-0.25, 0.0, 1.0) == 0.25
+
+
+def test_height_integral_learns_at_the_band_while_the_setpoint_holds() -> None:
+    gains = PidGains(kp=1.0, ki=1.0, kd=2.0, integral_limit=5.0, output_limit=100.0, integral_band=0.25)
+    hc = HeightController(gains, mass=1.0, gravity=9.8, climb_rate=2.0, descent_rate=1.0, max_tilt_gain=1.5)
+    hc.step(0.25, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.5)  # error exactly the band, setpoint still
+    assert hc.integral == 0.125
+    hc.step(0.5, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.5)  # outside the band
+    assert hc.integral == 0.125
+    hc.step(0.25, 0.5, 0.0, 0.0, 0.0, 0.0, 0.0, 0.5)  # the setpoint moves: no learning
+    assert hc.integral == 0.125
+
+
+def test_altitude_filter_uses_the_vertical_specific_force_of_any_attitude() -> None:
+    """Two filters fed the same vertical specific force, one through a tilted R(q) and a body-frame
+    reading, the other level with the world-frame reading, must estimate the same height."""
+    rotation = quat.to_matrix(quat.from_euler(0.4, -0.3, 1.1))
+    tilted, level = AltitudeFilter(), AltitudeFilter()
+    for f in (tilted, level):
+        f.reset(100.0, 0.2, samples=10)
+    accel_body = np.array([1.3, -0.7, 9.9])
+    world = rotation @ accel_body
+    for k in range(20):
+        baro = 100.0 + 0.01 * k
+        h1 = tilted.step(rotation, accel_body, baro, 0.01)
+        h2 = level.step(np.eye(3), np.array([0.0, 0.0, world[2]]), baro, 0.01)
+        assert h1 == pytest.approx(h2, abs=1e-12)
+    assert tilted.velocity == pytest.approx(level.velocity, abs=1e-12)
