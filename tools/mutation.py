@@ -1,0 +1,148 @@
+"""Mutation testing of robosoc's pure-Python layers with mutmut, one layer at a time (on demand, not CI).
+
+Usage::
+
+    python tools/mutation.py LAYER [LAYER ...]   # config, control, physics, analysis, cli
+    python tools/mutation.py --list              # the layers, their sources and test subsets
+    python tools/mutation.py --score LAYER       # re-read the score of a finished run
+    python tools/mutation.py --survivors LAYER   # after adding tests: check the last run's survivors again
+
+The layers and their test subsets live in ``pyproject.toml`` under ``[tool.robosoc-mutation.layers]``;
+the mutmut settings shared by every layer under ``[tool.mutmut]``.  For each layer the script copies
+``src/``, ``tests/`` and ``pyproject.toml`` into ``$ROBOSOC_MUTATION_DIR/<layer>`` (default
+``/tmp/robosoc-mutation``), writes that layer's ``only_mutate`` and test selection into the copy's
+``[tool.mutmut]``, and runs ``nice -n 10 mutmut run --max-children N`` there (N from
+``ROBOSOC_MUTATION_JOBS``, default 1: the machine is shared), with its own ``ROBOSOC_CACHE`` so
+numba compiles each kernel once per layer directory and not per mutant.  The repository itself is
+never modified.  Each run starts from fresh mutants (``--resume`` keeps the previous ``mutants/``, and
+mutmut then checks again only what changed); mutmut's output goes to ``<layer dir>/mutmut.log``.
+
+Score = killed / (mutants - skipped): mutants no selected test reaches ("no tests") and survivors
+both count against it.  The survivors are listed (``mutmut show NAME`` in the layer directory shows
+a diff).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import shutil
+import subprocess
+import sys
+import tomllib
+from collections import Counter
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+KILLED = {1, 3, 36, 37, -24, 24, 152, 255}  # mutmut's killed, timeout and type-check exit codes
+STATUS = {0: "survived", 33: "no tests", 5: "no tests", 34: "skipped", None: "not checked"}
+
+
+def _layers() -> dict[str, dict[str, list[str]]]:
+    data = tomllib.loads((ROOT / "pyproject.toml").read_text())
+    return data["tool"]["robosoc-mutation"]["layers"]
+
+
+def _toml_list(values: list[str]) -> str:
+    return "[" + ", ".join(json.dumps(v) for v in values) + "]"
+
+
+def prepare(spec: dict[str, list[str]], workdir: Path, resume: bool) -> None:
+    """Copy the tree into ``workdir`` with the layer's settings."""
+    workdir.mkdir(parents=True, exist_ok=True)
+    if not resume and (workdir / "mutants").exists():
+        shutil.rmtree(workdir / "mutants")
+    for name in ("src", "tests"):
+        target = workdir / name
+        if target.exists():
+            shutil.rmtree(target)
+        shutil.copytree(ROOT / name, target, ignore=shutil.ignore_patterns("__pycache__", "*.pyc"))
+    text = (ROOT / "pyproject.toml").read_text()
+    head, sep, rest = text.partition("[tool.mutmut]\n")
+    if not sep:
+        raise SystemExit("pyproject.toml has no [tool.mutmut] table")
+    settings = (
+        f"only_mutate = {_toml_list(spec['mutate'])}\n"
+        f"pytest_add_cli_args_test_selection = {_toml_list(spec['tests'])}\n"
+    )
+    (workdir / "pyproject.toml").write_text(head + sep + settings + rest)
+
+
+def score(workdir: Path) -> tuple[Counter[str], list[str]]:
+    counts: Counter[str] = Counter()
+    survivors = []
+    for meta in sorted((workdir / "mutants").rglob("*.meta")):
+        for name, code in json.loads(meta.read_text())["exit_code_by_key"].items():
+            status = "killed" if code in KILLED else STATUS.get(code, "suspicious")
+            counts[status] += 1
+            if status in ("survived", "no tests", "suspicious"):
+                survivors.append(f"{status:9} {name}")
+    return counts, survivors
+
+
+def report(layer: str, workdir: Path) -> float:
+    counts, survivors = score(workdir)
+    total = sum(counts.values()) - counts["skipped"]
+    value = 100.0 * counts["killed"] / total if total else float("nan")
+    detail = ", ".join(f"{k} {v}" for k, v in sorted(counts.items()))
+    print(f"\n{layer}: mutation score {value:.1f} % ({counts['killed']} of {total} killed; {detail})")
+    for line in survivors:
+        print("   ", line)
+    return value
+
+
+def run(layer: str, spec: dict[str, list[str]], workdir: Path, resume: bool, survivors: bool) -> int:
+    names: list[str] = []
+    if survivors:
+        names = [line.split()[-1] for line in score(workdir)[1]]
+        if not names:
+            print(f"[{layer}] no survivors to check again")
+            return 0
+        (workdir / "mutants" / "mutmut-stats.json").unlink(missing_ok=True)  # map the new tests too
+    prepare(spec, workdir, resume or survivors)
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}  # mutmut puts mutants/src first
+    env["ROBOSOC_CACHE"] = str(workdir / "cache")  # numba and firmware builds, kept between runs
+    # mutmut forks a worker per mutant: a BLAS thread pool started before the fork deadlocks the child
+    for name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_NUM_THREADS"):
+        env[name] = "1"
+    jobs = os.environ.get("ROBOSOC_MUTATION_JOBS", "1")
+    mutmut = shutil.which("mutmut") or f"{sys.executable} -m mutmut"
+    cmd = ["nice", "-n", "10", *mutmut.split(), "run", "--max-children", jobs, *names]
+    shown = " ".join(cmd[: len(cmd) - len(names)]) + (f" <{len(names)} survivors>" if names else "")
+    print(f"[{layer}] in {workdir}: {shown} > mutmut.log", flush=True)
+    with open(workdir / "mutmut.log", "w") as log:
+        return subprocess.run(cmd, cwd=workdir, env=env, stdout=log, stderr=subprocess.STDOUT, check=False).returncode
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("layers", nargs="*", help="layers to mutate (see --list)")
+    parser.add_argument("--list", action="store_true", help="show the layers and their test subsets")
+    parser.add_argument("--score", action="store_true", help="only report the score of a finished run")
+    parser.add_argument("--resume", action="store_true", help="keep the previous run's mutants and results")
+    parser.add_argument("--survivors", action="store_true", help="check only the previous run's survivors again")
+    args = parser.parse_args()
+    layers = _layers()
+    if args.list or not args.layers:
+        for name, spec in layers.items():
+            print(f"{name:9} mutate {' '.join(spec['mutate'])}\n{'':9} tests  {' '.join(spec['tests'])}")
+        return 0
+    unknown = sorted(set(args.layers) - set(layers))
+    if unknown:
+        parser.error(f"unknown layer(s) {', '.join(unknown)}; known: {', '.join(layers)}")
+    base = Path(os.environ.get("ROBOSOC_MUTATION_DIR", "/tmp/robosoc-mutation"))
+    status = 0
+    for layer in args.layers:
+        workdir = base / layer
+        if not args.score:
+            code = run(layer, layers[layer], workdir, args.resume, args.survivors)
+            if code != 0:
+                print(f"[{layer}] mutmut exited with {code}", file=sys.stderr)
+                status = code
+        report(layer, workdir)
+    return status
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
