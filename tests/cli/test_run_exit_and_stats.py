@@ -75,6 +75,7 @@ def test_mesh_exit_status_whatever_the_tile_order(
 ) -> None:
     stats = tmp_path / "stats.json"
     args = ["run", *(str(programs[name]) for name in order), "--mesh", "2x2", "--stats", str(stats)]
+    args += ["--exit-code", "program"]  # the programs' own codes (the default reports 0/4)
     result = CliRunner().invoke(app, args)
     assert result.exit_code == status, (order, result.stderr)
     record = json.loads(stats.read_text())
@@ -91,7 +92,9 @@ def test_mesh_exit_status_whatever_the_tile_order(
 
 def test_mesh_exit_status_with_two_non_zero_tiles_is_one_of_them(programs: dict[str, Path]) -> None:
     for order in (("seven-slow", "ok-fast", "five-slow"), ("five-slow", "seven-slow", "ok-fast")):
-        result = CliRunner().invoke(app, ["run", *(str(programs[n]) for n in order), "--mesh", "2x2"])
+        result = CliRunner().invoke(
+            app, ["run", *(str(programs[n]) for n in order), "--mesh", "2x2", "--exit-code", "program"]
+        )
         assert result.exit_code in (5, 7), order
 
 
@@ -128,7 +131,9 @@ def _check_core_counters(c: dict[str, int]) -> None:
 
 def test_single_core_stats_hold_every_counter(programs: dict[str, Path], tmp_path: Path) -> None:
     stats = tmp_path / "stats.json"
-    result = CliRunner().invoke(app, ["run", str(programs["seven-fast"]), "--stats", str(stats)])
+    result = CliRunner().invoke(
+        app, ["run", str(programs["seven-fast"]), "--stats", str(stats), "--exit-code", "program"]
+    )
     assert result.exit_code == 7
     record = json.loads(stats.read_text())
     c = record["counters"]
@@ -148,7 +153,8 @@ def test_mesh_stats_hold_every_counter(programs: dict[str, Path], tmp_path: Path
     stats = tmp_path / "stats.json"
     order = ("ok-fast", "seven-fast", "ok-slow")
     result = CliRunner().invoke(
-        app, ["run", *(str(programs[n]) for n in order), "--mesh", "2x2", "--stats", str(stats)]
+        app,
+        ["run", *(str(programs[n]) for n in order), "--mesh", "2x2", "--stats", str(stats), "--exit-code", "program"],
     )
     assert result.exit_code == 7
     record = json.loads(stats.read_text())
