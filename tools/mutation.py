@@ -5,7 +5,7 @@ Usage::
     python tools/mutation.py LAYER [LAYER ...]   # config, control, physics, analysis, cli
     python tools/mutation.py --list              # the layers, their sources and test subsets
     python tools/mutation.py --score LAYER       # re-read the score of a finished run
-    python tools/mutation.py --survivors LAYER   # after adding tests: check the last run's survivors again
+    python tools/mutation.py --survivors LAYER   # after adding tests: check the survivors (and unchecked) again
 
 The layers and their test subsets live in ``pyproject.toml`` under ``[tool.robosoc-mutation.layers]``;
 the mutmut settings shared by every layer under ``[tool.mutmut]``.  For each layer the script copies
@@ -76,7 +76,7 @@ def score(workdir: Path) -> tuple[Counter[str], list[str]]:
         for name, code in json.loads(meta.read_text())["exit_code_by_key"].items():
             status = "killed" if code in KILLED else STATUS.get(code, "suspicious")
             counts[status] += 1
-            if status in ("survived", "no tests", "suspicious"):
+            if status in ("survived", "no tests", "suspicious", "not checked"):
                 survivors.append(f"{status:9} {name}")
     return counts, survivors
 
