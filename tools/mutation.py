@@ -5,7 +5,7 @@ Usage::
     python tools/mutation.py LAYER [LAYER ...]   # config, control, physics, analysis, cli
     python tools/mutation.py --list              # the layers, their sources and test subsets
     python tools/mutation.py --score LAYER       # re-read the score of a finished run
-    python tools/mutation.py --survivors LAYER   # after adding tests: check the last run's survivors again
+    python tools/mutation.py --survivors LAYER   # after adding tests: check the survivors (and unchecked) again
 
 The layers and their test subsets live in ``pyproject.toml`` under ``[tool.robosoc-mutation.layers]``;
 the mutmut settings shared by every layer under ``[tool.mutmut]``.  For each layer the script copies
@@ -33,13 +33,14 @@ import sys
 import tomllib
 from collections import Counter
 from pathlib import Path
+from typing import Any
 
 ROOT = Path(__file__).resolve().parents[1]
 KILLED = {1, 3, 36, 37, -24, 24, 152, 255}  # mutmut's killed, timeout and type-check exit codes
 STATUS = {0: "survived", 33: "no tests", 5: "no tests", 34: "skipped", None: "not checked"}
 
 
-def _layers() -> dict[str, dict[str, list[str]]]:
+def _layers() -> dict[str, dict[str, Any]]:
     data = tomllib.loads((ROOT / "pyproject.toml").read_text())
     return data["tool"]["robosoc-mutation"]["layers"]
 
@@ -48,7 +49,7 @@ def _toml_list(values: list[str]) -> str:
     return "[" + ", ".join(json.dumps(v) for v in values) + "]"
 
 
-def prepare(spec: dict[str, list[str]], workdir: Path, resume: bool) -> None:
+def prepare(spec: dict[str, Any], workdir: Path, resume: bool) -> None:
     """Copy the tree into ``workdir`` with the layer's settings."""
     workdir.mkdir(parents=True, exist_ok=True)
     if not resume and (workdir / "mutants").exists():
@@ -66,6 +67,8 @@ def prepare(spec: dict[str, list[str]], workdir: Path, resume: bool) -> None:
         f"only_mutate = {_toml_list(spec['mutate'])}\n"
         f"pytest_add_cli_args_test_selection = {_toml_list(spec['tests'])}\n"
     )
+    for key, value in spec.get("settings", {}).items():  # the layer's own mutmut settings
+        settings += f"{key} = {json.dumps(value)}\n"
     (workdir / "pyproject.toml").write_text(head + sep + settings + rest)
 
 
@@ -76,7 +79,7 @@ def score(workdir: Path) -> tuple[Counter[str], list[str]]:
         for name, code in json.loads(meta.read_text())["exit_code_by_key"].items():
             status = "killed" if code in KILLED else STATUS.get(code, "suspicious")
             counts[status] += 1
-            if status in ("survived", "no tests", "suspicious"):
+            if status in ("survived", "no tests", "suspicious", "not checked"):
                 survivors.append(f"{status:9} {name}")
     return counts, survivors
 
@@ -92,7 +95,7 @@ def report(layer: str, workdir: Path) -> float:
     return value
 
 
-def run(layer: str, spec: dict[str, list[str]], workdir: Path, resume: bool, survivors: bool) -> int:
+def run(layer: str, spec: dict[str, Any], workdir: Path, resume: bool, survivors: bool) -> int:
     names: list[str] = []
     if survivors:
         names = [line.split()[-1] for line in score(workdir)[1]]

@@ -15,11 +15,12 @@ import math
 import numpy as np
 import pytest
 
-from robosoc.config.scenario import HeightMove
+from robosoc.config.scenario import FlightPlan, HeightMove, SetpointStep
 from robosoc.control import quaternion as quat
 from robosoc.control.altitude import AltitudeFilter
+from robosoc.control.ekf import AttitudeEkf, EkfParams
 from robosoc.control.pid import HeightController, Pid, PidGains, euler_rates, wrap_angle
-from robosoc.control.setpoint import move_profile
+from robosoc.control.setpoint import Setpoint, move_profile, setpoint_at
 
 ONE, I, J, K = (np.eye(4)[k] for k in range(4))
 
@@ -146,3 +147,119 @@ def test_altitude_filter_uses_the_vertical_specific_force_of_any_attitude() -> N
         h2 = level.step(np.eye(3), np.array([0.0, 0.0, world[2]]), baro, 0.01)
         assert h1 == pytest.approx(h2, abs=1e-12)
     assert tilted.velocity == pytest.approx(level.velocity, abs=1e-12)
+
+
+def _axis_angle_quat(axis: np.ndarray, angle: float) -> np.ndarray:
+    axis = axis / np.linalg.norm(axis)
+    q = np.array([math.cos(angle / 2), *(math.sin(angle / 2) * axis)])
+    return -q if q[0] < 0 else q
+
+
+def _rodrigues(axis: np.ndarray, angle: float) -> np.ndarray:
+    """R = I + sin θ·K + (1 − cos θ)·K² for the unit axis k (K the cross-product matrix)."""
+    kx, ky, kz = axis / np.linalg.norm(axis)
+    k = np.array([[0.0, -kz, ky], [kz, 0.0, -kx], [-ky, kx, 0.0]])
+    return np.eye(3) + math.sin(angle) * k + (1 - math.cos(angle)) * k @ k
+
+
+@pytest.mark.parametrize(
+    ("axis", "angle"),
+    [
+        ((0.3, -0.2, 0.9), 0.5),  # trace > 0
+        ((1.0, 0.05, -0.02), 3.0),  # near a half turn about x: R00 is the largest diagonal entry
+        ((0.04, 1.0, 0.03), 2.9),  # about y: R11 largest
+        ((-0.02, 0.05, 1.0), 3.1),  # about z: R22 largest
+        ((1.0, 1.0, 0.0), math.pi),  # exactly half turns: trace = -1
+        ((0.0, 1.0, 1.0), math.pi),
+        ((1.0, 0.0, 1.0), -math.pi),
+        ((0.2, -0.9, 0.4), -2.5),
+    ],
+)
+def test_quaternion_of_a_rotation_matrix_on_every_branch(axis: tuple[float, float, float], angle: float) -> None:
+    a = np.array(axis)
+    m = _rodrigues(a, angle)
+    want = _axis_angle_quat(a, angle)
+    got = quat.from_matrix(m)
+    if abs(want[0]) < 1e-12:  # w = 0: q and −q are the same rotation, either sign is right
+        want = want if np.dot(want, got) > 0 else -want
+    np.testing.assert_allclose(got, want, atol=1e-12)
+    assert got[0] >= 0.0
+
+
+def test_angle_between_ignores_the_norms() -> None:
+    a = quat.from_euler(0.2, 0.1, -0.3)
+    b = quat.multiply(a, _axis_angle_quat(np.array([0.0, 1.0, 0.0]), 0.4))
+    assert quat.angle_between(a, b) == pytest.approx(0.4)
+    assert quat.angle_between(3.0 * a, 0.5 * b) == pytest.approx(0.4)
+    assert quat.angle_between(a, -b) == pytest.approx(0.4)  # −b is the same attitude
+
+
+def test_euler_angles_clamp_at_gimbal_lock() -> None:
+    # 2·(w·y − z·x) slightly outside [−1, 1] (an unnormalised input) reads as ±90° pitch
+    assert quat.to_euler(np.array([0.8, 0.0, 0.8, 0.0]))[1] == pytest.approx(math.pi / 2)
+    assert quat.to_euler(np.array([0.8, 0.0, -0.8, 0.0]))[1] == pytest.approx(-math.pi / 2)
+
+
+def _rotation_of(q: np.ndarray) -> np.ndarray:
+    """R(q) in the form of quaternion.py's module docstring, 1 − 2(y² + z²) on the diagonal (the
+    Jacobian is of this polynomial, whatever the norm of q)."""
+    w, x, y, z = q
+    return np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+        ]
+    )
+
+
+def test_rotate_to_body_jacobian_is_the_derivative() -> None:
+    rng = np.random.default_rng(3)
+    for _ in range(5):
+        q = rng.normal(size=4)
+        v = rng.normal(size=3)
+        h = 1e-6
+        numeric = np.column_stack(
+            [(_rotation_of(q + h * e).T @ v - _rotation_of(q - h * e).T @ v) / (2 * h) for e in np.eye(4)]
+        )
+        np.testing.assert_allclose(quat.rotate_to_body_jacobian(q, v), numeric, atol=1e-7)
+
+
+def test_ekf_process_noise_is_the_papers() -> None:
+    """R = (Δt/2)²·Ξ(q)·diag(σ_g²)·Ξ(q)ᵀ + floor·I on the quaternion, σ_b²·Δt·I on the bias, with
+    Ξ(q) the matrix of ω ↦ q ⊗ (0, ω), built here from the product."""
+    params = EkfParams(gyro_noise=(0.1, 0.2, 0.3), bias_walk=0.02, quat_floor=1e-3)
+    q = quat.normalize(np.array([0.9, 0.1, -0.3, 0.2]))
+    xi = np.column_stack([quat.multiply(q, np.array([0.0, *e])) for e in np.eye(3)])
+    dt = 0.01
+    want = np.zeros((7, 7))
+    want[:4, :4] = (dt / 2) ** 2 * xi @ np.diag([0.01, 0.04, 0.09]) @ xi.T + 1e-3 * np.eye(4)
+    want[4:, 4:] = 0.02**2 * dt * np.eye(3)
+    np.testing.assert_allclose(AttitudeEkf(params).process_noise(q, dt), want, rtol=1e-12, atol=1e-18)
+
+
+def test_ekf_prediction_accepts_integer_gyro_readings() -> None:
+    ekf = AttitudeEkf()
+    ekf.predict(np.array([0, 0, 1]), 0.01)  # an integer array is read as floats
+    assert ekf.x[3] == pytest.approx(math.sin(0.005), rel=1e-4)
+
+
+def test_setpoint_at_boundaries() -> None:
+    plan = FlightPlan(
+        takeoff_s=1.0, climb_s=2.0, height_m=1.0,
+        steps=(SetpointStep(3.5, "height", 1.5), SetpointStep(4.0, "roll", 10.0)),
+    )  # fmt: skip
+    rest = 0.2
+
+    def half_cosine(h0: float, h1: float, t0: float, duration: float, t: float) -> float:
+        return h0 + (h1 - h0) * (1 - math.cos(math.pi * (t - t0) / duration)) / 2
+
+    assert setpoint_at(plan, rest, 0.99) == Setpoint(height=rest, armed=False)
+    at_takeoff = setpoint_at(plan, rest, 1.0)
+    assert at_takeoff.armed and at_takeoff.height == rest and at_takeoff.height_rate == 0.0
+    # late in the take-off climb, 0.6 s before the next move: still the climb
+    assert setpoint_at(plan, rest, 2.9).height == pytest.approx(half_cosine(0.2, 1.0, 1.0, 2.0, 2.9))
+    assert setpoint_at(plan, rest, 4.5).height == pytest.approx(half_cosine(1.0, 1.5, 3.5, 2.0, 4.5))
+    assert setpoint_at(plan, rest, 3.99).roll == 0.0
+    assert setpoint_at(plan, rest, 4.0).roll == pytest.approx(math.radians(10.0))  # from its time on
+    assert setpoint_at(plan, rest, 9.0) == Setpoint(roll=math.radians(10.0), height=1.5, armed=True)
