@@ -38,10 +38,10 @@ IRQ_TESTS = (
     "tests/chip/test_interrupts.py",
     "tests/chip/test_irq_differential.py",
 )
-TIMER_TESTS = ("tests/chip/test_timers.py",)
-NOC_TESTS = ("tests/noc/test_route.py", "tests/noc/test_hermes.py", "tests/noc/test_latency.py",
-             "tests/noc/test_wormhole.py")  # fmt: skip
-CHIP_TESTS = ("tests/chip/test_quanta_vs_lockstep.py",)
+TIMER_TESTS = ("tests/chip/test_timers.py", "tests/chip/test_timer_cause_edges.py")
+NOC_TESTS = ("tests/noc/test_route.py", "tests/noc/test_arbitration_edges.py", "tests/noc/test_hermes.py",
+             "tests/noc/test_latency.py", "tests/noc/test_wormhole.py")  # fmt: skip
+CHIP_TESTS = ("tests/chip/test_quanta_vs_lockstep.py", "tests/chip/test_mpsoc.py")
 
 
 @dataclass(frozen=True)
