@@ -128,9 +128,9 @@ MUTANTS = [
            "                port[t, o, P_CREDIT] -= 1",
            "                pass", NOC_TESTS),
     # chip quanta (kernels/chip.py): a quantum longer than the lookahead must change results
-    Mutant("active-quantum-too-long", K + "chip.py",
-           "                H = T + look_active",
-           "                H = T + look_active + 4", CHIP_TESTS),
+    Mutant("idle-quantum-past-the-noc", K + "chip.py",
+           "                    H = nxt",
+           "                    H = H", CHIP_TESTS),
     Mutant("send-does-not-shrink-quantum", K + "chip.py",
            "                    H = s0 + look_idle",
            "                    H = H", CHIP_TESTS),

@@ -9,20 +9,21 @@ from robosoc.config.chip import ChipConfig, NocConfig
 
 
 def test_hermes_output_is_free_two_cycles_after_the_tail() -> None:
-    """3x1 line, 3-flit packets. A: (0,0) -> (2,0) injected in 0; B: (1,0) -> (2,0) injected in 5.
+    """3x3, 3-flit packets into router (1,1)'s own receive memory: A from (0,1) (WEST), B from (1,0)
+    (SOUTH), both injected in 0.
 
-    A at (0,0): request 1, S2 2, S3 3, S5 4, crosses 5; at (1,0) requests 6.  B is at the head of (1,0)'s
-    LOCAL buffer in 6 and requests then too; S1 6, S2 7 selects W (A) first after E; A crosses 10, its
-    flits 10, 11, 12: EAST is free from 14.  The controller: S1 11 (B's request is up), S2 12, S3 13 finds
-    EAST held (a failed attempt), S1 14, S2 15, S3 16, S5 17, B crosses 18.  At (2,0): A arrived 10,
-    crossed into the receive memory 15, last flit 17 (s + 5(h + 1) + L - 1); LOCAL free from 19.  B arrives
-    18, requests 19, S2 20, S3 21, S5 22, crosses 23: last flit 25.  Were EAST free one cycle earlier (13),
-    B would cross (1,0) in 15 and finish in 22."""
-    mesh = Mesh(ChipConfig(width=3, height=1))
-    mesh.inject((0, 0), (2, 0), [1], at_cycle=0)
-    mesh.inject((1, 0), (2, 0), [2], at_cycle=5)
+    Each crosses its source router in 5 and requests at (1,1) from 6: S1 6, S2 7 selects W (A) first
+    after E, S3 8, S5 9, A crosses 10, its flits 10, 11, 12 (delivered in 12 = s + 5(h + 1) + L - 1): the
+    LOCAL output is free from 14.  The controller: S1 11 (B's request is up), S2 12 selects S, S3 13
+    finds LOCAL held (a failed attempt), S1 14, S2 15, S3 16, S5 17, B crosses 18: delivered in 20.
+    Were the output free one cycle earlier (13), B would cross in 15 and be delivered in 17.  (Through a
+    further router the difference would not show: B would queue behind A's tail in the next buffer and
+    request 2 cycles after it left, in either case.)"""
+    mesh = Mesh(ChipConfig(width=3, height=3))
+    mesh.inject((0, 1), (1, 1), [1], at_cycle=0)
+    mesh.inject((1, 0), (1, 1), [2], at_cycle=0)
     mesh.run(200)
-    assert [(d.flits[2], d.cycle) for d in mesh.deliveries()] == [(1, 17), (2, 25)]
+    assert [(d.flits[2], d.cycle) for d in mesh.deliveries()] == [(1, 12), (2, 20)]
 
 
 def test_per_output_pointer_moves_past_each_winner() -> None:
