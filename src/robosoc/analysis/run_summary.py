@@ -33,7 +33,7 @@ from typing import Any
 import numpy as np
 
 from robosoc.config.scenario import ScenarioConfig
-from robosoc.control.flight import flight_metrics
+from robosoc.control.flight import ROW_FIELDS, column, flight_metrics
 from robosoc.cosim.replay import ENERGY_PARTS, ReplayResult, task_summary
 
 SCHEMA = 1
@@ -69,13 +69,15 @@ def flight_summary(rows: np.ndarray, scenario: ScenarioConfig, rest_height: floa
     if len(rows) == 0:
         return None
     m = flight_metrics(rows, scenario.flight, rest_height)
+    armed = column(rows, "armed") > 0.5
+    seen = not np.isnan(rows[armed][:, [ROW_FIELDS.index(f"est_q{c}") for c in "wxyz"]]).any()
     return {
         "hover_rms_m": m.hover_rms,
         "hover_max_m": m.hover_max,
         "overshoot_m": m.overshoot,
         "tracking_rms_deg": dict(zip(("roll", "pitch", "yaw"), m.tracking_rms, strict=True)),
         "step_rise_s": [{"axis": axis, "time_s": at, "rise_s": rise} for axis, at, rise in m.step_rise],
-        "attitude_estimate_rms_deg": m.ekf_rms,
+        "attitude_estimate_rms_deg": m.ekf_rms if seen else math.nan,
         "height_estimate_rms_m": m.height_estimate_rms,
     }
 

@@ -320,6 +320,8 @@ def print_summary(console, summary: dict[str, Any]) -> None:
         row(f"{axis} tracking RMS", lambda v, a=axis: _fmt((flight(v, "tracking_rms_deg") or {}).get(a), 1, 2, "deg"))
     steps = (vehicles[0].get("flight") or {}).get("step_rise_s") or []
     for j, step in enumerate(steps):
+        if step["time_s"] >= summary["simulated_s"]:
+            continue
         row(
             f"{step['axis']} step at {step['time_s']:g} s: 90 % after",
             lambda v, j=j: _fmt(((v.get("flight") or {}).get("step_rise_s") or [{}] * (j + 1))[j].get("rise_s"),
