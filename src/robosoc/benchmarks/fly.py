@@ -3,7 +3,9 @@
 Flies the default scenario (shortened to ``duration_s``) with :func:`robosoc.cosim.flight_session.fly_scenario`,
 writing nothing, once per firmware build, after the host controller as the reference.  The firmware
 is built and the chip kernels compiled before the timed flights (a first run says so).  Prints per
-build the real-time factor, the simulated chip cycles per host second and the hover error, and last
+build the real-time factor, the simulated chip cycles per host second, the hover error, the slowest
+roll/pitch step (to 90 %), the RMS difference of the true height from the host controller's flight
+with the same seed (from take-off on), the deadline misses, and last
 the line ``fly: <x>× real time`` of the last build flown (fixed point with the multiplier by default).
 """
 
@@ -12,11 +14,13 @@ from __future__ import annotations
 import dataclasses
 import math
 
+import numpy as np
 from rich.console import Console
 from rich.table import Table
 
 from robosoc.config.firmware import FirmwareConfig
 from robosoc.config.scenario import ScenarioConfig
+from robosoc.control.flight import column
 from robosoc.cosim.flight_session import fly_scenario
 
 #: The builds flown when none is chosen, the reference build (fixed + multiplier) last.
@@ -46,15 +50,28 @@ def run_fly_benchmark(
     base = ScenarioConfig(duration_s=duration_s)
     console.print(f"lockstep flight of the default scenario, {duration_s:g} s simulated per build, seed {base.seed}")
     table = Table(show_edge=False, pad_edge=False)
-    for column in ("controller", "real time", "chip Mcycles/s", "hover RMS", "deadline misses"):
-        table.add_column(column, justify="left" if column == "controller" else "right")
+    headers = (
+        "controller", "real time", "chip Mcycles/s", "hover RMS", "slowest roll/pitch 90 %", "height vs host RMS",
+        "deadline misses",
+    )  # fmt: skip
+    for header in headers:
+        table.add_column(header, justify="left" if header == "controller" else "right")
     flights = [("host", dataclasses.replace(base, controller="host"))] if host else []
     flights += [(f"chip {fw.label}", dataclasses.replace(base, firmware=fw)) for fw in builds]
     factor = math.nan
+    host_z = None
     for name, scenario in flights:
         # first call: build and compile outside the timing (a one-sample flight)
         fly_scenario(dataclasses.replace(scenario, duration_s=0.01), None, on_status=console.print, plot=False)
-        summary = fly_scenario(scenario, None, plot=False).summary
+        flight = fly_scenario(scenario, None, plot=False)
+        summary = flight.summary
+        z = column(flight.rows[0], "z")
+        if scenario.controller == "host":
+            host_z = z
+        armed = column(flight.rows[0], "armed") > 0.5
+        versus = math.sqrt(float(np.mean((z - host_z)[armed] ** 2))) if host_z is not None and armed.any() else math.nan
+        rises = [s["rise_s"] for s in (summary["flight"] or {}).get("step_rise_s", []) if s["axis"] != "yaw"]
+        slowest = max((math.inf if r is None or math.isnan(r) else r for r in rises), default=math.nan)
         factor = summary["real_time_factor"]
         mcycles = "-"
         if scenario.controller == "chip":
@@ -66,6 +83,8 @@ def run_fly_benchmark(
             f"{factor:.2f}×",
             mcycles,
             "n/a" if math.isnan(hover) else f"{hover * 100:.2f} cm",
+            "n/a" if math.isnan(slowest) else "never" if math.isinf(slowest) else f"{slowest * 1000:.0f} ms",
+            "-" if math.isnan(versus) or scenario.controller == "host" else f"{versus * 100:.2f} cm",
             str(summary["deadline_misses"]) if summary["deadline_misses"] is not None else "-",
         )
     console.print(table)
