@@ -157,17 +157,20 @@ def test_two_vehicles_fly_side_by_side_with_their_own_chips_and_noise(tmp_path: 
     assert flight.rows[0].tobytes() == a.tobytes(), "the log holds the rows exactly"
 
 
-def test_an_interrupted_flight_leaves_its_rows_and_an_incomplete_summary(tmp_path: Path) -> None:
+@pytest.mark.parametrize(
+    ("error", "stopped"), [(KeyboardInterrupt(), "interrupted"), (RuntimeError("boom"), "RuntimeError: boom")]
+)
+def test_a_stopped_flight_leaves_its_rows_and_an_incomplete_summary(tmp_path: Path, error, stopped) -> None:
     def stop(world, k: int) -> None:
         if k == 40:
-            raise KeyboardInterrupt
+            raise error
 
-    with pytest.raises(KeyboardInterrupt):
-        fly_scenario(ScenarioConfig(duration_s=2.0), tmp_path, on_sample=stop)
+    with pytest.raises(type(error)):
+        fly_scenario(ScenarioConfig(duration_s=2.0), tmp_path, on_sample=stop, plot=False)
     rows = read_flight_log(tmp_path / "flight.csv")
     assert len(rows) == 41
     summary = json.loads((tmp_path / "summary.json").read_text())
-    assert summary["complete"] is False and summary["stopped"] == "interrupted"
+    assert summary["complete"] is False and summary["stopped"] == stopped
     assert summary["simulated_s"] == pytest.approx(0.41)
     assert summary["tasks"]["estimator"]["jobs"] == 41
     with (tmp_path / "jobs.csv").open() as handle:

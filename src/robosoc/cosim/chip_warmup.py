@@ -2,23 +2,32 @@
 
 numba compiles the chip's kernels (:mod:`robosoc.kernels`) the first time they run and keeps them
 in its on-disk cache (under ``$ROBOSOC_CACHE/numba/<digest of the kernel sources>``).  On a fresh
-install that takes on the order of a minute, during which a flight would sit silently at 0 %.  A
-flight therefore first checks the cache (:func:`kernels_cached`) and, when it is empty, tells the
-user and compiles by booting a throwaway chip with the firmware (:func:`warm_up_chip`), so that
-the flight's progress bar and its real-time factor measure flying only.
+install that takes on the order of a minute of CPU, during which a flight would sit silently at
+0 %.  A flight therefore first checks the cache (:func:`kernels_cached`) and, when it is empty,
+tells the user and compiles by running a throwaway chip (:func:`compile_kernels`), so that the
+flight's progress bar and real-time factor measure flying only.  The firmware build (the zig
+compiler, a separate process) runs meanwhile in a thread (:func:`prepare_chip`): on a fresh install
+it is cold too, and the two together use both cores of a 2-core machine.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
+from typing import TypeVar
 
-from robosoc.config.scenario import ScenarioConfig
+from robosoc.config.chip import ChipConfig
+
+T = TypeVar("T")
 
 #: The kernel whose compiled form marks the cache as filled (the MPSoC's main loop).
 MARKER = "chip.run_chip-*.nbi"
 
 COMPILING = "compiling the chip simulator with numba (first run only, cached afterwards; about a minute) ..."
+
+#: ``jal x0, 0``: a core spinning on one instruction, enough to make numba compile everything.
+SPIN = (0x0000006F).to_bytes(4, "little")
 
 
 def numba_cache_dir() -> Path:
@@ -35,19 +44,27 @@ def kernels_cached() -> bool:
     return any(numba_cache_dir().rglob(MARKER))
 
 
-def warm_up_chip(scenario: ScenarioConfig, on_status: Callable[[str], None]) -> bool:
-    """Compile the chip kernels if the cache lacks them, telling ``on_status`` first; whether it compiled.
+def compile_kernels(chip: ChipConfig) -> None:
+    """Run a throwaway ``chip`` whose first core spins, so that numba compiles (and caches) the chip's
+    kernels: the main loop with the cores, devices and NoC it calls, and the accounting."""
+    from robosoc.chip.core_state import SRAM_BASE
+    from robosoc.chip.elf import Program, Segment
+    from robosoc.chip.mpsoc import MPSoC
 
-    The compilation boots the scenario's firmware on a throwaway chip (the firmware must be built).
-    """
+    mpsoc = MPSoC(chip)
+    spin = Program(Path("<spin>"), SRAM_BASE, [(SRAM_BASE, SPIN)], segment_info=[Segment(SRAM_BASE, SPIN, True, False)])
+    mpsoc.load(mpsoc.core_tiles()[0], spin)
+    mpsoc.step(10_000)
+    mpsoc.finish_accounting()
+
+
+def prepare_chip(chip: ChipConfig, build: Callable[[], T], on_status: Callable[[str], None]) -> T:
+    """``build()`` (the firmware), and the chip kernels compiled if the cache lacks them: then
+    ``on_status`` is told first, and the build runs in a thread meanwhile.  Returns what ``build`` did."""
     if kernels_cached():
-        return False
-    from robosoc.config.vehicle import vehicle_preset
-    from robosoc.cosim.replay import FirmwareRun
-
+        return build()
     on_status(COMPILING)
-    run = FirmwareRun(
-        scenario.firmware, vehicle=vehicle_preset(scenario.vehicle), scenario=scenario, chip=scenario.chip
-    )
-    run.run_to(run.first_cycle)
-    return True
+    with ThreadPoolExecutor(max_workers=1) as pool:
+        built = pool.submit(build)
+        compile_kernels(chip)
+        return built.result()

@@ -103,13 +103,12 @@ def _controllers(scenario: ScenarioConfig, on_status: Callable[[str], None]) -> 
             HostLockstepController(HostController.for_scenario(scenario, canonical)) for _ in range(scenario.vehicles)
         ]
     on_status(f"building the firmware ({scenario.firmware.label}; cached after the first build) ...")
-    controllers: list[LockstepController] = [
-        ChipController(scenario, canonical, scenario.firmware, chip=scenario.chip) for _ in range(scenario.vehicles)
-    ]
-    from robosoc.cosim.chip_warmup import warm_up_chip
+    from robosoc.cosim.chip_warmup import prepare_chip
+    from robosoc.firmware import flight_app
 
-    warm_up_chip(scenario, on_status)
-    return controllers
+    prepare_chip(scenario.chip, lambda: flight_app.build(scenario.firmware, canonical, scenario), on_status)
+    fw, chip = scenario.firmware, scenario.chip
+    return [ChipController(scenario, canonical, fw, chip=chip) for _ in range(scenario.vehicles)]
 
 
 def _min_separation(rows: list[np.ndarray]) -> float:
