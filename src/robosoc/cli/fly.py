@@ -187,7 +187,7 @@ def fly_command(
             video_state.frame(world, k, config.sensors.rate_hz)
 
     try:
-        flight = fly_scenario(config, out, on_sample=on_sample, on_status=lambda text: plain(console, text), plot=True)
+        flight = fly_scenario(config, out, on_sample=on_sample, on_status=progress.status, plot=True)
     except KeyboardInterrupt:
         progress.stop()
         note(
@@ -220,11 +220,31 @@ class _FlightProgress:
         self.rate_hz = rate_hz
         self.samples = round(duration_s * rate_hz)
         self.progress = None
+        self.spinner = None
         self.task = None
         self.start = 0.0
 
+    def status(self, text: str) -> None:
+        """Say what is being done before the flight; a spinner with the elapsed time runs until the
+        next status or the first sample (a first run compiles for a minute or more)."""
+        from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
+
+        self._stop_spinner()
+        plain(self.console, text)
+        self.spinner = Progress(
+            SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=self.console, transient=True
+        )
+        self.spinner.start()
+        self.spinner.add_task(text.rstrip(" .").split(" (")[0])
+
+    def _stop_spinner(self) -> None:
+        if self.spinner is not None:
+            self.spinner.stop()
+            self.spinner = None
+
     def sample(self, k: int) -> None:
         if self.progress is None:
+            self._stop_spinner()
             from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
 
             self.progress = Progress(
@@ -245,6 +265,7 @@ class _FlightProgress:
         self.progress.update(self.task, completed=k + 1, sim=f"{simulated:.2f}/{self.duration_s:g} s", rtf=rtf)
 
     def stop(self) -> None:
+        self._stop_spinner()
         if self.progress is not None:
             self.progress.stop()
             self.progress = None
