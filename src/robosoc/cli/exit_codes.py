@@ -8,7 +8,8 @@ INTERNAL_ERROR = 1
 #: that cannot be written, a program that does not compile.  Nothing long has run.
 USAGE = 2
 #: ``robosoc run``: the simulator stopped the program (a fault, the cycle budget, a chip that
-#: cannot make progress).  With ``--exit-code status`` (the default) no program exit gives it.
+#: cannot make progress); ``robosoc fly``: the firmware failed on the chip.  With
+#: ``--exit-code status`` (the default) no program exit gives it.
 SIMULATOR_STOP = 3
 #: ``robosoc run --exit-code status``: the program exited with a non-zero exit code (printed on
 #: stderr and kept in the stats file).
@@ -24,6 +25,12 @@ EXIT_CODE_PROGRAM = "program"
 
 EPILOG = "Exit codes: 0 success, 1 internal error (a bug: please report it), 2 usage or input error, 130 interrupted."
 
+FLY_EPILOG = (
+    "Exit codes: 0 success, 1 internal error (a bug: please report it), 2 usage or input error, "
+    "3 the firmware failed on the chip, 130 interrupted; after 3 and 130 the run folder keeps the flight so far "
+    "(flight.csv, and summary.json with complete false)."
+)
+
 RUN_EPILOG = (
     "Exit codes: 0 the program exited with 0, 1 internal error (a bug: please report it), "
     "2 usage or input error, 3 the simulator stopped the program (fault, cycle budget, no progress), "
@@ -37,6 +44,7 @@ __all__ = [
     "EPILOG",
     "EXIT_CODE_PROGRAM",
     "EXIT_CODE_STATUS",
+    "FLY_EPILOG",
     "INTERNAL_ERROR",
     "INTERRUPTED",
     "OK",

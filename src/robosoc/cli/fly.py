@@ -88,7 +88,7 @@ NoOut = Annotated[bool, typer.Option("--no-out", help="Write nothing (print the 
 Video = Annotated[Path | None, typer.Option(help="Render to FILE.mp4, or to a folder of PNG frames.")]
 
 
-@app.command("fly", epilog=exit_codes.EPILOG)
+@app.command("fly", epilog=exit_codes.FLY_EPILOG)
 def fly_command(
     ctx: typer.Context,
     scenario_file: ScenarioArg = None,
