@@ -125,7 +125,9 @@ def test_unknown_estimate_publishes_no_estimate_and_csv_converts(rows: np.ndarra
     flight_csv_to_mcap(csv, out)
     decoded = _decoded(out)
     assert "/estimate/pose" not in decoded and "/estimate/euler" not in decoded
-    assert [_get(m, "pose.position.z") for _, _, m in decoded["/truth/pose"]] == list(chip_like[:, ROW_FIELDS.index("z")])
+    assert [_get(m, "pose.position.z") for _, _, m in decoded["/truth/pose"]] == list(
+        chip_like[:, ROW_FIELDS.index("z")]
+    )
     assert not list(tmp_path.glob("*.partial"))
 
 

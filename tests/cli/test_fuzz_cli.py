@@ -24,6 +24,7 @@ from hypothesis import strategies as st
 from typer.testing import CliRunner
 
 from robosoc.cli import app
+from robosoc.control.flight import ROW_FIELDS
 
 TIME_LIMIT_S = 60  # per command line; the first ones import numba, mujoco and the toolchain
 HUGE = str(10**40)
@@ -123,6 +124,9 @@ OPTIONS: dict[tuple[str, str], Spec] = {
     ("firmware replay", "--seconds"): Spec("float", 0.02, 600.0),
     ("firmware replay", "--seed"): Spec("int", 0, 2**63 - 1),
     ("firmware replay", "--out"): Spec("out_dir"),
+    ("report", "RUN_DIR"): Spec("in_dir"),
+    ("report", "--out"): Spec("out_file"),
+    ("report", "--mcap"): Spec("flag"),
 }
 
 PATH = "\0"  # "\0dir": one of the bad_paths fixture's paths
@@ -159,6 +163,13 @@ def base_command(command: str, option: str, elves: dict[str, Path], tmp: Path) -
             *([] if option == "FILES" else [str(source)]),
             *([] if option == "--output" else ["-o", str(tmp / "ok.elf")]),
         ]
+    if command == "report":
+        if option == "RUN_DIR":
+            return ["report"]
+        run = tmp / "run"
+        run.mkdir(exist_ok=True)
+        (run / "flight.csv").write_text(",".join(ROW_FIELDS) + "\n" + ",".join(["0.0"] * len(ROW_FIELDS)) + "\n")
+        return ["report", str(run)]
     if command == "fly":
         return ["fly", "--seconds", "0.01", *([] if option in ("--out", "--no-out") else ["--no-out"])]
     return {

@@ -1,0 +1,29 @@
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from robosoc.cosim.replay import ReplayResult
+from run_folders import chip_replay, host_rows, write_chip_run, write_host_run
+
+
+@pytest.fixture(scope="session")
+def host_flight() -> np.ndarray:
+    return host_rows()
+
+
+@pytest.fixture(scope="session")
+def chip_flight() -> tuple[np.ndarray, ReplayResult]:
+    return chip_replay()
+
+
+@pytest.fixture
+def host_run(host_flight: np.ndarray, tmp_path: Path) -> Path:
+    return write_host_run(tmp_path / "fly-host", host_flight)
+
+
+@pytest.fixture
+def chip_run(chip_flight: tuple[np.ndarray, ReplayResult], tmp_path: Path) -> Path:
+    return write_chip_run(tmp_path / "fly-chip", *chip_flight)
