@@ -95,7 +95,8 @@ def _svg(
 
 
 def _figure(name: str, caption: str, svg: str) -> str:
-    return f'<figure class="plot" data-plot="{html.escape(name)}">{svg}<figcaption>{html.escape(caption)}</figcaption></figure>'
+    head = f'<figure class="plot" data-plot="{html.escape(name)}">'
+    return f"{head}{svg}<figcaption>{html.escape(caption)}</figcaption></figure>"
 
 
 # --- flight plots -------------------------------------------------------------------------------
