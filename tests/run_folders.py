@@ -7,6 +7,7 @@ from __future__ import annotations
 import json
 import math
 from collections import defaultdict
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -18,7 +19,7 @@ from robosoc.config.vehicle import vehicle_preset
 from robosoc.control.flight import ROW_FIELDS, fly
 from robosoc.control.flight_log import CsvFlightLog
 from robosoc.control.host import HostController
-from robosoc.cosim.replay import ReplayResult, replay, task_summary, write_jobs_csv
+from robosoc.cosim.replay import FirmwareRun, ReplayResult, samples_from_rows, task_summary, write_jobs_csv
 
 HOST_SECONDS = 1.0
 CHIP_SECONDS = 0.3
@@ -62,12 +63,29 @@ def chip_rows(rows: np.ndarray) -> np.ndarray:
     return out
 
 
-def chip_replay(seconds: float = CHIP_SECONDS) -> tuple[np.ndarray, ReplayResult]:
+@dataclass(frozen=True)
+class ChipReplay:
+    rows: np.ndarray
+    run: FirmwareRun  # the chip recorded its timeline
+    result: ReplayResult
+
+
+def chip_replay(seconds: float = CHIP_SECONDS) -> ChipReplay:
+    """The host flight's samples replayed into the fixed+mul firmware, step by step as
+    :func:`robosoc.cosim.replay.replay` does it, keeping the firmware run for its timeline."""
     rows = host_rows(seconds, seed=6)
-    return rows, replay(rows, FirmwareConfig())
+    run = FirmwareRun(FirmwareConfig())
+    samples = samples_from_rows(rows, run.clock_ns)
+    period = samples[1].cycle - samples[0].cycle
+    for k, sample in enumerate(samples):
+        run.inject(sample)
+        run.run_to(samples[k + 1].cycle if k + 1 < len(samples) else sample.cycle + period)
+        run.close_period()
+    return ChipReplay(rows, run, run.result())
 
 
-def write_chip_run(folder: Path, rows: np.ndarray, result: ReplayResult) -> Path:
+def write_chip_run(folder: Path, chip: ChipReplay) -> Path:
+    rows, result = chip.rows, chip.result
     folder.mkdir(parents=True, exist_ok=True)
     _write_rows(folder, chip_rows(rows))
     _scenario_toml(folder, CHIP_SECONDS)

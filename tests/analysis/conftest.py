@@ -15,7 +15,7 @@ def host_flight() -> np.ndarray:
 
 
 @pytest.fixture(scope="session")
-def chip_flight() -> tuple[np.ndarray, ReplayResult]:
+def chip_flight() -> ChipReplay:
     return chip_replay()
 
 
@@ -25,5 +25,5 @@ def host_run(host_flight: np.ndarray, tmp_path: Path) -> Path:
 
 
 @pytest.fixture
-def chip_run(chip_flight: tuple[np.ndarray, ReplayResult], tmp_path: Path) -> Path:
-    return write_chip_run(tmp_path / "fly-chip", *chip_flight)
+def chip_run(chip_flight: ChipReplay, tmp_path: Path) -> Path:
+    return write_chip_run(tmp_path / "fly-chip", chip_flight)
