@@ -5,8 +5,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from robosoc.cosim.replay import ReplayResult
-from run_folders import chip_replay, host_rows, write_chip_run, write_host_run
+from run_folders import ChipReplay, chip_replay, host_rows, write_chip_run, write_host_run
 
 
 @pytest.fixture(scope="session")

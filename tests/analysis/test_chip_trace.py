@@ -14,11 +14,11 @@ from pathlib import Path
 
 import jsonschema
 import pytest
-from run_folders import ChipReplay
 
 from robosoc.analysis.chip_trace import run_trace, write_chip_trace
 from robosoc.cosim.chip_timeline import timeline_of
 from robosoc.firmware import flight_app, images
+from run_folders import ChipReplay
 
 _NUMBER = {"type": "number"}
 _ID = {"type": "integer", "minimum": 0}
