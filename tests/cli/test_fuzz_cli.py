@@ -93,6 +93,7 @@ OPTIONS: dict[tuple[str, str], Spec] = {
     ("fly", "--out"): Spec("out_dir"),
     ("fly", "--no-out"): Spec("flag"),
     ("fly", "--video"): Spec("out_any"),
+    ("fly", "--foxglove"): Spec("int", 0, 65535),  # 0: any free port (never tried: it would serve a flight)
     ("bench core", "--runs"): Spec("int", 1, 1000),
     ("bench core", "--mul"): Spec("flag"),
     ("bench physics", "--seconds"): Spec("float", 0.001, 3600.0),

@@ -66,6 +66,14 @@ Out = Annotated[
 ]
 NoOut = Annotated[bool, typer.Option("--no-out", help="Write no log and no plot.")]
 Video = Annotated[Path | None, typer.Option(help="Render to FILE.mp4, or to a folder of PNG frames.")]
+Foxglove = Annotated[
+    int | None,
+    typer.Option(
+        help="Serve the flight live to Foxglove on ws://127.0.0.1:PORT (8765 is Foxglove's default; 0: any free "
+        "port), at most at real-time pace.",
+        callback=options.int_range(0, 65535),
+    ),
+]
 
 
 @app.command("fly", epilog=exit_codes.EPILOG)
@@ -81,6 +89,7 @@ def fly_command(
     video: Video = None,
     arith: Arith = None,
     mul: Mul = None,
+    foxglove: Foxglove = None,
 ) -> None:
     """Fly the scenario (default: take off to 1 m, hover, 10° roll/pitch/yaw steps, a gust; 10 s)."""
     from rich.markup import escape
@@ -140,6 +149,8 @@ def fly_command(
         pilot = ChipController(config, craft, fw)
         flier = f"chip ({fw.label}, lockstep)"
     log = CsvFlightLog(out / "flight.csv") if out else None
+    live = _start_live(console, foxglove)  # --foxglove (docs/results-logs.md)
+    on_row = _rows_to(log.write if log else None, live.publish if live else None)
     renderer = sink = None
     if video is not None:
         renderer, sink = _open_video(console, video)
@@ -176,9 +187,9 @@ def fly_command(
             task = progress.add_task("fly", total=samples)
             start = time.perf_counter()
             if isinstance(pilot, HostController):
-                rows = fly(config, craft, pilot, seed, on_row=log.write if log else None, on_sample=on_sample)
+                rows = fly(config, craft, pilot, seed, on_row=on_row, on_sample=on_sample)
             else:
-                rows = fly_lockstep(config, craft, pilot, seed, on_row=log.write if log else None, on_sample=on_sample)
+                rows = fly_lockstep(config, craft, pilot, seed, on_row=on_row, on_sample=on_sample)
             host_s = time.perf_counter() - start
     except (ChipError, CoreError) as exc:
         raise CliError(f"the firmware failed on the chip: {exc}") from exc
@@ -188,6 +199,8 @@ def fly_command(
     finally:
         if log:
             log.close()
+        if live is not None:
+            live.close()
         if isinstance(state["renderer"], tuple):
             state["renderer"][0].close()
         if sink is not None:
@@ -221,6 +234,50 @@ def fly_command(
         plain(console, f"log: {out / 'flight.csv'}  plot: {out / 'flight.png'}")
     if sink is not None and sink.frames:
         plain(console, f"video: {sink.path} ({sink.frames} frames at {VIDEO_FPS:g} fps)")
+    if out:
+        _write_logs(console, out, rows, pilot, {"scenario": config.name, "seed": seed})
+
+
+# --- logs people open (docs/results-logs.md): MCAP, chip trace, report; the live Foxglove server ---
+
+
+def _write_logs(console, out: Path, rows, pilot, metadata: dict[str, object]) -> None:
+    """flight.mcap, chip-trace.json (chip flights) and report.html in ``out``, after every other file."""
+    from robosoc.analysis.run_folder import RunFolderError
+    from robosoc.analysis.run_logs import write_run_logs
+
+    run, result = getattr(pilot, "run", None), getattr(pilot, "result", None)
+    try:
+        written = write_run_logs(out, rows, run, result, metadata)
+    except RunFolderError as exc:
+        raise CliError(f"--out: {exc}") from exc
+    plain(console, "  ".join(f"{kind}: {path}" for kind, path in written.items()))
+
+
+def _rows_to(*sinks):
+    """One on_row callback feeding every given sink (None: none given)."""
+    chosen = [s for s in sinks if s is not None]
+    if not chosen:
+        return None
+
+    def on_row(row) -> None:
+        for sink in chosen:
+            sink(row)
+
+    return on_row
+
+
+def _start_live(console, port: int | None):
+    if port is None:
+        return None
+    from robosoc.analysis.foxglove_live import LiveFlight, LiveFlightError
+
+    try:
+        live = LiveFlight(port)
+    except LiveFlightError as exc:
+        raise options.fail("--foxglove", str(exc)) from exc
+    plain(console, f"foxglove: {live.url} (Foxglove: Open connection, Foxglove WebSocket)")
+    return live
 
 
 def _firmware(ctx: typer.Context, controller: str, arith: str | None, mul: bool | None) -> FirmwareConfig | None:
