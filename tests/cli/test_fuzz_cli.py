@@ -24,6 +24,7 @@ from hypothesis import strategies as st
 from typer.testing import CliRunner
 
 from robosoc.cli import app
+from robosoc.control.flight import ROW_FIELDS
 
 TIME_LIMIT_S = 60  # per command line; the first ones import numba, mujoco and the toolchain
 HUGE = str(10**40)
@@ -99,6 +100,7 @@ OPTIONS: dict[tuple[str, str], Spec] = {
     ("bench fly", "--mul"): Spec("flag"),
     ("bench fly", "--duration"): Spec("float", 0.01, 3600.0),
     ("scenario show", "FILE"): Spec("in_file"),
+    ("fly", "--foxglove"): Spec("int", 0, 65535),  # 0: any free port (never tried: it would serve a flight)
     ("bench core", "--runs"): Spec("int", 1, 1000),
     ("bench core", "--mul"): Spec("flag"),
     ("bench physics", "--seconds"): Spec("float", 0.001, 3600.0),
@@ -130,6 +132,9 @@ OPTIONS: dict[tuple[str, str], Spec] = {
     ("firmware replay", "--seconds"): Spec("float", 0.02, 600.0),
     ("firmware replay", "--seed"): Spec("int", 0, 2**63 - 1),
     ("firmware replay", "--out"): Spec("out_dir"),
+    ("report", "RUN_DIR"): Spec("in_dir"),
+    ("report", "--out"): Spec("out_file"),
+    ("report", "--mcap"): Spec("flag"),
 }
 
 PATH = "\0"  # "\0dir": one of the bad_paths fixture's paths
@@ -166,6 +171,13 @@ def base_command(command: str, option: str, elves: dict[str, Path], tmp: Path) -
             *([] if option == "FILES" else [str(source)]),
             *([] if option == "--output" else ["-o", str(tmp / "ok.elf")]),
         ]
+    if command == "report":
+        if option == "RUN_DIR":
+            return ["report"]
+        run = tmp / "run"
+        run.mkdir(exist_ok=True)
+        (run / "flight.csv").write_text(",".join(ROW_FIELDS) + "\n" + ",".join(["0.0"] * len(ROW_FIELDS)) + "\n")
+        return ["report", str(run)]
     if command == "fly":
         length = [] if option in ("--duration", "--seconds") else ["--duration", "0.01"]
         return ["fly", *length, *([] if option in ("--out", "--no-out") else ["--no-out"])]

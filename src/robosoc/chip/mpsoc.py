@@ -49,6 +49,12 @@ from robosoc.kernels.core_layout import (
 
 XOUT_CAPACITY = 1 << 20
 IO_ROWS = 4096
+TIMELINE_ROWS = 1 << 14
+"""Timeline events one :meth:`MPSoC.step` can hold (a 10 ms sample period of the flight firmware
+makes about a hundred: its 1 ms tick wakes each core); more are counted as lost."""
+TIMELINE_KEEP = 1 << 19
+"""Timeline events kept in all (about a minute of the flight firmware on the seed's chip, 32 MB);
+later ones are counted as lost, so a long flight's trace covers its beginning."""
 
 NI_ERRORS = {
     kc.CE_WIDTH: "network-interface registers take word loads and stores only",
@@ -145,6 +151,40 @@ class MPSoC:
         self.programs: dict[int, Program] = {}
         self._queue_next = 0
         self._io_received: list[tuple[int, list[int]]] = []
+        self.rec = np.zeros((0, kc.REC_COLS), dtype=np.int64)
+        self._timeline: list[np.ndarray] = []
+        self._timeline_room = 0
+        self._timeline_dropped = 0
+
+    # --- the timeline recorder -------------------------------------------------------------
+    def record_timeline(self, rows: int = TIMELINE_ROWS, keep: int = TIMELINE_KEEP) -> None:
+        """From now on, record timeline events (kc.R_*: TASK_ID stores, sleeps, packets sent and
+        delivered, the I/O tile's included) for :meth:`timeline`; ``rows`` is the buffer per step,
+        ``keep`` the most events kept."""
+        self.rec = np.zeros((rows, kc.REC_COLS), dtype=np.int64)
+        self._timeline_room = keep
+
+    @property
+    def recording(self) -> bool:
+        return self.rec.shape[0] > 0
+
+    def timeline(self) -> tuple[np.ndarray, int]:
+        """The events recorded so far (rows of kc.REC_COLS, in the order recorded) and how many were lost."""
+        rows = np.concatenate(self._timeline) if self._timeline else np.zeros((0, kc.REC_COLS), dtype=np.int64)
+        return rows, int(self.gst[kc.G_REC_LOST]) + self._timeline_dropped
+
+    def _keep(self, rows: np.ndarray) -> None:
+        kept = rows[: self._timeline_room]
+        if len(kept):
+            self._timeline.append(kept.copy())
+        self._timeline_room -= len(kept)
+        self._timeline_dropped += len(rows) - len(kept)
+
+    def _drain_rec(self) -> None:
+        n = int(self.gst[kc.G_REC_COUNT])
+        if n:
+            self._keep(self.rec[:n])
+            self.gst[kc.G_REC_COUNT] = 0
 
     # --- geometry --------------------------------------------------------------------------
     def regions(self, xy: tuple[int, int] | None = None) -> list[Region]:
@@ -217,6 +257,9 @@ class MPSoC:
                 self.noc.tile[self.io, nk.T_Q_HEAD] = row
         self.noc.tile[self.io, nk.T_Q_TAIL] = row
         self._queue_next += 1
+        if self.recording:
+            head = [flits[k] if k < len(flits) else 0 for k in (2, 3, 5)]
+            self._keep(np.array([[kc.R_SEND, self.io, at_cycle, flits[0], len(flits), *head]], dtype=np.int64))
 
     def received(self) -> list[tuple[int, list[int]]]:
         """Packets that reached the I/O tile since the last call: (cycle of the last flit, flits)."""
@@ -228,11 +271,15 @@ class MPSoC:
         for row in self.io_out[:n]:
             length = int(row[1])
             self._io_received.append((int(row[0]), [int(v) for v in row[3 : 3 + length]]))
+            if self.recording:  # visible from the cycle after the last flit, as on a core tile
+                head = [int(row[3 + k]) for k in (2, 3, 5)]
+                event = [kc.R_DELIVER, self.io, int(row[0]) + 1, int(row[2]), length, *head]
+                self._keep(np.array([event], dtype=np.int64))
         self.gst[kc.G_IO_COUNT] = 0
 
     # --- running ---------------------------------------------------------------------------
     def _book(self) -> kc.ChipBook:
-        return kc.ChipBook(self.cst, self.acc, self.snap, self.gst, self.xout, self.io_out)
+        return kc.ChipBook(self.cst, self.acc, self.snap, self.gst, self.xout, self.io_out, self.rec)
 
     def step(self, until: int) -> int:
         """Advance the chip to ``until`` (or a host event); returns the CHIP_* reason.
@@ -247,6 +294,7 @@ class MPSoC:
                 )
         kc.run_chip(self.cores.arrays(), self.noc, self._book(), until)
         self._drain_io()
+        self._drain_rec()
         return int(self.gst[kc.G_STATUS])
 
     def drain_output(self) -> dict[tuple[int, int], bytes]:

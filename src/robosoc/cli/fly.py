@@ -86,6 +86,14 @@ Out = Annotated[
 ]  # fmt: skip
 NoOut = Annotated[bool, typer.Option("--no-out", help="Write nothing (print the summary only).")]
 Video = Annotated[Path | None, typer.Option(help="Render to FILE.mp4, or to a folder of PNG frames.")]
+Foxglove = Annotated[
+    int | None,
+    typer.Option(
+        help="Serve the flight live to Foxglove on ws://127.0.0.1:PORT (8765 is Foxglove's default; 0: any free "
+        "port), at most at real-time pace.",
+        callback=options.int_range(0, 65535),
+    ),
+]
 
 
 @app.command("fly", epilog=exit_codes.FLY_EPILOG)
@@ -104,6 +112,7 @@ def fly_command(
     video: Video = None,
     arith: Arith = None,
     mul: Mul = None,
+    foxglove: Foxglove = None,
 ) -> None:
     """Fly a scenario: by default the firmware (fixed point, multiplier) on the seed's 2x2 chip in
     lockstep with the physics: take off to 1 m, hover, 10° roll/pitch/yaw steps, a gust; 10 s."""
@@ -179,6 +188,7 @@ def fly_command(
     console.print("every other field: built-in default" if sources else "all fields: built-in defaults")
 
     video_state = _VideoState(console, video) if video is not None else None
+    live = _start_live(console, foxglove)  # --foxglove (docs/results-logs.md)
     progress = _FlightProgress(console, config.duration_s, config.sensors.rate_hz)
 
     def on_sample(world, k: int) -> None:
@@ -187,7 +197,9 @@ def fly_command(
             video_state.frame(world, k, config.sensors.rate_hz)
 
     try:
-        flight = fly_scenario(config, out, on_sample=on_sample, on_status=progress.status, plot=True)
+        flight = fly_scenario(
+            config, out, on_sample=on_sample, on_status=progress.status, on_row=_live_rows(live), plot=True
+        )
     except KeyboardInterrupt:
         progress.stop()
         note(
@@ -202,10 +214,12 @@ def fly_command(
         progress.stop()
         if video_state is not None:
             video_state.close()
+        if live is not None:
+            live.close()
     print_summary(console, flight.summary)
     if out is not None:
-        plain(console, f"run folder: {out} (scenario.toml, flight.csv, summary.json, flight.png"
-              + (", jobs.csv" if config.controller == "chip" else "") + ")")  # fmt: skip
+        plain(console, f"run folder: {out} (scenario.toml, flight.csv, summary.json, flight.png, flight.mcap, "
+              + ("jobs.csv, chip-trace.json, " if config.controller == "chip" else "") + "report.html)")  # fmt: skip
     if video_state is not None and video_state.sink is not None and video_state.sink.frames:
         plain(console, f"video: {video_state.sink.path} ({video_state.sink.frames} frames at {VIDEO_FPS:g} fps)")
 
@@ -375,3 +389,31 @@ def print_summary(console, summary: dict[str, Any]) -> None:
         f"real-time factor {_fmt(summary['real_time_factor'], 1, 2)} ({summary['simulated_s']:g} s simulated in "
         f"{summary['host_s']:.1f} s){extra}{status}",
     )
+
+
+# --- the live Foxglove server (docs/results-logs.md) ---
+
+
+def _start_live(console, port: int | None):
+    if port is None:
+        return None
+    from robosoc.analysis.foxglove_live import LiveFlight, LiveFlightError
+
+    try:
+        live = LiveFlight(port)
+    except LiveFlightError as exc:
+        raise options.fail("--foxglove", str(exc)) from exc
+    plain(console, f"foxglove: {live.url} (Foxglove: Open connection, Foxglove WebSocket)")
+    return live
+
+
+def _live_rows(live):
+    """The rows of vehicle 1 to the live server (None: no server)."""
+    if live is None:
+        return None
+
+    def on_row(vehicle: int, row) -> None:
+        if vehicle == 0:
+            live.publish(row)
+
+    return on_row

@@ -128,7 +128,9 @@ def fly_scenario(
     seed: int | None = None,
     on_sample: Callable[[World, int], None] | None = None,
     on_status: Callable[[str], None] | None = None,
+    on_row: Callable[[int, np.ndarray], None] | None = None,
     plot: bool = True,
+    logs: bool = True,
 ) -> ScenarioFlight:
     """Fly ``scenario`` (with ``seed`` in place of its own, if given) and write the run folder ``out``.
 
@@ -139,7 +141,10 @@ def fly_scenario(
         on_sample: called once per sensor sample with the world and the sample index (progress, video).
         on_status: told what is being done before the flight (building, compiling), for a newcomer
             who would otherwise watch a silent terminal.
+        on_row: called with the vehicle index and each row as soon as it is complete (a live view).
         plot: also write ``flight.png`` per vehicle.
+        logs: also write ``flight.mcap``, ``chip-trace.json`` (chip) and ``report.html`` per vehicle
+            (:func:`robosoc.analysis.run_logs.write_run_logs`; docs/results-logs.md).
 
     Raises:
         KeyboardInterrupt, or whatever stopped the flight (a firmware fault: ChipError, CoreError),
@@ -152,35 +157,37 @@ def fly_scenario(
     count = len(vehicles)
     controllers = _controllers(scenario, say)
     folders = [vehicle_folder(out, i, count) for i in range(count)] if out is not None else []
-    logs: list[CsvFlightLog] = []
+    csv_logs: list[CsvFlightLog] = []
     if out is not None:
         out.mkdir(parents=True, exist_ok=True)
         (out / "scenario.toml").write_text(scenario_toml(scenario), encoding="utf-8")
-        logs = [CsvFlightLog(folder / "flight.csv") for folder in folders]
+        csv_logs = [CsvFlightLog(folder / "flight.csv") for folder in folders]
     flown: list[list[np.ndarray]] = [[] for _ in vehicles]
 
-    def on_row(i: int, row: np.ndarray) -> None:
+    def keep_row(i: int, row: np.ndarray) -> None:
         flown[i].append(row.copy())
-        if logs:
-            logs[i].write(row)
+        if csv_logs:
+            csv_logs[i].write(row)
+        if on_row is not None:
+            on_row(i, row)
 
     start = time.perf_counter()
     try:
-        fly_lockstep_fleet(scenario, vehicles, controllers, scenario.seed, on_row=on_row, on_sample=on_sample)
+        fly_lockstep_fleet(scenario, vehicles, controllers, scenario.seed, on_row=keep_row, on_sample=on_sample)
     except BaseException as exc:
         host_s = time.perf_counter() - start
-        for log in logs:
+        for log in csv_logs:
             log.close()
         stopped = "interrupted" if isinstance(exc, KeyboardInterrupt) else f"{type(exc).__name__}: {exc}"
         try:
-            _conclude(scenario, vehicles, controllers, flown, host_s, stopped, folders, out, plot)
+            _conclude(scenario, vehicles, controllers, flown, host_s, stopped, folders, out, plot, logs)
         except Exception as inner:
             exc.add_note(f"the summary of the flight so far could not be written: {type(inner).__name__}: {inner}")
         raise
     host_s = time.perf_counter() - start
-    for log in logs:
+    for log in csv_logs:
         log.close()
-    return _conclude(scenario, vehicles, controllers, flown, host_s, None, folders, out, plot)
+    return _conclude(scenario, vehicles, controllers, flown, host_s, None, folders, out, plot, logs)
 
 
 def _conclude(
@@ -193,8 +200,10 @@ def _conclude(
     folders: list[Path],
     out: Path | None,
     plot: bool,
+    logs: bool,
 ) -> ScenarioFlight:
-    """Summaries (complete or not), jobs.csv and plots of the rows flown; written when ``out`` is set."""
+    """Summaries (complete or not), jobs.csv, plots and the logs people open (flight.mcap,
+    chip-trace.json, report.html) of the rows flown; written when ``out`` is set."""
     complete = stopped is None
     rows = [np.array(r).reshape(-1, len(ROW_FIELDS)) for r in flown]
     samples = min(len(r) for r in rows)
@@ -225,6 +234,12 @@ def _conclude(
 
             title = f"{scenario.name}, seed {scenario.seed}" + (f", vehicle {i + 1}" if len(vehicles) > 1 else "")
             plot_flight(rows[i], folder / "flight.png", title=title)
+        if logs and len(rows[i]):
+            from robosoc.analysis.run_logs import write_run_logs
+
+            run = controller.run if isinstance(controller, ChipController) else None
+            metadata = {"scenario": scenario.name, "seed": scenario.seed, "vehicle": i + 1}
+            write_run_logs(folder, rows[i], run, result, metadata)
     if len(vehicles) == 1:
         top = summaries[0]
     else:

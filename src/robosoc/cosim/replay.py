@@ -205,6 +205,7 @@ class FirmwareRun:
         self.first_cycle = first_cycle
         elf = flight_app.build(self.fw, vehicle=vehicle, scenario=scenario)
         self.chip = MPSoC(self.chip_config)
+        self.chip.record_timeline()  # for the chip trace (cosim/chip_timeline.py)
         program = load_elf(elf, self.chip.regions())
         self.tiles = flight_app.app_tiles(self.fw)
         for xy in self.tiles:

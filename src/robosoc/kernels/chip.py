@@ -98,7 +98,16 @@ G_IO_COUNT = 7  # rows used in io_out
 G_SUSPEND_H = 9  # > 0: a breakpoint suspended the quantum ending here; the next call continues it
 G_SUSPEND_FLAGS = 10  # 1: that quantum is active (NoC first), 2: quiet
 G_BREAK_TILE = 11  # the tile that stopped at a breakpoint (CHIP_BREAK)
-GST_SIZE = 12
+G_REC_COUNT = 12  # rows used in rec (the timeline recorder; the host drains it)
+G_REC_LOST = 13  # events that found rec full
+GST_SIZE = 14
+
+# timeline events (rec rows: kind, tile, cycle, then five values; cosim/chip_timeline.py reads them)
+R_TASK = 1  # a TASK_ID store took effect in `cycle`: new id, old id, pc, sleep cycles so far
+R_SLEEP = 2  # a SLEEP store: the core sleeps from `cycle`; 0, 0, pc, sleep cycles so far
+R_SEND = 3  # a packet starts leaving in `cycle`: flit 0 (destination), length, flits 2, 3 and 5
+R_DELIVER = 4  # a packet became visible to the core in `cycle`: first-flit cycle, length, flits 2, 3 and 5
+REC_COLS = 8
 
 # return reasons
 CHIP_UNTIL = 0
@@ -138,7 +147,8 @@ class ChipBook(NamedTuple):
 
     ``cst`` per-tile chip state (K_* columns), ``acc`` per-task accounting vectors (A_*), ``snap``
     the counters at the last attribution, ``gst`` global scalars (G_*), ``xout`` per-tile output
-    kept for the host, ``io_out`` packets that reached the I/O tile (IO_COLS per row).
+    kept for the host, ``io_out`` packets that reached the I/O tile (IO_COLS per row), ``rec``
+    timeline events (R_* rows of REC_COLS; no rows: not recording).
     """
 
     cst: np.ndarray
@@ -147,6 +157,27 @@ class ChipBook(NamedTuple):
     gst: np.ndarray
     xout: np.ndarray
     io_out: np.ndarray
+    rec: np.ndarray
+
+
+@njit(cache=True)
+def record(rec, gst, kind, t, cycle, a, b, c, d, e):
+    """Append one timeline event to ``rec`` (counted as lost when it is full; nothing without rows)."""
+    if rec.shape[0] == 0:
+        return
+    n = gst[G_REC_COUNT]
+    if n >= rec.shape[0]:
+        gst[G_REC_LOST] += 1
+        return
+    rec[n, 0] = kind
+    rec[n, 1] = t
+    rec[n, 2] = cycle
+    rec[n, 3] = a
+    rec[n, 4] = b
+    rec[n, 5] = c
+    rec[n, 6] = d
+    rec[n, 7] = e
+    gst[G_REC_COUNT] = n + 1
 
 
 @njit(cache=True)
@@ -280,6 +311,7 @@ def ni_access(t, core, book, noc):
         st[t, S_CYCLE] = end
         st[t, S_PC] = pc + 4
         account(t, core, book, end)
+        record(book.rec, gst, R_TASK, t, end, v, cst[t, K_TASK], pc, cst[t, K_SLEEP_CYCLES], 0)
         cst[t, K_TASK] = v
         return True
     elif off == ni.SLEEP:
@@ -288,6 +320,7 @@ def ni_access(t, core, book, noc):
         cst[t, K_STATE] = K_SLEEP
         cst[t, K_SLEEP_FROM] = end
         cst[t, K_WAKE] = wake_time(st[t], end)
+        record(book.rec, gst, R_SLEEP, t, end, 0, 0, pc, cst[t, K_SLEEP_CYCLES], 0)
         return True
     elif off == ni.NI_CMD:
         if v == ni.CMD_SEND:
@@ -313,6 +346,8 @@ def ni_access(t, core, book, noc):
             cst[t, K_DMA_CYCLES] += n
             cst[t, K_SENT] += 1
             st[t, S_CYCLE] = start
+            record(book.rec, gst, R_SEND, t, start, mem[t, nk.SEND, 0], n, mem[t, nk.SEND, 2],
+                   mem[t, nk.SEND, 3], mem[t, nk.SEND, 5] if n > 5 else 0)  # fmt: skip
         elif v == ni.CMD_RECV:
             if cst[t, K_RX_READY] > s - 1:
                 _fault(cst, t, CE_NO_PACKET, addr, 0)
@@ -448,6 +483,8 @@ def _take_deliveries(st, book, noc):
             continue
         cst[d, K_RX_READY] = rise
         cst[d, K_RX_LEN] = ev[r, nk.EV_LEN]
+        record(book.rec, gst, R_DELIVER, d, rise, ev[r, nk.EV_FIRST], ev[r, nk.EV_LEN], ev[r, nk.EV_FLITS + 2],
+               ev[r, nk.EV_FLITS + 3], ev[r, nk.EV_FLITS + 5])  # fmt: skip
         irq_external_rise(st[d], rise)
         if cst[d, K_STATE] == K_SLEEP:
             cst[d, K_WAKE] = wake_time(st[d], cst[d, K_SLEEP_FROM])
@@ -667,4 +704,4 @@ def run_chip(core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int) -> 
     return status
 
 
-__all__ = ["ChipBook", "account", "ni_access", "run_chip", "wake_time"]
+__all__ = ["ChipBook", "account", "ni_access", "record", "run_chip", "wake_time"]

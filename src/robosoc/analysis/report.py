@@ -1,0 +1,360 @@
+"""The HTML report of a run folder: one self-contained page (``report.html``).
+
+Plots are matplotlib figures inlined as SVG, styles inline, no script or font fetched from
+anywhere: the page opens without a network.  It shows what the folder holds (see
+:mod:`robosoc.analysis.run_folder`): trajectory and setpoints, estimated against true attitude,
+motor PWM (``flight.csv``); per-task response-time histograms and energy per task split into its
+parts (``jobs.csv``); energy by tile and any other breakdown of ``summary.json``'s ``energy``
+(by instruction class, ``classes_uj``, when present); the key figures of ``summary.json`` and the
+scenario (``scenario.toml``).  A missing file leaves its section out with a line saying so.
+
+A short script at the end of the page marks each plot that the browser laid out with a non-empty
+size (``data-rendered``) and counts them on ``<body>``; the tests read that back from headless
+Chromium.  The page needs no script to be read.
+"""
+
+from __future__ import annotations
+
+import html
+import io
+import json
+import math
+import os
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+
+from robosoc.analysis.run_folder import REPORT_HTML, RunFolder, finite, read_run_folder
+from robosoc.control.flight import ROW_FIELDS
+
+MAX_POINTS = 5000
+"""Most points drawn per line (longer flights are thinned evenly; the CSV keeps every row)."""
+
+JOB_ENERGY_PARTS = ("task", "kernel", "noc", "idle")
+
+_STYLE = """
+body { font-family: system-ui, sans-serif; margin: 1.5em auto; max-width: 1100px; color: #222; }
+h1 { font-size: 1.5em; } h2 { font-size: 1.2em; border-bottom: 1px solid #ccc; margin-top: 1.6em; }
+figure.plot { margin: 0.8em 0; } figure.plot svg { width: 100%; height: auto; }
+figcaption { font-size: 0.9em; color: #555; }
+table { border-collapse: collapse; font-size: 0.9em; } td, th { padding: 2px 10px; text-align: left; }
+tr:nth-child(even) { background: #f4f4f4; } td.num { text-align: right; font-variant-numeric: tabular-nums; }
+pre { background: #f6f6f6; padding: 0.8em; overflow-x: auto; font-size: 0.85em; }
+.note { color: #8a5a00; }
+"""
+
+_CHECK_SCRIPT = """
+(function () {
+  var figures = document.querySelectorAll("figure.plot");
+  var rendered = 0;
+  for (var i = 0; i < figures.length; i++) {
+    var svg = figures[i].querySelector("svg");
+    if (!svg) continue;
+    var box = svg.getBoundingClientRect();
+    if (box.width > 0 && box.height > 0 && svg.querySelectorAll("path, use, text").length > 0) {
+      figures[i].setAttribute("data-rendered", "1");
+      rendered++;
+    }
+  }
+  document.body.setAttribute("data-plots", String(figures.length));
+  document.body.setAttribute("data-rendered", String(rendered));
+})();
+"""
+
+
+def _column(rows: np.ndarray, name: str) -> np.ndarray:
+    return rows[:, ROW_FIELDS.index(name)]
+
+
+def _thin(rows: np.ndarray) -> np.ndarray:
+    step = max(1, math.ceil(len(rows) / MAX_POINTS))
+    return rows[::step]
+
+
+def _svg(
+    draw: Callable[..., None], name: str, size: tuple[float, float], nrows: int = 1, *, sharex: bool = True
+) -> str:
+    """A matplotlib figure drawn by ``draw(axes)`` as inline SVG (ids salted by ``name``)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    with matplotlib.rc_context({"svg.fonttype": "none", "svg.hashsalt": name, "font.size": 9}):
+        fig, axes = plt.subplots(nrows, 1, figsize=size, sharex=sharex and nrows > 1, squeeze=False)
+        try:
+            draw(*axes[:, 0])
+            fig.tight_layout()
+            buffer = io.StringIO()
+            fig.savefig(buffer, format="svg", metadata={"Date": None})
+        finally:
+            plt.close(fig)
+    text = buffer.getvalue()
+    return text[text.index("<svg") :]
+
+
+def _figure(name: str, caption: str, svg: str) -> str:
+    head = f'<figure class="plot" data-plot="{html.escape(name)}">'
+    return f"{head}{svg}<figcaption>{html.escape(caption)}</figcaption></figure>"
+
+
+# --- flight plots -------------------------------------------------------------------------------
+
+
+def _trajectory(rows: np.ndarray) -> str:
+    r = _thin(rows)
+    t = _column(r, "t")
+
+    def draw(ax_z, ax_xy) -> None:
+        ax_z.plot(t, _column(r, "z"), label="true height z")
+        ax_z.plot(t, _column(r, "sp_height"), "--", label="height setpoint")
+        est = _column(r, "est_height")
+        if np.isfinite(est).any():
+            ax_z.plot(t, est, ":", label="estimated height")
+        ax_z.set_ylabel("m")
+        ax_z.legend(loc="best")
+        ax_z.grid(alpha=0.3)
+        ax_xy.plot(t, _column(r, "x"), label="x")
+        ax_xy.plot(t, _column(r, "y"), label="y")
+        ax_xy.set_ylabel("m")
+        ax_xy.set_xlabel("time [s]")
+        ax_xy.legend(loc="best")
+        ax_xy.grid(alpha=0.3)
+
+    return _figure(
+        "trajectory", "Trajectory: height against its setpoint, horizontal drift", _svg(draw, "traj", (10, 5), 2)
+    )
+
+
+def _attitude(rows: np.ndarray) -> str:
+    r = _thin(rows)
+    t = _column(r, "t")
+
+    def draw(*axes) -> None:
+        for ax, axis in zip(axes, ("roll", "pitch", "yaw"), strict=True):
+            ax.plot(t, np.degrees(_column(r, axis)), label=f"true {axis}")
+            est = _column(r, f"est_{axis}")
+            if np.isfinite(est).any():
+                ax.plot(t, np.degrees(est), ":", label=f"estimated {axis}")
+            ax.plot(t, np.degrees(_column(r, f"sp_{axis}")), "--", label="setpoint")
+            ax.set_ylabel("deg")
+            ax.legend(loc="best")
+            ax.grid(alpha=0.3)
+        axes[-1].set_xlabel("time [s]")
+
+    has_estimate = np.isfinite(_column(rows, "est_roll")).any()
+    caption = "Attitude: true, estimated and setpoint" + ("" if has_estimate else " (no estimate in this log)")
+    return _figure("attitude", caption, _svg(draw, "att", (10, 7), 3))
+
+
+def _pwm(rows: np.ndarray) -> str:
+    r = _thin(rows)
+    t = _column(r, "t")
+
+    def draw(ax) -> None:
+        for i in range(4):
+            ax.step(t, _column(r, f"pwm{i}"), where="post", label=f"motor {i}")
+        ax.set_ylabel("PWM count")
+        ax.set_xlabel("time [s]")
+        ax.legend(loc="best", ncols=4)
+        ax.grid(alpha=0.3)
+
+    return _figure("pwm", "Motor PWM commands", _svg(draw, "pwm", (10, 3)))
+
+
+# --- job plots ----------------------------------------------------------------------------------
+
+
+def _tasks(jobs: dict[str, np.ndarray]) -> list[str]:
+    return list(dict.fromkeys(str(t) for t in jobs["task"]))
+
+
+def _response_histograms(jobs: dict[str, np.ndarray], clock_ns: float | None) -> str:
+    tasks = _tasks(jobs)
+    scale, unit = (clock_ns / 1000.0, "us") if clock_ns else (1.0, "cycles")
+
+    def draw(*axes) -> None:
+        for ax, task in zip(axes, tasks, strict=True):
+            mine = jobs["task"] == task
+            values = jobs["response_cycles"][mine] * scale
+            ax.hist(values, bins=min(50, max(5, len(values) // 4)))
+            ax.set_ylabel("jobs")
+            ax.set_title(f"{task}: {len(values)} jobs, mean {values.mean():.1f} {unit}, max {values.max():.1f} {unit}")
+            ax.grid(alpha=0.3)
+        axes[-1].set_xlabel(f"response time (release to completion) [{unit}]")
+
+    return _figure(
+        "response", "Response time per task", _svg(draw, "resp", (10, 2.6 * len(tasks)), len(tasks), sharex=False)
+    )
+
+
+def _job_energy(jobs: dict[str, np.ndarray]) -> str:
+    tasks = _tasks(jobs)
+
+    def draw(ax) -> None:
+        bottom = np.zeros(len(tasks))
+        for part in JOB_ENERGY_PARTS:
+            values = np.array([jobs[f"{part}_pj"][jobs["task"] == task].sum() / 1e6 for task in tasks])
+            ax.bar(tasks, values, bottom=bottom, label=part)
+            bottom += values
+        ax.set_ylabel("energy of all jobs [uJ]")
+        ax.legend(loc="best")
+        ax.grid(alpha=0.3, axis="y")
+
+    return _figure(
+        "energy-task", "Energy by task, split into the task itself, kernel, NoC and idle", _svg(draw, "etask", (7, 3.2))
+    )
+
+
+def _bars(name: str, caption: str, values: dict[str, float], unit: str) -> str:
+    def draw(ax) -> None:
+        labels = list(values)
+        ax.bar(labels, [values[k] for k in labels])
+        ax.set_ylabel(unit)
+        ax.grid(alpha=0.3, axis="y")
+        if len(labels) > 6:
+            ax.tick_params(axis="x", labelrotation=45)
+
+    return _figure(name, caption, _svg(draw, name, (7, 3.2)))
+
+
+def _energy_breakdowns(summary: dict) -> list[str]:
+    energy = summary.get("energy")
+    if not isinstance(energy, dict):
+        return []
+    out = []
+    for key, value in energy.items():
+        if not isinstance(value, dict):
+            continue
+        numbers = {str(k): finite(v) for k, v in value.items()}
+        numbers = {k: v for k, v in numbers.items() if v is not None}
+        if not numbers:
+            continue
+        if key == "tiles_uj":
+            noc = finite(energy.get("noc_uj"))
+            if noc is not None:
+                numbers["NoC"] = noc
+            numbers = {(f"tile {k}" if k != "NoC" else k): v for k, v in numbers.items()}
+        what = key.removesuffix("_uj").replace("_", " ")
+        out.append(_bars(f"energy-{key}", f"Energy by {what}", numbers, "uJ"))
+    return out
+
+
+# --- tables -------------------------------------------------------------------------------------
+
+
+def _flatten(prefix: str, value: object, out: list[tuple[str, str]]) -> None:
+    if isinstance(value, dict):
+        for k, v in value.items():
+            _flatten(f"{prefix}.{k}" if prefix else str(k), v, out)
+    elif isinstance(value, list):
+        if all(not isinstance(v, dict | list) for v in value):
+            out.append((prefix, ", ".join(_number(v) for v in value)))
+        else:
+            for i, v in enumerate(value):
+                _flatten(f"{prefix}[{i}]", v, out)
+    else:
+        out.append((prefix, _number(value)))
+
+
+def _number(value: object) -> str:
+    if value is None:
+        return "n/a"
+    if isinstance(value, float):
+        return f"{value:.6g}"
+    return str(value)
+
+
+def _summary_table(summary: dict) -> str:
+    items: list[tuple[str, str]] = []
+    _flatten("", summary, items)
+    rows = "".join(f"<tr><th>{html.escape(k)}</th><td class='num'>{html.escape(v)}</td></tr>" for k, v in items)
+    return f"<table>{rows}</table>"
+
+
+def _title(run: RunFolder) -> str:
+    s = run.summary or {}
+    parts = [str(s.get("scenario", run.path.name))]
+    if "controller" in s:
+        parts.append(f"controller {s['controller']}")
+    firmware = s.get("firmware")
+    if isinstance(firmware, dict) and firmware.get("build"):
+        parts.append(f"firmware {firmware['build']}")
+    if "seed" in s:
+        parts.append(f"seed {s['seed']}")
+    if s.get("complete") is False:
+        parts.append("INCOMPLETE (interrupted or crashed)")
+    return ", ".join(parts)
+
+
+def _section(run: RunFolder, level: int) -> str:
+    h = f"h{level}"
+    body: list[str] = [f"<p class='note'>{html.escape(n)}</p>" for n in run.notes]
+    body.append(f"<{h}>Flight</{h}>")
+    if run.rows is not None and len(run.rows):
+        body += [_trajectory(run.rows), _attitude(run.rows), _pwm(run.rows)]
+    else:
+        body.append("<p>No flight log (flight.csv) in this folder.</p>")
+    body.append(f"<{h}>Tasks on the chip</{h}>")
+    if run.jobs is not None and len(run.jobs["task"]):
+        body += [_response_histograms(run.jobs, run.clock_ns), _job_energy(run.jobs)]
+        if run.clock_ns is None:
+            body.append("<p class='note'>No chip clock in summary.json: response times in cycles.</p>")
+    else:
+        body.append("<p>No job records (jobs.csv): a host-controller flight, or the chip ran no job.</p>")
+    if run.summary is not None:
+        energy = _energy_breakdowns(run.summary)
+        if energy:
+            body.append(f"<{h}>Energy</{h}>")
+            body += energy
+        body.append(f"<{h}>Summary</{h}>")
+        body.append(_summary_table(run.summary))
+    else:
+        body.append("<p>No summary.json in this folder.</p>")
+    body.append(f"<{h}>Configuration (scenario.toml)</{h}>")
+    if run.scenario_text is not None:
+        body.append(f"<pre>{html.escape(run.scenario_text)}</pre>")
+    else:
+        body.append("<p>No scenario.toml in this folder.</p>")
+    if run.summary is not None:
+        text = json.dumps(run.summary, indent=2)
+        body.append(f"<details><summary>summary.json</summary><pre>{html.escape(text)}</pre></details>")
+    for k, vehicle in enumerate(run.vehicles, start=1):
+        body.append(f"<h2>Vehicle {k}: {html.escape(_title(vehicle))}</h2>")
+        body.append(_section(vehicle, 3))
+    return "\n".join(body)
+
+
+def render_report(run: RunFolder) -> str:
+    """The report page of ``run`` as HTML text."""
+    title = html.escape(_title(run))
+    return (
+        "<!DOCTYPE html>\n<html lang='en'><head><meta charset='utf-8'>"
+        f"<title>robosoc: {title}</title><style>{_STYLE}</style></head>\n<body>\n"
+        f"<h1>robosoc run: {title}</h1>\n<p>Folder: <code>{html.escape(str(run.path))}</code></p>\n"
+        f"{_section(run, 2)}\n<script>{_CHECK_SCRIPT}</script>\n</body></html>\n"
+    )
+
+
+def write_report(run_dir: Path, out: Path | None = None) -> Path:
+    """Write the report of the run folder ``run_dir`` to ``out`` (default ``run_dir/report.html``).
+
+    The page is written to a temporary name and renamed.
+
+    Raises:
+        robosoc.analysis.run_folder.RunFolderError: ``run_dir`` is not a run folder, or a file in it
+            is malformed (the message names it).
+    """
+    run = read_run_folder(run_dir)
+    target = out if out is not None else run_dir / REPORT_HTML
+    partial = target.with_name(target.name + ".partial")
+    try:
+        partial.write_text(render_report(run), encoding="utf-8")
+        os.replace(partial, target)
+    finally:
+        partial.unlink(missing_ok=True)
+    return target
+
+
+__all__ = ["MAX_POINTS", "render_report", "write_report"]

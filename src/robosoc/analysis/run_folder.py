@@ -1,0 +1,179 @@
+"""Reading a run folder (what ``robosoc fly`` writes) back, tolerating whatever is missing.
+
+A fly run folder holds ``scenario.toml``, ``flight.csv``, ``jobs.csv`` (chip controller only),
+``summary.json`` and, with several vehicles, ``vehicle-N/`` sub-folders each with their own.  Any
+of the files may be missing (a host flight has no jobs, an interrupted one no summary), and a
+flight log cut short by a crash may end in half a line: what is there is read, what is not is
+``None``, and :attr:`RunFolder.notes` says what was skipped.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from robosoc.control.flight import ROW_FIELDS
+from robosoc.cosim.replay import JOB_CSV_FIELDS
+
+FLIGHT_CSV = "flight.csv"
+JOBS_CSV = "jobs.csv"
+SUMMARY_JSON = "summary.json"
+SCENARIO_TOML = "scenario.toml"
+FLIGHT_MCAP = "flight.mcap"
+CHIP_TRACE_JSON = "chip-trace.json"
+REPORT_HTML = "report.html"
+VEHICLE_FOLDER = re.compile(r"vehicle-(\d+)")
+
+_TEXT_JOB_FIELDS = ("task", "tile")
+
+
+class RunFolderError(ValueError):
+    """The folder is not a run folder, or one of its files is not what its name says."""
+
+
+@dataclass
+class RunFolder:
+    """What one run folder holds (``None``: the file is not there)."""
+
+    path: Path
+    rows: np.ndarray | None = None
+    jobs: dict[str, np.ndarray] | None = None
+    summary: dict | None = None
+    scenario_text: str | None = None
+    vehicles: list[RunFolder] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)
+
+    @property
+    def clock_ns(self) -> float | None:
+        """The chip's clock period from ``summary.json`` (None without one)."""
+        chip = (self.summary or {}).get("chip") or {}
+        value = chip.get("clock_ns")
+        return float(value) if isinstance(value, int | float) and value > 0 else None
+
+
+def read_flight_rows(path: Path, notes: list[str]) -> np.ndarray:
+    """The rows of a flight log; a last line cut short (an interrupted flight) is skipped with a note.
+
+    Raises:
+        RunFolderError: the header is not the flight log's, or a row other than the last is bad.
+    """
+    with path.open(encoding="utf-8", newline="") as handle:
+        reader = csv.reader(handle)
+        header = next(reader, None)
+        if header is None or tuple(header) != ROW_FIELDS:
+            raise RunFolderError(f"{path}: not a robosoc flight log (unexpected header)")
+        lines = list(reader)
+    rows = []
+    for k, line in enumerate(lines):
+        try:
+            if len(line) != len(ROW_FIELDS):
+                raise ValueError(f"{len(line)} values, expected {len(ROW_FIELDS)}")
+            rows.append([float(v) for v in line])
+        except ValueError as exc:
+            if k == len(lines) - 1:
+                notes.append(f"{path.name}: last line incomplete (interrupted flight?), skipped")
+                break
+            raise RunFolderError(f"{path}: line {k + 2}: {exc}") from None
+    return np.array(rows, dtype=float).reshape(-1, len(ROW_FIELDS))
+
+
+def read_jobs(path: Path, notes: list[str]) -> dict[str, np.ndarray]:
+    """``jobs.csv`` as columns (task and tile as text, the rest as numbers).
+
+    Raises:
+        RunFolderError: the header is not the job records'.
+    """
+    with path.open(encoding="utf-8", newline="") as handle:
+        reader = csv.reader(handle)
+        header = next(reader, None)
+        if header is None or tuple(header) != JOB_CSV_FIELDS:
+            raise RunFolderError(f"{path}: not a robosoc job record file (unexpected header)")
+        lines = [line for line in reader if line]
+    if lines and len(lines[-1]) != len(JOB_CSV_FIELDS):
+        notes.append(f"{path.name}: last line incomplete, skipped")
+        lines = lines[:-1]
+    columns: dict[str, np.ndarray] = {}
+    for i, name in enumerate(JOB_CSV_FIELDS):
+        values = [line[i] for line in lines]
+        try:
+            columns[name] = np.array(values, dtype=str if name in _TEXT_JOB_FIELDS else float)
+        except ValueError as exc:
+            raise RunFolderError(f"{path}: column {name}: {exc}") from None
+    return columns
+
+
+def _read_summary(path: Path) -> dict:
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise RunFolderError(f"{path}: not JSON: {exc}") from None
+    if not isinstance(data, dict):
+        raise RunFolderError(f"{path}: expected a JSON object")
+    return data
+
+
+def read_run_folder(path: Path) -> RunFolder:
+    """Everything a run folder holds.
+
+    Raises:
+        RunFolderError: ``path`` is not a folder, holds none of the run files, or one of them is
+            malformed (the message names the file).
+    """
+    if not path.exists():
+        raise RunFolderError(f"{path}: folder not found")
+    if not path.is_dir():
+        raise RunFolderError(f"{path}: is a file, expected a run folder")
+    run = RunFolder(path)
+    try:
+        if (path / FLIGHT_CSV).is_file():
+            run.rows = read_flight_rows(path / FLIGHT_CSV, run.notes)
+        if (path / JOBS_CSV).is_file():
+            run.jobs = read_jobs(path / JOBS_CSV, run.notes)
+        if (path / SUMMARY_JSON).is_file():
+            run.summary = _read_summary(path / SUMMARY_JSON)
+        if (path / SCENARIO_TOML).is_file():
+            run.scenario_text = (path / SCENARIO_TOML).read_text(encoding="utf-8")
+    except UnicodeDecodeError as exc:
+        raise RunFolderError(f"{path}: a run file is not UTF-8 text: {exc}") from None
+    except OSError as exc:
+        raise RunFolderError(f"{path}: cannot read: {exc}") from None
+    subs = sorted(
+        (p for p in path.iterdir() if p.is_dir() and VEHICLE_FOLDER.fullmatch(p.name)),
+        key=lambda p: int(p.name.split("-")[1]),
+    )
+    run.vehicles = [read_run_folder(p) for p in subs]
+    if run.rows is None and run.jobs is None and run.summary is None and not run.vehicles:
+        raise RunFolderError(
+            f"{path}: not a run folder (no {FLIGHT_CSV}, {JOBS_CSV}, {SUMMARY_JSON} or vehicle-N/ in it)"
+        )
+    return run
+
+
+def finite(value: object) -> float | None:
+    """``value`` as a float if it is a finite number (JSON null and NaN are None)."""
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        return None
+    return float(value) if math.isfinite(value) else None
+
+
+__all__ = [
+    "CHIP_TRACE_JSON",
+    "FLIGHT_CSV",
+    "FLIGHT_MCAP",
+    "JOBS_CSV",
+    "REPORT_HTML",
+    "SCENARIO_TOML",
+    "SUMMARY_JSON",
+    "RunFolder",
+    "RunFolderError",
+    "finite",
+    "read_flight_rows",
+    "read_jobs",
+    "read_run_folder",
+]

@@ -1,0 +1,122 @@
+"""The live server: a WebSocket client on loopback speaks Foxglove's protocol with it."""
+
+from __future__ import annotations
+
+import json
+import os
+import socket
+import struct
+import subprocess
+import sys
+import threading
+from pathlib import Path
+
+import numpy as np
+import pytest
+from mcap_ros2._dynamic import generate_dynamic
+from websockets.sync.client import connect
+
+from robosoc.analysis.foxglove_live import LiveFlight, LiveFlightError
+from robosoc.analysis.ros2_flight import TOPICS
+from robosoc.control.flight import ROW_FIELDS
+
+SUBPROTOCOL = "foxglove.sdk.v1"
+MESSAGE_DATA = 0x01  # binary opcode of a message (Foxglove WebSocket protocol)
+WAIT_S = 30
+
+
+def _advertised(ws) -> list[dict]:
+    """Read JSON frames up to the advertisement of every topic."""
+    channels: dict[str, dict] = {}
+    while len(channels) < len(TOPICS):
+        frame = json.loads(ws.recv(timeout=WAIT_S))
+        if frame["op"] == "advertise":
+            channels.update({c["topic"]: c for c in frame["channels"]})
+    return list(channels.values())
+
+
+def _subscribe(ws, channels: list[dict]) -> dict[int, dict]:
+    subscriptions = {k + 1: c for k, c in enumerate(channels)}
+    ws.send(
+        json.dumps(
+            {"op": "subscribe", "subscriptions": [{"id": k, "channelId": c["id"]} for k, c in subscriptions.items()]}
+        )
+    )
+    return subscriptions
+
+
+def _first_message(ws) -> tuple[int, int, bytes]:
+    while True:
+        frame = ws.recv(timeout=WAIT_S)
+        if isinstance(frame, bytes) and frame[0] == MESSAGE_DATA:
+            subscription, ns = struct.unpack_from("<IQ", frame, 1)
+            return subscription, ns, frame[13:]
+
+
+def test_a_client_gets_the_channels_and_messages_equal_to_the_rows(host_flight: np.ndarray) -> None:
+    rows = host_flight[:50]
+    with LiveFlight(0, pace=0) as live:
+        assert live.port > 0
+        stop = threading.Event()
+        with connect(live.url, subprotocols=[SUBPROTOCOL], open_timeout=WAIT_S) as ws:
+            assert ws.subprotocol == SUBPROTOCOL
+            channels = _advertised(ws)
+            assert {c["topic"]: c["schemaName"] for c in channels} == {t.name: t.datatype for t in TOPICS}
+            assert {(c["encoding"], c["schemaEncoding"]) for c in channels} == {("cdr", "ros2msg")}
+            subscriptions = _subscribe(ws, channels)
+
+            def publish() -> None:  # until the subscription has reached the server
+                while not stop.is_set():
+                    for row in rows:
+                        live.publish(row)
+
+            publisher = threading.Thread(target=publish, daemon=True)
+            publisher.start()
+            try:
+                subscription, ns, payload = _first_message(ws)
+            finally:
+                stop.set()
+                publisher.join(WAIT_S)
+    channel = subscriptions[subscription]
+    decoded = generate_dynamic(channel["schemaName"], channel["schema"])[channel["schemaName"]](payload)
+    times = np.round(rows[:, ROW_FIELDS.index("t")] * 1e9).astype(np.int64)
+    assert ns in times  # a row's simulated time
+    row = dict(zip(ROW_FIELDS, rows[list(times).index(ns)], strict=True))
+    if hasattr(decoded, "header"):
+        assert decoded.header.stamp.sec * 10**9 + decoded.header.stamp.nanosec == ns
+    topic = next(t for t in TOPICS if t.name == channel["topic"])
+    for path, (column, factor) in topic.columns.items():
+        node = decoded
+        for key in path.split("."):
+            node = node[int(key)] if key.isdigit() else getattr(node, key)
+        assert node == (row[column] > 0.5 if column == "armed" else row[column] * factor), (topic.name, path)
+
+
+def test_a_taken_port_is_an_error_naming_it() -> None:
+    with socket.socket() as taken:
+        taken.bind(("127.0.0.1", 0))
+        taken.listen()
+        port = taken.getsockname()[1]
+        with pytest.raises(LiveFlightError, match=f"127.0.0.1:{port}"):
+            LiveFlight(port)
+
+
+def test_fly_foxglove_serves_the_flight_and_writes_its_logs(tmp_path: Path) -> None:
+    env = {**os.environ, "PYTHONUNBUFFERED": "1", "COLUMNS": "200"}
+    args = [sys.executable, "-m", "robosoc", "fly", "--seconds", "3", "--foxglove", "0", "--out", str(tmp_path / "run")]
+    with subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env) as fly:
+        assert fly.stdout is not None
+        url = None
+        for line in fly.stdout:
+            if line.startswith("foxglove: ws://"):
+                url = line.split()[1]
+                break
+        assert url is not None, "fly printed no foxglove URL"
+        with connect(url, subprotocols=[SUBPROTOCOL], open_timeout=WAIT_S) as ws:
+            _subscribe(ws, _advertised(ws))
+            _, ns, payload = _first_message(ws)  # the flight goes at real-time pace: 3 s to catch it
+            assert payload and 0 <= ns <= 3 * 10**9
+        rest = fly.stdout.read()
+        assert fly.wait(timeout=120) == 0, rest
+    for name in ("flight.csv", "flight.mcap", "report.html"):
+        assert (tmp_path / "run" / name).is_file(), name

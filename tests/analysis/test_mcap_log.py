@@ -1,0 +1,137 @@
+"""The flight MCAP read back with the third-party ``mcap`` reader and the ROS 2 decoder."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from mcap.reader import make_reader
+from mcap_ros2.decoder import DecoderFactory
+
+from robosoc.analysis.mcap_log import flight_csv_to_mcap, write_flight_mcap
+from robosoc.config.scenario import ScenarioConfig
+from robosoc.config.vehicle import vehicle_preset
+from robosoc.control.flight import ROW_FIELDS, fly
+from robosoc.control.flight_log import CsvFlightLog
+from robosoc.control.host import HostController
+
+SECONDS = 0.5
+
+
+@pytest.fixture(scope="module")
+def rows() -> np.ndarray:
+    scenario = ScenarioConfig(duration_s=SECONDS)
+    vehicle = vehicle_preset(scenario.vehicle)
+    return fly(scenario, vehicle, HostController.for_scenario(scenario, vehicle), seed=4)
+
+
+def _decoded(path: Path) -> dict[str, list]:
+    out: dict[str, list] = {}
+    with path.open("rb") as stream:
+        reader = make_reader(stream, decoder_factories=[DecoderFactory()])
+        summary = reader.get_summary()
+        assert summary is not None and summary.statistics is not None
+        for schema, channel, message, decoded in reader.iter_decoded_messages():
+            assert schema.encoding == "ros2msg" and channel.message_encoding == "cdr"
+            out.setdefault(channel.topic, []).append((schema.name, message.log_time, decoded))
+    return out
+
+
+def _expected(row: dict[str, float]) -> dict[str, dict[str, float]]:
+    """Per topic, field path → value, written out by hand from the ROS message definitions."""
+    return {
+        "/imu": {"angular_velocity.x": row["gyro_x"], "angular_velocity.y": row["gyro_y"],
+                 "angular_velocity.z": row["gyro_z"], "linear_acceleration.x": row["accel_x"],
+                 "linear_acceleration.y": row["accel_y"], "linear_acceleration.z": row["accel_z"],
+                 "orientation_covariance.0": -1.0},
+        "/mag": {"magnetic_field.x": row["mag_x"], "magnetic_field.y": row["mag_y"], "magnetic_field.z": row["mag_z"]},
+        "/baro/pressure": {"fluid_pressure": row["baro_pressure"] * 100.0},
+        "/baro/altitude": {"data": row["baro_altitude"]},
+        "/truth/pose": {"pose.position.x": row["x"], "pose.position.y": row["y"], "pose.position.z": row["z"],
+                        "pose.orientation.w": row["qw"], "pose.orientation.x": row["qx"],
+                        "pose.orientation.y": row["qy"], "pose.orientation.z": row["qz"]},
+        "/truth/euler": {"vector.x": row["roll"], "vector.y": row["pitch"], "vector.z": row["yaw"]},
+        "/estimate/pose": {"pose.position.z": row["est_height"], "pose.orientation.w": row["est_qw"],
+                           "pose.orientation.x": row["est_qx"], "pose.orientation.y": row["est_qy"],
+                           "pose.orientation.z": row["est_qz"]},
+        "/estimate/euler": {"vector.x": row["est_roll"], "vector.y": row["est_pitch"], "vector.z": row["est_yaw"]},
+        "/setpoint": {"roll": row["sp_roll"], "pitch": row["sp_pitch"], "yaw": row["sp_yaw"],
+                      "height": row["sp_height"], "height_rate": row["sp_height_rate"],
+                      "height_accel": row["sp_height_accel"], "armed": row["armed"] > 0.5},
+        "/pwm": {f"pwm.{i}": row[f"pwm{i}"] for i in range(4)},
+        "/wind": {"vector.x": row["wind_x"], "vector.y": row["wind_y"], "vector.z": row["wind_z"]},
+    }  # fmt: skip
+
+
+def _get(message: object, path: str) -> object:
+    node = message
+    for key in path.split("."):
+        node = node[int(key)] if key.isdigit() else getattr(node, key)
+    return node
+
+
+def test_every_message_decodes_and_equals_its_row(rows: np.ndarray, tmp_path: Path) -> None:
+    path = tmp_path / "flight.mcap"
+    count = write_flight_mcap(rows, path)
+    decoded = _decoded(path)
+    expected_topics = set(_expected(dict.fromkeys(ROW_FIELDS, 0.0)))
+    assert set(decoded) == expected_topics
+    assert count == sum(len(v) for v in decoded.values()) == len(rows) * len(expected_topics)
+    for topic, messages in decoded.items():
+        assert len(messages) == len(rows), topic
+        for k, (_, log_time, message) in enumerate(messages):
+            row = dict(zip(ROW_FIELDS, (float(v) for v in rows[k]), strict=True))
+            ns = round(row["t"] * 1e9)
+            assert log_time == ns
+            if hasattr(message, "header"):
+                assert message.header.stamp.sec * 10**9 + message.header.stamp.nanosec == ns
+            for field, value in _expected(row)[topic].items():
+                got = _get(message, field)
+                assert got == value, (topic, k, field, got, value)
+
+
+def test_types_and_schema_text_are_the_ros2_ones(rows: np.ndarray, tmp_path: Path) -> None:
+    path = tmp_path / "flight.mcap"
+    write_flight_mcap(rows[:2], path)
+    with path.open("rb") as stream:
+        reader = make_reader(stream)
+        summary = reader.get_summary()
+        assert reader.get_header().profile == "ros2"
+    schemas = {s.name: s.data.decode() for s in summary.schemas.values()}
+    topics = {c.topic: summary.schemas[c.schema_id].name for c in summary.channels.values()}
+    assert topics["/imu"] == "sensor_msgs/Imu"
+    assert topics["/mag"] == "sensor_msgs/MagneticField"
+    assert topics["/baro/pressure"] == "sensor_msgs/FluidPressure"
+    assert topics["/truth/pose"] == topics["/estimate/pose"] == "geometry_msgs/PoseStamped"
+    # a ros2msg schema carries every type it uses, once
+    imu = schemas["sensor_msgs/Imu"]
+    for dep in ("std_msgs/Header", "builtin_interfaces/Time", "geometry_msgs/Quaternion", "geometry_msgs/Vector3"):
+        assert imu.count(f"MSG: {dep}\n") == 1, dep
+    assert "uint8[4] pwm" in schemas["robosoc_msgs/Pwm"]
+
+
+def test_unknown_estimate_publishes_no_estimate_and_csv_converts(rows: np.ndarray, tmp_path: Path) -> None:
+    chip_like = rows[:5].copy()
+    for name in ROW_FIELDS:
+        if name.startswith("est_"):
+            chip_like[:, ROW_FIELDS.index(name)] = math.nan
+    csv = tmp_path / "flight.csv"
+    with CsvFlightLog(csv) as log:
+        for row in chip_like:
+            log.write(row)
+    out = tmp_path / "flight.mcap"
+    flight_csv_to_mcap(csv, out)
+    decoded = _decoded(out)
+    assert "/estimate/pose" not in decoded and "/estimate/euler" not in decoded
+    assert [_get(m, "pose.position.z") for _, _, m in decoded["/truth/pose"]] == list(
+        chip_like[:, ROW_FIELDS.index("z")]
+    )
+    assert not list(tmp_path.glob("*.partial"))
+
+
+def test_rows_without_flight_columns_are_refused(tmp_path: Path) -> None:
+    with pytest.raises(ValueError, match="columns"):
+        write_flight_mcap(np.zeros((3, 4)), tmp_path / "x.mcap")
+    assert not (tmp_path / "x.mcap").exists()
