@@ -85,13 +85,20 @@ OPTIONS: dict[tuple[str, str], Spec] = {
     ("fly", "--controller"): Spec("choice", choices=("host", "chip")),
     ("fly", "--arith"): Spec("choice", choices=("float", "fixed")),
     ("fly", "--mul"): Spec("flag"),
-    ("fly", "--seconds"): Spec("float", 0.01, 3600.0),  # at least one sensor period of 10 ms
+    ("fly", "SCENARIO"): Spec("in_file"),
+    ("fly", "--duration"): Spec("float", 0.01, 3600.0),  # at least one sensor period of 10 ms
+    ("fly", "--seconds"): Spec("float", 0.01, 3600.0),  # the hidden alias of --duration
+    ("fly", "--vehicles"): Spec("int", 1, 16),
     ("fly", "--seed"): Spec("int", 0, 2**63 - 1),
     ("fly", "--scenario"): Spec("in_file"),
     ("fly", "--vehicle"): Spec("choice", choices=("default", "laser")),
     ("fly", "--out"): Spec("out_dir"),
     ("fly", "--no-out"): Spec("flag"),
     ("fly", "--video"): Spec("out_any"),
+    ("bench fly", "--arith"): Spec("choice", choices=("float", "fixed")),
+    ("bench fly", "--mul"): Spec("flag"),
+    ("bench fly", "--duration"): Spec("float", 0.01, 3600.0),
+    ("scenario show", "FILE"): Spec("in_file"),
     ("bench core", "--runs"): Spec("int", 1, 1000),
     ("bench core", "--mul"): Spec("flag"),
     ("bench physics", "--seconds"): Spec("float", 0.001, 3600.0),
@@ -160,13 +167,17 @@ def base_command(command: str, option: str, elves: dict[str, Path], tmp: Path) -
             *([] if option == "--output" else ["-o", str(tmp / "ok.elf")]),
         ]
     if command == "fly":
-        return ["fly", "--seconds", "0.01", *([] if option in ("--out", "--no-out") else ["--no-out"])]
+        length = [] if option in ("--duration", "--seconds") else ["--duration", "0.01"]
+        return ["fly", *length, *([] if option in ("--out", "--no-out") else ["--no-out"])]
+    if command == "bench fly":
+        return ["bench", "fly", *([] if option == "--duration" else ["--duration", "0.01"]), "--arith", "fixed"]
     return {
         "bench core": ["bench", "core", "--runs", "1"],
         "bench physics": ["bench", "physics", "--seconds", "0.01", "--runs", "1"],
         "bench noc": ["bench", "noc", "--size", "2x2", "--cycles", "10", "--rates", "0.1", "--arbiter", "hermes"],
         "bench chip": ["bench", "chip", "--runs", "1", "--cycles", "10", "--ticks", "1", "--no-noc"],
         "firmware build": ["firmware", "build"],
+        "scenario show": ["scenario", "show"],
         "firmware size": ["firmware", "size"],
         "firmware replay": ["firmware", "replay", *([] if option in ("LOG", "--seconds") else ["--seconds", "0.02"])],
     }[command]

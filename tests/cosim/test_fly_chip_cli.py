@@ -1,44 +1,103 @@
-"""``robosoc fly --controller chip``: the lockstep flight through the CLI."""
+"""``robosoc fly``: the chip flies by default; the run folder, the summary table, the options."""
 
 from __future__ import annotations
 
 import csv
+import json
+import re
+import tomllib
 from pathlib import Path
 
 from typer.testing import CliRunner
 
 from robosoc.cli import app
+from robosoc.config.scenario import ScenarioConfig
+from robosoc.config.validate import from_mapping
 from robosoc.control.flight import ROW_FIELDS
 from robosoc.control.flight_log import read_flight_log
 from robosoc.cosim.replay import JOB_CSV_FIELDS
 
+runner = CliRunner()
 
-def test_fly_with_the_chip_writes_log_plot_and_jobs(tmp_path: Path) -> None:
+
+def test_fly_flies_the_chip_by_default_and_writes_the_run_folder(tmp_path: Path) -> None:
     out = tmp_path / "run"
-    result = CliRunner().invoke(
-        app, ["fly", "--controller", "chip", "--seconds", "0.5", "--seed", "4", "--out", str(out)]
-    )
+    result = runner.invoke(app, ["fly", "--duration", "0.5", "--seed", "4", "--out", str(out)])
     assert result.exit_code == 0, result.output
     text = result.output
     assert "controller chip (fixed+mul, lockstep)" in text
-    assert "hover height error" in text and "attitude tracking error" in text
-    assert "EKF attitude error" not in text, "the chip's estimate is not visible"
-    assert "estimator 50 jobs: response mean" in text and "pid       50 jobs: response mean" in text
-    assert "deadline misses: 0; 50 PWM commands; real-time factor" in text
+    assert "hover height error RMS" in text and "roll tracking RMS" in text
+    assert re.search(r"estimator jobs\s+│\s+50", text) and re.search(r"pid jobs\s+│\s+50", text)
+    assert re.search(r"deadline misses\s+│\s+0", text)
+    assert re.search(r"real-time factor [0-9.]+ \(0.5 s simulated in [0-9.]+ s\)", text)
+    assert f"run folder: {out}" in text
     rows = read_flight_log(out / "flight.csv")
     assert rows.shape == (50, len(ROW_FIELDS))
     assert (out / "flight.png").stat().st_size > 10_000
     with (out / "jobs.csv").open() as handle:
         jobs = list(csv.DictReader(handle))
-    assert tuple(jobs[0]) == JOB_CSV_FIELDS
-    assert sorted({j["task"] for j in jobs}) == ["estimator", "pid"] and len(jobs) == 100
-    assert all(j["deadline_met"] == "1" for j in jobs)
+    assert tuple(jobs[0]) == JOB_CSV_FIELDS and len(jobs) == 100
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["complete"] is True and summary["seed"] == 4 and summary["tasks"]["pid"]["jobs"] == 50
+    resolved = from_mapping(ScenarioConfig, tomllib.loads((out / "scenario.toml").read_text()))
+    assert resolved == ScenarioConfig(duration_s=0.5, seed=4)
 
 
-def test_fly_with_the_soft_float_build_without_multiplier(tmp_path: Path) -> None:
-    result = CliRunner().invoke(
-        app, ["fly", "--controller", "chip", "--arith", "float", "--no-mul", "--seconds", "0.05", "--no-out"]
+def test_options_override_the_scenario_file(tmp_path: Path) -> None:
+    path = tmp_path / "s.toml"
+    path.write_text('name = "mine"\nseed = 3\n[firmware]\narith = "fixed"\n')
+    result = runner.invoke(
+        app, ["fly", str(path), "--arith", "float", "--no-mul", "--seconds", "0.05", "--seed", "9", "--no-out"]
     )
     assert result.exit_code == 0, result.output
-    assert "controller chip (float-no-mul, lockstep)" in result.output
-    assert "5 PWM commands" in result.output
+    assert "controller chip (float-no-mul, lockstep), seed 9" in result.output
+    assert f"from {path}: name, seed, firmware.arith" in result.output
+    assert "from --seconds: duration_s" in result.output and "from --arith: firmware.arith" in result.output
+    assert "from --mul/--no-mul: firmware.multiplier" in result.output
+
+
+def test_the_default_run_folder_is_named_after_scenario_and_seed(tmp_path: Path, monkeypatch) -> None:
+    monkeypatch.chdir(tmp_path)
+    result = runner.invoke(app, ["fly", "--controller", "host", "--duration", "0.05", "--seed", "12"])
+    assert result.exit_code == 0, result.output
+    summary = json.loads(Path("runs/fly-default-s12/summary.json").read_text())
+    assert summary["controller"] == "host" and summary["tasks"] is None
+    assert not Path("runs/fly-default-s12/jobs.csv").exists()
+
+
+def test_conflicting_options_are_refused_before_flying(tmp_path: Path) -> None:
+    path = tmp_path / "s.toml"
+    path.write_text("")
+    for args, option in (
+        (["--controller", "host", "--arith", "float"], "--arith"),
+        (["--controller", "host", "--no-mul"], "--mul/--no-mul"),
+        (["--duration", "1", "--seconds", "1"], "--duration"),
+        ([str(path), "--scenario", str(path)], "--scenario"),
+    ):
+        result = runner.invoke(app, ["fly", "--no-out", *args])
+        assert result.exit_code == 2, (args, result.output)
+        assert option in result.output and "flying scenario" not in result.output
+
+
+def test_a_host_scenario_file_refuses_firmware_options(tmp_path: Path) -> None:
+    path = tmp_path / "host.toml"
+    path.write_text('controller = "host"\n')
+    result = runner.invoke(app, ["fly", str(path), "--arith", "fixed", "--no-out"])
+    assert result.exit_code == 2 and "--arith: only with the chip controller" in result.output
+
+
+def test_two_vehicles_from_the_command_line(tmp_path: Path) -> None:
+    result = runner.invoke(app, ["fly", "--vehicles", "2", "--duration", "0.1", "--out", str(tmp_path)])
+    assert result.exit_code == 0, result.output
+    assert "2 vehicles (default)" in result.output and "vehicle 2" in result.output
+    top = json.loads((tmp_path / "summary.json").read_text())
+    assert [v["tasks"]["pid"]["jobs"] for v in top["vehicles"]] == [10, 10]
+    assert (tmp_path / "vehicle-2" / "jobs.csv").is_file()
+
+
+def test_bench_fly_prints_its_last_line() -> None:
+    result = runner.invoke(app, ["bench", "fly", "--arith", "fixed", "--mul", "--duration", "0.1"])
+    assert result.exit_code == 0, result.output
+    last = result.output.strip().splitlines()[-1]
+    assert re.fullmatch(r"fly: [0-9]+\.[0-9]{2}× real time", last), last
+    assert "chip fixed+mul" in result.output and "float" not in result.output

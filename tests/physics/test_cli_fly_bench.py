@@ -13,15 +13,17 @@ runner = CliRunner()
 
 def test_firmware_options_need_the_chip_controller() -> None:
     for args in (["--arith", "float"], ["--no-mul"], ["--mul"]):
-        result = runner.invoke(app, ["fly", "--seconds", "0.01", "--no-out", *args])
+        result = runner.invoke(app, ["fly", "--controller", "host", "--seconds", "0.01", "--no-out", *args])
         assert result.exit_code == 2, result.output
-        assert "only with --controller chip" in result.output and "flying scenario" not in result.output
+        assert "only with the chip controller" in result.output and "flying scenario" not in result.output
 
 
 def test_fly_writes_log_and_plot_and_prints_errors(tmp_path: Path) -> None:
-    result = runner.invoke(app, ["fly", "--seconds", "6", "--seed", "2", "--out", str(tmp_path)])
+    result = runner.invoke(
+        app, ["fly", "--controller", "host", "--seconds", "6", "--seed", "2", "--out", str(tmp_path)]
+    )
     assert result.exit_code == 0, result.output
-    assert "hover height error" in result.output and "EKF attitude error" in result.output
+    assert "hover height error RMS" in result.output and "attitude estimate RMS" in result.output
     rows = read_flight_log(tmp_path / "flight.csv")
     assert rows.shape[0] == 600
     assert (tmp_path / "flight.png").stat().st_size > 10_000

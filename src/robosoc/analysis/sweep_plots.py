@@ -7,6 +7,7 @@ from __future__ import annotations
 import csv
 import html
 import io
+import json
 import math
 from collections.abc import Sequence
 from pathlib import Path
@@ -49,14 +50,13 @@ def _label(record: dict[str, Any], varied: Sequence[str]) -> str:
     return ", ".join(f"{name.rsplit('.', 1)[-1]}={values.get(name)}" for name in varied) or "base"
 
 
-def _svg(fig) -> str:
-    buffer = io.StringIO()
-    fig.savefig(buffer, format="svg")
-    import matplotlib.pyplot as plt
+def _png(fig, path: Path, dpi: int) -> str:
+    """Save ``fig`` as PNG at ``path`` and close it; the PNG as base64 for an inline image."""
+    import base64
 
-    plt.close(fig)
-    text = buffer.getvalue()
-    return text[text.index("<svg") :]
+    fig.savefig(path, dpi=dpi)
+    _pyplot().close(fig)
+    return base64.b64encode(path.read_bytes()).decode("ascii")
 
 
 def _pyplot():
@@ -128,45 +128,39 @@ def metric_figure(records: Sequence[dict[str, Any]], name: str, field: str):
 
 def write_sweep_plots(
     folder: Path, records: Sequence[dict[str, Any]], varied: Sequence[str], metrics: Sequence[str]
-) -> list[Path]:
-    """PNG files of every plot in ``folder``/plots; their paths."""
+) -> list[tuple[str, Path, str]]:
+    """Every plot as a PNG in ``folder``/plots: (caption, path, base64 of the PNG) per plot."""
     out = folder / "plots"
     out.mkdir(parents=True, exist_ok=True)
-    paths = []
+    plots = []
     for task in TASKS:
-        fig = pareto_figure(records, varied, task)
         path = out / f"pareto-{task}.png"
-        fig.savefig(path, dpi=100)
-        _pyplot().close(fig)
-        paths.append(path)
+        plots.append((f"{task}: Pareto front", path, _png(pareto_figure(records, varied, task), path, 100)))
     for field in varied:
         for name in metrics:
-            fig = metric_figure(records, name, field)
-            path = out / f"{name}--{field}.png".replace("/", "_")
-            fig.savefig(path, dpi=90)
-            _pyplot().close(fig)
-            paths.append(path)
-    return paths
+            path = out / f"{name}--{field}.png"
+            plots.append((f"{name} against {field}", path, _png(metric_figure(records, name, field), path, 80)))
+    return plots
 
 
 def sweep_html(
-    title: str, records: Sequence[dict[str, Any]], varied: Sequence[str], metrics: Sequence[str], table_csv: str
+    title: str, records: Sequence[dict[str, Any]], plots: Sequence[tuple[str, Path, str]], table_csv: str
 ) -> str:
-    """The sweep's page: Pareto fronts, metric plots, failures and the table; plots inline as SVG."""
+    """The sweep's page: the plots (inline PNG), the failures and the table; needs no network."""
     parts = [f"<h1>{html.escape(title)}</h1>"]
     ok = sum(1 for r in records if r["status"] == OK)
     parts.append(f"<p>{len(records)} points finished, {ok} ok, {len(records) - ok} failed.</p>")
-    parts.append("<h2>Energy against response time</h2>")
-    parts.extend(f"<figure>{_svg(pareto_figure(records, varied, task))}</figure>" for task in TASKS)
-    if varied:
-        parts.append("<h2>Metrics against the swept fields</h2>")
-        for field in varied:
-            parts.extend(f"<figure>{_svg(metric_figure(records, name, field))}</figure>" for name in metrics)
+    parts.extend(
+        f'<figure><img alt="{html.escape(caption)}" src="data:image/png;base64,{data}">'
+        f"<figcaption>{html.escape(caption)}</figcaption></figure>"
+        for caption, _, data in plots
+    )
     failed = [r for r in records if r["status"] != OK]
     if failed:
         parts.append("<h2>Failed points</h2><ul>")
         parts.extend(
-            f"<li>{html.escape(_label(r, varied))}, seed {r['seed']}: {html.escape(r['error'])}</li>" for r in failed
+            f"<li>{html.escape(json.dumps(r['values']))}, seed {r['seed']}: {html.escape(r['error'])}</li>"
+            for r in failed
         )
         parts.append("</ul>")
     rows = list(csv.reader(io.StringIO(table_csv)))
@@ -175,7 +169,7 @@ def sweep_html(
         body = "".join("<tr>" + "".join(f"<td>{html.escape(c)}</td>" for c in row) + "</tr>" for row in rows[1:])
         parts.append(f"<h2>Points</h2><table><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>")
     style = (
-        "body{font-family:sans-serif;margin:2em;max-width:1100px}figure{display:inline-block;margin:.5em}"
+        "body{font-family:sans-serif;margin:2em}figure{display:inline-block;margin:.5em}img{max-width:640px}"
         "table{border-collapse:collapse;font-size:12px}td,th{border:1px solid #ccc;padding:2px 6px}"
     )
     return (

@@ -10,6 +10,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import numpy as np
 from elftools.common.exceptions import ELFError as PyElfToolsError
 from elftools.elf.constants import P_FLAGS
 from elftools.elf.elffile import ELFFile
@@ -244,22 +245,40 @@ def _read_program(path: Path, elf: ELFFile, allowed: list[Region] | None) -> Pro
     )
 
 
+#: Elf32_Sym, little-endian: st_name, st_value, st_size, st_info, st_other, st_shndx.
+_ELF32_SYM = np.dtype(
+    [("name", "<u4"), ("value", "<u4"), ("size", "<u4"), ("info", "u1"), ("other", "u1"), ("shndx", "<u2")]
+)
+_STT_OBJECT, _STT_FUNC = 1, 2
+_STB_GLOBAL, _STB_WEAK = 1, 2
+
+
 def _read_symbols(elf: ELFFile) -> list[Symbol]:
+    """The defined functions and data objects of ``.symtab``, read as one array (a firmware image has
+    thousands of symbols; pyelftools parses them one by one, a thousand times slower)."""
     table = elf.get_section_by_name(".symtab")
     if not isinstance(table, SymbolTableSection):
         return []
+    if table["sh_entsize"] != _ELF32_SYM.itemsize:
+        raise ElfError(f".symtab entries are {table['sh_entsize']} bytes, expected {_ELF32_SYM.itemsize}")
+    entries = np.frombuffer(table.data(), dtype=_ELF32_SYM, count=len(table.data()) // _ELF32_SYM.itemsize)
+    strings = elf.get_section(table["sh_link"]).data()
+    kinds = entries["info"] & 0xF
+    binds = entries["info"] >> 4
+    keep = ((kinds == _STT_FUNC) | (kinds == _STT_OBJECT)) & (entries["shndx"] != 0) & (entries["name"] != 0)
     symbols = []
-    for sym in table.iter_symbols():
-        kind = sym["st_info"]["type"]
-        if kind not in ("STT_FUNC", "STT_OBJECT") or not sym.name or sym["st_shndx"] == "SHN_UNDEF":
+    for entry, kind, bind in zip(entries[keep], kinds[keep], binds[keep], strict=True):
+        start = int(entry["name"])
+        name = strings[start : strings.index(b"\0", start)].decode("utf-8", "replace")
+        if not name:
             continue
         symbols.append(
             Symbol(
-                addr=sym["st_value"],
-                name=sym.name,
-                size=sym["st_size"],
-                kind="func" if kind == "STT_FUNC" else "object",
-                is_global=sym["st_info"]["bind"] in ("STB_GLOBAL", "STB_WEAK"),
+                addr=int(entry["value"]),
+                name=name,
+                size=int(entry["size"]),
+                kind="func" if kind == _STT_FUNC else "object",
+                is_global=int(bind) in (_STB_GLOBAL, _STB_WEAK),
             )
         )
     return symbols

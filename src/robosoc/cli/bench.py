@@ -8,6 +8,7 @@ import typer
 from robosoc.cli import exit_codes, files, options
 from robosoc.cli.app import bench_app
 from robosoc.cli.console import make_console
+from robosoc.config.firmware import ARITH_CHOICES
 
 MAX_RUNS = 1000
 #: Largest NoC benchmark: generated-cycles x tiles (the traffic draws one number per tile and cycle).
@@ -126,3 +127,39 @@ def bench_chip(
     from robosoc.benchmarks.chip import run_chip_benchmark
 
     run_chip_benchmark(runs=runs, cycles=cycles, ticks=ticks, noc=noc, console=make_console())
+
+
+@bench_app.command("fly", epilog=exit_codes.EPILOG)
+def bench_fly(
+    ctx: typer.Context,
+    arith: Annotated[
+        str | None,
+        typer.Option(
+            help="Fly only this firmware arithmetic: float or fixed (default: all four builds).",
+            callback=options.choice(*ARITH_CHOICES),
+        ),
+    ] = None,
+    mul: Annotated[
+        bool | None,
+        typer.Option("--mul/--no-mul", help="Fly only the build with (or without) the multiplier."),
+    ] = None,
+    duration: Annotated[
+        float,
+        typer.Option(
+            help="Simulated seconds per flight, whole ms in 0.01..3600.",
+            callback=options.float_range(0.01, 3600.0, unit="s"),
+        ),
+    ] = 10.0,
+) -> None:
+    """Real-time factor of the lockstep flight (physics + firmware on the chip), per firmware build,
+    the host controller as reference; last line: fly: <x>× real time (fixed + multiplier by default)."""
+    from robosoc.benchmarks.fly import ALL_BUILDS, run_fly_benchmark
+
+    if round(duration * 1000) != round(duration * 1000, 6):
+        raise options.fail("--duration", f"must be a whole number of ms, got {duration:g}")
+    mul_given = mul is not None and options.given(ctx, "mul")
+    builds = tuple(
+        fw for fw in ALL_BUILDS if (arith is None or fw.arith == arith) and (not mul_given or fw.multiplier == mul)
+    )
+    chosen = arith is not None or mul_given
+    run_fly_benchmark(builds, duration_s=duration, host=not chosen, console=make_console())

@@ -1,11 +1,13 @@
-"""``robosoc fly``: fly a scenario closed-loop and print hover, tracking and estimation errors."""
+"""``robosoc fly [SCENARIO.toml]``: fly a scenario closed-loop (by default the firmware on the chip, in
+lockstep), write the run folder and print a summary table (the run itself is
+:func:`robosoc.cosim.flight_session.fly_scenario`)."""
 
 from __future__ import annotations
 
 import math
 import time
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import typer
 
@@ -13,274 +15,342 @@ from robosoc.cli import exit_codes, files, options
 from robosoc.cli.app import app
 from robosoc.cli.console import make_console, note, plain
 from robosoc.cli.errors import CliError
-from robosoc.config.firmware import ARITH_CHOICES, FirmwareConfig
+from robosoc.cli.scenario import load_scenario
+from robosoc.config.firmware import ARITH_CHOICES
+from robosoc.config.scenario import CONTROLLERS, MAX_VEHICLES
 from robosoc.config.vehicle import VEHICLE_PRESETS
 
 VIDEO_FPS = 25.0
 
-
-def _fmt(value: float, unit: str, digits: int = 2) -> str:
-    return "n/a" if math.isnan(value) else f"{value:.{digits}f} {unit}"
-
-
-CONTROLLERS = ("host", "chip")
-
+ScenarioArg = Annotated[
+    Path | None,
+    typer.Argument(
+        metavar="SCENARIO",
+        help="Scenario TOML file (default: built-in; robosoc scenario show prints every field).",
+        show_default=False,
+    ),
+]
 Controller = Annotated[
-    str,
+    str | None,
     typer.Option(
-        help="Who flies: host (float64 Python) or chip (the firmware on the seed's 2x2 chip, in lockstep).",
+        help="Who flies: chip (the firmware on the chip, in lockstep) or host (float64 Python) "
+        "(default: the scenario's, chip).",
         callback=options.choice(*CONTROLLERS),
     ),
 ]
 Arith = Annotated[
     str | None,
     typer.Option(
-        help="With --controller chip: float (soft-float) or fixed (Q16.16) firmware (default: fixed).",
+        help="Firmware arithmetic: float (soft-float) or fixed (Q16.16) (default: the scenario's, fixed).",
         callback=options.choice(*ARITH_CHOICES),
     ),
 ]
 Mul = Annotated[
     bool | None,
-    typer.Option(
-        "--mul/--no-mul", help="With --controller chip: cores with the multiplier or without (default: with)."
-    ),
+    typer.Option("--mul/--no-mul", help="Firmware built for cores with the multiplier or without (default: with)."),
+]
+DURATION_HELP = (
+    "Flight length in seconds, whole ms in 0.001..3600, at least one sensor period (default: the scenario's)."
+)
+Duration = Annotated[
+    float | None,
+    typer.Option(help=DURATION_HELP, callback=options.float_range(0.001, 3600.0, unit="s")),
 ]
 Seconds = Annotated[
     float | None,
-    typer.Option(
-        help="Flight length in seconds, whole ms in 0.001..3600, at least one sensor period (default: the scenario's).",
-        callback=options.float_range(0.001, 3600.0, unit="s"),
-    ),
+    typer.Option(help=DURATION_HELP, callback=options.float_range(0.001, 3600.0, unit="s"), hidden=True),
 ]
 Seed = Annotated[
-    int, typer.Option(help="Seeds every random number (noise, biases, gusts), 0..2**63-1.", callback=options.seed())
+    int | None,
+    typer.Option(
+        help="Seeds every random number (noise, biases, gusts), 0..2**63-1 (default: the scenario's, 1).",
+        callback=options.seed(),
+    ),
 ]
-Scenario = Annotated[Path | None, typer.Option(help="Scenario TOML file (default: built-in).")]
+ScenarioOpt = Annotated[Path | None, typer.Option(help="Scenario TOML file (same as the SCENARIO argument).")]
 Vehicle = Annotated[
     str | None,
     typer.Option(help="default or laser (default: the scenario's).", callback=options.choice(*VEHICLE_PRESETS)),
 ]
+Vehicles = Annotated[
+    int | None,
+    typer.Option(
+        help=f"Quadrotors in one world, 1..{MAX_VEHICLES}, each with its own chip (default: the scenario's, 1).",
+        callback=options.int_range(1, MAX_VEHICLES),
+    ),
+]
 Out = Annotated[
     Path | None,
-    typer.Option(help="Folder for flight.csv (written as it flies) and flight.png (default: runs/fly-NAME-sSEED)."),
-]
-NoOut = Annotated[bool, typer.Option("--no-out", help="Write no log and no plot.")]
+    typer.Option(help="Run folder: scenario.toml, flight.csv, jobs.csv, summary.json, flight.png "
+                 "(default: runs/fly-NAME-sSEED)."),
+]  # fmt: skip
+NoOut = Annotated[bool, typer.Option("--no-out", help="Write nothing (print the summary only).")]
 Video = Annotated[Path | None, typer.Option(help="Render to FILE.mp4, or to a folder of PNG frames.")]
 
 
 @app.command("fly", epilog=exit_codes.EPILOG)
 def fly_command(
     ctx: typer.Context,
-    controller: Controller = "host",
+    scenario_file: ScenarioArg = None,
+    controller: Controller = None,
+    duration: Duration = None,
     seconds: Seconds = None,
-    seed: Seed = 1,
-    scenario: Scenario = None,
+    seed: Seed = None,
+    scenario: ScenarioOpt = None,
     vehicle: Vehicle = None,
+    vehicles: Vehicles = None,
     out: Out = None,
     no_out: NoOut = False,
     video: Video = None,
     arith: Arith = None,
     mul: Mul = None,
 ) -> None:
-    """Fly the scenario (default: take off to 1 m, hover, 10° roll/pitch/yaw steps, a gust; 10 s)."""
+    """Fly a scenario: by default the firmware (fixed point, multiplier) on the seed's 2x2 chip in
+    lockstep with the physics: take off to 1 m, hover, 10° roll/pitch/yaw steps, a gust; 10 s."""
     from rich.markup import escape
-    from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
 
     from robosoc.chip.mpsoc import ChipError
     from robosoc.chip.single import CoreError
-    from robosoc.config.scenario import ScenarioConfig
-    from robosoc.config.vehicle import vehicle_preset
-    from robosoc.control.flight import flight_metrics, fly
-    from robosoc.control.flight_log import CsvFlightLog
-    from robosoc.control.flight_plot import plot_flight
-    from robosoc.control.host import HostController
-    from robosoc.cosim.lockstep import fly_lockstep
+    from robosoc.cosim.flight_session import fly_scenario
 
     console = make_console()
-    fw = _firmware(ctx, controller, arith, mul)
+    options.exclusive(scenario=scenario is not None, scenario_file=scenario_file is not None)
+    options.exclusive(duration=duration is not None, seconds=seconds is not None)
     options.exclusive(out=out is not None, no_out=no_out)
-    sources: list[tuple[str, tuple[str, ...]]] = []
-    config = ScenarioConfig()
-    if scenario is not None:
-        config, named = files.load_toml(ScenarioConfig, scenario, "--scenario")
-        sources.append((str(scenario), named))
-    changes = {}
-    if seconds is not None:
-        changes["--seconds"] = ("duration_s", seconds)
-    if vehicle is not None:
-        changes["--vehicle"] = ("vehicle", vehicle)
-    config = options.override(config, changes, [str(scenario)] if scenario is not None else ())
-    sources.extend((option, (field,)) for option, (field, _) in changes.items())
-    period = 1.0 / config.sensors.rate_hz
+    path = scenario if scenario is not None else scenario_file
+    label = "--scenario" if scenario is not None else None
+    config, named = load_scenario(path, label)
+    sources: list[tuple[str, tuple[str, ...]]] = [(str(path), named)] if path is not None else []
+    files_used = [str(path)] if path is not None else []
+
+    changes: dict[str, tuple[str, Any]] = {}
+    for option, field, value in (
+        ("--controller", "controller", controller),
+        ("--duration", "duration_s", duration),
+        ("--seconds", "duration_s", seconds),
+        ("--seed", "seed", seed),
+        ("--vehicle", "vehicle", vehicle),
+        ("--vehicles", "vehicles", vehicles),
+    ):
+        if value is not None:
+            changes[option] = (field, value)
+    fw_changes: dict[str, tuple[str, Any]] = {}
+    if arith is not None:
+        fw_changes["--arith"] = ("arith", arith)
+    if mul is not None and options.given(ctx, "mul"):
+        fw_changes["--mul/--no-mul"] = ("multiplier", mul)
+    if fw_changes:
+        firmware = options.override(config.firmware, fw_changes, files_used)
+        changes[next(iter(fw_changes))] = ("firmware", firmware)
+    config = options.override(config, changes, files_used)
+    if config.controller == "host":
+        for option in fw_changes:
+            raise options.fail(option, "only with the chip controller (the host controller has no firmware)")
+    sources.extend((option, (field,)) for option, (field, _) in changes.items() if field != "firmware")
+    sources.extend((option, (f"firmware.{field}",)) for option, (field, _) in fw_changes.items())
     if round(config.duration_s * config.sensors.rate_hz) < 1:
-        where = "--seconds" if seconds is not None else f"--scenario: {scenario}: duration_s"
+        where = next((o for o in ("--duration", "--seconds") if o in changes), f"{path}: duration_s")
         raise options.fail(
             where,
-            f"a flight lasts at least one sensor period ({period:g} s at {config.sensors.rate_hz:g} Hz), "
-            f"got {config.duration_s:g}",
+            f"a flight lasts at least one sensor period ({1 / config.sensors.rate_hz:g} s at "
+            f"{config.sensors.rate_hz:g} Hz), got {config.duration_s:g}",
         )
-    craft = vehicle_preset(config.vehicle)
 
+    inputs = [path] if path is not None else []
     if out is None and not no_out:
-        out = Path("runs") / f"fly-{config.name}-s{seed}"
+        out = Path("runs") / f"fly-{config.name}-s{config.seed}"
     if out is not None:
-        out = files.output_dir(out, "--out", inputs=[scenario] if scenario else ())
+        out = files.output_dir(out, "--out", inputs=inputs)
     if video is not None:
         if video.suffix.lower() == ".mp4":
-            video = files.output_file(video, "--video", inputs=[scenario] if scenario else ())
+            video = files.output_file(video, "--video", inputs=inputs)
         else:
             video = files.output_dir(video, "--video")
-    if fw is None:
-        pilot = HostController.for_scenario(config, craft)
-        flier = "host"
-    else:
-        from robosoc.cosim.lockstep import ChipController
 
-        note(console, f"building the firmware ({fw.label}) and loading the chip ...")
-        pilot = ChipController(config, craft, fw)
-        flier = f"chip ({fw.label}, lockstep)"
-    log = CsvFlightLog(out / "flight.csv") if out else None
-    renderer = sink = None
-    if video is not None:
-        renderer, sink = _open_video(console, video)
-    samples = round(config.duration_s * config.sensors.rate_hz)
-    frame_every = max(1, round(config.sensors.rate_hz / VIDEO_FPS))
-    state = {"renderer": renderer}
+    fw = config.firmware
+    flier = f"chip ({fw.label}, lockstep)" if config.controller == "chip" else "host"
+    fleet = f"{config.vehicles} vehicles ({config.vehicle})" if config.vehicles > 1 else f"vehicle {config.vehicle}"
+    console.print(
+        f"flying scenario [bold]{escape(config.name)}[/bold] for {config.duration_s:g} s, {fleet}, "
+        f"controller {flier}, seed {config.seed}, sensors at {config.sensors.rate_hz:g} Hz"
+    )
+    for source, fields in sources:
+        console.print(escape(f"from {source}: {', '.join(fields) if fields else '(no fields)'}"))
+    console.print("every other field: built-in default" if sources else "all fields: built-in defaults")
+
+    video_state = _VideoState(console, video) if video is not None else None
+    progress = _FlightProgress(console, config.duration_s, config.sensors.rate_hz)
 
     def on_sample(world, k: int) -> None:
-        progress.update(task, completed=k + 1)
-        if state["renderer"] is None or k % frame_every:
-            return
-        if not isinstance(state["renderer"], tuple):
-            state["renderer"] = _start_renderer(console, world, state["renderer"])
-            if state["renderer"] is None:
-                return
-        sink.add(state["renderer"][0].render(world.data))
+        progress.sample(k)
+        if video_state is not None:
+            video_state.frame(world, k, config.sensors.rate_hz)
 
-    console.print(
-        f"flying scenario [bold]{escape(config.name)}[/bold] for {config.duration_s:g} s, vehicle {config.vehicle}, "
-        f"controller {flier}, seed {seed}, sensors at {config.sensors.rate_hz:g} Hz"
-    )
-    for source, named in sources:
-        console.print(escape(f"from {source}: {', '.join(named) if named else '(no fields)'}"))
-    console.print("every other field: built-in default" if sources else "all fields: built-in defaults")
     try:
-        with Progress(
-            TextColumn("flight"),
-            BarColumn(),
-            TextColumn("{task.percentage:>3.0f}%"),
-            TimeRemainingColumn(),
-            console=console,
-            transient=True,
-        ) as progress:
-            task = progress.add_task("fly", total=samples)
-            start = time.perf_counter()
-            if isinstance(pilot, HostController):
-                rows = fly(config, craft, pilot, seed, on_row=log.write if log else None, on_sample=on_sample)
-            else:
-                rows = fly_lockstep(config, craft, pilot, seed, on_row=log.write if log else None, on_sample=on_sample)
-            host_s = time.perf_counter() - start
-    except (ChipError, CoreError) as exc:
-        raise CliError(f"the firmware failed on the chip: {exc}") from exc
+        flight = fly_scenario(config, out, on_sample=on_sample, on_status=lambda text: plain(console, text), plot=True)
     except KeyboardInterrupt:
-        note(console, "interrupted" + (f"; the log so far is in {log.path}" if log else ""))
+        progress.stop()
+        note(
+            console, "interrupted" + (f"; the flight so far is in {out} (summary.json: complete false)" if out else "")
+        )
         raise typer.Exit(exit_codes.INTERRUPTED) from None
+    except (ChipError, CoreError) as exc:
+        progress.stop()
+        where = f" (the flight so far is in {out})" if out else ""
+        raise CliError(f"the firmware failed on the chip: {exc}{where}", code=exit_codes.SIMULATOR_STOP) from exc
     finally:
-        if log:
-            log.close()
-        if isinstance(state["renderer"], tuple):
-            state["renderer"][0].close()
-        if sink is not None:
-            sink.close()
+        progress.stop()
+        if video_state is not None:
+            video_state.close()
+    print_summary(console, flight.summary)
+    if out is not None:
+        plain(console, f"run folder: {out} (scenario.toml, flight.csv, summary.json, flight.png"
+              + (", jobs.csv" if config.controller == "chip" else "") + ")")  # fmt: skip
+    if video_state is not None and video_state.sink is not None and video_state.sink.frames:
+        plain(console, f"video: {video_state.sink.path} ({video_state.sink.frames} frames at {VIDEO_FPS:g} fps)")
 
-    m = flight_metrics(rows, config.flight, craft.rest_height)
-    console.print(
-        f"hover height error (RMS, after the climb): {_fmt(m.hover_rms * 100, 'cm')}"
-        f"  (max {_fmt(m.hover_max * 100, 'cm')}); overshoot {_fmt(m.overshoot * 100, 'cm')}"
+
+class _FlightProgress:
+    """A progress bar of simulated seconds and the real-time factor, started at the first sample
+    (so that building and compiling are not counted)."""
+
+    def __init__(self, console, duration_s: float, rate_hz: float) -> None:
+        self.console = console
+        self.duration_s = duration_s
+        self.rate_hz = rate_hz
+        self.samples = round(duration_s * rate_hz)
+        self.progress = None
+        self.task = None
+        self.start = 0.0
+
+    def sample(self, k: int) -> None:
+        if self.progress is None:
+            from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
+
+            self.progress = Progress(
+                TextColumn("flight"),
+                BarColumn(),
+                TextColumn("{task.fields[sim]}"),
+                TextColumn("{task.fields[rtf]}"),
+                TimeRemainingColumn(),
+                console=self.console,
+                transient=True,
+            )
+            self.progress.start()
+            self.task = self.progress.add_task("fly", total=self.samples, sim="", rtf="")
+            self.start = time.perf_counter()
+        simulated = (k + 1) / self.rate_hz
+        elapsed = time.perf_counter() - self.start
+        rtf = f"{simulated / elapsed:.2f}x real time" if elapsed > 0.2 else ""
+        self.progress.update(self.task, completed=k + 1, sim=f"{simulated:.2f}/{self.duration_s:g} s", rtf=rtf)
+
+    def stop(self) -> None:
+        if self.progress is not None:
+            self.progress.stop()
+            self.progress = None
+
+
+class _VideoState:
+    """The frame sink and the renderer (started at the first frame); without a GL backend: a note."""
+
+    def __init__(self, console, video: Path) -> None:
+        self.console = console
+        self.renderer = None
+        self.sink = None
+        from robosoc.physics.render import FrameSink, RenderUnavailable, find_backend
+
+        try:
+            self.backend = find_backend()
+            self.sink = FrameSink(video, VIDEO_FPS)
+        except RenderUnavailable as exc:
+            note(console, f"no video: {exc}")
+
+    def frame(self, world, k: int, rate_hz: float) -> None:
+        if self.sink is None or k % max(1, round(rate_hz / VIDEO_FPS)):
+            return
+        if self.renderer is None:
+            from robosoc.physics.mjcf import RENDER_SIZE
+            from robosoc.physics.render import OffscreenRenderer, RenderUnavailable
+
+            try:
+                width, height = RENDER_SIZE
+                body = world.quadrotors[0].body_id
+                self.renderer = OffscreenRenderer(world.model, body, width, height, self.backend)
+            except RenderUnavailable as exc:
+                note(self.console, f"no video: {exc}")
+                self.sink.close()
+                self.sink = None
+                return
+        self.sink.add(self.renderer.render(world.data))
+
+    def close(self) -> None:
+        if self.renderer is not None:
+            self.renderer.close()
+        if self.sink is not None:
+            self.sink.close()
+
+
+def _fmt(value: float | None, scale: float = 1.0, digits: int = 2, unit: str = "") -> str:
+    if value is None or (isinstance(value, float) and math.isnan(value)):
+        return "n/a"
+    return f"{value * scale:.{digits}f}{(' ' + unit) if unit else ''}"
+
+
+def print_summary(console, summary: dict[str, Any]) -> None:
+    """The short table printed at the end of a flight (from its ``summary.json`` content)."""
+    from rich.table import Table
+
+    vehicles = summary.get("vehicles") or [summary]
+    many = len(vehicles) > 1
+    table = Table(title="flight summary", show_edge=False, pad_edge=False)
+    table.add_column("figure")
+    for i in range(len(vehicles)):
+        table.add_column(f"vehicle {i + 1}" if many else "value", justify="right")
+
+    def row(name: str, pick) -> None:
+        table.add_row(name, *(pick(v) for v in vehicles))
+
+    def flight(v, key):
+        return (v.get("flight") or {}).get(key)
+
+    row("hover height error RMS", lambda v: _fmt(flight(v, "hover_rms_m"), 100, 2, "cm"))
+    row("hover height error max", lambda v: _fmt(flight(v, "hover_max_m"), 100, 2, "cm"))
+    row("overshoot", lambda v: _fmt(flight(v, "overshoot_m"), 100, 2, "cm"))
+    for axis in ("roll", "pitch", "yaw"):
+        row(f"{axis} tracking RMS", lambda v, a=axis: _fmt((flight(v, "tracking_rms_deg") or {}).get(a), 1, 2, "deg"))
+    steps = (vehicles[0].get("flight") or {}).get("step_rise_s") or []
+    for j, step in enumerate(steps):
+        if step["time_s"] >= summary["simulated_s"]:
+            continue
+        row(
+            f"{step['axis']} step at {step['time_s']:g} s: 90 % after",
+            lambda v, j=j: _fmt(((v.get("flight") or {}).get("step_rise_s") or [{}] * (j + 1))[j].get("rise_s"),
+                                1000, 0, "ms"),
+        )  # fmt: skip
+    row("attitude estimate RMS", lambda v: _fmt(flight(v, "attitude_estimate_rms_deg"), 1, 2, "deg"))
+    row("height estimate RMS", lambda v: _fmt(flight(v, "height_estimate_rms_m"), 100, 2, "cm"))
+    if vehicles[0].get("tasks"):
+        for task in vehicles[0]["tasks"]:
+
+            def figures(v, task=task):
+                return (v.get("tasks") or {}).get(task) or {}
+
+            row(f"{task} jobs", lambda v, f=figures: str(f(v).get("jobs", "n/a")))
+            row(
+                f"{task} response mean / max",
+                lambda v, f=figures: (
+                    f"{_fmt(f(v).get('response_us_mean'), 1, 1)} / {_fmt(f(v).get('response_us_max'), 1, 1)} us"
+                ),
+            )
+            row(f"{task} cycles per job (mean)", lambda v, f=figures: _fmt(f(v).get("exec_cycles_mean"), 1, 0))
+            row(f"{task} energy per job (mean)", lambda v, f=figures: _fmt(f(v).get("energy_nj_mean"), 1, 1, "nJ"))
+        row("deadline misses", lambda v: str(v.get("deadline_misses")))
+        row("chip energy", lambda v: _fmt((v.get("energy") or {}).get("total_uj"), 1e-3, 2, "mJ"))
+    console.print(table)
+    status = "" if summary.get("complete", True) else f" (incomplete: {summary.get('stopped')})"
+    extra = f"; closest approach {_fmt(summary.get('min_separation_m'), 1, 2, 'm')}" if many else ""
+    plain(
+        console,
+        f"real-time factor {_fmt(summary['real_time_factor'], 1, 2)} ({summary['simulated_s']:g} s simulated in "
+        f"{summary['host_s']:.1f} s){extra}{status}",
     )
-    if m.min_pwm_armed >= 0:
-        console.print(f"lowest motor PWM while armed: {m.min_pwm_armed} (idle {craft.idle_pwm})")
-    console.print(
-        "attitude tracking error (RMS, 0.5 s after steps excluded): "
-        f"roll {_fmt(m.tracking_rms[0], 'deg')}, pitch {_fmt(m.tracking_rms[1], 'deg')}, "
-        f"yaw {_fmt(m.tracking_rms[2], 'deg')}"
-    )
-    for axis, at, rise in m.step_rise:
-        console.print(f"  {axis} step at {at:g} s: 90 % reached after {_fmt(rise * 1000, 'ms', 0)}")
-    if fw is None:
-        console.print(
-            f"EKF attitude error vs truth (RMS while flying): {_fmt(m.ekf_rms, 'deg')} "
-            f"(max {_fmt(m.ekf_max, 'deg')}; "
-            f"roll {m.ekf_euler_rms[0]:.2f}, pitch {m.ekf_euler_rms[1]:.2f}, yaw {m.ekf_euler_rms[2]:.2f} deg)"
-        )
-        console.print(f"height estimate error (RMS while flying): {_fmt(m.height_estimate_rms * 100, 'cm')}")
-    else:
-        _chip_report(console, pilot, out, config.duration_s, host_s)
-    if out:
-        plot_flight(rows, out / "flight.png", title=f"{config.name}, seed {seed}")
-        plain(console, f"log: {out / 'flight.csv'}  plot: {out / 'flight.png'}")
-    if sink is not None and sink.frames:
-        plain(console, f"video: {sink.path} ({sink.frames} frames at {VIDEO_FPS:g} fps)")
-
-
-def _firmware(ctx: typer.Context, controller: str, arith: str | None, mul: bool | None) -> FirmwareConfig | None:
-    """The firmware build the chip flies (None for the host controller, which takes no build options)."""
-    arith_given = arith is not None
-    mul_given = mul is not None and options.given(ctx, "mul")
-    if controller == "host":
-        for option, given in (("--arith", arith_given), ("--mul/--no-mul", mul_given)):
-            if given:
-                raise options.fail(option, "only with --controller chip (the host controller has no firmware)")
-        return None
-    changes = {}
-    if arith_given:
-        changes["--arith"] = ("arith", arith)
-    if mul_given:
-        changes["--mul/--no-mul"] = ("multiplier", mul)
-    return options.override(FirmwareConfig(), changes)
-
-
-def _chip_report(console, pilot, out: Path | None, simulated_s: float, host_s: float) -> None:
-    """Per-task response times and deadline misses of the chip's flight; jobs.csv in ``out``."""
-    from robosoc.cosim.replay import task_summary, write_jobs_csv
-
-    result = pilot.result
-    console.print("state estimate: on the chip (only PWM commands reach the I/O tile)")
-    for name, s in task_summary(result.jobs, result.clock_ns).items():
-        console.print(
-            f"  {name:<9} {s['jobs']} jobs: response mean {s['response_us_mean']:.1f} us, "
-            f"max {s['response_us_max']:.1f} us; exec mean {s['exec_cycles_mean']:.0f} cycles; "
-            f"deadline misses {s['deadline_misses']}"
-        )
-    console.print(
-        f"deadline misses: {result.deadline_misses}; {len(result.commands)} PWM commands; "
-        f"real-time factor {simulated_s / host_s:.2f} ({simulated_s:g} s simulated in {host_s:.1f} s)"
-    )
-    if out:
-        write_jobs_csv(result.jobs, out / "jobs.csv")
-        plain(console, f"jobs: {out / 'jobs.csv'}")
-
-
-def _open_video(console, video: Path):
-    """Find a GL backend and open the frame sink; on failure say why and fly without video."""
-    from robosoc.physics.render import FrameSink, RenderUnavailable, find_backend
-
-    try:
-        backend = find_backend()
-        sink = FrameSink(video, VIDEO_FPS)
-    except RenderUnavailable as exc:
-        note(console, f"no video: {exc}")
-        return None, None
-    return backend, sink
-
-
-def _start_renderer(console, world, backend: str):
-    from robosoc.physics.mjcf import RENDER_SIZE
-    from robosoc.physics.render import OffscreenRenderer, RenderUnavailable
-
-    try:
-        width, height = RENDER_SIZE
-        return (OffscreenRenderer(world.model, world.quadrotors[0].body_id, width, height, backend),)
-    except RenderUnavailable as exc:
-        note(console, f"no video: {exc}")
-        return None

@@ -115,7 +115,6 @@ def sweep_command(
             progress.update(task, completed=done)
             if done:
                 progress.console.print(f"resuming in {escape(str(out))}: {done} of {total} runs already done")
-            progress.console.print("preparing the firmware builds and the workers ...")
 
         def on_point(point, record) -> None:
             if record["status"] != OK:
@@ -125,7 +124,14 @@ def sweep_command(
 
         try:
             outcome = run_sweep(
-                config, out, workers=workers, dask=dask, retry_failed=retry_failed, on_start=on_start, on_point=on_point
+                config,
+                out,
+                workers=workers,
+                dask=dask,
+                retry_failed=retry_failed,
+                on_start=on_start,
+                on_point=on_point,
+                on_status=lambda text: progress.console.print(escape(text)),
             )
         except KeyboardInterrupt:
             note(console, f"interrupted; the finished points are kept in {out}: run the same command to resume")
@@ -134,12 +140,9 @@ def sweep_command(
             raise CliError(f"--dask: cannot reach the scheduler at {dask}: {exc}") from None
 
     records = [outcome.records[p.key] for p in outcome.points if p.key in outcome.records]
-    varied = config.varied()
-    write_sweep_plots(out, records, varied, config.metrics)
+    plots = write_sweep_plots(out, records, config.varied(), config.metrics)
     page = out / "sweep.html"
-    page.write_text(
-        sweep_html(f"sweep {config.name}", records, varied, config.metrics, outcome.table.read_text()), "utf-8"
-    )
+    page.write_text(sweep_html(f"sweep {config.name}", records, plots, outcome.table.read_text()), "utf-8")
     ok = sum(1 for r in records if r["status"] == OK)
     console.print(f"{outcome.ran} runs now, {outcome.skipped} done before; {ok} ok, {len(records) - ok} failed")
     for record in outcome.failures:

@@ -7,7 +7,23 @@ vectors) is replaced as a whole.  All fields, with their defaults::
 
     name = "default"
     duration_s = 10.0
+    seed = 1                 # drives every random number (noise, biases, gusts)
     vehicle = "default"      # or "laser"
+    vehicles = 1             # quadrotors in one world (1..16), each with its own chip
+    controller = "chip"      # "chip": the firmware on the chip, in lockstep; "host": float64 Python
+
+    [firmware]               # the build and task mapping (robosoc.config.firmware.FirmwareConfig)
+    arith = "fixed"
+    multiplier = true
+    ekf_tile = [0, 1]
+    pid_tile = [1, 0]
+    ...
+
+    [chip]                   # the chip (robosoc.config.chip.ChipConfig): the seed's 2x2, tile (1, 1) off
+    width = 2
+    height = 2
+    powered_off = [[1, 1]]
+    ...
 
     [sensors]
     rate_hz = 100.0          # must divide into whole 1 ms physics steps
@@ -43,6 +59,10 @@ import math
 from dataclasses import dataclass, field
 from typing import Literal
 
+from robosoc.config.chip import ChipConfig
+from robosoc.config.firmware import FirmwareConfig
+from robosoc.config.ranges import MAX_SEED
+from robosoc.config.toml_text import to_toml
 from robosoc.config.vehicle import VEHICLE_PRESETS
 
 PHYSICS_DT_S = 0.001
@@ -61,6 +81,11 @@ MAX_HEIGHT_M = 5.0
 """Highest height setpoint [m]."""
 MAX_ANGLE_DEG = 45.0
 """Largest roll, pitch or yaw setpoint [degrees]."""
+MAX_VEHICLES = 16
+"""Most quadrotors in one world (each brings its own chip)."""
+CONTROLLERS = ("chip", "host")
+"""Who flies: the firmware on the chip (lockstep) or the float64 host controller."""
+Controller = Literal["chip", "host"]
 
 Vector3 = tuple[float, float, float]
 
@@ -340,22 +365,65 @@ def _default_wind() -> WindConfig:
     return WindConfig(gusts=(GustConfig(start_s=8.5, duration_s=1.5, rise_s=0.3, velocity=(3.0, 2.0, 0.0)),))
 
 
+def _default_chip() -> ChipConfig:
+    return FirmwareConfig().seed_chip()
+
+
 @dataclass(frozen=True)
 class ScenarioConfig:
-    """One flight: duration, vehicle preset, sensors, wind and the flight plan.
+    """One flight: duration, seed, vehicles, who flies them (the firmware on which chip, or the host),
+    sensors, wind and the flight plan.
 
-    The default is the issue's scenario: calibrate 1 s on the ground, take off to 1 m, hover,
-    roll/pitch/yaw 10° steps, a 3.6 m/s gust, 10 s in total.
+    The default is the issue's scenario: calibrate on the ground until 3 s, take off to 1 m, hover,
+    roll/pitch/yaw 10° steps, a 3.6 m/s gust, 10 s in total, flown by the fixed-point firmware with
+    the multiplier on the seed's 2×2 chip (:meth:`FirmwareConfig.seed_chip`).
     """
 
     name: str = "default"
     duration_s: float = 10.0
+    seed: int = 1
     vehicle: str = "default"
+    vehicles: int = 1
+    controller: Controller = "chip"
     sensors: SensorConfig = field(default_factory=SensorConfig)
     wind: WindConfig = field(default_factory=_default_wind)
     flight: FlightPlan = field(default_factory=lambda: FlightPlan(steps=_default_steps()))
+    firmware: FirmwareConfig = field(default_factory=FirmwareConfig)
+    chip: ChipConfig = field(default_factory=_default_chip)
 
     def __post_init__(self) -> None:
+        _require(
+            bool(self.name) and self.name.replace("_", "").replace("-", "").replace(".", "").isalnum(),
+            "name",
+            f"must be letters, digits, '_', '-' or '.' (it names the run folder), got {self.name!r}",
+        )
+        _require(
+            isinstance(self.seed, int) and 0 <= self.seed <= MAX_SEED,
+            "seed",
+            f"must be between 0 and 2**63-1, got {self.seed}",
+        )
+        _require(
+            isinstance(self.vehicles, int) and 1 <= self.vehicles <= MAX_VEHICLES,
+            "vehicles",
+            f"must be between 1 and {MAX_VEHICLES}, got {self.vehicles}",
+        )
+        _require(
+            self.controller in CONTROLLERS,
+            "controller",
+            f"must be one of {', '.join(map(repr, CONTROLLERS))}, got {self.controller!r}",
+        )
+        try:
+            self.firmware.check_chip(self.chip)
+        except ValueError as exc:
+            raise ValueError(f"firmware.{exc}") from exc
+        if self.firmware.multiplier:
+            for name in ("ekf_tile", "pid_tile"):
+                xy = tuple(getattr(self.firmware, name))
+                _require(
+                    self.chip.tile_config(xy).multiplier,
+                    "firmware.multiplier",
+                    f"the build uses the multiplier but the {name} {list(xy)} has none (chip.tile or chip.tiles)",
+                )
         _require(
             math.isfinite(self.duration_s) and 0 < self.duration_s <= 3600,
             "duration_s",
@@ -384,3 +452,14 @@ class ScenarioConfig:
                 f"a height step must not come before the previous height move ends ({previous.end_s:g} s), "
                 f"got {self.flight.steps[i].time_s}",
             )
+
+
+SCENARIO_HEADER = """\
+robosoc scenario: every field, resolved (docs/scenarios.md).
+Edit and fly it with: robosoc fly FILE.toml (a file may also name only the fields it changes)."""
+
+
+def scenario_toml(scenario: ScenarioConfig) -> str:
+    """The resolved scenario as TOML, every field (what ``robosoc scenario show`` prints and a run
+    folder keeps as ``scenario.toml``); it loads back to an equal scenario."""
+    return to_toml(scenario, SCENARIO_HEADER)

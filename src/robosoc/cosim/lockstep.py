@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Protocol
 
@@ -43,9 +43,16 @@ from robosoc.config.ranges import check_seed
 from robosoc.config.scenario import PHYSICS_DT_S, ScenarioConfig
 from robosoc.config.vehicle import VehicleConfig
 from robosoc.control.flight import ROW_FIELDS, flight_row
-from robosoc.control.host import Estimate
+from robosoc.control.host import Estimate, HostController
 from robosoc.control.setpoint import Setpoint, setpoint_at
-from robosoc.cosim.replay import DEFAULT_FIRST_CYCLE, FirmwareRun, ReplayResult, SampleInput, sensor_packet
+from robosoc.cosim.replay import (
+    DEFAULT_FIRST_CYCLE,
+    FirmwareRun,
+    PwmCommand,
+    ReplayResult,
+    SampleInput,
+    sensor_packet,
+)
 from robosoc.firmware import flight_app
 from robosoc.physics import SensorSample, World
 
@@ -130,6 +137,8 @@ class ChipController:
             first_cycle=self.first_cycle,
         )
         self.result = None
+        self._period_end = self.first_cycle
+        self._ahead: list[PwmCommand] = []  # commands received ahead of the physics
 
     def _run(self) -> FirmwareRun:
         if self.run is None:
@@ -146,16 +155,39 @@ class ChipController:
             run.close_period()  # the chip is at the cycle of t_k: the previous sample's period ends
         packet = sensor_packet(row, k, self.sample_period_us)
         run.inject(SampleInput(k, sample.time, self.cycle_of(t_ns), packet))
+        self._period_end = self.cycle_of(t_ns + self.sample_period_us * 1000)
 
     def advance(self, t_ns: int) -> Pwm | None:
-        fresh = self._run().run_to(self.cycle_of(t_ns))
-        return fresh[-1].pwm if fresh else None
+        # Nothing reaches the chip between two samples, so the chip runs to the next sample in one go
+        # (one kernel call instead of one per physics step) and each command is handed out at the
+        # step it arrived in, exactly as if the chip had been run step by step.
+        run = self._run()
+        if run.cycle < self._period_end:
+            self._ahead.extend(run.run_to(self._period_end))
+        until = self.cycle_of(t_ns)
+        due = 0
+        while due < len(self._ahead) and self._ahead[due].cycle < until:
+            due += 1
+        if not due:
+            return None
+        pwm = self._ahead[due - 1].pwm
+        del self._ahead[:due]
+        return pwm
 
     def finish(self) -> None:
         run = self._run()
         if run.samples:
             run.close_period()
         self.result = run.result()
+
+    def result_so_far(self) -> ReplayResult | None:
+        """The job records and totals up to where the flight stopped (an interrupted or crashed
+        flight): :attr:`result` if it finished, None if it never started."""
+        if self.result is not None or self.run is None:
+            return self.result
+        if self.run.period_open:
+            self.run.close_period()
+        return self.run.result()
 
     @property
     def estimate(self) -> Estimate:
@@ -181,42 +213,108 @@ def fly_lockstep(
     Raises:
         ValueError: a negative seed, or a flight shorter than one sensor period.
     """
+    rows_of = None if on_row is None else (lambda _i, row: on_row(row))
+    return fly_lockstep_fleet(scenario, [vehicle], [controller], seed, on_row=rows_of, on_sample=on_sample)[0]
+
+
+def fly_lockstep_fleet(
+    scenario: ScenarioConfig,
+    vehicles: Sequence[VehicleConfig],
+    controllers: Sequence[LockstepController],
+    seed: int,
+    on_row: Callable[[int, np.ndarray], None] | None = None,
+    on_sample: Callable[[World, int], None] | None = None,
+) -> list[np.ndarray]:
+    """Fly ``scenario`` with several vehicles in one world, vehicle i flown by ``controllers[i]``,
+    all under one clock; the flight of each vehicle (columns :data:`ROW_FIELDS`).
+
+    Per sample and per physics step the vehicles are served in their order: every controller is
+    given its sample, then every controller is run to the end of each step before the world takes
+    it.  Each vehicle's sensors draw from their own random stream (:meth:`World.reset`).
+
+    Args:
+        on_row: called with (vehicle index, row) as soon as a row is complete (logging).
+        on_sample: called once per sample with the world and the sample index.
+
+    Raises:
+        ValueError: a negative seed, a flight shorter than one sensor period, or not one controller
+            per vehicle.
+    """
     check_seed("seed", seed)
+    if len(controllers) != len(vehicles):
+        raise ValueError(f"controllers: one per vehicle, got {len(controllers)} for {len(vehicles)} vehicles")
     if round(scenario.duration_s * scenario.sensors.rate_hz) < 1:
         raise ValueError(f"duration_s: a flight lasts at least one sensor period, got {scenario.duration_s:g} s")
-    world = World([vehicle], scenario.sensors, scenario.wind)
+    world = World(list(vehicles), scenario.sensors, scenario.wind)
     world.reset(seed)
-    quad = world.quadrotors[0]
-    controller.reset()
+    quads = world.quadrotors
+    for controller in controllers:
+        controller.reset()
     steps_per_sample = world.sensor_steps
     samples = round(scenario.duration_s * scenario.sensors.rate_hz)
-    rows = np.empty((samples, len(ROW_FIELDS)))
-    rest = vehicle.rest_height
+    flights = [np.empty((samples, len(ROW_FIELDS))) for _ in vehicles]
+    rests = [v.rest_height for v in vehicles]
+    pending: list[np.ndarray] = []
     for k in range(samples):
         first_step = k * steps_per_sample
         if world.steps != first_step:
             raise AssertionError("the world is not at the sample's step")
         t_ns = first_step * PHYSICS_STEP_NS
-        sample = quad.sensors()
-        setpoint = setpoint_at(scenario.flight, rest, sample.time)
-        truth, wind = quad.truth(), world.wind.velocity
-        given = flight_row(sample, truth, UNKNOWN_ESTIMATE, setpoint, quad.pwm, wind)
-        controller.sense(k, t_ns, sample, setpoint, given)
-        row = flight_row(sample, truth, controller.estimate, setpoint, quad.pwm, wind)  # the estimate after it
+        wind = world.wind.velocity
+        pending.clear()
+        for quad, controller, rest in zip(quads, controllers, rests, strict=True):
+            sample = quad.sensors()
+            setpoint = setpoint_at(scenario.flight, rest, sample.time)
+            truth = quad.truth()
+            given = flight_row(sample, truth, UNKNOWN_ESTIMATE, setpoint, quad.pwm, wind)
+            controller.sense(k, t_ns, sample, setpoint, given)
+            pending.append(flight_row(sample, truth, controller.estimate, setpoint, quad.pwm, wind))
         for s in range(steps_per_sample):
-            pwm = controller.advance(t_ns + (s + 1) * PHYSICS_STEP_NS)
-            if pwm is not None:
-                quad.apply_pwm(pwm)
+            t_end = t_ns + (s + 1) * PHYSICS_STEP_NS
+            for quad, controller in zip(quads, controllers, strict=True):
+                pwm = controller.advance(t_end)
+                if pwm is not None:
+                    quad.apply_pwm(pwm)
             if s == 0:
-                row[PWM_COLUMNS] = quad.pwm
-                rows[k] = row
-                if on_row is not None:
-                    on_row(row)
+                for i, (quad, row) in enumerate(zip(quads, pending, strict=True)):
+                    row[PWM_COLUMNS] = quad.pwm
+                    flights[i][k] = row
+                    if on_row is not None:
+                        on_row(i, row)
                 if on_sample is not None:
                     on_sample(world, k)
             world.step()
-    controller.finish()
-    return rows
+    for controller in controllers:
+        controller.finish()
+    return flights
+
+
+class HostLockstepController:
+    """The float64 host controller behind the lockstep seam: it has no compute latency, so its
+    command for a sample arrives in the sample's first physics step (a flight identical to
+    :func:`robosoc.control.flight.fly`)."""
+
+    def __init__(self, host: HostController) -> None:
+        self.host = host
+        self._fresh: Pwm | None = None
+
+    def reset(self) -> None:
+        self.host.reset()
+        self._fresh = None
+
+    def sense(self, k: int, t_ns: int, sample: SensorSample, setpoint: Setpoint, row: np.ndarray) -> None:
+        self._fresh = tuple(int(v) for v in self.host.step(sample, setpoint))  # type: ignore[assignment]
+
+    def advance(self, t_ns: int) -> Pwm | None:
+        fresh, self._fresh = self._fresh, None
+        return fresh
+
+    def finish(self) -> None:
+        pass
+
+    @property
+    def estimate(self) -> Estimate:
+        return self.host.estimate
 
 
 @dataclass(frozen=True)
@@ -265,8 +363,10 @@ __all__ = [
     "UNKNOWN_ESTIMATE",
     "ChipController",
     "ChipFlight",
+    "HostLockstepController",
     "LockstepController",
     "arrival_step",
     "fly_chip",
     "fly_lockstep",
+    "fly_lockstep_fleet",
 ]

@@ -53,6 +53,8 @@ from robosoc.firmware import flight_app, images, packets
 DEFAULT_FIRST_CYCLE = flight_app.FIRST_SAMPLE_CYCLE
 
 TASK_NAMES = ("estimator", "pid")
+#: The parts of a job's energy (:attr:`JobRecord.energy_pj`), see the module's docstring.
+ENERGY_PARTS = ("task", "kernel", "idle", "noc")
 
 
 @dataclass(frozen=True)
@@ -209,6 +211,7 @@ class FirmwareRun:
             self.chip.load(xy, program)
         self.names = {(xy, tid): name for xy in self.tiles for name, tid in flight_app.task_ids(self.fw, xy).items()}
         self.samples: list[SampleInput] = []
+        self._sample_cycles: list[int] = []  # of the samples, for finding a job's period
         self.commands: list[PwmCommand] = []
         self._periods: list[dict] = []  # per sample period: counter deltas per (tile, task) and NoC energy
         self._previous = _snapshot(self.chip, self.tiles, self.model)
@@ -224,11 +227,17 @@ class FirmwareRun:
     def cycle(self) -> int:
         return self.chip.cycle
 
+    @property
+    def period_open(self) -> bool:
+        """Whether the last injected sample's period has not been closed yet."""
+        return len(self._periods) < len(self.samples)
+
     def inject(self, sample: SampleInput) -> None:
         """Send ``sample`` from the I/O tile to the estimator at ``sample.cycle``."""
         for payload in flight_app.sensor_payloads(sample.payload, self.fw, self.chip_config, seq=sample.seq):
             self.chip.inject(tuple(self.fw.ekf_tile), payload, sample.cycle)  # type: ignore[arg-type]
         self.samples.append(sample)
+        self._sample_cycles.append(sample.cycle)
 
     def run_to(self, cycle: int) -> list[PwmCommand]:
         """Run the chip to ``cycle``; the PWM commands that reached the I/O tile meanwhile.
@@ -259,14 +268,13 @@ class FirmwareRun:
         self._periods.append(_delta(self._previous, current))
         self._previous = current
         for xy in self.tiles:
-            log = images.read_job_log(self.chip, xy)
-            count = log.lost + len(log.records)
-            fresh = count - self._seen[xy]
-            if fresh > len(log.records):
-                raise RuntimeError(f"tile {xy}: the job log overflowed between two samples")
-            for r in log.records[len(log.records) - fresh :] if fresh else []:
+            try:
+                fresh, count = images.read_new_jobs(self.chip, xy, self._seen[xy])
+            except ValueError as exc:
+                raise RuntimeError(f"{exc} (between two samples)") from exc
+            for r in fresh:
                 r = _unwrapped(r, self.chip.cycle)
-                self._logged.append((xy, r, _period_of(self.samples, r.release)))
+                self._logged.append((xy, r, _period_of(self._sample_cycles, r.release)))
             self._seen[xy] = count
 
     def result(self) -> ReplayResult:
@@ -374,7 +382,8 @@ def write_jobs_csv(jobs: Sequence[JobRecord], path: Path) -> None:
 
 def task_summary(jobs: Sequence[JobRecord], clock_ns: float) -> dict[str, dict[str, float]]:
     """Per task (of :data:`TASK_NAMES` that has jobs): job count, mean/max execution cycles and
-    response time [us], mean energy per job [nJ], the kernel's share of it, deadline misses."""
+    response time [us], mean energy per job [nJ] in all and per part (:data:`ENERGY_PARTS`), the
+    kernel's share of it, deadline misses."""
     summary: dict[str, dict[str, float]] = {}
     for name in TASK_NAMES:
         mine = [j for j in jobs if j.task == name]
@@ -390,6 +399,10 @@ def task_summary(jobs: Sequence[JobRecord], clock_ns: float) -> dict[str, dict[s
             "response_us_mean": sum(resp) / len(mine) * clock_ns / 1000,
             "response_us_max": max(resp) * clock_ns / 1000,
             "energy_nj_mean": sum(energy) / len(mine) / 1000,
+            **{
+                f"energy_nj_{part}_mean": sum(j.energy_pj[part] for j in mine) / len(mine) / 1000
+                for part in ENERGY_PARTS
+            },
             "kernel_energy_share": sum(j.energy_pj["kernel"] for j in mine) / max(1e-12, sum(energy)),
             "deadline_misses": sum(not j.deadline_met for j in mine),
         }
@@ -409,9 +422,10 @@ def _unwrapped(record: images.JobRecord, now: int) -> images.JobRecord:
     )  # fmt: skip
 
 
-def _period_of(samples: Sequence[SampleInput], cycle: int) -> int:
-    """Index of the sample period [cycle_k, cycle_k+1) holding ``cycle`` (0 before the first)."""
-    return max(0, bisect.bisect_right([s.cycle for s in samples], cycle) - 1)
+def _period_of(sample_cycles: Sequence[int], cycle: int) -> int:
+    """Index of the sample period [cycle_k, cycle_k+1) holding ``cycle`` (0 before the first), given
+    the samples' injection cycles."""
+    return max(0, bisect.bisect_right(sample_cycles, cycle) - 1)
 
 
 def _pj(model: EnergyModel, counters: dict[str, int]) -> float:

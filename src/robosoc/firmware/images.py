@@ -140,6 +140,31 @@ def read_job_log(chip: MPSoC, xy: tuple[int, int]) -> JobLog:
     return JobLog(records, count - kept, tick)
 
 
+def read_new_jobs(chip: MPSoC, xy: tuple[int, int], seen: int) -> tuple[list[JobRecord], int]:
+    """The job records tile ``xy`` logged after the first ``seen``, and how many it has logged in all
+    (reads only the header and the new records: a flight calls this every sample).
+
+    Raises:
+        ValueError: the log is not initialised, or the ring overwrote records after ``seen`` unread.
+    """
+    magic, capacity, count, _ = _LOG_HEADER.unpack(_memory(chip, xy, JOB_LOG_SYMBOL, _LOG_HEADER.size))
+    if magic != JOBLOG_MAGIC:
+        raise ValueError(f"tile {xy}: the job log is not initialised (os_start has not run)")
+    if count - seen > capacity:
+        raise ValueError(f"tile {xy}: the job log overflowed: {count - seen} new records, the ring keeps {capacity}")
+    t = chip.config.tile_index(xy)
+    base = chip.programs[t].address_of(JOB_LOG_SYMBOL) + _LOG_HEADER.size
+    records = []
+    for i in range(seen, count):
+        raw = chip.cores.read(base + (i % capacity) * _RECORD.size, _RECORD.size, tile=t)
+        task, flags, job, release, deadline, start, completion, exec_cycles = _RECORD.unpack(raw)
+        records.append(
+            JobRecord(task, job, release, deadline, start, completion, exec_cycles,
+                      bool(flags & JOB_MET), bool(flags & JOB_EVENT), bool(flags & JOB_DEPLETED))
+        )  # fmt: skip
+    return records, count
+
+
 @dataclass(frozen=True)
 class KernelStats:
     """``os_stats`` of one tile (field meanings in ``kernel/os.h``)."""
@@ -312,6 +337,7 @@ __all__ = [
     "message_packets",
     "parse_packet",
     "read_job_log",
+    "read_new_jobs",
     "read_stats",
     "reassemble",
     "tile_address",

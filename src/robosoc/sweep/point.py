@@ -65,7 +65,7 @@ def run_point(base: ScenarioConfig, point: Point, source: str) -> PointResult:
             status = FAILED
             where = traceback.extract_tb(exc.__traceback__)[-1]
             error = f"{type(exc).__name__}: {exc} (at {Path(where.filename).name}:{where.lineno})"
-        files = {p.name: p.read_bytes() for p in sorted(folder.iterdir()) if p.is_file()}
+        files = {p.relative_to(folder).as_posix(): p.read_bytes() for p in sorted(folder.rglob("*")) if p.is_file()}
     return PointResult(point.key, status, error, summary, files, time.perf_counter() - start)
 
 
@@ -73,7 +73,7 @@ def fly_point(scenario: ScenarioConfig, seed: int, folder: Path) -> dict[str, An
     """Fly ``scenario`` with ``seed``, writing its run folder into ``folder``; its summary."""
     from robosoc.cosim.flight_session import fly_scenario
 
-    return fly_scenario(scenario, seed, folder, plot=False)
+    return fly_scenario(scenario, folder, seed=seed, plot=False).summary
 
 
 __all__ = ["FAILED", "OK", "PointResult", "fly_point", "metric", "run_point"]

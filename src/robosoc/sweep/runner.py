@@ -72,30 +72,34 @@ Progress = Callable[[Point, dict[str, Any]], None]
 def warm_worker() -> None:
     """Import what a point needs once per worker process; Ctrl-C belongs to the driving process."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
-    import robosoc.sweep.point  # noqa: F401  (imports the flight on first use; kept for the process)
+    import robosoc.cosim.flight_session  # noqa: F401  (physics, chip and firmware: once per process)
 
 
-def prepare(config: SweepConfig, points: list[Point]) -> None:
-    """Build, once and before the workers start, every firmware image the points will load."""
+def prepare(config: SweepConfig, points: list[Point], on_status: Callable[[str], None]) -> None:
+    """Build, once and before the workers start, every firmware image the points will load, and
+    compile the chip kernels into numba's cache if they are not there (workers then only load)."""
     from robosoc.config.validate import ConfigError, from_mapping
+    from robosoc.config.vehicle import vehicle_preset
+    from robosoc.cosim.chip_warmup import prepare_chip
+    from robosoc.firmware import flight_app
 
-    try:
-        from robosoc.cosim.flight_session import prepare_scenario
-    except ImportError:  # no firmware to prepare for this scenario schema
-        return
     seen: set[str] = set()
     for point in points:
         try:
             scenario = from_mapping(ScenarioConfig, point.changes(), config.source, base=config.base)
         except ConfigError:
             continue  # recorded as failed when it runs
-        token = repr(scenario)
-        if token not in seen:
-            seen.add(token)
-            try:
-                prepare_scenario(scenario)
-            except Exception:
-                continue
+        if scenario.controller != "chip":
+            continue
+        vehicle = vehicle_preset(scenario.vehicle)
+        token = repr((scenario.firmware, scenario.chip, vehicle, scenario.flight, scenario.sensors))
+        if token in seen:
+            continue
+        seen.add(token)
+        try:
+            prepare_chip(scenario.chip, lambda s=scenario, v=vehicle: flight_app.build(s.firmware, v, s), on_status)
+        except Exception:
+            continue
 
 
 class _LocalPool:
@@ -196,6 +200,7 @@ def run_sweep(
     retry_failed: bool = False,
     on_start: Callable[[int, int], None] | None = None,
     on_point: Progress | None = None,
+    on_status: Callable[[str], None] | None = None,
 ) -> SweepOutcome:
     """Run every point of ``config`` not yet finished in ``out``; results stored as they come.
 
@@ -205,6 +210,7 @@ def run_sweep(
         retry_failed: run again the points recorded as failed.
         on_start: called with (points to run, points already finished).
         on_point: called with each finished point and its record.
+        on_status: told what is prepared before the workers start (firmware builds, compiling).
 
     Raises:
         KeyboardInterrupt: after stopping the workers; every point finished so far is kept.
@@ -222,7 +228,7 @@ def run_sweep(
     varied = config.varied()
     ran = 0
     if todo:
-        prepare(config, todo)
+        prepare(config, todo, on_status or (lambda _text: None))
         pool: _LocalPool | _DaskPool = _DaskPool(dask, workers) if dask else _LocalPool(workers)
         aborted = True
         try:

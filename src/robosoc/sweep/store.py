@@ -84,7 +84,11 @@ class SweepStore:
         shutil.rmtree(scratch, ignore_errors=True)
         scratch.mkdir()
         for name, data in result.files.items():
-            (scratch / Path(name).name).write_bytes(data)
+            relative = Path(name)
+            if relative.is_absolute() or ".." in relative.parts:
+                raise ValueError(f"point {point.key}: a run folder file outside the folder: {name!r}")
+            (scratch / relative).parent.mkdir(parents=True, exist_ok=True)
+            (scratch / relative).write_bytes(data)
         shutil.rmtree(folder, ignore_errors=True)
         os.replace(scratch, folder)
         record = {

@@ -1,0 +1,92 @@
+"""``robosoc bench fly``: real-time factor of the lockstep co-simulation (physics + firmware on the chip).
+
+Flies the default scenario (shortened to ``duration_s``) with :func:`robosoc.cosim.flight_session.fly_scenario`,
+writing nothing, once per firmware build, after the host controller as the reference.  The firmware
+is built and the chip kernels compiled before the timed flights (a first run says so).  Prints per
+build the real-time factor, the simulated chip cycles per host second, the hover error, the slowest
+roll/pitch step (to 90 %), the RMS difference of the true height from the host controller's flight
+with the same seed (from take-off on), the deadline misses, and last
+the line ``fly: <x>× real time`` of the last build flown (fixed point with the multiplier by default).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+from rich.console import Console
+from rich.table import Table
+
+from robosoc.config.firmware import FirmwareConfig
+from robosoc.config.scenario import ScenarioConfig
+from robosoc.control.flight import column
+from robosoc.cosim.flight_session import fly_scenario
+
+#: The builds flown when none is chosen, the reference build (fixed + multiplier) last.
+ALL_BUILDS = (
+    FirmwareConfig(arith="float", multiplier=False),
+    FirmwareConfig(arith="float", multiplier=True),
+    FirmwareConfig(arith="fixed", multiplier=False),
+    FirmwareConfig(arith="fixed", multiplier=True),
+)
+
+
+def run_fly_benchmark(
+    builds: tuple[FirmwareConfig, ...] = ALL_BUILDS,
+    duration_s: float = 10.0,
+    host: bool = True,
+    console: Console | None = None,
+) -> float:
+    """Fly the default scenario for ``duration_s`` with each build (and the host controller first if
+    ``host``); print the figures and the last line; the last build's real-time factor.
+
+    Raises:
+        ValueError: ``duration_s`` is not a whole number of ms of at least one sensor period, or no build.
+    """
+    if not builds:
+        raise ValueError("builds: at least one firmware build")
+    console = console or Console()
+    base = ScenarioConfig(duration_s=duration_s)
+    console.print(f"lockstep flight of the default scenario, {duration_s:g} s simulated per build, seed {base.seed}")
+    table = Table(show_edge=False, pad_edge=False)
+    headers = (
+        "controller", "real time", "chip Mcycles/s", "hover RMS", "slowest roll/pitch 90 %", "height vs host RMS",
+        "deadline misses",
+    )  # fmt: skip
+    for header in headers:
+        table.add_column(header, justify="left" if header == "controller" else "right")
+    flights = [("host", dataclasses.replace(base, controller="host"))] if host else []
+    flights += [(f"chip {fw.label}", dataclasses.replace(base, firmware=fw)) for fw in builds]
+    factor = math.nan
+    host_z = None
+    for name, scenario in flights:
+        # first call: build and compile outside the timing (a one-sample flight)
+        fly_scenario(dataclasses.replace(scenario, duration_s=0.01), None, on_status=console.print, plot=False)
+        flight = fly_scenario(scenario, None, plot=False)
+        summary = flight.summary
+        z = column(flight.rows[0], "z")
+        if scenario.controller == "host":
+            host_z = z
+        armed = column(flight.rows[0], "armed") > 0.5
+        versus = math.sqrt(float(np.mean((z - host_z)[armed] ** 2))) if host_z is not None and armed.any() else math.nan
+        rises = [s["rise_s"] for s in (summary["flight"] or {}).get("step_rise_s", []) if s["axis"] != "yaw"]
+        slowest = max((math.inf if r is None or math.isnan(r) else r for r in rises), default=math.nan)
+        factor = summary["real_time_factor"]
+        mcycles = "-"
+        if scenario.controller == "chip":
+            cycles = summary["simulated_s"] * 1e9 / summary["chip"]["clock_ns"]
+            mcycles = f"{cycles / summary['host_s'] / 1e6:.0f}"
+        hover = (summary["flight"] or {}).get("hover_rms_m", math.nan)
+        table.add_row(
+            name,
+            f"{factor:.2f}×",
+            mcycles,
+            "n/a" if math.isnan(hover) else f"{hover * 100:.2f} cm",
+            "n/a" if math.isnan(slowest) else "never" if math.isinf(slowest) else f"{slowest * 1000:.0f} ms",
+            "-" if math.isnan(versus) or scenario.controller == "host" else f"{versus * 100:.2f} cm",
+            str(summary["deadline_misses"]) if summary["deadline_misses"] is not None else "-",
+        )
+    console.print(table)
+    print(f"fly: {factor:.2f}× real time")
+    return factor

@@ -1,0 +1,49 @@
+"""``robosoc scenario show``: the resolved scenario as TOML, to copy and edit; scenario files for ``fly``."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING, Annotated
+
+import typer
+
+from robosoc.cli import exit_codes, files
+from robosoc.cli.app import RobosocGroup, app
+
+if TYPE_CHECKING:
+    from robosoc.config.scenario import ScenarioConfig
+
+scenario_app = typer.Typer(
+    cls=RobosocGroup,
+    help="Scenarios: what robosoc fly flies (vehicles, wind, flight plan, controller, firmware, chip).",
+    epilog=exit_codes.EPILOG,
+    no_args_is_help=True,
+)
+app.add_typer(scenario_app, name="scenario")
+
+
+def load_scenario(path: Path | None, label: str | None) -> tuple[ScenarioConfig, tuple[str, ...]]:
+    """The scenario of ``path`` merged into the built-in default (the default itself for None), and
+    the dotted fields the file sets.  Errors name ``label`` (the option, or None for an argument),
+    the file and the field."""
+    from robosoc.config.scenario import ScenarioConfig
+
+    if path is None:
+        return ScenarioConfig(), ()
+    return files.load_toml(ScenarioConfig, path, label)
+
+
+@scenario_app.command("show", epilog=exit_codes.EPILOG)
+def scenario_show(
+    file: Annotated[
+        Path | None,
+        typer.Argument(
+            metavar="FILE", help="A scenario TOML file (it may name only the fields it changes); default: built-in."
+        ),
+    ] = None,
+) -> None:
+    """Print the resolved scenario, every field, as TOML: save it, edit it, fly it with robosoc fly FILE."""
+    from robosoc.config.scenario import scenario_toml
+
+    config, _ = load_scenario(file, None)
+    typer.echo(scenario_toml(config), nl=False)

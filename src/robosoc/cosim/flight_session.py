@@ -1,0 +1,242 @@
+"""One ``robosoc fly`` run as a library call: fly a scenario, write its run folder, return its summary.
+
+:func:`fly_scenario` is what the CLI, the tests and a sweep call.  It flies every vehicle of the
+scenario in one world under one clock (:func:`robosoc.cosim.lockstep.fly_lockstep_fleet`), each
+with its own controller: the firmware on its own chip (``controller = "chip"``) or the float64
+host controller (``"host"``).  The run folder (``out``) gets, as the flight goes:
+
+* ``scenario.toml``: the resolved scenario, every field (loads back to the same scenario);
+* ``flight.csv``: one row per sensor sample, flushed row by row;
+
+and at the end (or when the flight is interrupted or crashes, with ``"complete": false``):
+
+* ``summary.json`` (:mod:`robosoc.analysis.run_summary`), ``jobs.csv`` (chip: the job records,
+  :func:`robosoc.cosim.replay.write_jobs_csv`) and ``flight.png``.
+
+With several vehicles each has a sub-folder ``vehicle-1/``, ``vehicle-2/``, ... holding its own
+``flight.csv``, ``jobs.csv``, ``summary.json`` and ``flight.png``, and the top-level
+``summary.json`` lists them all (:func:`robosoc.analysis.run_summary.fleet_summary`).
+
+Vehicles: vehicle i (from 0) is the scenario's preset named ``quad`` (one vehicle) or
+``quad<i+1>``, spawned on a square grid :data:`SPACING_M` apart, vehicle 1 at the origin.  One
+seed drives all of them; each vehicle's sensor noise comes from its own stream
+(:meth:`robosoc.physics.World.reset`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from robosoc.analysis.run_summary import fleet_summary, vehicle_summary, write_summary
+from robosoc.config.scenario import ScenarioConfig, scenario_toml
+from robosoc.config.vehicle import VehicleConfig, vehicle_preset
+from robosoc.control.flight import ROW_FIELDS
+from robosoc.control.flight_log import CsvFlightLog
+from robosoc.control.host import HostController
+from robosoc.cosim.lockstep import (
+    NS_PER_S,
+    PHYSICS_STEP_NS,
+    ChipController,
+    HostLockstepController,
+    LockstepController,
+    fly_lockstep_fleet,
+)
+from robosoc.cosim.replay import ReplayResult, write_jobs_csv
+from robosoc.physics import World
+
+SPACING_M = 3.0
+"""Distance between neighbouring spawn points of a fleet [m]: the vehicles fly the same plan, so
+they drift alike; 3 m leaves room for what their noise makes them differ by (the closest approach
+is in the summary, ``min_separation_m``)."""
+
+__all__ = [
+    "SPACING_M",
+    "ScenarioFlight",
+    "fleet_vehicles",
+    "fly_scenario",
+    "vehicle_folder",
+]
+
+
+def fleet_vehicles(scenario: ScenarioConfig) -> list[VehicleConfig]:
+    """The vehicles of ``scenario``: its preset, named and spawned on a grid (see the module's docstring)."""
+    if scenario.vehicles == 1:
+        return [vehicle_preset(scenario.vehicle)]
+    side = math.ceil(math.sqrt(scenario.vehicles))
+    base = vehicle_preset(scenario.vehicle)
+    x0, y0, z0 = base.spawn_position
+    return [
+        dataclasses.replace(
+            base, name=f"quad{i + 1}", spawn_position=(x0 + SPACING_M * (i % side), y0 + SPACING_M * (i // side), z0)
+        )
+        for i in range(scenario.vehicles)
+    ]
+
+
+def vehicle_folder(out: Path, index: int, count: int) -> Path:
+    """The folder of vehicle ``index`` (from 0) of ``count``: ``out`` itself for a single vehicle."""
+    return out if count == 1 else out / f"vehicle-{index + 1}"
+
+
+@dataclass
+class ScenarioFlight:
+    """A flown scenario: its top-level summary, each vehicle's rows and firmware run, and where it is."""
+
+    summary: dict[str, Any]
+    rows: list[np.ndarray]
+    results: list[ReplayResult | None]
+    out: Path | None
+
+
+def _controllers(scenario: ScenarioConfig, on_status: Callable[[str], None]) -> list[LockstepController]:
+    canonical = vehicle_preset(scenario.vehicle)  # the control parameters do not depend on name or spawn
+    if scenario.controller == "host":
+        return [
+            HostLockstepController(HostController.for_scenario(scenario, canonical)) for _ in range(scenario.vehicles)
+        ]
+    on_status(f"building the firmware ({scenario.firmware.label}; cached after the first build) ...")
+    from robosoc.cosim.chip_warmup import prepare_chip
+    from robosoc.firmware import flight_app
+
+    prepare_chip(scenario.chip, lambda: flight_app.build(scenario.firmware, canonical, scenario), on_status)
+    fw, chip = scenario.firmware, scenario.chip
+    return [ChipController(scenario, canonical, fw, chip=chip) for _ in range(scenario.vehicles)]
+
+
+def _min_separation(rows: list[np.ndarray]) -> float:
+    if len(rows) < 2 or len(rows[0]) == 0:
+        return math.nan
+    xyz = [ROW_FIELDS.index(n) for n in ("x", "y", "z")]
+    positions = np.stack([r[:, xyz] for r in rows])  # vehicle, sample, axis
+    gaps = np.linalg.norm(positions[:, None] - positions[None, :], axis=-1)
+    n = len(rows)
+    return float(min(gaps[i, j].min() for i in range(n) for j in range(i + 1, n)))
+
+
+def fly_scenario(
+    scenario: ScenarioConfig,
+    out: Path | None = None,
+    *,
+    seed: int | None = None,
+    on_sample: Callable[[World, int], None] | None = None,
+    on_status: Callable[[str], None] | None = None,
+    plot: bool = True,
+) -> ScenarioFlight:
+    """Fly ``scenario`` (with ``seed`` in place of its own, if given) and write the run folder ``out``.
+
+    Args:
+        scenario: the resolved scenario.
+        out: the run folder (created); None writes nothing.
+        seed: overrides ``scenario.seed``.
+        on_sample: called once per sensor sample with the world and the sample index (progress, video).
+        on_status: told what is being done before the flight (building, compiling), for a newcomer
+            who would otherwise watch a silent terminal.
+        plot: also write ``flight.png`` per vehicle.
+
+    Raises:
+        KeyboardInterrupt, or whatever stopped the flight (a firmware fault: ChipError, CoreError),
+        after ``summary.json`` with ``"complete": false`` has been written next to the rows flown.
+    """
+    if seed is not None:
+        scenario = dataclasses.replace(scenario, seed=seed)
+    say = on_status or (lambda _text: None)
+    vehicles = fleet_vehicles(scenario)
+    count = len(vehicles)
+    controllers = _controllers(scenario, say)
+    folders = [vehicle_folder(out, i, count) for i in range(count)] if out is not None else []
+    logs: list[CsvFlightLog] = []
+    if out is not None:
+        out.mkdir(parents=True, exist_ok=True)
+        (out / "scenario.toml").write_text(scenario_toml(scenario), encoding="utf-8")
+        logs = [CsvFlightLog(folder / "flight.csv") for folder in folders]
+    flown: list[list[np.ndarray]] = [[] for _ in vehicles]
+
+    def on_row(i: int, row: np.ndarray) -> None:
+        flown[i].append(row.copy())
+        if logs:
+            logs[i].write(row)
+
+    start = time.perf_counter()
+    try:
+        fly_lockstep_fleet(scenario, vehicles, controllers, scenario.seed, on_row=on_row, on_sample=on_sample)
+    except BaseException as exc:
+        host_s = time.perf_counter() - start
+        for log in logs:
+            log.close()
+        stopped = "interrupted" if isinstance(exc, KeyboardInterrupt) else f"{type(exc).__name__}: {exc}"
+        try:
+            _conclude(scenario, vehicles, controllers, flown, host_s, stopped, folders, out, plot)
+        except Exception as inner:
+            exc.add_note(f"the summary of the flight so far could not be written: {type(inner).__name__}: {inner}")
+        raise
+    host_s = time.perf_counter() - start
+    for log in logs:
+        log.close()
+    return _conclude(scenario, vehicles, controllers, flown, host_s, None, folders, out, plot)
+
+
+def _conclude(
+    scenario: ScenarioConfig,
+    vehicles: list[VehicleConfig],
+    controllers: list[LockstepController],
+    flown: list[list[np.ndarray]],
+    host_s: float,
+    stopped: str | None,
+    folders: list[Path],
+    out: Path | None,
+    plot: bool,
+) -> ScenarioFlight:
+    """Summaries (complete or not), jobs.csv and plots of the rows flown; written when ``out`` is set."""
+    complete = stopped is None
+    rows = [np.array(r).reshape(-1, len(ROW_FIELDS)) for r in flown]
+    samples = min(len(r) for r in rows)
+    simulated_s = samples * scenario.sensors.period_steps * PHYSICS_STEP_NS / NS_PER_S
+    results: list[ReplayResult | None] = []
+    summaries = []
+    for i, (vehicle, controller) in enumerate(zip(vehicles, controllers, strict=True)):
+        result = None
+        note = stopped
+        if isinstance(controller, ChipController):
+            try:
+                result = controller.result if complete else controller.result_so_far()
+            except Exception as exc:  # the chip's state after a crash may not give job records
+                note = f"{stopped}; no task figures: {type(exc).__name__}: {exc}"
+        results.append(result)
+        summary = vehicle_summary(
+            scenario, rows[i], vehicle.rest_height, result, simulated_s, host_s, complete=complete, stopped=note
+        )
+        summaries.append(summary)
+        if out is None:
+            continue
+        folder = folders[i]
+        if result is not None:
+            write_jobs_csv(result.jobs, folder / "jobs.csv")
+        write_summary(summary, folder / "summary.json")
+        if plot and len(rows[i]):
+            from robosoc.control.flight_plot import plot_flight
+
+            title = f"{scenario.name}, seed {scenario.seed}" + (f", vehicle {i + 1}" if len(vehicles) > 1 else "")
+            plot_flight(rows[i], folder / "flight.png", title=title)
+    if len(vehicles) == 1:
+        top = summaries[0]
+    else:
+        top = fleet_summary(
+            scenario,
+            summaries,
+            simulated_s,
+            host_s,
+            min_separation_m=_min_separation(rows),
+            complete=complete,
+            stopped=stopped,
+        )
+        if out is not None:
+            write_summary(top, out / "summary.json")
+    return ScenarioFlight(top, rows, results, out)
