@@ -83,11 +83,11 @@ def test_listed_points_alone(tmp_path):
     [
         ("[grid]\nduraton_s = [1.0]\n", "grid.duraton_s", "'duraton_s' is not a scenario field"),
         ("[grid]\nsensors.rate = [1.0]\n", "grid.sensors.rate", "sensors has: "),
-        ("[grid]\n\"duration_s.x\" = [1.0]\n", "grid.duration_s.x", "not a table"),
+        ('[grid]\n"duration_s.x" = [1.0]\n', "grid.duration_s.x", "not a table"),
         ("[grid]\nsensors = [1.0]\n", "grid.sensors", "is a table"),
         ("[grid]\nduration_s = []\n", "grid.duration_s", "non-empty list"),
         ("[grid]\nduration_s = 1.0\n", "grid.duration_s", "non-empty list"),
-        ("[grid]\nduration_s = [1.0, \"x\"]\n", "grid.duration_s[1]: duration_s", "expected a number"),
+        ('[grid]\nduration_s = [1.0, "x"]\n', "grid.duration_s[1]: duration_s", "expected a number"),
         ("[grid]\nduration_s = [-1.0]\n", "grid.duration_s[0]", "duration_s"),
         ("[[points]]\nwnd.constant = [1.0, 0.0, 0.0]\n", "points[0].wnd.constant", "not a scenario field"),
         ("[[points]]\n", "points[0]", "empty point"),
@@ -97,9 +97,9 @@ def test_listed_points_alone(tmp_path):
         ("seeds = [1, 1]\n", "seeds", "listed twice"),
         ("metrics = [1]\n", "metrics[0]", "expected dotted names"),
         ("gird = {}\n", "gird", "unknown field"),
-        ("name = \"a b\"\n", "name", "letters, digits"),
-        ("scenario = \"missing.toml\"\n", "", "file not found"),
-        ("[base]\nduration_s = \"long\"\n", "duration_s", "expected a number"),
+        ('name = "a b"\n', "name", "letters, digits"),
+        ('scenario = "missing.toml"\n', "", "file not found"),
+        ('[base]\nduration_s = "long"\n', "duration_s", "expected a number"),
     ],
 )
 def test_bad_sweep_files_name_file_and_field(tmp_path, text, field, reason):
