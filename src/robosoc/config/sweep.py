@@ -43,6 +43,9 @@ from robosoc.config.ranges import check_seed
 from robosoc.config.scenario import ScenarioConfig
 from robosoc.config.validate import ConfigError, from_mapping, read_toml_mapping
 
+SEED_FIELD = "seed"
+"""The scenario's seed: a sweep sets it from its ``seeds`` list, never from a grid or a point."""
+
 MAX_POINTS = 100_000
 """Largest sweep (points × seeds): a guard against a grid typed with one list too many."""
 
@@ -91,6 +94,8 @@ def field_names(cls: type = ScenarioConfig, prefix: str = "") -> list[str]:
 
 def check_field(name: str, where: str, key: str) -> None:
     """Raise :class:`ConfigError` unless ``name`` is a dotted field of the scenario."""
+    if name == SEED_FIELD:
+        raise ConfigError(where, key, "vary the seed with seeds = [...] at the top of the sweep file")
     cls: Any = ScenarioConfig
     parts = name.split(".")
     for i, part in enumerate(parts):
