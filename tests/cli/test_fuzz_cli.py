@@ -94,6 +94,14 @@ OPTIONS: dict[tuple[str, str], Spec] = {
     ("fly", "--scenario"): Spec("in_file"),
     ("fly", "--vehicle"): Spec("choice", choices=("default", "laser")),
     ("fly", "--out"): Spec("out_dir"),
+    ("bench sweep", "--points"): Spec("int", 1, 256),
+    ("bench sweep", "--seconds"): Spec("float", 0.01, 60.0),
+    ("bench sweep", "--workers"): Spec("int", 1, 256),
+    ("sweep", "FILE"): Spec("in_file"),
+    ("sweep", "--workers"): Spec("int", 1, 256),
+    ("sweep", "--dask"): Spec("dask"),
+    ("sweep", "--out"): Spec("out_dir"),
+    ("sweep", "--retry-failed"): Spec("flag"),
     ("fly", "--no-out"): Spec("flag"),
     ("fly", "--video"): Spec("out_any"),
     ("bench fly", "--arith"): Spec("choice", choices=("float", "fixed")),
@@ -149,6 +157,7 @@ BAD_VALUES: dict[str, list[str]] = {
     "mesh": ["", "0x0", "1x1", "-2x2", "99999x99999", "nan", "2x", "2x2x2"],
     "tile": ["", "a,b", "-1,0", "99,99", "nan", "0,0", "1"],
     "rates": ["", "0", "-0.1", "2", "nan", "inf", "a", "0.1,,0.2"],
+    "dask": ["", "nowhere", "tcp://", "tcp://host:0", "host:99999", "ftp://host:80", ":8786"],
     "define": ["", "-x", "A B=1", "=1", "1X", "A-B"],
     "flag": ["=1"],
     "in_file": ["\0missing", "\0dir", "\0binary", "\0under_file"],
@@ -178,6 +187,10 @@ def base_command(command: str, option: str, elves: dict[str, Path], tmp: Path) -
         run.mkdir(exist_ok=True)
         (run / "flight.csv").write_text(",".join(ROW_FIELDS) + "\n" + ",".join(["0.0"] * len(ROW_FIELDS)) + "\n")
         return ["report", str(run)]
+    if command == "sweep":
+        sweep = tmp / "ok-sweep.toml"
+        sweep.write_text("[base]\nduration_s = 0.01\n[grid]\nduration_s = [0.01]\n")
+        return ["sweep", *([] if option == "FILE" else [str(sweep)]), "--workers", "1"]
     if command == "fly":
         length = [] if option in ("--duration", "--seconds") else ["--duration", "0.01"]
         return ["fly", *length, *([] if option in ("--out", "--no-out") else ["--no-out"])]
@@ -186,6 +199,7 @@ def base_command(command: str, option: str, elves: dict[str, Path], tmp: Path) -
     return {
         "bench core": ["bench", "core", "--runs", "1"],
         "bench physics": ["bench", "physics", "--seconds", "0.01", "--runs", "1"],
+        "bench sweep": ["bench", "sweep", "--points", "1", "--seconds", "0.01", "--workers", "1"],
         "bench noc": ["bench", "noc", "--size", "2x2", "--cycles", "10", "--rates", "0.1", "--arbiter", "hermes"],
         "bench chip": ["bench", "chip", "--runs", "1", "--cycles", "10", "--ticks", "1", "--no-noc"],
         "firmware build": ["firmware", "build"],
@@ -299,6 +313,9 @@ def bad_text(spec: Spec) -> st.SearchStrategy[str]:
         )
     if spec.kind == "flag":
         return st.sampled_from(["=1", "=yes", "=", "=nan"])
+    if spec.kind == "dask":  # anything but 'local' or scheme://host:port with a port in 1..65535
+        far = st.integers(min_value=65536, max_value=10**12)
+        return st.one_of(words.filter(lambda v: v != "local"), special, far.map(lambda p: f"tcp://host:{p}"))
     # files: a bad path, or a binary file (not UTF-8; for ELF files: with or without the ELF magic)
     paths = st.sampled_from(BAD_VALUES[spec.kind])
     if spec.kind != "in_file":

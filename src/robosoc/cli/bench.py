@@ -163,3 +163,24 @@ def bench_fly(
     )
     chosen = arith is not None or mul_given
     run_fly_benchmark(builds, duration_s=duration, host=not chosen, console=make_console())
+
+
+@bench_app.command("sweep", epilog=exit_codes.EPILOG)
+def bench_sweep(
+    points: Annotated[
+        int, typer.Option(help="Points (chip flights) per sweep, 1..256.", callback=options.int_range(1, 256))
+    ] = 8,
+    seconds: Annotated[
+        float,
+        typer.Option(
+            help="Simulated seconds per flight, 0.01..60.", callback=options.float_range(0.01, 60.0, unit="s")
+        ),
+    ] = 2.0,
+    workers: Annotated[
+        int, typer.Option(help="Workers of the parallel runs, 1..256.", callback=options.int_range(1, 256))
+    ] = 2,
+) -> None:
+    """Speed-up of a sweep on the local pool (1 worker against --workers) and the Dask path's overhead."""
+    from robosoc.benchmarks.sweep import run_sweep_benchmark
+
+    run_sweep_benchmark(points=points, seconds=seconds, workers=workers, console=make_console())

@@ -169,21 +169,30 @@ def load_toml(cls: type[T], path: str | Path, section: str | None = None) -> T:
     return load_toml_named(cls, path, section)[0]
 
 
-def load_toml_named(cls: type[T], path: str | Path, section: str | None = None) -> tuple[T, tuple[str, ...]]:
-    """:func:`load_toml`, and the dotted fields the file sets (:func:`named_fields`)."""
+def read_toml_mapping(path: str | Path, kind: str = "TOML file") -> dict[str, Any]:
+    """Parse a TOML file into a plain mapping.
+
+    Raises:
+        ConfigError: the file is missing or unreadable, is not UTF-8 or not valid TOML.
+    """
     path = Path(path)
     try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
+        return tomllib.loads(path.read_text(encoding="utf-8"))
     except FileNotFoundError as exc:
         raise ConfigError(str(path), "", "file not found") from exc
     except IsADirectoryError as exc:
-        raise ConfigError(str(path), "", "is a folder, expected a TOML file") from exc
+        raise ConfigError(str(path), "", f"is a folder, expected a {kind}") from exc
     except OSError as exc:
         raise ConfigError(str(path), "", f"cannot read: {exc.strerror or exc}") from exc
     except UnicodeDecodeError as exc:
         raise ConfigError(str(path), "", f"not UTF-8 text (offset {exc.start}): expected a TOML file") from exc
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(str(path), "", f"invalid TOML: {exc}") from exc
+
+
+def load_toml_named(cls: type[T], path: str | Path, section: str | None = None) -> tuple[T, tuple[str, ...]]:
+    """:func:`load_toml`, and the dotted fields the file sets (:func:`named_fields`)."""
+    data = read_toml_mapping(path)
     if section is not None:
         if section not in data:
             raise ConfigError(str(path), section, "missing table")

@@ -1,0 +1,152 @@
+"""``robosoc sweep FILE``: run a sweep file's points on a local pool or a Dask cluster, resumably."""
+
+from __future__ import annotations
+
+import os
+import shutil
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from robosoc.cli import exit_codes, files, options
+from robosoc.cli.app import app
+from robosoc.cli.console import make_console, note, plain
+from robosoc.cli.errors import CliError
+
+MAX_WORKERS = 256
+
+
+def _dask_address(text: str) -> str:
+    """``local`` or a scheduler address (``tcp://host:8786``, ``host:8786``)."""
+    from robosoc.sweep.runner import LOCAL
+
+    if text == LOCAL:
+        return text
+    address = text if "://" in text else f"tcp://{text}"
+    scheme, _, rest = address.partition("://")
+    host, sep, port = rest.rpartition(":")
+    if scheme not in ("tcp", "tls", "ws", "wss", "inproc") or not sep or not host or not port.isdigit():
+        raise ValueError(f"expected 'local' or a scheduler address such as tcp://host:8786, got {text!r}")
+    if not 0 < int(port) < 65536:
+        raise ValueError(f"port must be 1..65535, got {port}")
+    return address
+
+
+def _check_dask(ctx: typer.Context, param: typer.CallbackParam, value: str | None) -> str | None:
+    if value is None:
+        return None
+    try:
+        return _dask_address(value)
+    except ValueError as exc:
+        raise options.fail(options.option_name(param), str(exc)) from None
+
+
+@app.command("sweep", epilog=exit_codes.EPILOG)
+def sweep_command(
+    file: Annotated[Path, typer.Argument(help="The sweep file (TOML; docs/sweeps.md).", show_default=False)],
+    workers: Annotated[
+        int | None,
+        typer.Option(
+            help=f"Worker processes, 1..{MAX_WORKERS} (default: the number of cores).",
+            callback=options.int_range(1, MAX_WORKERS),
+        ),
+    ] = None,
+    dask: Annotated[
+        str | None,
+        typer.Option(
+            help="Run on a Dask cluster: a scheduler address (tcp://host:8786), or 'local' for a LocalCluster "
+            "of --workers processes with Dask's dashboard.",
+            callback=_check_dask,
+        ),
+    ] = None,
+    out: Annotated[
+        Path | None, typer.Option(help="Output folder (default runs/sweep-NAME); a re-run resumes in it.")
+    ] = None,
+    retry_failed: Annotated[bool, typer.Option("--retry-failed", help="Run the points that failed again.")] = False,
+) -> None:
+    """Fly every point of a sweep file; store each as it finishes; table, Pareto plots and an HTML page."""
+    from rich.markup import escape
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
+
+    from robosoc.analysis.sweep_plots import sweep_html, write_sweep_plots
+    from robosoc.config.sweep import load_sweep
+    from robosoc.config.validate import ConfigError
+    from robosoc.sweep.point import OK
+    from robosoc.sweep.runner import run_sweep
+
+    console = make_console()
+    files.input_file(file, None, "sweep file")
+    try:
+        config = load_sweep(file)
+        from robosoc.sweep.plan import plan
+
+        total = len(plan(config))
+    except ConfigError as exc:
+        raise CliError(str(exc)) from None
+    if out is None:
+        out = Path("runs") / f"sweep-{config.name}"
+    out = files.output_dir(out, "--out", inputs=[file])
+    if workers is None:
+        workers = os.cpu_count() or 1
+    copy = out / "sweep.toml"
+    if not copy.exists() or copy.read_bytes() != file.read_bytes():
+        shutil.copyfile(file, copy)
+
+    where = f"Dask at {dask}" if dask and dask != "local" else ("a Dask LocalCluster" if dask else "a local pool")
+    console.print(
+        f"sweep [bold]{escape(config.name)}[/bold]: {total} runs "
+        f"({len(config.assignments())} points × {len(config.seeds)} seeds) on {where} of {workers} workers"
+        + ("" if not dask or dask == "local" else " (the cluster's own workers)")
+    )
+    state = {"failed": 0}
+    with Progress(
+        TextColumn("points"),
+        BarColumn(),
+        MofNCompleteColumn(),
+        TextColumn("{task.fields[failed]} failed"),
+        TimeRemainingColumn(),
+        console=console,
+        transient=True,
+    ) as progress:
+        task = progress.add_task("sweep", total=total, failed=0)
+
+        def on_start(todo: int, done: int) -> None:
+            progress.update(task, completed=done)
+            if done:
+                progress.console.print(f"resuming in {escape(str(out))}: {done} of {total} runs already done")
+
+        def on_point(point, record) -> None:
+            if record["status"] != OK:
+                state["failed"] += 1
+                progress.console.print(escape(f"failed: {point.label}: {record['error']}"))
+            progress.update(task, advance=1, failed=state["failed"])
+
+        try:
+            outcome = run_sweep(
+                config,
+                out,
+                workers=workers,
+                dask=dask,
+                retry_failed=retry_failed,
+                on_start=on_start,
+                on_point=on_point,
+                on_status=lambda text: progress.console.print(escape(text)),
+            )
+        except KeyboardInterrupt:
+            note(console, f"interrupted; the finished points are kept in {out}: run the same command to resume")
+            raise typer.Exit(exit_codes.INTERRUPTED) from None
+        except OSError as exc:
+            raise CliError(f"--dask: cannot reach the scheduler at {dask}: {exc}") from None
+
+    records = [outcome.records[p.key] for p in outcome.points if p.key in outcome.records]
+    plots = write_sweep_plots(out, records, config.varied(), config.metrics)
+    page = out / "sweep.html"
+    page.write_text(sweep_html(f"sweep {config.name}", records, plots, outcome.table.read_text()), "utf-8")
+    ok = sum(1 for r in records if r["status"] == OK)
+    console.print(f"{outcome.ran} runs now, {outcome.skipped} done before; {ok} ok, {len(records) - ok} failed")
+    for record in outcome.failures:
+        console.print(
+            escape(f"  failed: point {record['index']} {record['values']} seed {record['seed']}: {record['error']}")
+        )
+    plain(console, f"table: {outcome.table}  plots: {out / 'plots'}  page: {page}")

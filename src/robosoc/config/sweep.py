@@ -1,0 +1,267 @@
+"""Sweep files: a base scenario, the fields to vary, the seeds and the metrics to keep.
+
+A sweep file is TOML::
+
+    name = "builds"                      # names the output folder (default: the file's stem)
+    scenario = "base.toml"               # optional base scenario, relative to this file
+    seeds = [1, 2, 3]                    # every point is flown once per seed (default [1])
+    metrics = [                          # dotted fields of each run's summary.json to tabulate
+        "tasks.estimator.response_us_mean",
+        "tasks.estimator.energy_nj_mean",
+        "flight.hover_rms_m",
+    ]
+
+    [base]                               # optional changes to the base scenario, any field
+    duration_s = 5.0
+
+    [grid]                               # every combination of these lists (a Cartesian product)
+    "firmware.arith" = ["fixed", "float"]
+    firmware.multiplier = [true, false]  # unquoted dotted keys are the same field
+
+    [[points]]                           # and/or listed points, each a set of field values
+    "chip.width" = 3
+
+Field names are the scenario's (``robosoc scenario show``), dotted; a name that is not a field
+is an error naming the sweep file and the key.  Each grid value is checked alone against the
+base scenario before anything runs, so a wrong type or an out-of-range value stops the sweep
+at once; a *combination* that is invalid (a task mapped outside a smaller mesh, say) is a failed
+point, recorded with its reason, and the sweep goes on.
+
+When both ``grid`` and ``points`` are given, every listed point is combined with every grid
+combination (the listed values win where both set a field).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import typing
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from robosoc.config.ranges import check_seed
+from robosoc.config.scenario import ScenarioConfig
+from robosoc.config.validate import ConfigError, from_mapping, read_toml_mapping
+
+SEED_FIELD = "seed"
+"""The scenario's seed: a sweep sets it from its ``seeds`` list, never from a grid or a point."""
+
+MAX_POINTS = 100_000
+"""Largest sweep (points × seeds): a guard against a grid typed with one list too many."""
+
+Value = bool | int | float | str | list[Any]
+Assignment = tuple[tuple[str, Value], ...]
+"""One point's field values: (dotted name, value) pairs in the file's order."""
+
+
+def flatten(table: dict[str, Any], prefix: str = "") -> dict[str, Any]:
+    """Nested TOML tables as dotted names: ``{"a": {"b": 1}}`` → ``{"a.b": 1}``."""
+    flat: dict[str, Any] = {}
+    for key, value in table.items():
+        name = f"{prefix}{key}"
+        if isinstance(value, dict):
+            flat.update(flatten(value, f"{name}."))
+        else:
+            flat[name] = value
+    return flat
+
+
+def nest(assignment: Assignment | dict[str, Any]) -> dict[str, Any]:
+    """Dotted names back to nested tables, as :func:`robosoc.config.validate.from_mapping` takes."""
+    items = assignment.items() if isinstance(assignment, dict) else assignment
+    tree: dict[str, Any] = {}
+    for name, value in items:
+        *tables, leaf = name.split(".")
+        node = tree
+        for table in tables:
+            node = node.setdefault(table, {})
+        node[leaf] = value
+    return tree
+
+
+def field_names(cls: type = ScenarioConfig, prefix: str = "") -> list[str]:
+    """Every dotted field of ``cls``, nested dataclasses descended."""
+    names: list[str] = []
+    hints = typing.get_type_hints(cls)
+    for f in dataclasses.fields(cls):
+        hint = hints[f.name]
+        if dataclasses.is_dataclass(hint):
+            names.extend(field_names(hint, f"{prefix}{f.name}."))  # type: ignore[arg-type]
+        else:
+            names.append(f"{prefix}{f.name}")
+    return names
+
+
+def check_field(name: str, where: str, key: str) -> None:
+    """Raise :class:`ConfigError` unless ``name`` is a dotted field of the scenario."""
+    if name == SEED_FIELD:
+        raise ConfigError(where, key, "vary the seed with seeds = [...] at the top of the sweep file")
+    cls: Any = ScenarioConfig
+    parts = name.split(".")
+    for i, part in enumerate(parts):
+        hints = typing.get_type_hints(cls) if dataclasses.is_dataclass(cls) else {}
+        if part not in hints:
+            known = ", ".join(sorted(hints)) if hints else "none: it is not a table"
+            parent = ".".join(parts[:i]) or "the scenario"
+            raise ConfigError(where, key, f"{name!r} is not a scenario field ({parent} has: {known})")
+        cls = hints[part]
+    if dataclasses.is_dataclass(cls):
+        raise ConfigError(where, key, f"{name!r} is a table; vary one of its fields ({', '.join(field_names(cls))})")
+
+
+@dataclass(frozen=True)
+class SweepConfig:
+    """A validated sweep file (see the module docstring)."""
+
+    name: str
+    base: ScenarioConfig
+    base_fields: tuple[tuple[str, Any], ...]
+    """The dotted fields the base scenario file and ``[base]`` set (for the record)."""
+    grid: tuple[tuple[str, tuple[Value, ...]], ...]
+    points: tuple[Assignment, ...]
+    seeds: tuple[int, ...]
+    metrics: tuple[str, ...]
+    source: str
+
+    def assignments(self) -> list[Assignment]:
+        """Every point's field values, grid order first (the last grid field varies fastest)."""
+        combos: list[Assignment] = [()]
+        for name, values in self.grid:
+            combos = [(*combo, (name, value)) for combo in combos for value in values]
+        listed = self.points or ((),)
+        merged = []
+        for point in listed:
+            names = {name for name, _ in point}
+            for combo in combos:
+                merged.append(tuple((n, v) for n, v in combo if n not in names) + point)
+        return merged
+
+    def varied(self) -> list[str]:
+        """The dotted fields that vary across points, in the file's order."""
+        names = [name for name, _ in self.grid]
+        for point in self.points:
+            names.extend(name for name, _ in point if name not in names)
+        return names
+
+    def scenario(self, assignment: Assignment, where: str = "") -> ScenarioConfig:
+        """The base scenario with one point's values (raises :class:`ConfigError` if invalid)."""
+        return from_mapping(ScenarioConfig, nest(assignment), where or self.source, base=self.base)
+
+
+def _list_of(value: Any, where: str, key: str, kind: type, what: str) -> list[Any]:
+    if not isinstance(value, list) or not value:
+        raise ConfigError(where, key, f"expected a non-empty list of {what}, got {value!r}")
+    for i, item in enumerate(value):
+        if (isinstance(item, bool) and kind is not bool) or not isinstance(item, kind):
+            raise ConfigError(where, f"{key}[{i}]", f"expected {what}, got {item!r}")
+    return value
+
+
+def sweep_from_mapping(data: dict[str, Any], where: str, folder: Path, default_name: str) -> SweepConfig:
+    """Validate a parsed sweep file (``folder`` resolves a relative ``scenario`` path)."""
+    known = {"name", "scenario", "seeds", "metrics", "base", "grid", "points"}
+    unknown = sorted(set(data) - known)
+    if unknown:
+        raise ConfigError(where, unknown[0], f"unknown field (known: {', '.join(sorted(known))})")
+    name = data.get("name", default_name)
+    if not isinstance(name, str) or not name or not all(c.isalnum() or c in "-_." for c in name):
+        raise ConfigError(where, "name", f"expected a name of letters, digits, '-', '_' or '.', got {name!r}")
+
+    base_data: dict[str, Any] = {}
+    if "scenario" in data:
+        path = data["scenario"]
+        if not isinstance(path, str):
+            raise ConfigError(where, "scenario", f"expected a file name, got {path!r}")
+        scenario_path = folder / path
+        scenario_data = read_toml_mapping(scenario_path, "scenario TOML file")
+        base = from_mapping(ScenarioConfig, scenario_data, str(scenario_path))
+        base_data = flatten(scenario_data)
+    else:
+        base = ScenarioConfig()
+    changes = data.get("base", {})
+    if not isinstance(changes, dict):
+        raise ConfigError(where, "base", f"expected a table of scenario fields, got {changes!r}")
+    for key in flatten(changes):
+        check_field(key, where, f"base.{key}")
+    base = from_mapping(ScenarioConfig, changes, f"{where}: [base]", base=base)
+    base_data.update(flatten(changes))
+
+    grid_table = data.get("grid", {})
+    if not isinstance(grid_table, dict):
+        raise ConfigError(where, "grid", f"expected a table of field = [values], got {grid_table!r}")
+    grid = []
+    for key, values in flatten(grid_table).items():
+        check_field(key, where, f"grid.{key}")
+        if not isinstance(values, list) or not values:
+            raise ConfigError(where, f"grid.{key}", f"expected a non-empty list of values, got {values!r}")
+        for i, value in enumerate(values):
+            from_mapping(ScenarioConfig, nest({key: value}), f"{where}: grid.{key}[{i}]", base=base)
+        grid.append((key, tuple(values)))
+
+    raw_points = data.get("points", [])
+    if not isinstance(raw_points, list) or not all(isinstance(p, dict) for p in raw_points):
+        raise ConfigError(where, "points", "expected [[points]] tables of field = value")
+    points = []
+    for i, point in enumerate(raw_points):
+        flat = flatten(point)
+        if not flat:
+            raise ConfigError(where, f"points[{i}]", "an empty point: name at least one field")
+        for key in flat:
+            check_field(key, where, f"points[{i}].{key}")
+        points.append(tuple(flat.items()))
+
+    seeds = tuple(_list_of(data.get("seeds", [1]), where, "seeds", int, "seeds (integers)"))
+    for i, seed in enumerate(seeds):
+        try:
+            check_seed(f"seeds[{i}]", seed)
+        except ValueError as exc:
+            field, _, reason = str(exc).partition(": ")
+            raise ConfigError(where, field, reason) from exc
+    if len(set(seeds)) != len(seeds):
+        raise ConfigError(where, "seeds", f"a seed is listed twice: {list(seeds)}")
+    metrics = tuple(_list_of(data.get("metrics", list(DEFAULT_METRICS)), where, "metrics", str, "dotted names"))
+
+    config = SweepConfig(name, base, tuple(base_data.items()), tuple(grid), tuple(points), seeds, metrics, where)
+    total = len(config.assignments()) * len(seeds)
+    if total > MAX_POINTS:
+        raise ConfigError(where, "grid", f"{total} runs (points × seeds), more than {MAX_POINTS}")
+    return config
+
+
+DEFAULT_METRICS = (
+    "tasks.estimator.response_us_mean",
+    "tasks.estimator.response_us_max",
+    "tasks.estimator.energy_nj_mean",
+    "tasks.pid.response_us_mean",
+    "tasks.pid.response_us_max",
+    "tasks.pid.energy_nj_mean",
+    "deadline_misses",
+    "flight.hover_rms_m",
+    "energy.total_uj",
+    "real_time_factor",
+)
+"""Metrics kept when a sweep file names none: response time and energy per task, flight quality."""
+
+
+def load_sweep(path: str | Path) -> SweepConfig:
+    """Read and validate a sweep file.
+
+    Raises:
+        ConfigError: naming the file and the field (or the file's problem).
+    """
+    path = Path(path)
+    data = read_toml_mapping(path, "sweep TOML file")
+    return sweep_from_mapping(data, str(path), path.parent, path.stem)
+
+
+__all__ = [
+    "DEFAULT_METRICS",
+    "MAX_POINTS",
+    "SweepConfig",
+    "check_field",
+    "field_names",
+    "flatten",
+    "load_sweep",
+    "nest",
+    "sweep_from_mapping",
+]

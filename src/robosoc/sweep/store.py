@@ -1,0 +1,144 @@
+"""A sweep's output folder, written so that an interruption at any moment loses no finished point.
+
+Layout::
+
+    OUT/sweep.toml           the sweep file as given (for the record)
+    OUT/points/KEY/          each finished point's run folder (summary.json, flight.csv, ...)
+    OUT/results/KEY.json     each finished point's record: its values, seed, status, error, summary
+    OUT/points.csv           the table: one row per finished point, its values and metrics
+
+A point is finished once its record exists: the run folder is written first (into a scratch
+folder renamed into place), then the record (a scratch file renamed into place), so a record
+never names a half-written folder.  ``points.csv`` is derived from the records and rewritten
+(atomically) after every point.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import math
+import os
+import shutil
+from pathlib import Path
+from typing import Any
+
+from robosoc.sweep.plan import Point
+from robosoc.sweep.point import PointResult, metric
+
+TABLE_LEADING = ("index", "key", "seed", "status", "error")
+"""The first columns of ``points.csv``; then the varied fields, then the metrics."""
+
+
+def _json_safe(value: Any) -> Any:
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    if isinstance(value, dict):
+        return {k: _json_safe(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_json_safe(v) for v in value]
+    return value
+
+
+def write_atomic(path: Path, data: bytes) -> None:
+    """Write ``path`` so that it is either absent or complete, whatever interrupts the write."""
+    scratch = path.with_name(f".{path.name}.partial")
+    with open(scratch, "wb") as file:
+        file.write(data)
+        file.flush()
+        os.fsync(file.fileno())
+    os.replace(scratch, path)
+
+
+class SweepStore:
+    """The output folder of one sweep (see the module docstring)."""
+
+    def __init__(self, folder: Path) -> None:
+        self.folder = folder
+        self.points_dir = folder / "points"
+        self.results_dir = folder / "results"
+        self.points_dir.mkdir(parents=True, exist_ok=True)
+        self.results_dir.mkdir(parents=True, exist_ok=True)
+
+    @property
+    def table_path(self) -> Path:
+        return self.folder / "points.csv"
+
+    def records(self) -> dict[str, dict[str, Any]]:
+        """Every finished point's record by key (unreadable records, from a crash, are skipped)."""
+        found = {}
+        for path in sorted(self.results_dir.glob("*.json")):
+            try:
+                record = json.loads(path.read_text(encoding="utf-8"))
+            except (OSError, ValueError):
+                continue
+            if isinstance(record, dict) and record.get("key") == path.stem:
+                found[path.stem] = record
+        return found
+
+    def save(self, point: Point, result: PointResult) -> dict[str, Any]:
+        """Keep a finished point: its run folder, then its record."""
+        folder = self.points_dir / point.key
+        scratch = self.points_dir / f".{point.key}.partial"
+        shutil.rmtree(scratch, ignore_errors=True)
+        scratch.mkdir()
+        for name, data in result.files.items():
+            relative = Path(name)
+            if relative.is_absolute() or ".." in relative.parts:
+                raise ValueError(f"point {point.key}: a run folder file outside the folder: {name!r}")
+            (scratch / relative).parent.mkdir(parents=True, exist_ok=True)
+            (scratch / relative).write_bytes(data)
+        shutil.rmtree(folder, ignore_errors=True)
+        os.replace(scratch, folder)
+        record = {
+            "key": point.key,
+            "index": point.index,
+            "seed": point.seed,
+            "values": {name: value for name, value in point.assignment},
+            "status": result.status,
+            "error": result.error,
+            "worker_s": result.worker_s,
+            "summary": result.summary,
+        }
+        text = json.dumps(_json_safe(record), indent=1, allow_nan=False) + "\n"
+        write_atomic(self.results_dir / f"{point.key}.json", text.encode())
+        return record
+
+    def forget(self, key: str) -> None:
+        """Drop a point's record (its run folder goes when the point is saved again)."""
+        (self.results_dir / f"{key}.json").unlink(missing_ok=True)
+
+    def write_table(self, points: list[Point], varied: list[str], metrics: tuple[str, ...]) -> Path:
+        """``points.csv``: the finished points among ``points``, in plan order."""
+        records = self.records()
+        buffer = io.StringIO()
+        writer = csv.writer(buffer, lineterminator="\n")
+        writer.writerow([*TABLE_LEADING, *varied, *metrics])
+        for point in points:
+            record = records.get(point.key)
+            if record is None:
+                continue
+            values = record["values"]
+            row = [point.index, point.key, point.seed, record["status"], record["error"]]
+            row += [_cell(values.get(name)) for name in varied]
+            row += [_cell(metric(record["summary"], name)) for name in metrics]
+            writer.writerow(row)
+        write_atomic(self.table_path, buffer.getvalue().encode())
+        return self.table_path
+
+
+def _cell(value: Any) -> Any:
+    """A CSV cell: empty for a missing value, JSON for lists and tables, repr-exact floats."""
+    if value is None:
+        return ""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, list | dict):
+        return json.dumps(value)
+    if isinstance(value, float):
+        return repr(value)
+    return value
+
+
+__all__ = ["TABLE_LEADING", "SweepStore", "write_atomic"]
