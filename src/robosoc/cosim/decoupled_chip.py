@@ -7,8 +7,9 @@ the readings the physics side sends (docs/decoupled.md):
   ``heartbeat_s`` until the first sensor batch comes;
 * **pacing**: the chip never runs past the physics' timestamps -- with readings waiting, up to the
   cycle of the oldest one; otherwise up to one sensor period past the newest reading injected (the
-  earliest the next one can be due), or to the end of the flight once the physics said bye.  It
-  runs in slices of :data:`SLICE_NS` of chip time and takes the datagrams that came in between;
+  earliest the next one can be due), or to the end of the flight once the physics said bye.  Until
+  the newest reading's command has left, it runs in slices of :data:`SLICE_NS` of chip time (so
+  the command is sent at once), then to the limit in one go;
 * **latency compensation**: each reading is injected from the I/O tile at the cycle of its
   timestamp when the chip is not past it (whenever it arrived), else at the current cycle (counted
   late); a reading older than one already injected is dropped (counted stale: it would go back in
@@ -46,7 +47,7 @@ from robosoc.cosim.replay import DEFAULT_FIRST_CYCLE, FirmwareRun, ReplayResult,
 
 __all__ = ["SLICE_NS", "ChipOutcome", "serve_chip"]
 
-#: Chip time run between two looks at the socket: a command leaves at most this late (in chip time).
+#: Chip time run at a time while a command is due: it is sent at most this late (in chip time).
 SLICE_NS = 250_000
 
 
@@ -157,8 +158,12 @@ class _Chip:
         return self.cycle_of(0)
 
     def advance(self, limit: int) -> None:
-        slice_cycles = max(1, round(SLICE_NS / self.clock_ns))
-        fresh = self.run.run_to(min(limit, self.run.cycle + slice_cycles))
+        """Run towards ``limit``: in slices while the newest reading's command has not left (so that
+        it leaves at once), then in one go (nothing can arrive that the chip could use before)."""
+        answered = bool(self.recent) and self.recent[-1].seq >= (self.newest_k & 0xFFFFFFFF)
+        if not answered:
+            limit = min(limit, self.run.cycle + max(1, round(SLICE_NS / self.clock_ns)))
+        fresh = self.run.run_to(limit)
         for c in fresh:
             left = math.floor((c.cycle - self.first) * self.clock_ns)
             self.recent.append(Command(c.seq & 0xFFFFFFFF, max(0, left), c.pwm))

@@ -7,12 +7,13 @@ chip at the other end of a UDP link (docs/decoupled.md):
    scenario and vehicle (:func:`scenario_digest`);
 2. per sensor sample k at ``t_k``: the flight row is formed and the sample's sensor packet sent in
    a sensor batch with its timestamp (plus the ``resend`` readings before it);
-3. per physics step ``[t, t + 1 ms)``: it waits until the step may be taken -- ``pace="realtime"``:
-   the wall clock has reached ``t + 1 ms`` since the start; ``pace="fast"``: the chip has
-   reported reaching ``t + 1 ms`` (so that every command that left the chip before is known) --
-   meanwhile taking the datagrams that come; each command is scheduled at the step of the chip
-   time it left (if that step is past, at the current step: counted late) and the motors get
-   what :class:`~robosoc.cosim.actuator_hold.ActuatorHold` gives for the step;
+3. per sample period (the 1 ms physics steps from ``t_k`` to ``t_k+1``): it waits until the steps
+   may be taken -- ``pace="realtime"``: the wall clock has reached ``t_k+1`` since the start;
+   ``pace="fast"``: the chip has reported reaching ``t_k+1`` (so every command that left the chip
+   before is known) -- meanwhile taking the datagrams that come.  Each command is scheduled at
+   the step of the chip time it left or, if it came later than that, at the step it arrived in
+   (realtime: the step the wall clock was in; counted late); then the world takes the period's
+   steps with what :class:`~robosoc.cosim.actuator_hold.ActuatorHold` gives for each;
 4. at the end it sends a bye and waits (up to ``peer_timeout_s``) for the chip's, which says how
    many datagrams the chip sent.
 
@@ -110,7 +111,9 @@ class _Flight:
         self.link, self.config, self.hold, self.log = link, config, hold, log
         self.progress_ns = -1
         self.newest_seq = -1
-        self.step = 0
+        self.first_step = 0  # the sample period being waited for: its first and last physics step
+        self.last_step = 0
+        self.start = time.monotonic()  # wall-clock time of flight time 0 (realtime pacing)
         self.received = self.late = 0
         self.recent: deque[Reading] = deque(maxlen=min(MAX_READINGS, config.resend + 1))
         self.last_send = time.monotonic()
@@ -137,15 +140,24 @@ class _Flight:
                     if self.finished:
                         continue
                     step = c.left_ns // PHYSICS_STEP_NS
-                    if step < self.step:
+                    now = self.arrival_step()
+                    if step < now:
                         self.late += 1
-                        self.log.write(f"command {c.seq} (left at {c.left_ns} ns) applied late, at step {self.step}")
-                        step = self.step
+                        self.log.write(f"command {c.seq} (left at {c.left_ns} ns) applied late, at step {now}")
+                        step = now
                     self.hold.schedule(step, c.pwm)
             elif isinstance(body, Bye):
                 self.peer_bye = body
                 raise PeerEnded(f"the chip said bye ({body.reason.name.lower()})")
         return bool(got)
+
+    def arrival_step(self) -> int:
+        """The first physics step a command arriving now can act on: realtime, the step the wall
+        clock is in (within the period being waited for); fast, the period's first step."""
+        if self.config.pace == "fast":
+            return self.first_step
+        wall = int((time.monotonic() - self.start) * NS_PER_S) // PHYSICS_STEP_NS
+        return min(max(wall, self.first_step), self.last_step)
 
     def check_peer(self) -> None:
         silent = self.link.silent_for(time.monotonic())
@@ -157,12 +169,15 @@ class _Flight:
             self.link.send_data(SensorBatch(now_ns, tuple(self.recent)))
             self.last_send = time.monotonic()
 
-    def wait_for_step(self, end_ns: int, start: float) -> float:
-        """Wait until the step ending at ``end_ns`` may be taken; the real-time lag then [s]."""
+    def wait_for_period(self, first_step: int, steps: int) -> float:
+        """Wait until the physics steps ``first_step ...`` of a sample period may be taken (their
+        commands are known); the real-time lag then [s]."""
+        self.first_step, self.last_step = first_step, first_step + steps - 1
+        end_ns = (first_step + steps) * PHYSICS_STEP_NS
         while True:
             now = time.monotonic()
             if self.config.pace == "realtime":
-                remaining = start + end_ns / NS_PER_S - now
+                remaining = self.start + end_ns / NS_PER_S - now
                 if remaining <= 0:
                     self.take(0.0)
                     self.check_peer()
@@ -173,7 +188,7 @@ class _Flight:
                     return 0.0
                 timeout = self.config.heartbeat_s
             self.take(timeout)
-            self.heartbeat(end_ns - PHYSICS_STEP_NS)
+            self.heartbeat(first_step * PHYSICS_STEP_NS)
             self.check_peer()
 
 
@@ -256,17 +271,16 @@ def serve_physics(
         flight = _Flight(link, config, ActuatorHold(config.hold, quad.pwm), log)
         steps = world.sensor_steps
         rest = vehicle.rest_height
-        start = time.monotonic()
+        start = flight.start = time.monotonic()
         for k in range(samples):
             t_ns = k * period_ns
             sample = quad.sensors()
             setpoint = setpoint_at(scenario.flight, rest, sample.time)
             row = flight_row(sample, quad.truth(), UNKNOWN_ESTIMATE, setpoint, quad.pwm, world.wind.velocity)
             flight.send(t_ns, [Reading(k, t_ns, sensor_packet(row, k, period_ns // 1000))])
+            max_lag = max(max_lag, flight.wait_for_period(k * steps, steps))
             for s in range(steps):
-                flight.step = k * steps + s
-                max_lag = max(max_lag, flight.wait_for_step(t_ns + (s + 1) * PHYSICS_STEP_NS, start))
-                quad.apply_pwm(flight.hold.at(flight.step))
+                quad.apply_pwm(flight.hold.at(k * steps + s))
                 if s == 0:
                     row[PWM_COLUMNS] = quad.pwm
                     rows[k] = row

@@ -259,8 +259,8 @@ class FirmwareRun:
         self._periods.append(_delta(self._previous, current))
         self._previous = current
         for xy in self.tiles:
-            log = images.read_job_log(self.chip, xy)
-            count = log.lost + len(log.records)
+            log = images.read_job_log(self.chip, xy, since=self._seen[xy])
+            count = log.first + len(log.records)
             fresh = count - self._seen[xy]
             if fresh > len(log.records):
                 raise RuntimeError(f"tile {xy}: the job log overflowed between two samples")
