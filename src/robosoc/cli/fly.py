@@ -9,7 +9,7 @@ from typing import Annotated
 
 import typer
 
-from robosoc.cli import exit_codes, files, options
+from robosoc.cli import exit_codes, files, link_options, options
 from robosoc.cli.app import app
 from robosoc.cli.console import make_console, note, plain
 from robosoc.cli.errors import CliError
@@ -81,6 +81,20 @@ def fly_command(
     video: Video = None,
     arith: Arith = None,
     mul: Mul = None,
+    # --- decoupled mode (robosoc.cli.fly_decoupled, docs/decoupled.md) ---
+    decoupled: Annotated[
+        bool,
+        typer.Option(
+            "--decoupled",
+            help="The physics and the chip as two processes over UDP on loopback (exit code 5 if a side goes silent).",
+        ),
+    ] = False,
+    pace: link_options.Pace = "realtime",
+    hold: link_options.Hold = "zoh",
+    faults: link_options.Faults = None,
+    resend: link_options.Resend = 2,
+    peer_timeout: link_options.PeerTimeout = 5.0,
+    bind: link_options.Bind = None,
 ) -> None:
     """Fly the scenario (default: take off to 1 m, hover, 10° roll/pitch/yaw steps, a gust; 10 s)."""
     from rich.markup import escape
@@ -97,6 +111,22 @@ def fly_command(
     from robosoc.cosim.lockstep import fly_lockstep
 
     console = make_console()
+    # --- decoupled mode: its options, and the chip controller it implies ---
+    from robosoc.cli.fly_decoupled import LINK_OPTIONS
+
+    for option, name in LINK_OPTIONS.items():
+        if options.given(ctx, name) and not decoupled:
+            raise options.fail(option, "only with --decoupled")
+    if decoupled:
+        if options.given(ctx, "controller") and controller != "chip":
+            raise options.fail(
+                "--decoupled", "the decoupled mode flies the firmware on the chip (drop --controller host)"
+            )
+        if video is not None:
+            raise options.fail("--video", "not with --decoupled (the physics runs in another process)")
+        controller = "chip"
+        link = link_options.link_config(pace, hold, faults, resend, peer_timeout)
+    # --- end of the decoupled mode's checks ---
     fw = _firmware(ctx, controller, arith, mul)
     options.exclusive(out=out is not None, no_out=no_out)
     sources: list[tuple[str, tuple[str, ...]]] = []
@@ -125,6 +155,12 @@ def fly_command(
         out = Path("runs") / f"fly-{config.name}-s{seed}"
     if out is not None:
         out = files.output_dir(out, "--out", inputs=[scenario] if scenario else ())
+    if decoupled:  # --- decoupled mode ---
+        from robosoc.cli.fly_decoupled import fly_decoupled_run
+
+        assert fw is not None
+        fly_decoupled_run(console, config, craft, fw, seed, out, link, bind)
+        return
     if video is not None:
         if video.suffix.lower() == ".mp4":
             video = files.output_file(video, "--video", inputs=[scenario] if scenario else ())

@@ -56,7 +56,8 @@ class LinkFaults:
         exclusive = self.loss + self.duplicate + self.reorder + self.truncate
         if exclusive > 1.0 + 1e-12:
             raise ValueError(
-                f"loss: loss + duplicate + reorder + truncate must be at most 1 (one fault per datagram), got {exclusive:g}"
+                "loss: loss + duplicate + reorder + truncate must be at most 1 (one fault per datagram), "
+                f"got {exclusive:g}"
             )
 
     @property
@@ -81,7 +82,9 @@ def parse_faults(text: str) -> LinkFaults:
         name, eq, number = item.strip().partition("=")
         name = name.strip()
         if not eq or name not in FAULT_NAMES:
-            raise ValueError(f"expected NAME=RATE[,NAME=RATE...] with NAME one of {', '.join(FAULT_NAMES)}, got {text!r}")
+            raise ValueError(
+                f"expected NAME=RATE[,NAME=RATE...] with NAME one of {', '.join(FAULT_NAMES)}, got {text!r}"
+            )
         if name in values:
             raise ValueError(f"{name} given twice in {text!r}")
         try:
@@ -118,7 +121,8 @@ class LinkConfig:
             raise ValueError(f"heartbeat_s: must be between 0.001 and 1 s, got {self.heartbeat_s!r}")
         if self.heartbeat_s >= self.peer_timeout_s:
             raise ValueError(
-                f"heartbeat_s: must be shorter than peer_timeout_s ({self.peer_timeout_s:g} s), got {self.heartbeat_s:g}"
+                f"heartbeat_s: must be shorter than peer_timeout_s ({self.peer_timeout_s:g} s), "
+                f"got {self.heartbeat_s:g}"
             )
         if isinstance(self.resend, bool) or not isinstance(self.resend, int) or not 0 <= self.resend <= MAX_RESEND:
             raise ValueError(f"resend: must be between 0 and {MAX_RESEND}, got {self.resend!r}")

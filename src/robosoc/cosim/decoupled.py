@@ -13,6 +13,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import json
 import multiprocessing
 import os
@@ -120,10 +121,8 @@ def _interrupt_once() -> None:
 
 
 def _send(conn: Connection, *message: object) -> None:
-    try:
+    with contextlib.suppress(OSError, EOFError):  # the parent has gone: the side goes on and writes its files
         conn.send(message)
-    except (OSError, EOFError):  # the parent has gone: the side goes on and writes its files
-        pass
 
 
 def _physics_process(conn: Connection, args: tuple) -> None:
@@ -210,10 +209,8 @@ class _Side:
 
     def interrupt(self) -> None:
         if self.process.is_alive() and self.process.pid is not None:
-            try:
+            with contextlib.suppress(ProcessLookupError):
                 os.kill(self.process.pid, signal.SIGINT)
-            except ProcessLookupError:
-                pass
 
 
 def fly_decoupled(
@@ -253,9 +250,7 @@ def fly_decoupled(
         physics = _Side("physics", ctx, _physics_process, ((scenario, vehicle, seed, config, bind, out),))
         sides.append(physics)
         address = _await_listening(physics, config.connect_timeout_s, say)
-        chip_side = _Side(
-            "chip", ctx, _chip_process, ((scenario, vehicle, fw, seed, config, address, None, out), chip)
-        )
+        chip_side = _Side("chip", ctx, _chip_process, ((scenario, vehicle, fw, seed, config, address, None, out), chip))
         sides.append(chip_side)
         _collect(sides, say, on_progress, deadline=None)
     except KeyboardInterrupt:
@@ -325,7 +320,9 @@ def _await_listening(side: _Side, timeout_s: float, say: Callable[[str], None]) 
     raise SideFailed(side.name, "internal", f"not listening after {timeout_s:g} s")
 
 
-def _collect(sides: list[_Side], say: Callable[[str], None], on_progress: Callable | None, deadline: float | None) -> None:
+def _collect(
+    sides: list[_Side], say: Callable[[str], None], on_progress: Callable | None, deadline: float | None
+) -> None:
     """Take the sides' messages until each has finished (or ``deadline``)."""
     while not all(s.finished for s in sides):
         if deadline is not None and time.monotonic() > deadline:

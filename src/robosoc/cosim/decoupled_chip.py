@@ -25,6 +25,7 @@ the sample period they were released in (:meth:`FirmwareRun.close_period` at eac
 
 from __future__ import annotations
 
+import contextlib
 import math
 import time
 from collections import deque
@@ -248,7 +249,9 @@ def serve_chip(
             link.send_control(hello)
             state.take(config.heartbeat_s)
             if time.monotonic() > deadline:
-                raise _PeerSilent(f"no sensor data from the physics at {peer} within --connect-timeout {config.connect_timeout_s:g} s")
+                raise _PeerSilent(
+                    f"no sensor data from the physics at {peer} within --connect-timeout {config.connect_timeout_s:g} s"
+                )
         say("flying")
         start = time.monotonic()
         while True:
@@ -286,10 +289,8 @@ def serve_chip(
             Ended.PEER_LOST: ByeReason.PEER_LOST,
         }.get(ended, ByeReason.ERROR)
         end_ns = state.now_ns() if state is not None else 0
-        try:
+        with contextlib.suppress(KeyboardInterrupt):
             link.send_control(Bye(reason, link.sent, end_ns))
-        except KeyboardInterrupt:
-            pass
         link.close()
         readings = dict(state.counts) if state is not None else {}
         if state is not None:

@@ -162,7 +162,9 @@ class _Flight:
     def check_peer(self) -> None:
         silent = self.link.silent_for(time.monotonic())
         if silent > self.config.peer_timeout_s:
-            raise PeerSilent(f"no datagram from the chip for {silent:.1f} s (--peer-timeout {self.config.peer_timeout_s:g})")
+            raise PeerSilent(
+                f"no datagram from the chip for {silent:.1f} s (--peer-timeout {self.config.peer_timeout_s:g})"
+            )
 
     def heartbeat(self, now_ns: int) -> None:
         if time.monotonic() - self.last_send >= self.config.heartbeat_s and self.recent:
@@ -324,7 +326,11 @@ def serve_physics(
             message=message,
             host_s=host_s,
             link={
-                "to_chip": {"sent": link.sent, "injected": dict(link.injector.injected), "send_errors": link.send_errors},
+                "to_chip": {
+                    "sent": link.sent,
+                    "injected": dict(link.injector.injected),
+                    "send_errors": link.send_errors,
+                },
                 "from_chip": counts,
                 "foreign": link.foreign,
                 "receive_errors": link.receive_errors,

@@ -92,7 +92,10 @@ def chip_part(result: ReplayResult, fw: FirmwareConfig, chip: ChipConfig) -> dic
             "exec_cycles_mean": _mean([j.exec_cycles for j in jobs]),
             "exec_cycles_max": max(j.exec_cycles for j in jobs),
             "energy_nj_mean": _mean([j.energy_total_pj / 1000 for j in jobs]),
-            **{f"energy_nj_{part}_mean": _mean([j.energy_pj[part] / 1000 for j in jobs]) for part in ("task", "kernel", "idle", "noc")},
+            **{
+                f"energy_nj_{part}_mean": _mean([j.energy_pj[part] / 1000 for j in jobs])
+                for part in ("task", "kernel", "idle", "noc")
+            },
             "deadline_misses": sum(not j.deadline_met for j in jobs),
         }
     tiles = {f"{x},{y}": result.energy_pj[f"tile {(x, y)}"] / 1e6 for (x, y) in result.counters}

@@ -174,7 +174,9 @@ class UdpLink:
         except OSError as exc:
             self.sock.close()
             if exc.errno == errno.EADDRINUSE:
-                raise LinkError(f"{bind}: the address is in use (another robosoc serve, or pick another port)") from None
+                raise LinkError(
+                    f"{bind}: the address is in use (another robosoc serve, or pick another port)"
+                ) from None
             if exc.errno == errno.EADDRNOTAVAIL:
                 raise LinkError(f"{bind}: not an address of this machine") from None
             if exc.errno == errno.EACCES:

@@ -21,7 +21,7 @@ import numpy as np
 from robosoc.config.link import LinkFaults
 from robosoc.cosim.datagram import MAGIC
 
-__all__ = ["FaultInjector", "INJECTED_NAMES"]
+__all__ = ["INJECTED_NAMES", "FaultInjector"]
 
 INJECTED_NAMES = ("lost", "duplicated", "reordered", "truncated", "garbage")
 GARBAGE_MAX_BYTES = 64
