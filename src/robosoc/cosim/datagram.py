@@ -9,7 +9,7 @@ Every datagram is a 20-byte header and a payload, little-endian::
     6      2     flags (0)
     8      4     sequence number (data datagrams: 0, 1, 2 ... per sender; hello and bye: 0)
     12     4     payload length in bytes
-    16     4     CRC-32 of the payload (zlib.crc32)
+    16     4     CRC-32 (zlib.crc32) of the header, with this field 0, and the payload
     20     ...   payload
 
 Payloads:
@@ -201,8 +201,9 @@ def encode(body: Body, seq: int = 0) -> bytes:
         ValueError / struct.error: a field does not fit its layout (a bug of the caller).
     """
     payload = _payload(body)
-    header = HEADER.pack(MAGIC, VERSION, KIND_OF[type(body)], 0, seq, len(payload), zlib.crc32(payload))
-    return header + payload
+    fields = (MAGIC, VERSION, KIND_OF[type(body)], 0, seq, len(payload))
+    crc = zlib.crc32(HEADER.pack(*fields, 0) + payload)
+    return HEADER.pack(*fields, crc) + payload
 
 
 def _parse(kind: Kind, payload: bytes) -> Body | str:
@@ -254,7 +255,7 @@ def decode(data: bytes) -> Datagram | Rejected:
         return Rejected(Rejection.BAD_MAGIC, f"starts with {bytes(data[:8]).hex()}", size)
     if size < HEADER_BYTES:
         return Rejected(Rejection.TRUNCATED, f"{size} bytes, shorter than the {HEADER_BYTES}-byte header", size)
-    _, version, kind, _flags, seq, length, crc = HEADER.unpack_from(data)
+    _, version, kind, flags, seq, length, crc = HEADER.unpack_from(data)
     if version != VERSION:
         return Rejected(Rejection.BAD_VERSION, f"version {version}, expected {VERSION}", size)
     if kind not in Kind._value2member_map_:
@@ -264,8 +265,9 @@ def decode(data: bytes) -> Datagram | Rejected:
     if size > HEADER_BYTES + length:
         return Rejected(Rejection.BAD_LENGTH, f"{size - HEADER_BYTES} payload bytes, the header says {length}", size)
     payload = bytes(data[HEADER_BYTES:])
-    if zlib.crc32(payload) != crc:
-        return Rejected(Rejection.BAD_CHECKSUM, f"CRC-32 {zlib.crc32(payload):08x}, the header says {crc:08x}", size)
+    actual = zlib.crc32(HEADER.pack(MAGIC, version, kind, flags, seq, length, 0) + payload)
+    if actual != crc:
+        return Rejected(Rejection.BAD_CHECKSUM, f"CRC-32 {actual:08x}, the header says {crc:08x}", size)
     body = _parse(Kind(kind), payload)
     if isinstance(body, str):
         return Rejected(Rejection.BAD_PAYLOAD, body, size)

@@ -268,6 +268,11 @@ class UdpLink:
         if result.kind in (Kind.HELLO, Kind.BYE):
             if isinstance(result.body, Bye):
                 self.counts.announced = result.body.data_sent
+                tail = result.body.data_sent - self.counts.highest - 1
+                if tail > 0:
+                    self.log.write(
+                        f"lost {tail} datagram(s) at the end: #{self.counts.highest + 1}..#{result.body.data_sent - 1}"
+                    )
             self.log.write(f"received {_describe(result.body)}")
             return result
         arrival, gap = self.counts.arrive(result.seq)
