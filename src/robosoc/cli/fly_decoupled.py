@@ -121,6 +121,11 @@ def fly_decoupled_run(
             f"commands applied {c.get('received', 0)} (late {c.get('late', 0)}, missed {c.get('missed', 0)}); "
             f"real-time factor {summary['real_time_factor'] or 0:.2f}"
         )
+    if "cpu_s" in flight.physics and "cpu_s" in flight.chip:
+        console.print(
+            f"CPU time while flying: physics {flight.physics['cpu_s']:.1f} s, chip {flight.chip['cpu_s']:.1f} s "
+            f"(real time needs each below the flight's {summary['simulated_s']:g} s, on a core of its own)"
+        )
     print_link_counts(console, {"to chip": lk["to_chip"], "to physics": lk["to_physics"]})
     if out is not None:
         rows_path = out / "flight.csv"

@@ -60,6 +60,7 @@ class ChipOutcome:
     ended: str
     message: str
     host_s: float
+    cpu_s: float
     simulated_s: float
     link: dict[str, object] = field(default_factory=dict)
     readings: dict[str, int] = field(default_factory=dict)
@@ -232,6 +233,7 @@ def serve_chip(
         log.close()
         raise
     start = time.monotonic()
+    cpu_start = time.process_time()
     state: _Chip | None = None
     run: FirmwareRun | None = None
     result: ReplayResult | None = None
@@ -254,6 +256,7 @@ def serve_chip(
                 )
         say("flying")
         start = time.monotonic()
+        cpu_start = time.process_time()
         while True:
             state.take(0.0)
             if state.peer_bye is not None and state.peer_bye.reason is not ByeReason.DONE:
@@ -276,6 +279,7 @@ def serve_chip(
         ended, message = Ended.FAILED, f"the firmware failed on the chip: {exc}"
     finally:
         host_s = time.monotonic() - start
+        cpu_s = time.process_time() - cpu_start
         log.write(f"ended: {ended}: {message}")
         try:
             if run is not None and run.samples:
@@ -301,6 +305,7 @@ def serve_chip(
             ended=ended,
             message=message,
             host_s=host_s,
+            cpu_s=cpu_s,
             simulated_s=end_ns / NS_PER_S,
             link={
                 "to_physics": {

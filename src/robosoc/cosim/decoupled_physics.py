@@ -77,6 +77,7 @@ class PhysicsOutcome:
     ended: str
     message: str
     host_s: float
+    cpu_s: float
     link: dict[str, object] = field(default_factory=dict)
     commands: dict[str, int] = field(default_factory=dict)
     max_lag_s: float = 0.0
@@ -258,6 +259,7 @@ def serve_physics(
     done = 0
     flight: _Flight | None = None
     start = time.monotonic()
+    cpu_start = time.process_time()
     ended, message = Ended.DONE, "flown"
     max_lag = 0.0
     try:
@@ -274,6 +276,7 @@ def serve_physics(
         steps = world.sensor_steps
         rest = vehicle.rest_height
         start = flight.start = time.monotonic()
+        cpu_start = time.process_time()
         for k in range(samples):
             t_ns = k * period_ns
             sample = quad.sensors()
@@ -302,6 +305,7 @@ def serve_physics(
         ended, message = Ended.MISMATCH, str(exc)
     finally:
         host_s = time.monotonic() - start
+        cpu_s = time.process_time() - cpu_start
         reason = {Ended.DONE: ByeReason.DONE, Ended.INTERRUPTED: ByeReason.INTERRUPTED}.get(ended, ByeReason.ERROR)
         if ended == Ended.PEER_LOST:
             reason = ByeReason.PEER_LOST
@@ -325,6 +329,7 @@ def serve_physics(
             ended=ended,
             message=message,
             host_s=host_s,
+            cpu_s=cpu_s,
             link={
                 "to_chip": {
                     "sent": link.sent,
