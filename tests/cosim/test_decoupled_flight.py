@@ -19,14 +19,19 @@ import time
 from pathlib import Path
 
 import numpy as np
+import pytest
 from typer.testing import CliRunner
 
 from robosoc.cli import app, exit_codes
+from robosoc.config.chip import ChipConfig
+from robosoc.config.firmware import FirmwareConfig
+from robosoc.config.link import LinkConfig
 from robosoc.config.scenario import FlightPlan, ScenarioConfig
 from robosoc.config.vehicle import vehicle_preset
 from robosoc.control.flight import ROW_FIELDS
 from robosoc.control.flight_log import read_flight_log
 from robosoc.cosim.datagram import Hello, Reading, SensorBatch
+from robosoc.cosim.decoupled import SideFailed, fly_decoupled
 from robosoc.cosim.decoupled_physics import sample_period_ns, scenario_digest
 from robosoc.cosim.link import Address, UdpLink
 from robosoc.cosim.lockstep import fly_chip
@@ -200,3 +205,16 @@ def test_addresses_in_use_and_bad_addresses_are_usage_errors(tmp_path: Path) -> 
         assert result.exit_code == exit_codes.USAGE, (args, result.output)
         assert message in result.output and "Traceback" not in result.output, (args, result.output)
     taken.close()
+
+
+def test_a_side_that_fails_to_start_stops_the_other(tmp_path: Path) -> None:
+    """The chip side cannot load its firmware (its tile is powered off): the physics side, waiting
+    for a hello that will never come, is interrupted instead of waiting out --connect-timeout."""
+    config = ScenarioConfig(duration_s=0.5)
+    chip = ChipConfig(width=2, height=2, io_tile=(0, 0), powered_off=((0, 1),))  # the estimator's tile
+    with pytest.raises(SideFailed, match="ekf_tile: \\[0, 1\\] is powered off") as failure:
+        fly_decoupled(config, vehicle_preset(config.vehicle), FirmwareConfig(), 1, LinkConfig(), tmp_path, chip=chip)
+    assert failure.value.side == "chip"
+    physics = json.loads((tmp_path / "physics.json").read_text())
+    assert physics["ended"] == "interrupted" and physics["rows"] == 0
+    assert json.loads((tmp_path / "summary.json").read_text())["complete"] is False

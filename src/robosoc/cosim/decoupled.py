@@ -323,7 +323,9 @@ def _await_listening(side: _Side, timeout_s: float, say: Callable[[str], None]) 
 def _collect(
     sides: list[_Side], say: Callable[[str], None], on_progress: Callable | None, deadline: float | None
 ) -> None:
-    """Take the sides' messages until each has finished (or ``deadline``)."""
+    """Take the sides' messages until each has finished (or ``deadline``); a side that failed to
+    start or crashed gets the other one interrupted (it would wait for its peer in vain)."""
+    stopped = False
     while not all(s.finished for s in sides):
         if deadline is not None and time.monotonic() > deadline:
             return
@@ -332,3 +334,9 @@ def _collect(
         for side in sides:
             for message in side.receive():
                 _handle(side, message, say, on_progress)
+        failed = any(s.error is not None or (s.finished and s.record is None) for s in sides)
+        if failed and not stopped:
+            stopped = True
+            for side in sides:
+                if not side.finished:
+                    side.interrupt()
