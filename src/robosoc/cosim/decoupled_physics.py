@@ -311,6 +311,9 @@ def serve_physics(
             reason = ByeReason.PEER_LOST
         log.write(f"ended: {ended}: {message}")
         try:
+            if ended == Ended.DONE and flight is not None and flight.recent:
+                # the last readings once more: a reading lost at the very end has no later datagram to ride on
+                link.send_data(SensorBatch(samples * period_ns, tuple(flight.recent)))
             link.send_control(Bye(reason, link.sent, samples * period_ns if ended == Ended.DONE else done * period_ns))
             if ended == Ended.DONE and flight is not None:
                 _await_bye(flight, config)
