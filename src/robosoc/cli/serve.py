@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 
@@ -21,6 +21,10 @@ from robosoc.cli.link_options import DEFAULT_BIND, Bind, ConnectTimeout, Faults,
 from robosoc.cli.link_report import end_of_side, print_link_counts
 from robosoc.config.firmware import ARITH_CHOICES, FirmwareConfig
 from robosoc.config.vehicle import VEHICLE_PRESETS
+
+if TYPE_CHECKING:
+    from robosoc.config.scenario import ScenarioConfig
+    from robosoc.config.vehicle import VehicleConfig
 
 serve_app = typer.Typer(
     cls=RobosocGroup,
@@ -60,7 +64,9 @@ Peer = Annotated[
 ]
 
 
-def resolve_scenario(scenario: Path | None, seconds: float | None, vehicle: str | None):
+def resolve_scenario(
+    scenario: Path | None, seconds: float | None, vehicle: str | None
+) -> tuple[ScenarioConfig, VehicleConfig]:
     """The scenario of the options, as ``robosoc fly`` resolves it (errors name the option or field)."""
     from robosoc.config.scenario import ScenarioConfig
     from robosoc.config.vehicle import vehicle_preset

@@ -29,6 +29,7 @@ import time
 from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
@@ -217,7 +218,7 @@ def serve_physics(
     config: LinkConfig,
     bind: Address,
     *,
-    log_path=None,
+    log_path: Path | None = None,
     on_listen: Callable[[Address], None] | None = None,
     on_start: Callable[[], None] | None = None,
     on_row: Callable[[np.ndarray], None] | None = None,
