@@ -109,6 +109,40 @@ OPTIONS: dict[tuple[str, str], Spec] = {
     ("bench fly", "--duration"): Spec("float", 0.01, 3600.0),
     ("scenario show", "FILE"): Spec("in_file"),
     ("fly", "--foxglove"): Spec("int", 0, 65535),  # 0: any free port (never tried: it would serve a flight)
+    ("fly", "--decoupled"): Spec("flag"),
+    ("fly", "--pace"): Spec("choice", choices=("realtime", "fast")),
+    ("fly", "--hold"): Spec("choice", choices=("zoh", "linear")),
+    ("fly", "--faults"): Spec("faults"),
+    ("fly", "--resend"): Spec("int", 0, 8),
+    ("fly", "--peer-timeout"): Spec("float", 0.05, 3600.0),
+    ("fly", "--bind"): Spec("address"),
+    ("serve physics", "--seconds"): Spec("float", 0.01, 3600.0),
+    ("serve physics", "--seed"): Spec("int", 0, 2**63 - 1),
+    ("serve physics", "--scenario"): Spec("in_file"),
+    ("serve physics", "--vehicle"): Spec("choice", choices=("default", "laser")),
+    ("serve physics", "--out"): Spec("out_dir"),
+    ("serve physics", "--no-out"): Spec("flag"),
+    ("serve physics", "--bind"): Spec("address"),
+    ("serve physics", "--pace"): Spec("choice", choices=("realtime", "fast")),
+    ("serve physics", "--hold"): Spec("choice", choices=("zoh", "linear")),
+    ("serve physics", "--faults"): Spec("faults"),
+    ("serve physics", "--resend"): Spec("int", 0, 8),
+    ("serve physics", "--peer-timeout"): Spec("float", 0.05, 3600.0),
+    ("serve physics", "--connect-timeout"): Spec("float", 0.05, 3600.0),
+    ("serve chip", "--seconds"): Spec("float", 0.01, 3600.0),
+    ("serve chip", "--seed"): Spec("int", 0, 2**63 - 1),
+    ("serve chip", "--scenario"): Spec("in_file"),
+    ("serve chip", "--vehicle"): Spec("choice", choices=("default", "laser")),
+    ("serve chip", "--arith"): Spec("choice", choices=("float", "fixed")),
+    ("serve chip", "--mul"): Spec("flag"),
+    ("serve chip", "--peer"): Spec("address"),
+    ("serve chip", "--bind"): Spec("address"),
+    ("serve chip", "--out"): Spec("out_dir"),
+    ("serve chip", "--no-out"): Spec("flag"),
+    ("serve chip", "--faults"): Spec("faults"),
+    ("serve chip", "--resend"): Spec("int", 0, 8),
+    ("serve chip", "--peer-timeout"): Spec("float", 0.05, 3600.0),
+    ("serve chip", "--connect-timeout"): Spec("float", 0.05, 3600.0),
     ("bench core", "--runs"): Spec("int", 1, 1000),
     ("bench core", "--mul"): Spec("flag"),
     ("bench physics", "--seconds"): Spec("float", 0.001, 3600.0),
@@ -160,6 +194,17 @@ BAD_VALUES: dict[str, list[str]] = {
     "dask": ["", "nowhere", "tcp://", "tcp://host:0", "host:99999", "ftp://host:80", ":8786"],
     "define": ["", "-x", "A B=1", "=1", "1X", "A-B"],
     "flag": ["=1"],
+    "address": ["", "nohost", "127.0.0.1:99999", "127.0.0.1:abc", ":5600", "::1:5600", "a b:5600"],
+    "faults": [
+        "",
+        "loss",
+        "loss=2",
+        "loss=-0.1",
+        "loss=nan",
+        "nope=0.1",
+        "loss=0.6,duplicate=0.6",
+        "loss=0.1,loss=0.2",
+    ],
     "in_file": ["\0missing", "\0dir", "\0binary", "\0under_file"],
     "in_dir": ["\0missing", "\0file"],
     "out_file": ["\0dir", "\0read_only", "\0under_file"],
@@ -196,6 +241,12 @@ def base_command(command: str, option: str, elves: dict[str, Path], tmp: Path) -
         return ["fly", *length, *([] if option in ("--out", "--no-out") else ["--no-out"])]
     if command == "bench fly":
         return ["bench", "fly", *([] if option == "--duration" else ["--duration", "0.01"]), "--arith", "fixed"]
+    if command.startswith("serve "):  # a bad value let through would wait 0.5 s for the peer and exit with 5
+        base = {"--seconds": "0.01", "--connect-timeout": "0.5", "--bind": "127.0.0.1:0"}
+        if command == "serve chip":
+            base["--peer"] = "127.0.0.1:9"
+        args = command.split() + [w for name, v in base.items() if name != option for w in (name, v)]
+        return args + ([] if option in ("--out", "--no-out") else ["--no-out"])
     return {
         "bench core": ["bench", "core", "--runs", "1"],
         "bench physics": ["bench", "physics", "--seconds", "0.01", "--runs", "1"],
@@ -316,6 +367,12 @@ def bad_text(spec: Spec) -> st.SearchStrategy[str]:
     if spec.kind == "dask":  # anything but 'local' or scheme://host:port with a port in 1..65535
         far = st.integers(min_value=65536, max_value=10**12)
         return st.one_of(words.filter(lambda v: v != "local"), special, far.map(lambda p: f"tcp://host:{p}"))
+    if spec.kind == "address":
+        far = st.integers(min_value=65536, max_value=10**12).map(lambda p: f"127.0.0.1:{p}")
+        return st.one_of(words, special, far)
+    if spec.kind == "faults":
+        rate = st.one_of(st.floats(max_value=0.0, exclude_max=True), st.floats(min_value=1.0, exclude_min=True))
+        return st.one_of(words, special, rate.map(lambda r: f"loss={r!r}"))
     # files: a bad path, or a binary file (not UTF-8; for ELF files: with or without the ELF magic)
     paths = st.sampled_from(BAD_VALUES[spec.kind])
     if spec.kind != "in_file":

@@ -14,6 +14,10 @@ SIMULATOR_STOP = 3
 #: ``robosoc run --exit-code status``: the program exited with a non-zero exit code (printed on
 #: stderr and kept in the stats file).
 PROGRAM_FAILED = 4
+#: ``robosoc serve physics|chip``, ``robosoc fly --decoupled``: the other side went silent for
+#: ``--peer-timeout`` (or never answered within ``--connect-timeout``) or ended early; what was
+#: done so far is written.
+PEER_LOST = 5
 #: Interrupted (Ctrl-C); whatever was written so far is kept.
 INTERRUPTED = 130
 #: The reader of the output went away (``robosoc ... | head``), as a shell reports SIGPIPE.
@@ -29,6 +33,12 @@ FLY_EPILOG = (
     "Exit codes: 0 success, 1 internal error (a bug: please report it), 2 usage or input error, "
     "3 the firmware failed on the chip, 130 interrupted; after 3 and 130 the run folder keeps the flight so far "
     "(flight.csv, and summary.json with complete false)."
+)
+
+SERVE_EPILOG = (
+    "Exit codes: 0 success, 1 internal error (a bug: please report it), 2 usage or input error "
+    "(also: the address is in use, the firmware faulted), 5 the other side went silent for --peer-timeout, "
+    "never answered within --connect-timeout, or ended early, 130 interrupted."
 )
 
 RUN_EPILOG = (
@@ -48,8 +58,10 @@ __all__ = [
     "INTERNAL_ERROR",
     "INTERRUPTED",
     "OK",
+    "PEER_LOST",
     "PROGRAM_FAILED",
     "RUN_EPILOG",
+    "SERVE_EPILOG",
     "SIMULATOR_STOP",
     "USAGE",
 ]

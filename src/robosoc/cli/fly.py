@@ -11,7 +11,7 @@ from typing import Annotated, Any
 
 import typer
 
-from robosoc.cli import exit_codes, files, options
+from robosoc.cli import exit_codes, files, link_options, options
 from robosoc.cli.app import app
 from robosoc.cli.console import make_console, note, plain
 from robosoc.cli.errors import CliError
@@ -113,6 +113,20 @@ def fly_command(
     arith: Arith = None,
     mul: Mul = None,
     foxglove: Foxglove = None,
+    # --- decoupled mode (robosoc.cli.fly_decoupled, docs/decoupled.md) ---
+    decoupled: Annotated[
+        bool,
+        typer.Option(
+            "--decoupled",
+            help="The physics and the chip as two processes over UDP on loopback (exit code 5 if a side goes silent).",
+        ),
+    ] = False,
+    pace: link_options.Pace = "realtime",
+    hold: link_options.Hold = "zoh",
+    faults: link_options.Faults = None,
+    resend: link_options.Resend = 2,
+    peer_timeout: link_options.PeerTimeout = 5.0,
+    bind: link_options.Bind = None,
 ) -> None:
     """Fly a scenario: by default the firmware (fixed point, multiplier) on the seed's 2x2 chip in
     lockstep with the physics: take off to 1 m, hover, 10° roll/pitch/yaw steps, a gust; 10 s."""
@@ -123,6 +137,24 @@ def fly_command(
     from robosoc.cosim.flight_session import fly_scenario
 
     console = make_console()
+    # --- decoupled mode: its options, and the chip controller it implies ---
+    from robosoc.cli.fly_decoupled import LINK_OPTIONS
+
+    for option, name in LINK_OPTIONS.items():
+        if options.given(ctx, name) and not decoupled:
+            raise options.fail(option, "only with --decoupled")
+    if decoupled:
+        if controller is not None and controller != "chip":
+            raise options.fail(
+                "--decoupled", "the decoupled mode flies the firmware on the chip (drop --controller host)"
+            )
+        if video is not None:
+            raise options.fail("--video", "not with --decoupled (the physics runs in another process)")
+        if foxglove is not None:
+            raise options.fail("--foxglove", "not with --decoupled (the physics runs in another process)")
+        controller = "chip"
+        link = link_options.link_config(pace, hold, faults, resend, peer_timeout)
+    # --- end of the decoupled mode's checks ---
     options.exclusive(scenario=scenario is not None, scenario_file=scenario_file is not None)
     options.exclusive(duration=duration is not None, seconds=seconds is not None)
     options.exclusive(out=out is not None, no_out=no_out)
@@ -170,6 +202,16 @@ def fly_command(
         out = Path("runs") / f"fly-{config.name}-s{config.seed}"
     if out is not None:
         out = files.output_dir(out, "--out", inputs=inputs)
+    if decoupled:  # --- decoupled mode ---
+        from robosoc.cli.fly_decoupled import fly_decoupled_run
+        from robosoc.config.vehicle import vehicle_preset
+
+        if config.vehicles != 1:
+            raise options.fail("--decoupled", f"flies one vehicle, the scenario has {config.vehicles}")
+        fly_decoupled_run(
+            console, config, vehicle_preset(config.vehicle), config.firmware, config.seed, out, link, bind
+        )
+        return
     if video is not None:
         if video.suffix.lower() == ".mp4":
             video = files.output_file(video, "--video", inputs=inputs)

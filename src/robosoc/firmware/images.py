@@ -108,6 +108,8 @@ class JobLog:
     #: records overwritten in the ring before they were read (``count - capacity`` when positive)
     lost: int
     tick_cycles: int
+    #: number (0, 1, 2 ... since boot) of ``records[0]``: ``first + len(records)`` jobs were logged
+    first: int = 0
 
 
 def _memory(chip: MPSoC, xy: tuple[int, int], symbol: str, size: int) -> bytes:
@@ -122,22 +124,24 @@ def _memory(chip: MPSoC, xy: tuple[int, int], symbol: str, size: int) -> bytes:
     return chip.cores.read(addr, size, tile=t)
 
 
-def read_job_log(chip: MPSoC, xy: tuple[int, int]) -> JobLog:
-    """The job records of tile ``xy``, oldest first (the ring keeps the last ``capacity``)."""
+def read_job_log(chip: MPSoC, xy: tuple[int, int], since: int = 0) -> JobLog:
+    """The job records of tile ``xy``, oldest first (the ring keeps the last ``capacity``); only
+    those numbered ``since`` or later (a reader that has seen ``since`` records parses no more)."""
     magic, capacity, count, tick = _LOG_HEADER.unpack(_memory(chip, xy, JOB_LOG_SYMBOL, _LOG_HEADER.size))
     if magic != JOBLOG_MAGIC:
         raise ValueError(f"tile {xy}: the job log is not initialised (os_start has not run)")
     raw = _memory(chip, xy, JOB_LOG_SYMBOL, _LOG_HEADER.size + capacity * _RECORD.size)
     kept = min(count, capacity)
     records = []
-    for i in range(count - kept, count):
+    first = max(count - kept, min(since, count))
+    for i in range(first, count):
         off = _LOG_HEADER.size + (i % capacity) * _RECORD.size
         task, flags, job, release, deadline, start, completion, exec_cycles = _RECORD.unpack_from(raw, off)
         records.append(
             JobRecord(task, job, release, deadline, start, completion, exec_cycles,
                       bool(flags & JOB_MET), bool(flags & JOB_EVENT), bool(flags & JOB_DEPLETED))
         )  # fmt: skip
-    return JobLog(records, count - kept, tick)
+    return JobLog(records, count - kept, tick, first)
 
 
 def read_new_jobs(chip: MPSoC, xy: tuple[int, int], seen: int) -> tuple[list[JobRecord], int]:

@@ -1,0 +1,141 @@
+"""``robosoc fly --decoupled``: the flight with the physics and the chip in two processes over UDP.
+
+Called from :mod:`robosoc.cli.fly` once the scenario, firmware and run folder are resolved; thin
+over :func:`robosoc.cosim.decoupled.fly_decoupled` (docs/decoupled.md).
+"""
+
+from __future__ import annotations
+
+import math
+import tempfile
+from pathlib import Path
+
+from rich.console import Console
+
+from robosoc.cli import exit_codes, options
+from robosoc.cli.console import note, plain
+from robosoc.cli.errors import CliError
+from robosoc.cli.link_report import end_of_side, print_link_counts
+from robosoc.config.firmware import FirmwareConfig
+from robosoc.config.link import LinkConfig
+from robosoc.config.scenario import ScenarioConfig
+from robosoc.config.vehicle import VehicleConfig
+from robosoc.cosim.link import Address
+
+__all__ = ["LINK_OPTIONS", "fly_decoupled_run"]
+
+#: fly's options that only the decoupled mode takes (option -> parameter name).
+LINK_OPTIONS = {
+    "--pace": "pace",
+    "--hold": "hold",
+    "--faults": "faults",
+    "--resend": "resend",
+    "--peer-timeout": "peer_timeout",
+    "--bind": "bind",
+}
+
+
+def _number(value: float | None, scale: float, unit: str) -> str:
+    return "n/a" if value is None or not math.isfinite(value) else f"{value * scale:.2f} {unit}"
+
+
+def fly_decoupled_run(
+    console: Console,
+    scenario: ScenarioConfig,
+    vehicle: VehicleConfig,
+    fw: FirmwareConfig,
+    seed: int,
+    out: Path | None,
+    link: LinkConfig,
+    bind: Address | None,
+) -> None:
+    """Fly, print the flight figures and the datagram counts, write the run folder (or a temporary one)."""
+    from rich.markup import escape
+    from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
+
+    from robosoc.control.flight_log import read_flight_log
+    from robosoc.control.flight_plot import plot_flight
+    from robosoc.cosim.decoupled import SideFailed, fly_decoupled
+
+    samples = round(scenario.duration_s * scenario.sensors.rate_hz)
+    console.print(
+        f"flying scenario [bold]{escape(scenario.name)}[/bold] for {scenario.duration_s:g} s, "
+        f"vehicle {scenario.vehicle}, "
+        f"controller chip ({fw.label}, decoupled: two processes over UDP, pace {link.pace}, hold {link.hold}, "
+        f"resend {link.resend}), seed {seed}"
+    )
+    if link.faults.any:
+        console.print(
+            "injected faults per datagram, each direction: "
+            + ", ".join(f"{k} {v:g}" for k, v in link.faults.as_dict().items() if v)
+        )
+    temporary = tempfile.TemporaryDirectory(prefix="robosoc-decoupled-") if out is None else None
+    folder = out if out is not None else Path(temporary.name)  # type: ignore[union-attr]
+    progress = Progress(
+        TextColumn("flight"),
+        BarColumn(),
+        TextColumn("{task.percentage:>3.0f}%"),
+        TimeRemainingColumn(),
+        console=console,
+        transient=True,
+    )
+    task = progress.add_task("fly", total=samples)
+    try:
+        with progress:
+            flight = fly_decoupled(
+                scenario, vehicle, fw, seed, link, folder, bind=bind,
+                on_status=lambda text: progress.console.print(escape(text), style="dim"),
+                on_progress=lambda done, total: progress.update(task, completed=done),
+            )  # fmt: skip
+    except SideFailed as exc:
+        if temporary is not None:
+            temporary.cleanup()
+        if exc.kind == "link" and exc.side == "physics":
+            raise options.fail("--bind", exc.message) from None
+        if exc.kind == "link":
+            raise CliError(f"chip side: {exc.message}") from None
+        raise CliError(f"the {exc.side} side failed:\n{exc.message}", code=exit_codes.INTERNAL_ERROR) from None
+    summary = flight.summary
+    f = summary["flight"]
+    if f:
+        t = f["tracking_rms_deg"]
+        console.print(
+            f"hover height error (RMS, after the climb): {_number(f['hover_rms_m'], 100, 'cm')}  "
+            f"(max {_number(f['hover_max_m'], 100, 'cm')})"
+        )
+        console.print(
+            "attitude tracking error (RMS, 0.5 s after steps excluded): "
+            + ", ".join(f"{axis} {_number(t[axis], 1, 'deg')}" for axis in ("roll", "pitch", "yaw"))
+        )
+    for name, s in (summary.get("tasks") or {}).items():
+        console.print(
+            f"  {name:<9} {s['jobs']} jobs: response mean {s['response_us_mean']:.1f} us, "
+            f"max {s['response_us_max']:.1f} us; "
+            f"deadline misses {s['deadline_misses']}"
+        )
+    lk = summary["link"]
+    r, c = lk.get("readings") or {}, lk.get("commands") or {}
+    if r and c:
+        console.print(
+            f"readings injected {r.get('injected', 0)} (late {r.get('late', 0)}, stale {r.get('stale', 0)}); "
+            f"commands applied {c.get('received', 0)} (late {c.get('late', 0)}, missed {c.get('missed', 0)}); "
+            f"real-time factor {summary['real_time_factor'] or 0:.2f}"
+        )
+    if "cpu_s" in flight.physics and "cpu_s" in flight.chip:
+        console.print(
+            f"CPU time while flying: physics {flight.physics['cpu_s']:.1f} s, chip {flight.chip['cpu_s']:.1f} s "
+            f"(real time needs each below the flight's {summary['simulated_s']:g} s, on a core of its own)"
+        )
+    print_link_counts(console, {"to chip": lk["to_chip"], "to physics": lk["to_physics"]})
+    if out is not None:
+        rows_path = out / "flight.csv"
+        if rows_path.exists():
+            rows = read_flight_log(rows_path)
+            if len(rows):
+                plot_flight(rows, out / "flight.png", title=f"{scenario.name}, seed {seed}, decoupled")
+        plain(console, f"run folder: {out} (flight.csv, jobs.csv, summary.json, link-*.log)")
+    else:
+        temporary.cleanup()  # type: ignore[union-attr]
+    if flight.ended != "done":
+        note(console, f"{flight.message}")
+    end_of_side(flight.ended, flight.message, str(out) if out else "")

@@ -1,0 +1,148 @@
+"""The decoupled mode's command-line options, shared by ``robosoc serve physics|chip`` and
+``robosoc fly --decoupled``, and the :class:`~robosoc.config.link.LinkConfig` they make."""
+
+from __future__ import annotations
+
+from typing import Annotated, Any
+
+import typer
+
+from robosoc.cli import options
+from robosoc.cli.errors import CliError
+from robosoc.config.link import (
+    FAULT_NAMES,
+    HOLD_CHOICES,
+    MAX_RESEND,
+    PACE_CHOICES,
+    LinkConfig,
+    LinkFaults,
+    parse_faults,
+)
+from robosoc.cosim.link import Address, parse_address
+
+__all__ = [
+    "DEFAULT_PORT",
+    "Bind",
+    "ConnectTimeout",
+    "Faults",
+    "Hold",
+    "Pace",
+    "PeerTimeout",
+    "Resend",
+    "address_option",
+    "link_config",
+]
+
+#: Where ``robosoc serve physics`` listens and ``robosoc serve chip`` sends by default.
+DEFAULT_PORT = 47800
+DEFAULT_BIND = f"127.0.0.1:{DEFAULT_PORT}"
+
+
+def address_option(*, any_port: bool) -> Any:
+    """Callback: ``HOST:PORT`` (port 0 allowed with ``any_port``) -> :class:`Address`."""
+
+    def callback(ctx: typer.Context, param: typer.CallbackParam, value: str | None) -> Address | None:
+        if value is None or getattr(ctx, "resilient_parsing", False):
+            return None
+        try:
+            return parse_address(value, any_port=any_port)
+        except ValueError as exc:
+            raise CliError(f"{options.option_name(param)}: {exc}") from None
+
+    return callback
+
+
+def _faults(ctx: typer.Context, param: typer.CallbackParam, value: str | None) -> LinkFaults | None:
+    if value is None or getattr(ctx, "resilient_parsing", False):
+        return None
+    try:
+        return parse_faults(value)
+    except ValueError as exc:
+        raise CliError(f"{options.option_name(param)}: {exc}") from None
+
+
+Pace = Annotated[
+    str,
+    typer.Option(
+        help="realtime: the physics keeps to the wall clock; fast: as fast as the chip allows.",
+        callback=options.choice(*PACE_CHOICES),
+    ),
+]
+Hold = Annotated[
+    str,
+    typer.Option(
+        help="Between actuator commands: zoh holds the newest, linear ramps to each over the command interval.",
+        callback=options.choice(*HOLD_CHOICES),
+    ),
+]
+Faults = Annotated[
+    LinkFaults | None,
+    typer.Option(
+        parser=str,
+        metavar="NAME=RATE,...",
+        help=(
+            "Inject faults on the datagrams sent (by this side; with fly --decoupled by both), "
+            f"rates 0..1 ({', '.join(FAULT_NAMES)}); "
+            "seeded by --seed. Example: loss=0.1,duplicate=0.05,reorder=0.05."
+        ),
+        callback=_faults,
+    ),
+]
+Resend = Annotated[
+    int,
+    typer.Option(
+        help=f"Each datagram repeats this many earlier readings or commands, 0..{MAX_RESEND} (against loss).",
+        callback=options.int_range(0, MAX_RESEND),
+    ),
+]
+PeerTimeout = Annotated[
+    float,
+    typer.Option(
+        help="End (exit code 5) when the other side has been silent this long, 0.05..3600 s.",
+        callback=options.float_range(0.05, 3600.0, unit="s"),
+    ),
+]
+ConnectTimeout = Annotated[
+    float,
+    typer.Option(
+        help="Wait this long for the other side's first datagram, 0.05..3600 s (a fresh chip side compiles first).",
+        callback=options.float_range(0.05, 3600.0, unit="s"),
+    ),
+]
+Bind = Annotated[
+    Address | None,
+    typer.Option(
+        parser=str,
+        metavar="HOST:PORT",
+        help="The address to listen on (port 0: any free port).",
+        callback=address_option(any_port=True),
+    ),
+]
+
+
+def link_config(
+    pace: str = "realtime",
+    hold: str = "zoh",
+    faults: LinkFaults | None = None,
+    resend: int = 2,
+    peer_timeout: float = 5.0,
+    connect_timeout: float = 300.0,
+) -> LinkConfig:
+    """The link configuration of the options (errors name the option)."""
+    try:
+        return LinkConfig(
+            pace=pace,
+            hold=hold,
+            faults=faults or LinkFaults(),
+            resend=resend,
+            peer_timeout_s=peer_timeout,
+            connect_timeout_s=connect_timeout,
+        )
+    except ValueError as exc:
+        field = str(exc).split(":", 1)[0]
+        option = {
+            "peer_timeout_s": "--peer-timeout",
+            "connect_timeout_s": "--connect-timeout",
+            "heartbeat_s": "--peer-timeout",
+        }
+        raise options.fail(option.get(field, f"--{field}"), str(exc).split(": ", 1)[-1]) from None

@@ -1,0 +1,242 @@
+"""``robosoc serve physics`` and ``robosoc serve chip``: the two sides of the decoupled mode.
+
+Thin over :func:`robosoc.cosim.decoupled.run_physics_side` and
+:func:`robosoc.cosim.decoupled.run_chip_side` (docs/decoupled.md).  Start the physics side first;
+both sides take the same scenario options (the physics side refuses a chip built for another).
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import TYPE_CHECKING, Annotated
+
+import typer
+
+from robosoc.cli import exit_codes, files, link_options, options
+from robosoc.cli.app import RobosocGroup, app
+from robosoc.cli.console import make_console, note, plain
+from robosoc.cli.errors import CliError
+from robosoc.cli.link_options import DEFAULT_BIND, Bind, ConnectTimeout, Faults, Hold, Pace, PeerTimeout, Resend
+from robosoc.cli.link_report import end_of_side, print_link_counts
+from robosoc.config.firmware import ARITH_CHOICES, FirmwareConfig
+from robosoc.config.vehicle import VEHICLE_PRESETS
+
+if TYPE_CHECKING:
+    from robosoc.config.scenario import ScenarioConfig
+    from robosoc.config.vehicle import VehicleConfig
+
+serve_app = typer.Typer(
+    cls=RobosocGroup,
+    help="The decoupled mode's two sides as separate programs talking UDP (start the physics first).",
+    epilog=exit_codes.SERVE_EPILOG,
+    no_args_is_help=True,
+)
+app.add_typer(serve_app, name="serve")
+
+Seconds = Annotated[
+    float | None,
+    typer.Option(
+        help="Flight length in seconds, whole ms in 0.001..3600, at least one sensor period (default: the scenario's).",
+        callback=options.float_range(0.001, 3600.0, unit="s"),
+    ),
+]
+Seed = Annotated[
+    int,
+    typer.Option(
+        help="Seeds every random number (physics; faults injected here), 0..2**63-1.", callback=options.seed()
+    ),
+]
+Scenario = Annotated[Path | None, typer.Option(help="Scenario TOML file (default: built-in).")]
+Vehicle = Annotated[
+    str | None,
+    typer.Option(help="default or laser (default: the scenario's).", callback=options.choice(*VEHICLE_PRESETS)),
+]
+NoOut = Annotated[bool, typer.Option("--no-out", help="Write no files.")]
+Peer = Annotated[
+    link_options.Address | None,
+    typer.Option(
+        parser=str,
+        metavar="HOST:PORT",
+        help=f"The physics side's address (default {DEFAULT_BIND}).",
+        callback=link_options.address_option(any_port=False),
+    ),
+]
+
+
+def resolve_scenario(
+    scenario: Path | None, seconds: float | None, vehicle: str | None
+) -> tuple[ScenarioConfig, VehicleConfig]:
+    """The scenario of the options, as ``robosoc fly`` resolves it (errors name the option or field)."""
+    from robosoc.config.scenario import ScenarioConfig
+    from robosoc.config.vehicle import vehicle_preset
+
+    config = ScenarioConfig()
+    if scenario is not None:
+        config, _ = files.load_toml(ScenarioConfig, scenario, "--scenario")
+    changes = {}
+    if seconds is not None:
+        changes["--seconds"] = ("duration_s", seconds)
+    if vehicle is not None:
+        changes["--vehicle"] = ("vehicle", vehicle)
+    config = options.override(config, changes, [str(scenario)] if scenario is not None else ())
+    if round(config.duration_s * config.sensors.rate_hz) < 1:
+        where = "--seconds" if seconds is not None else f"--scenario: {scenario}: duration_s"
+        raise options.fail(where, f"a flight lasts at least one sensor period, got {config.duration_s:g} s")
+    return config, vehicle_preset(config.vehicle)
+
+
+def _out(out: Path | None, no_out: bool, side: str, name: str, seed: int, scenario: Path | None) -> Path | None:
+    options.exclusive(out=out is not None, no_out=no_out)
+    if no_out:
+        return None
+    return files.output_dir(
+        out or Path("runs") / f"serve-{side}-{name}-s{seed}", "--out", inputs=[scenario] if scenario else ()
+    )
+
+
+@serve_app.command("physics", epilog=exit_codes.SERVE_EPILOG)
+def serve_physics_command(
+    seconds: Seconds = None,
+    seed: Seed = 1,
+    scenario: Scenario = None,
+    vehicle: Vehicle = None,
+    out: Annotated[
+        Path | None,
+        typer.Option(
+            help="Folder for flight.csv, physics.json, link-physics.log (default: runs/serve-physics-NAME-sSEED)."
+        ),
+    ] = None,
+    no_out: NoOut = False,
+    bind: Bind = None,
+    pace: Pace = "realtime",
+    hold: Hold = "zoh",
+    faults: Faults = None,
+    resend: Resend = 2,
+    peer_timeout: PeerTimeout = 5.0,
+    connect_timeout: ConnectTimeout = 300.0,
+) -> None:
+    """The physics side: fly the scenario, sending sensor readings to a chip side and applying its commands."""
+    from rich.markup import escape
+    from rich.progress import BarColumn, Progress, TextColumn
+
+    from robosoc.cosim.decoupled import run_physics_side
+    from robosoc.cosim.link import LinkError, parse_address
+
+    console = make_console()
+    config, craft = resolve_scenario(scenario, seconds, vehicle)
+    link = link_options.link_config(pace, hold, faults, resend, peer_timeout, connect_timeout)
+    folder = _out(out, no_out, "physics", config.name, seed, scenario)
+    address = bind or parse_address(DEFAULT_BIND, any_port=True)
+    samples = round(config.duration_s * config.sensors.rate_hz)
+    progress = Progress(
+        TextColumn("{task.description}"), BarColumn(), TextColumn("{task.fields[t]}"), console=console, transient=True
+    )
+    task = progress.add_task("waiting for a chip", total=samples, t="")
+
+    def on_listen(a) -> None:
+        console.print(
+            f"physics: scenario [bold]{escape(config.name)}[/bold], {config.duration_s:g} s, seed {seed}, "
+            f"pace {pace}, hold {hold}; listening on {escape(str(a))}"
+        )
+        progress.start()
+
+    def on_sample(done: int, total: int) -> None:
+        progress.update(task, completed=done, description="flight", t=f"{done / config.sensors.rate_hz:.2f} s")
+
+    try:
+        try:
+            outcome, record = run_physics_side(
+                config, craft, seed, link, address, folder, on_listen=on_listen, on_sample=on_sample
+            )  # fmt: skip
+        finally:
+            progress.stop()
+    except LinkError as exc:
+        raise options.fail("--bind", str(exc)) from None
+    f = record["flight"]
+    if f and math.isfinite(f["hover_rms_m"]):
+        console.print(
+            f"hover height error (RMS, after the climb): {f['hover_rms_m'] * 100:.2f} cm "
+            f"(max {f['hover_max_m'] * 100:.2f} cm)"
+        )
+    c = outcome.commands
+    console.print(
+        f"flown {outcome.simulated_s:g} of {config.duration_s:g} s in {outcome.host_s:.1f} s; "
+        f"commands {c['received']}, late {c['late']}, missed {c['missed']}; "
+        f"largest lag behind real time {outcome.max_lag_s * 1000:.0f} ms"
+    )
+    print_link_counts(console, {"to chip": record["link"]["to_chip"], "from chip": record["link"]["from_chip"]})
+    if folder is not None:
+        plain(console, f"files: {folder}")
+    end_of_side(outcome.ended, outcome.message, str(folder) if folder else "")
+
+
+@serve_app.command("chip", epilog=exit_codes.SERVE_EPILOG)
+def serve_chip_command(
+    seconds: Seconds = None,
+    seed: Seed = 1,
+    scenario: Scenario = None,
+    vehicle: Vehicle = None,
+    arith: Annotated[
+        str,
+        typer.Option(help="float (soft-float) or fixed (Q16.16) firmware.", callback=options.choice(*ARITH_CHOICES)),
+    ] = "fixed",
+    mul: Annotated[bool, typer.Option("--mul/--no-mul", help="Cores with the multiplier or without.")] = True,
+    peer: Peer = None,
+    bind: Annotated[
+        link_options.Address | None,
+        typer.Option(
+            parser=str,
+            metavar="HOST:PORT",
+            help="The address to listen on (default: any free port).",
+            callback=link_options.address_option(any_port=True),
+        ),
+    ] = None,
+    out: Annotated[
+        Path | None,
+        typer.Option(help="Folder for jobs.csv, chip.json, link-chip.log (default: runs/serve-chip-NAME-sSEED)."),
+    ] = None,
+    no_out: NoOut = False,
+    faults: Faults = None,
+    resend: Resend = 2,
+    peer_timeout: PeerTimeout = 5.0,
+    connect_timeout: ConnectTimeout = 300.0,
+) -> None:
+    """The chip side: run the firmware on the chip for a physics side, over UDP."""
+    from robosoc.cosim.decoupled import run_chip_side
+    from robosoc.cosim.link import LinkError, parse_address
+
+    console = make_console()
+    config, craft = resolve_scenario(scenario, seconds, vehicle)
+    link = link_options.link_config(
+        faults=faults, resend=resend, peer_timeout=peer_timeout, connect_timeout=connect_timeout
+    )
+    fw = options.override(FirmwareConfig(), {"--arith": ("arith", arith), "--mul/--no-mul": ("multiplier", mul)})
+    folder = _out(out, no_out, "chip", config.name, seed, scenario)
+    target = peer or parse_address(DEFAULT_BIND, any_port=False)
+    try:
+        outcome, record = run_chip_side(
+            config, craft, fw, seed, link, target, bind, folder, on_status=lambda text: note(console, f"chip: {text}")
+        )  # fmt: skip
+    except LinkError as exc:
+        raise options.fail("--bind" if bind is not None and str(bind) in str(exc) else "--peer", str(exc)) from None
+    except ValueError as exc:
+        raise CliError(str(exc)) from None
+    for name, t in record.get("tasks", {}).items():
+        console.print(
+            f"  {name:<9} {t['jobs']} jobs: response mean {t['response_us_mean']:.1f} us, "
+            f"max {t['response_us_max']:.1f} us; "
+            f"deadline misses {t['deadline_misses']}"
+        )
+    r = outcome.readings
+    if r:
+        console.print(
+            f"readings {r['received']}, injected {r['injected']}, late {r['late']}, stale {r['stale']}; "
+            f"commands sent {r['commands_sent']}; chip time {outcome.simulated_s:g} s in {outcome.host_s:.1f} s"
+        )
+    print_link_counts(
+        console, {"to physics": record["link"]["to_physics"], "from physics": record["link"]["from_physics"]}
+    )
+    if folder is not None:
+        plain(console, f"files: {folder}")
+    end_of_side(outcome.ended, outcome.message, str(folder) if folder else "")

@@ -1,0 +1,342 @@
+"""The decoupled mode as a whole: each side with its files, and both sides as processes.
+
+* :func:`run_physics_side` / :func:`run_chip_side`: one side (``robosoc serve physics|chip``) with
+  its files in the run folder: ``flight.csv`` (as it flies), ``link-physics.log``,
+  ``physics.json``; ``jobs.csv``, ``link-chip.log``, ``chip.json``.
+* :func:`fly_decoupled` (``robosoc fly --decoupled``): starts both sides as separate processes
+  (``multiprocessing``, spawn start method), the physics first on a free loopback port, then the
+  chip pointed at it; they talk only over UDP.  The processes report their progress through a
+  pipe; at the end the two sides' parts become ``summary.json`` (``"mode": "decoupled"``, with the
+  ``"link"`` counts).  Ctrl-C reaches both sides (the terminal's process group, and forwarded);
+  each ends, says bye and writes what it did, and the summary is written with ``"complete": false``.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import multiprocessing
+import os
+import signal
+import time
+import traceback
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from multiprocessing.connection import Connection, wait
+from pathlib import Path
+from typing import Any
+
+from robosoc.config.chip import ChipConfig
+from robosoc.config.firmware import FirmwareConfig
+from robosoc.config.link import LinkConfig
+from robosoc.config.scenario import ScenarioConfig
+from robosoc.config.vehicle import VehicleConfig
+from robosoc.control.flight_log import CsvFlightLog
+from robosoc.cosim.decoupled_chip import ChipOutcome, serve_chip
+from robosoc.cosim.decoupled_physics import Ended, PhysicsOutcome, serve_physics
+from robosoc.cosim.decoupled_summary import chip_record, decoupled_summary, physics_record, write_json
+from robosoc.cosim.link import Address, LinkError
+from robosoc.cosim.replay import write_jobs_csv
+
+__all__ = ["DecoupledFlight", "SideFailed", "fly_decoupled", "run_chip_side", "run_physics_side"]
+
+#: How long the sides get to end and write their files after Ctrl-C before they are terminated.
+SHUTDOWN_S = 20.0
+
+
+def run_physics_side(
+    scenario: ScenarioConfig,
+    vehicle: VehicleConfig,
+    seed: int,
+    config: LinkConfig,
+    bind: Address,
+    out: Path | None,
+    **callbacks: Any,
+) -> tuple[PhysicsOutcome, dict[str, Any]]:
+    """:func:`serve_physics` writing ``flight.csv``, ``link-physics.log`` and ``physics.json`` in
+    ``out`` (nothing if None); the outcome and the ``physics.json`` record."""
+    log = CsvFlightLog(out / "flight.csv") if out is not None else None
+    try:
+        outcome = serve_physics(
+            scenario, vehicle, seed, config, bind,
+            log_path=out / "link-physics.log" if out is not None else None,
+            on_row=log.write if log is not None else None,
+            **callbacks,
+        )  # fmt: skip
+    finally:
+        if log is not None:
+            log.close()
+    record = physics_record(outcome, scenario, vehicle)
+    if out is not None:
+        write_json(record, out / "physics.json")
+    return outcome, record
+
+
+def run_chip_side(
+    scenario: ScenarioConfig,
+    vehicle: VehicleConfig,
+    fw: FirmwareConfig,
+    seed: int,
+    config: LinkConfig,
+    peer: Address,
+    bind: Address | None,
+    out: Path | None,
+    *,
+    chip: ChipConfig | None = None,
+    on_status: Callable[[str], None] | None = None,
+) -> tuple[ChipOutcome, dict[str, Any]]:
+    """:func:`serve_chip` writing ``jobs.csv``, ``link-chip.log`` and ``chip.json`` in ``out``."""
+    outcome = serve_chip(
+        scenario, vehicle, fw, seed, config, peer, bind, chip=chip,
+        log_path=out / "link-chip.log" if out is not None else None, on_status=on_status,
+    )  # fmt: skip
+    record = chip_record(outcome, fw, chip or fw.seed_chip())
+    if out is not None:
+        if outcome.result is not None:
+            write_jobs_csv(outcome.result.jobs, out / "jobs.csv")
+        write_json(record, out / "chip.json")
+    return outcome, record
+
+
+# --- both sides as processes ---------------------------------------------------------------------
+
+
+class SideFailed(Exception):
+    """A side could not start or crashed: ``side`` names it, ``kind`` is "link" (its address) or "internal"."""
+
+    def __init__(self, side: str, kind: str, message: str) -> None:
+        super().__init__(f"{side} side: {message}")
+        self.side, self.kind, self.message = side, kind, message
+
+
+def _interrupt_once() -> None:
+    """The first Ctrl-C interrupts the side; later ones (the terminal's and the parent's) must not
+    interrupt it while it ends and writes its files."""
+
+    def handler(signum: int, frame: object) -> None:
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+        raise KeyboardInterrupt
+
+    signal.signal(signal.SIGINT, handler)
+
+
+def _send(conn: Connection, *message: object) -> None:
+    with contextlib.suppress(OSError, EOFError):  # the parent has gone: the side goes on and writes its files
+        conn.send(message)
+
+
+def _physics_process(conn: Connection, args: tuple) -> None:
+    _interrupt_once()
+    try:
+        _, record = run_physics_side(
+            *args,
+            on_listen=lambda address: _send(conn, "listening", address),
+            on_start=lambda: _send(conn, "status", "physics: the chip said hello; flying"),
+            on_sample=lambda done, total: _send(conn, "progress", done, total),
+        )
+        _send(conn, "done", record)
+    except LinkError as exc:
+        _send(conn, "error", "link", str(exc))
+    except KeyboardInterrupt:
+        _send(conn, "error", "interrupted", "interrupted before the flight")
+    except BaseException:
+        _send(conn, "error", "internal", traceback.format_exc())
+
+
+def _chip_process(conn: Connection, args: tuple, chip: ChipConfig | None) -> None:
+    _interrupt_once()
+    try:
+        _, record = run_chip_side(*args, chip=chip, on_status=lambda text: _send(conn, "status", f"chip: {text}"))
+        _send(conn, "done", record)
+    except LinkError as exc:
+        _send(conn, "error", "link", str(exc))
+    except KeyboardInterrupt:
+        _send(conn, "error", "interrupted", "interrupted before the flight")
+    except BaseException:
+        _send(conn, "error", "internal", traceback.format_exc())
+
+
+@dataclass
+class DecoupledFlight:
+    """The two sides' records, the summary, and how the flight ended."""
+
+    summary: dict[str, Any]
+    physics: dict[str, Any] = field(default_factory=dict)
+    chip: dict[str, Any] = field(default_factory=dict)
+    interrupted: bool = False
+
+    @property
+    def ended(self) -> str:
+        """The first reason that is not ``done``: the physics side's, else the chip side's."""
+        if self.interrupted:
+            return Ended.INTERRUPTED
+        for record in (self.physics, self.chip):
+            if record.get("ended", Ended.FAILED) != Ended.DONE:
+                return str(record.get("ended", Ended.FAILED))
+        return Ended.DONE
+
+    @property
+    def message(self) -> str:
+        for record in (self.physics, self.chip):
+            if record.get("ended") not in (None, Ended.DONE):
+                return f"{record.get('side')} side: {record.get('message')}"
+        return "interrupted" if self.interrupted else "flown"
+
+
+class _Side:
+    def __init__(self, name: str, ctx: Any, target: Callable, args: tuple) -> None:
+        self.name = name
+        self.conn, child = ctx.Pipe(duplex=False)
+        self.process = ctx.Process(target=target, args=(child, *args), name=f"robosoc-{name}", daemon=False)
+        self.process.start()
+        child.close()
+        self.record: dict[str, Any] | None = None
+        self.error: tuple[str, str] | None = None
+        self.open = True
+
+    def receive(self) -> list[tuple]:
+        out = []
+        try:
+            while self.conn.poll():
+                out.append(self.conn.recv())
+        except (EOFError, OSError):
+            self.open = False
+        return out
+
+    @property
+    def finished(self) -> bool:
+        return self.record is not None or self.error is not None or (not self.open and not self.process.is_alive())
+
+    def interrupt(self) -> None:
+        if self.process.is_alive() and self.process.pid is not None:
+            with contextlib.suppress(ProcessLookupError):
+                os.kill(self.process.pid, signal.SIGINT)
+
+
+def fly_decoupled(
+    scenario: ScenarioConfig,
+    vehicle: VehicleConfig,
+    fw: FirmwareConfig,
+    seed: int,
+    config: LinkConfig,
+    out: Path,
+    *,
+    bind: Address | None = None,
+    chip: ChipConfig | None = None,
+    on_status: Callable[[str], None] | None = None,
+    on_progress: Callable[[int, int], None] | None = None,
+) -> DecoupledFlight:
+    """Fly ``scenario`` with the physics and the chip in two processes talking UDP; files in ``out``.
+
+    Args:
+        bind: the physics side's address (default: a free port on 127.0.0.1).
+        on_status: told what the sides are doing (building, booting, flying).
+        on_progress: called with (samples flown, samples in all).
+
+    Returns:
+        Both sides' records and ``summary.json``'s contents (also written), also when a side
+        lost its peer or the flight was interrupted.
+
+    Raises:
+        SideFailed: a side could not bind its address or crashed (the message says which and why).
+    """
+    out.mkdir(parents=True, exist_ok=True)
+    bind = bind or Address("127.0.0.1", 0)
+    ctx = multiprocessing.get_context("spawn")
+    say = on_status or (lambda _text: None)
+    sides: list[_Side] = []
+    interrupted = False
+    try:
+        physics = _Side("physics", ctx, _physics_process, ((scenario, vehicle, seed, config, bind, out),))
+        sides.append(physics)
+        address = _await_listening(physics, config.connect_timeout_s, say)
+        chip_side = _Side("chip", ctx, _chip_process, ((scenario, vehicle, fw, seed, config, address, None, out), chip))
+        sides.append(chip_side)
+        _collect(sides, say, on_progress, deadline=None)
+    except KeyboardInterrupt:
+        interrupted = True
+        for side in sides:
+            side.interrupt()
+        _collect(sides, say, None, deadline=time.monotonic() + SHUTDOWN_S)
+    finally:
+        for side in sides:
+            side.process.join(timeout=SHUTDOWN_S if not interrupted else 1.0)
+            if side.process.is_alive():
+                side.process.terminate()
+                side.process.join(timeout=5.0)
+    failed = [s for s in sides if s.error is not None and s.error[0] in ("link", "internal")]
+    records = {s.name: s.record or _read_record(out / f"{s.name}.json") for s in sides}
+    result = DecoupledFlight(
+        summary={},
+        physics=records.get("physics") or {},
+        chip=records.get("chip") or {},
+        interrupted=interrupted or any(s.error is not None and s.error[0] == "interrupted" for s in sides),
+    )
+    result.summary = decoupled_summary(result.physics, result.chip, scenario=scenario, seed=seed, config=config)
+    write_json(result.summary, out / "summary.json")
+    if failed and not interrupted:
+        side = failed[0]
+        assert side.error is not None
+        raise SideFailed(side.name, side.error[0], side.error[1])
+    for side in sides:
+        if side.record is None and side.error is None and not interrupted:
+            raise SideFailed(side.name, "internal", f"the process ended with exit code {side.process.exitcode}")
+    return result
+
+
+def _read_record(path: Path) -> dict[str, Any]:
+    try:
+        return json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return {}
+
+
+def _handle(side: _Side, message: tuple, say: Callable[[str], None], on_progress: Callable | None) -> None:
+    kind = message[0]
+    if kind == "status":
+        say(message[1])
+    elif kind == "progress" and on_progress is not None:
+        on_progress(message[1], message[2])
+    elif kind == "done":
+        side.record = message[1]
+    elif kind == "error":
+        side.error = (message[1], message[2])
+    elif kind == "listening":
+        side.address = message[1]  # type: ignore[attr-defined]
+
+
+def _await_listening(side: _Side, timeout_s: float, say: Callable[[str], None]) -> Address:
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        wait([side.conn, side.process.sentinel], timeout=0.2)
+        for message in side.receive():
+            _handle(side, message, say, None)
+        if getattr(side, "address", None) is not None:
+            return side.address  # type: ignore[attr-defined,no-any-return]
+        if side.error is not None:
+            raise SideFailed(side.name, side.error[0], side.error[1])
+        if not side.process.is_alive() and not side.conn.poll():
+            raise SideFailed(side.name, "internal", f"the process ended with exit code {side.process.exitcode}")
+    raise SideFailed(side.name, "internal", f"not listening after {timeout_s:g} s")
+
+
+def _collect(
+    sides: list[_Side], say: Callable[[str], None], on_progress: Callable | None, deadline: float | None
+) -> None:
+    """Take the sides' messages until each has finished (or ``deadline``); a side that failed to
+    start or crashed gets the other one interrupted (it would wait for its peer in vain)."""
+    stopped = False
+    while not all(s.finished for s in sides):
+        if deadline is not None and time.monotonic() > deadline:
+            return
+        waitables = [s.conn for s in sides if s.open] + [s.process.sentinel for s in sides if s.process.is_alive()]
+        wait(waitables, timeout=0.5)
+        for side in sides:
+            for message in side.receive():
+                _handle(side, message, say, on_progress)
+        failed = any(s.error is not None or (s.finished and s.record is None) for s in sides)
+        if failed and not stopped:
+            stopped = True
+            for side in sides:
+                if not side.finished:
+                    side.interrupt()

@@ -1,0 +1,324 @@
+"""The chip side of the decoupled mode (``robosoc serve chip``): the firmware on the chip, over UDP.
+
+:func:`serve_chip` runs the flight firmware (:class:`robosoc.cosim.replay.FirmwareRun`) against
+the readings the physics side sends (docs/decoupled.md):
+
+* it boots the chip (to the cycle of flight time 0), then says hello to the physics side every
+  ``heartbeat_s`` until the first sensor batch comes;
+* **pacing**: the chip never runs past the physics' timestamps -- with readings waiting, up to the
+  cycle of the oldest one; otherwise up to one sensor period past the newest reading injected (the
+  earliest the next one can be due), or to the end of the flight once the physics said bye.  Until
+  the newest reading's command has left, it runs in slices of :data:`SLICE_NS` of chip time (so
+  the command is sent at once), then to the limit in one go;
+* **latency compensation**: each reading is injected from the I/O tile at the cycle of its
+  timestamp when the chip is not past it (whenever it arrived), else at the current cycle (counted
+  late); a reading older than one already injected is dropped (counted stale: it would go back in
+  time).  Readings repeated by the physics side for redundancy are dropped quietly;
+* each PWM command that reaches the I/O tile is sent at once with the chip time it arrived, plus
+  the ``resend`` commands before it; on reaching its limit the chip sends its time (a command
+  datagram, so the physics side knows every earlier command is out) and repeats it every
+  ``heartbeat_s`` while it waits.
+
+The counters and energy of the run are those of the replay harness: per-job records, charged to
+the sample period they were released in (:meth:`FirmwareRun.close_period` at each injection).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+import time
+from collections import deque
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from robosoc.chip.mpsoc import ChipError
+from robosoc.chip.single import CoreError
+from robosoc.config.chip import ChipConfig
+from robosoc.config.firmware import FirmwareConfig
+from robosoc.config.link import LinkConfig
+from robosoc.config.scenario import ScenarioConfig
+from robosoc.config.vehicle import VehicleConfig
+from robosoc.cosim.datagram import MAX_COMMANDS, Bye, ByeReason, Command, CommandBatch, Hello, Reading, SensorBatch
+from robosoc.cosim.decoupled_physics import Ended, sample_period_ns, scenario_digest
+from robosoc.cosim.link import Address, LinkLog, UdpLink
+from robosoc.cosim.lockstep import NS_PER_S
+from robosoc.cosim.replay import DEFAULT_FIRST_CYCLE, FirmwareRun, ReplayResult, SampleInput
+
+__all__ = ["SLICE_NS", "ChipOutcome", "serve_chip"]
+
+#: Chip time run at a time while a command is due: it is sent at most this late (in chip time).
+SLICE_NS = 250_000
+
+
+@dataclass
+class ChipOutcome:
+    """What the chip side did: the firmware run's result, how it ended, the link's counts."""
+
+    result: ReplayResult | None
+    ended: str
+    message: str
+    host_s: float
+    cpu_s: float
+    simulated_s: float
+    link: dict[str, object] = field(default_factory=dict)
+    readings: dict[str, int] = field(default_factory=dict)
+
+    @property
+    def complete(self) -> bool:
+        return self.ended == Ended.DONE
+
+
+class _PeerSilent(Exception):
+    pass
+
+
+class _Chip:
+    """State of the chip side during a flight (the helpers of :func:`serve_chip`)."""
+
+    def __init__(self, run: FirmwareRun, link: UdpLink, config: LinkConfig, period_ns: int, log: LinkLog) -> None:
+        self.run, self.link, self.config, self.period_ns, self.log = run, link, config, period_ns, log
+        self.first = run.first_cycle
+        self.clock_ns = run.clock_ns
+        self.pending: dict[int, Reading] = {}
+        self.seen: set[int] = set()  # every reading number received
+        self.newest_k = -1
+        self.newest_t: int | None = None
+        self.end_ns: int | None = None
+        self.peer_bye: Bye | None = None
+        self.counts = {"received": 0, "injected": 0, "late": 0, "stale": 0, "repeated": 0}
+        self.recent: deque[Command] = deque(maxlen=min(MAX_COMMANDS, config.resend + 16))
+        self.commands_sent = 0
+        self.last_send = time.monotonic()
+        self.reported_ns = -1
+
+    def cycle_of(self, t_ns: int) -> int:
+        return self.first + round(t_ns / self.clock_ns)
+
+    def now_ns(self) -> int:
+        return math.floor((self.run.cycle - self.first) * self.clock_ns)
+
+    def take(self, timeout: float) -> bool:
+        got = self.link.receive(timeout)
+        for d in got:
+            body = d.body
+            if isinstance(body, SensorBatch):
+                for r in body.readings:
+                    if r.k in self.seen:
+                        self.counts["repeated"] += 1
+                        continue
+                    self.seen.add(r.k)
+                    self.counts["received"] += 1
+                    if r.k < self.newest_k:
+                        self.counts["stale"] += 1
+                        self.log.write(f"reading {r.k} dropped: older than reading {self.newest_k}, injected")
+                    else:
+                        self.pending[r.k] = r
+            elif isinstance(body, Bye):
+                self.peer_bye = body
+                self.end_ns = body.end_ns
+        return bool(got)
+
+    def send(self, fresh: int) -> None:
+        """A command datagram: the chip's time and the newest ``fresh + resend`` commands."""
+        keep = min(len(self.recent), fresh + self.config.resend)
+        commands = tuple(self.recent)[len(self.recent) - keep :]
+        self.link.send_data(CommandBatch(self.now_ns(), commands))
+        self.last_send = time.monotonic()
+        self.reported_ns = self.now_ns()
+
+    def inject_due(self) -> bool:
+        """Inject the oldest waiting reading if the chip has reached its cycle; whether it did."""
+        if not self.pending:
+            return False
+        k = min(self.pending)
+        r = self.pending[k]
+        cycle = self.cycle_of(r.t_ns)
+        if cycle > self.run.cycle:
+            return False
+        del self.pending[k]
+        if cycle < self.run.cycle:
+            self.counts["late"] += 1
+            self.log.write(f"reading {k} (t={r.t_ns} ns) injected late, at chip time {self.now_ns()} ns")
+            cycle = self.run.cycle
+        if self.run.samples:
+            self.run.close_period()
+        self.run.inject(SampleInput(k, r.t_ns / NS_PER_S, cycle, r.packet))
+        self.counts["injected"] += 1
+        self.newest_k, self.newest_t = k, r.t_ns
+        return True
+
+    def limit(self) -> int:
+        """The cycle the chip may run to now."""
+        if self.pending:
+            return self.cycle_of(self.pending[min(self.pending)].t_ns)
+        if self.end_ns is not None:
+            return self.cycle_of(self.end_ns)
+        if self.newest_t is not None:
+            return self.cycle_of(self.newest_t + self.period_ns)
+        return self.cycle_of(0)
+
+    def advance(self, limit: int) -> None:
+        """Run towards ``limit``: in slices while the newest reading's command has not left (so that
+        it leaves at once), then in one go (nothing can arrive that the chip could use before)."""
+        answered = bool(self.recent) and self.recent[-1].seq >= (self.newest_k & 0xFFFFFFFF)
+        if not answered:
+            limit = min(limit, self.run.cycle + max(1, round(SLICE_NS / self.clock_ns)))
+        fresh = self.run.run_to(limit)
+        for c in fresh:
+            left = math.floor((c.cycle - self.first) * self.clock_ns)
+            self.recent.append(Command(c.seq & 0xFFFFFFFF, max(0, left), c.pwm))
+        self.commands_sent += len(fresh)
+        if fresh:
+            self.send(len(fresh))
+
+    def wait(self) -> None:
+        """At the limit with nothing to inject: report the chip's time, wait, repeat it now and then."""
+        if self.reported_ns != self.now_ns() or time.monotonic() - self.last_send >= self.config.heartbeat_s:
+            self.send(0)
+        self.take(self.config.heartbeat_s)
+        silent = self.link.silent_for(time.monotonic())
+        if silent > self.config.peer_timeout_s:
+            raise _PeerSilent(
+                f"no datagram from the physics for {silent:.1f} s (--peer-timeout {self.config.peer_timeout_s:g})"
+            )
+
+
+def serve_chip(
+    scenario: ScenarioConfig,
+    vehicle: VehicleConfig,
+    fw: FirmwareConfig,
+    seed: int,
+    config: LinkConfig,
+    peer: Address,
+    bind: Address | None = None,
+    *,
+    chip: ChipConfig | None = None,
+    log_path: Path | None = None,
+    on_status: Callable[[str], None] | None = None,
+) -> ChipOutcome:
+    """Run the firmware ``fw`` on the chip for the physics side at ``peer``; see the module docstring.
+
+    Args:
+        scenario, vehicle: what the physics side flies (the firmware's control parameters come
+            from them; the physics side refuses a chip built for another).
+        fw, chip: the firmware build and mapping, and the chip (default: the seed's 2×2).
+        seed: drives the faults injected on the command datagrams.
+        config: timeouts, redundancy and faults (pace and hold are the physics side's).
+        peer: the physics side's address.
+        bind: where to listen (default: any free port on the loopback interface of ``peer``'s family).
+        log_path: the side's link log (``link-chip.log``), or None.
+        on_status: told what the side is doing (building, booting, waiting, flying).
+
+    Returns:
+        The outcome, also when interrupted (Ctrl-C), the physics went silent or said bye early, or
+        the firmware faulted (``ended`` says which; the result holds the jobs up to then).
+
+    Raises:
+        LinkError: ``bind`` cannot be bound or ``peer`` resolved.
+        ValueError: the mapping does not fit the chip.
+        CompileError: the firmware failed to build.
+    """
+    say = on_status or (lambda _text: None)
+    period_ns = sample_period_ns(scenario)
+    log = LinkLog(log_path)
+    try:
+        if bind is None:
+            bind = Address("::1" if ":" in peer.host else "127.0.0.1", 0)
+            if peer.host not in ("127.0.0.1", "::1", "localhost"):
+                bind = Address("::" if ":" in peer.host else "0.0.0.0", 0)
+        link = UdpLink(bind, "chip", config.faults, seed, log, peer=peer)
+    except BaseException:
+        log.close()
+        raise
+    start = time.monotonic()
+    cpu_start = time.process_time()
+    state: _Chip | None = None
+    run: FirmwareRun | None = None
+    result: ReplayResult | None = None
+    ended, message = Ended.DONE, "flown"
+    try:
+        say(f"building the firmware ({fw.label}) and loading the chip ...")
+        run = FirmwareRun(fw, vehicle=vehicle, scenario=scenario, chip=chip, first_cycle=DEFAULT_FIRST_CYCLE)
+        say("booting the chip (compiling the chip kernels on a fresh install) ...")
+        run.run_to(DEFAULT_FIRST_CYCLE)
+        state = _Chip(run, link, config, period_ns, log)
+        say(f"waiting for the physics at {peer} ...")
+        hello = Hello(scenario_digest(scenario, vehicle), period_ns)
+        deadline = time.monotonic() + config.connect_timeout_s
+        while not state.pending and state.end_ns is None:
+            link.send_control(hello)
+            state.take(config.heartbeat_s)
+            if time.monotonic() > deadline:
+                raise _PeerSilent(
+                    f"no sensor data from the physics at {peer} within --connect-timeout {config.connect_timeout_s:g} s"
+                )
+        say("flying")
+        start = time.monotonic()
+        cpu_start = time.process_time()
+        while True:
+            state.take(0.0)
+            if state.peer_bye is not None and state.peer_bye.reason is not ByeReason.DONE:
+                ended, message = Ended.PEER_ENDED, f"the physics said bye ({state.peer_bye.reason.name.lower()})"
+                break
+            if state.inject_due():
+                continue
+            limit = state.limit()
+            if run.cycle < limit:
+                state.advance(limit)
+            elif state.end_ns is not None and not state.pending:
+                break  # at the end of the flight
+            else:
+                state.wait()
+    except KeyboardInterrupt:
+        ended, message = Ended.INTERRUPTED, "interrupted"
+    except _PeerSilent as exc:
+        ended, message = Ended.PEER_LOST, str(exc)
+    except (ChipError, CoreError) as exc:
+        ended, message = Ended.FAILED, f"the firmware failed on the chip: {exc}"
+    finally:
+        host_s = time.monotonic() - start
+        cpu_s = time.process_time() - cpu_start
+        log.write(f"ended: {ended}: {message}")
+        try:
+            if run is not None and run.samples:
+                run.close_period()
+            result = run.result() if run is not None else None
+        except (ChipError, CoreError, RuntimeError, KeyboardInterrupt) as exc:
+            log.write(f"no job records: {exc}")
+        reason = {
+            Ended.DONE: ByeReason.DONE,
+            Ended.INTERRUPTED: ByeReason.INTERRUPTED,
+            Ended.PEER_LOST: ByeReason.PEER_LOST,
+        }.get(ended, ByeReason.ERROR)
+        end_ns = state.now_ns() if state is not None else 0
+        with contextlib.suppress(KeyboardInterrupt):
+            link.send_control(Bye(reason, link.sent, end_ns))
+        link.close()
+        readings = dict(state.counts) if state is not None else {}
+        if state is not None:
+            readings["commands_sent"] = state.commands_sent
+        counts = link.counts.as_dict()
+        outcome = ChipOutcome(
+            result=result,
+            ended=ended,
+            message=message,
+            host_s=host_s,
+            cpu_s=cpu_s,
+            simulated_s=end_ns / NS_PER_S,
+            link={
+                "to_physics": {
+                    "sent": link.sent,
+                    "injected": dict(link.injector.injected),
+                    "send_errors": link.send_errors,
+                },
+                "from_physics": counts,
+                "foreign": link.foreign,
+                "receive_errors": link.receive_errors,
+            },
+            readings=readings,
+        )
+        log.write(f"counts: {outcome.link}; readings {readings}")
+        log.close()
+    return outcome

@@ -1,0 +1,364 @@
+"""The physics side of the decoupled mode (``robosoc serve physics``): the world, paced, over UDP.
+
+The loop of :func:`serve_physics` is that of :func:`robosoc.cosim.lockstep.fly_lockstep` with the
+chip at the other end of a UDP link (docs/decoupled.md):
+
+1. it listens, and waits for the chip's hello (``connect_timeout_s``), which must name the same
+   scenario and vehicle (:func:`scenario_digest`);
+2. per sensor sample k at ``t_k``: the flight row is formed and the sample's sensor packet sent in
+   a sensor batch with its timestamp (plus the ``resend`` readings before it);
+3. per sample period (the 1 ms physics steps from ``t_k`` to ``t_k+1``): it waits until the steps
+   may be taken -- ``pace="realtime"``: the wall clock has reached ``t_k+1`` since the start;
+   ``pace="fast"``: the chip has reported reaching ``t_k+1`` (so every command that left the chip
+   before is known) -- meanwhile taking the datagrams that come.  Each command is scheduled at
+   the step of the chip time it left or, if it came later than that, at the step it arrived in
+   (realtime: the step the wall clock was in; counted late); then the world takes the period's
+   steps with what :class:`~robosoc.cosim.actuator_hold.ActuatorHold` gives for each;
+4. at the end it sends a bye and waits (up to ``peer_timeout_s``) for the chip's, which says how
+   many datagrams the chip sent.
+
+A side that waits repeats its newest datagram every ``heartbeat_s`` (a lost datagram cannot stall
+the flight), and ends when the peer has been silent for ``peer_timeout_s``.  With ``pace="fast"``
+and every command delivered in time the flight is the lockstep flight, row for row.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import time
+from collections import deque
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from robosoc.config.link import LinkConfig
+from robosoc.config.ranges import check_seed
+from robosoc.config.scenario import ScenarioConfig
+from robosoc.config.vehicle import VehicleConfig
+from robosoc.control.flight import ROW_FIELDS, flight_row
+from robosoc.control.setpoint import setpoint_at
+from robosoc.cosim.actuator_hold import ActuatorHold
+from robosoc.cosim.datagram import MAX_READINGS, Bye, ByeReason, CommandBatch, Hello, Reading, SensorBatch
+from robosoc.cosim.link import Address, LinkLog, UdpLink
+from robosoc.cosim.lockstep import NS_PER_S, PHYSICS_STEP_NS, PWM_COLUMNS, UNKNOWN_ESTIMATE
+from robosoc.cosim.replay import sensor_packet
+from robosoc.physics import World
+
+__all__ = ["Ended", "PhysicsOutcome", "scenario_digest", "serve_physics"]
+
+
+class Ended:
+    """How a side's run ended (``outcome.ended``)."""
+
+    DONE = "done"
+    INTERRUPTED = "interrupted"
+    PEER_LOST = "peer_lost"  # the peer was silent for peer_timeout_s, or never answered
+    PEER_ENDED = "peer_ended"  # the peer said bye before the end (interrupted, failed)
+    MISMATCH = "mismatch"  # the chip's firmware was built for another scenario or vehicle
+    FAILED = "failed"  # this side failed (the firmware faulted on the chip)
+
+
+def scenario_digest(scenario: ScenarioConfig, vehicle: VehicleConfig) -> bytes:
+    """8 bytes naming what is flown: both sides must have it equal."""
+    return hashlib.blake2b(repr((scenario, vehicle)).encode(), digest_size=8).digest()
+
+
+def sample_period_ns(scenario: ScenarioConfig) -> int:
+    return scenario.sensors.period_steps * PHYSICS_STEP_NS
+
+
+@dataclass
+class PhysicsOutcome:
+    """What the physics side did: the rows flown, how it ended, the link's counts."""
+
+    rows: np.ndarray
+    samples: int
+    ended: str
+    message: str
+    host_s: float
+    cpu_s: float
+    link: dict[str, object] = field(default_factory=dict)
+    commands: dict[str, int] = field(default_factory=dict)
+    max_lag_s: float = 0.0
+    period_s: float = 0.0
+
+    @property
+    def simulated_s(self) -> float:
+        """Simulated seconds flown (whole sample periods)."""
+        return len(self.rows) * self.period_s
+
+    @property
+    def complete(self) -> bool:
+        return self.ended == Ended.DONE
+
+
+class PeerSilent(Exception):
+    pass
+
+
+class PeerEnded(Exception):
+    pass
+
+
+class Mismatch(Exception):
+    pass
+
+
+class _Flight:
+    """State of one flight on the physics side (the helpers of :func:`serve_physics`)."""
+
+    def __init__(self, link: UdpLink, config: LinkConfig, hold: ActuatorHold, log: LinkLog) -> None:
+        self.link, self.config, self.hold, self.log = link, config, hold, log
+        self.progress_ns = -1
+        self.newest_seq = -1
+        self.first_step = 0  # the sample period being waited for: its first and last physics step
+        self.last_step = 0
+        self.start = time.monotonic()  # wall-clock time of flight time 0 (realtime pacing)
+        self.received = self.late = 0
+        self.recent: deque[Reading] = deque(maxlen=min(MAX_READINGS, config.resend + 1))
+        self.last_send = time.monotonic()
+        self.peer_bye: Bye | None = None
+        self.finished = False  # the flight is over: commands are still counted, no longer applied
+
+    def send(self, now_ns: int, fresh: list[Reading]) -> None:
+        self.recent.extend(fresh)
+        self.link.send_data(SensorBatch(now_ns, tuple(self.recent)))
+        self.last_send = time.monotonic()
+
+    def take(self, timeout: float) -> bool:
+        """Receive for up to ``timeout`` s; whether anything valid came."""
+        got = self.link.receive(timeout)
+        for d in got:
+            body = d.body
+            if isinstance(body, CommandBatch):
+                self.progress_ns = max(self.progress_ns, body.chip_now_ns)
+                for c in body.commands:
+                    if c.seq <= self.newest_seq:
+                        continue  # a repeat, or older than a command already scheduled
+                    self.newest_seq = c.seq
+                    self.received += 1
+                    if self.finished:
+                        continue
+                    step = c.left_ns // PHYSICS_STEP_NS
+                    now = self.arrival_step()
+                    if step < now:
+                        self.late += 1
+                        self.log.write(f"command {c.seq} (left at {c.left_ns} ns) applied late, at step {now}")
+                        step = now
+                    self.hold.schedule(step, c.pwm)
+            elif isinstance(body, Bye):
+                self.peer_bye = body
+                raise PeerEnded(f"the chip said bye ({body.reason.name.lower()})")
+        return bool(got)
+
+    def arrival_step(self) -> int:
+        """The first physics step a command arriving now can act on: realtime, the step the wall
+        clock is in (within the period being waited for); fast, the period's first step."""
+        if self.config.pace == "fast":
+            return self.first_step
+        wall = int((time.monotonic() - self.start) * NS_PER_S) // PHYSICS_STEP_NS
+        return min(max(wall, self.first_step), self.last_step)
+
+    def check_peer(self) -> None:
+        silent = self.link.silent_for(time.monotonic())
+        if silent > self.config.peer_timeout_s:
+            raise PeerSilent(
+                f"no datagram from the chip for {silent:.1f} s (--peer-timeout {self.config.peer_timeout_s:g})"
+            )
+
+    def heartbeat(self, now_ns: int) -> None:
+        if time.monotonic() - self.last_send >= self.config.heartbeat_s and self.recent:
+            self.link.send_data(SensorBatch(now_ns, tuple(self.recent)))
+            self.last_send = time.monotonic()
+
+    def wait_for_period(self, first_step: int, steps: int) -> float:
+        """Wait until the physics steps ``first_step ...`` of a sample period may be taken (their
+        commands are known); the real-time lag then [s]."""
+        self.first_step, self.last_step = first_step, first_step + steps - 1
+        end_ns = (first_step + steps) * PHYSICS_STEP_NS
+        while True:
+            now = time.monotonic()
+            if self.config.pace == "realtime":
+                remaining = self.start + end_ns / NS_PER_S - now
+                if remaining <= 0:
+                    self.take(0.0)
+                    self.check_peer()
+                    return -remaining
+                timeout = min(remaining, self.config.heartbeat_s)
+            else:
+                if self.progress_ns >= end_ns:
+                    return 0.0
+                timeout = self.config.heartbeat_s
+            self.take(timeout)
+            self.heartbeat(first_step * PHYSICS_STEP_NS)
+            self.check_peer()
+
+
+def _wait_for_hello(link: UdpLink, config: LinkConfig, digest: bytes, period_ns: int, log: LinkLog) -> Hello:
+    deadline = time.monotonic() + config.connect_timeout_s
+    while True:
+        for d in link.receive(min(0.1, max(0.0, deadline - time.monotonic()))):
+            if isinstance(d.body, Hello):
+                if d.body.digest != digest or d.body.sample_period_ns != period_ns:
+                    raise Mismatch(
+                        "the chip's firmware was built for another scenario or vehicle "
+                        "(give both sides the same --scenario, --seconds and --vehicle)"
+                    )
+                return d.body
+        if time.monotonic() > deadline:
+            raise PeerSilent(f"no hello from a chip within --connect-timeout {config.connect_timeout_s:g} s")
+
+
+def serve_physics(
+    scenario: ScenarioConfig,
+    vehicle: VehicleConfig,
+    seed: int,
+    config: LinkConfig,
+    bind: Address,
+    *,
+    log_path: Path | None = None,
+    on_listen: Callable[[Address], None] | None = None,
+    on_start: Callable[[], None] | None = None,
+    on_row: Callable[[np.ndarray], None] | None = None,
+    on_sample: Callable[[int, int], None] | None = None,
+) -> PhysicsOutcome:
+    """Fly ``scenario`` with the chip at the other end of a UDP link; see the module docstring.
+
+    Args:
+        scenario, vehicle, seed: what is flown (as :func:`robosoc.cosim.lockstep.fly_lockstep`);
+            the seed also drives the faults injected on the sensor batches.
+        config: pacing, hold, timeouts, redundancy and faults.
+        bind: the address to listen on (port 0: a free port, given to ``on_listen``).
+        log_path: the side's link log (``link-physics.log``), or None.
+        on_listen: called with the address bound, before waiting for the chip.
+        on_start: called when the chip's hello has come and the flight starts.
+        on_row: called with each row as soon as it is complete (the flight log).
+        on_sample: called with (samples done, samples in all).
+
+    Returns:
+        The outcome, also when the flight was interrupted (Ctrl-C), the chip went silent or said
+        bye early (``ended`` says which; the rows are those flown).
+
+    Raises:
+        LinkError: ``bind`` cannot be bound.
+        ValueError: a negative seed, a flight shorter than one sensor period.
+    """
+    check_seed("seed", seed)
+    samples = round(scenario.duration_s * scenario.sensors.rate_hz)
+    if samples < 1:
+        raise ValueError(f"duration_s: a flight lasts at least one sensor period, got {scenario.duration_s:g} s")
+    period_ns = sample_period_ns(scenario)
+    log = LinkLog(log_path)
+    try:
+        link = UdpLink(bind, "physics", config.faults, seed, log)
+    except BaseException:
+        log.close()
+        raise
+    rows = np.empty((samples, len(ROW_FIELDS)))
+    done = 0
+    flight: _Flight | None = None
+    start = time.monotonic()
+    cpu_start = time.process_time()
+    ended, message = Ended.DONE, "flown"
+    max_lag = 0.0
+    try:
+        if on_listen is not None:
+            on_listen(link.address)
+        _wait_for_hello(link, config, scenario_digest(scenario, vehicle), period_ns, log)
+        log.write(f"flying {samples} samples, pace {config.pace}, hold {config.hold}, resend {config.resend}")
+        if on_start is not None:
+            on_start()
+        world = World([vehicle], scenario.sensors, scenario.wind)
+        world.reset(seed)
+        quad = world.quadrotors[0]
+        flight = _Flight(link, config, ActuatorHold(config.hold, quad.pwm), log)
+        steps = world.sensor_steps
+        rest = vehicle.rest_height
+        start = flight.start = time.monotonic()
+        cpu_start = time.process_time()
+        for k in range(samples):
+            t_ns = k * period_ns
+            sample = quad.sensors()
+            setpoint = setpoint_at(scenario.flight, rest, sample.time)
+            row = flight_row(sample, quad.truth(), UNKNOWN_ESTIMATE, setpoint, quad.pwm, world.wind.velocity)
+            flight.send(t_ns, [Reading(k, t_ns, sensor_packet(row, k, period_ns // 1000))])
+            max_lag = max(max_lag, flight.wait_for_period(k * steps, steps))
+            for s in range(steps):
+                quad.apply_pwm(flight.hold.at(k * steps + s))
+                if s == 0:
+                    row[PWM_COLUMNS] = quad.pwm
+                    rows[k] = row
+                    done = k + 1
+                    if on_row is not None:
+                        on_row(row)
+                    if on_sample is not None:
+                        on_sample(done, samples)
+                world.step()
+    except KeyboardInterrupt:
+        ended, message = Ended.INTERRUPTED, "interrupted"
+    except PeerSilent as exc:
+        ended, message = Ended.PEER_LOST, str(exc)
+    except PeerEnded as exc:
+        ended, message = Ended.PEER_ENDED, str(exc)
+    except Mismatch as exc:
+        ended, message = Ended.MISMATCH, str(exc)
+    finally:
+        host_s = time.monotonic() - start
+        cpu_s = time.process_time() - cpu_start
+        reason = {Ended.DONE: ByeReason.DONE, Ended.INTERRUPTED: ByeReason.INTERRUPTED}.get(ended, ByeReason.ERROR)
+        if ended == Ended.PEER_LOST:
+            reason = ByeReason.PEER_LOST
+        log.write(f"ended: {ended}: {message}")
+        try:
+            if ended == Ended.DONE and flight is not None and flight.recent:
+                # the last readings once more: a reading lost at the very end has no later datagram to ride on
+                link.send_data(SensorBatch(samples * period_ns, tuple(flight.recent)))
+            link.send_control(Bye(reason, link.sent, samples * period_ns if ended == Ended.DONE else done * period_ns))
+            if ended == Ended.DONE and flight is not None:
+                _await_bye(flight, config)
+        except KeyboardInterrupt:
+            pass
+        link.close()
+        commands = {
+            "received": flight.received if flight else 0,
+            "late": flight.late if flight else 0,
+            "missed": max(0, done - (flight.received if flight else 0)),
+        }
+        counts = link.counts.as_dict()
+        outcome = PhysicsOutcome(
+            rows=rows[:done],
+            samples=samples,
+            ended=ended,
+            message=message,
+            host_s=host_s,
+            cpu_s=cpu_s,
+            link={
+                "to_chip": {
+                    "sent": link.sent,
+                    "injected": dict(link.injector.injected),
+                    "send_errors": link.send_errors,
+                },
+                "from_chip": counts,
+                "foreign": link.foreign,
+                "receive_errors": link.receive_errors,
+            },
+            commands=commands,
+            max_lag_s=max_lag,
+            period_s=period_ns / NS_PER_S,
+        )
+        log.write(f"counts: {outcome.link}; commands {commands}")
+        log.close()
+    return outcome
+
+
+def _await_bye(flight: _Flight, config: LinkConfig) -> None:
+    """After the flight: take what the chip still sends until its bye (or its silence)."""
+    deadline = time.monotonic() + config.peer_timeout_s
+    flight.finished = True
+    while time.monotonic() < deadline:
+        try:
+            flight.take(min(0.05, deadline - time.monotonic()))
+        except PeerEnded:
+            return

@@ -1,0 +1,220 @@
+"""The decoupled mode end to end: both sides as processes over loopback, peers that vanish, bad addresses.
+
+Short flights paced ``fast``; the scenario takes off at 0.3 s so that the commands matter.  With
+``fast`` pacing every command is known before the physics steps past it, so the decoupled flight
+must be the lockstep flight row for row, whatever the link loses, repeats or reorders.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import queue
+import signal
+import socket
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from robosoc.cli import app, exit_codes
+from robosoc.config.chip import ChipConfig
+from robosoc.config.firmware import FirmwareConfig
+from robosoc.config.link import LinkConfig
+from robosoc.config.scenario import FlightPlan, ScenarioConfig
+from robosoc.config.vehicle import vehicle_preset
+from robosoc.control.flight import ROW_FIELDS
+from robosoc.control.flight_log import read_flight_log
+from robosoc.cosim.datagram import Hello, Reading, SensorBatch
+from robosoc.cosim.decoupled import SideFailed, fly_decoupled
+from robosoc.cosim.decoupled_physics import sample_period_ns, scenario_digest
+from robosoc.cosim.link import Address, UdpLink
+from robosoc.cosim.lockstep import fly_chip
+from robosoc.cosim.replay import sensor_packet
+
+SCENARIO_TOML = "duration_s = 1.2\n[flight]\ntakeoff_s = 0.3\nsteps = []\n"
+FAULTS = "loss=0.1,duplicate=0.05,reorder=0.05,truncate=0.05,garbage=0.05"
+HANG_GUARD_S = 300  # a side that never ends fails the test instead of hanging the suite
+
+
+def test_fly_decoupled_survives_every_fault_and_equals_lockstep(tmp_path: Path) -> None:
+    scenario = tmp_path / "short.toml"
+    scenario.write_text(SCENARIO_TOML)
+    out = tmp_path / "run"
+    args = ["fly", "--decoupled", "--pace", "fast", "--faults", FAULTS, "--scenario", str(scenario)]
+    result = CliRunner().invoke(app, [*args, "--seed", "5", "--out", str(out)])
+    assert result.exit_code == 0, result.output
+    assert "decoupled: two processes over UDP, pace fast" in result.output and "to physics" in result.output
+    summary = json.loads((out / "summary.json").read_text())
+    assert (summary["mode"], summary["controller"], summary["complete"]) == ("decoupled", "chip", True)
+    assert summary["firmware"]["build"] == "fixed+mul" and summary["deadline_misses"] == 0
+    link = summary["link"]
+    for direction in ("to_chip", "to_physics"):
+        d, injected = link[direction], link[direction]["injected"]
+        assert min(injected.values()) > 0, (direction, injected)  # every fault happened in each direction
+        for name in ("duplicated", "reordered", "truncated", "garbage"):
+            assert d[name] == injected[name], (direction, name, d)
+        assert d["lost"] == injected["lost"] + injected["truncated"], (direction, d)
+        assert d["received"] == d["sent"] - d["lost"]
+    assert link["readings"]["injected"] == 120 and link["readings"]["late"] == 0
+    assert link["commands"] == {"received": 120, "late": 0, "missed": 0}
+    rows = read_flight_log(out / "flight.csv")
+    config = ScenarioConfig(duration_s=1.2, flight=FlightPlan(takeoff_s=0.3, steps=()))
+    reference = fly_chip(config, vehicle_preset(config.vehicle), 5).rows
+    pwm = [ROW_FIELDS.index(f"pwm{i}") for i in range(4)]
+    assert reference[-1, pwm].min() > 0, "the reference flight has taken off"
+    assert np.array_equal(rows, reference, equal_nan=True)
+    for name in ("jobs.csv", "chip.json", "physics.json", "link-chip.log", "link-physics.log", "flight.png"):
+        assert (out / name).stat().st_size > 0, name
+
+
+# --- one side against a hand-driven peer -----------------------------------------------------------
+
+
+def robosoc(*args: str) -> subprocess.Popen:
+    env = {**os.environ, "PYTHONPATH": str(Path(__file__).parents[2] / "src"), "COLUMNS": "200"}
+    return subprocess.Popen(
+        [sys.executable, "-m", "robosoc", *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env
+    )
+
+
+def lines_of(process: subprocess.Popen) -> queue.Queue:
+    lines: queue.Queue = queue.Queue()
+
+    def read() -> None:
+        for line in process.stdout:  # type: ignore[union-attr]
+            lines.put(line)
+
+    threading.Thread(target=read, daemon=True).start()
+    return lines
+
+
+def wait_for(lines: queue.Queue, text: str) -> str:
+    while True:
+        line = lines.get(timeout=HANG_GUARD_S)
+        if text in line:
+            return line
+
+
+def test_the_physics_side_ends_when_the_chip_goes_silent(tmp_path: Path) -> None:
+    out = tmp_path / "physics"
+    args = ["--seconds", "3", "--bind", "127.0.0.1:0", "--peer-timeout", "1", "--out", str(out)]
+    physics = robosoc("serve", "physics", *args)
+    line = wait_for(lines_of(physics), "listening on")
+    port = int(line.rsplit(":", 1)[1])
+    config = ScenarioConfig(duration_s=3.0)
+    chip = UdpLink(Address("127.0.0.1", 0), "chip", peer=Address("127.0.0.1", port))
+    chip.send_control(Hello(scenario_digest(config, vehicle_preset(config.vehicle)), sample_period_ns(config)))
+    got = []
+    while not got:
+        got = chip.receive(5.0)
+    chip.close()  # the chip vanishes after its first sensor batch
+    assert physics.wait(timeout=HANG_GUARD_S) == exit_codes.PEER_LOST
+    stderr = physics.stderr.read()  # type: ignore[union-attr]
+    assert "robosoc serve physics: no datagram from the chip for" in stderr and "--peer-timeout 1" in stderr
+    record = json.loads((out / "physics.json").read_text())
+    assert record["ended"] == "peer_lost" and not record["complete"]
+    assert len(read_flight_log(out / "flight.csv")) == record["rows"] > 0
+
+
+def test_the_chip_side_ends_when_the_physics_goes_silent(tmp_path: Path) -> None:
+    config = ScenarioConfig(duration_s=2.0)
+    physics = UdpLink(Address("127.0.0.1", 0), "physics")
+    out = tmp_path / "chip"
+    peer = f"127.0.0.1:{physics.address.port}"
+    chip = robosoc("serve", "chip", "--seconds", "2", "--peer", peer, "--peer-timeout", "1", "--out", str(out))
+    hello = []
+    while not hello:
+        assert chip.poll() is None, chip.stderr.read()  # type: ignore[union-attr]
+        hello = physics.receive(5.0)
+    assert hello[0].body == Hello(scenario_digest(config, vehicle_preset(config.vehicle)), sample_period_ns(config))
+    row = np.zeros(len(ROW_FIELDS))
+    readings = []
+    for k in range(3):
+        row[0] = k / 100
+        readings.append(Reading(k, k * 10_000_000, sensor_packet(row, k, 10_000)))
+    physics.send_data(SensorBatch(20_000_000, tuple(readings)))
+    # the physics vanishes: the chip runs to one period past the last reading, then waits in vain
+    assert chip.wait(timeout=HANG_GUARD_S) == exit_codes.PEER_LOST
+    stderr = chip.stderr.read()  # type: ignore[union-attr]
+    assert "robosoc serve chip: no datagram from the physics for" in stderr
+    record = json.loads((out / "chip.json").read_text())
+    assert record["ended"] == "peer_lost" and record["readings"]["injected"] == 3
+    assert record["tasks"]["estimator"]["jobs"] == 3
+    physics.close()
+
+
+def test_ctrl_c_ends_fly_decoupled_with_what_was_done(tmp_path: Path) -> None:
+    out = tmp_path / "run"
+    fly = robosoc("fly", "--decoupled", "--seconds", "20", "--out", str(out))
+    wait_for(lines_of(fly), "the chip said hello; flying")
+    while not (out / "flight.csv").exists() or len((out / "flight.csv").read_text().splitlines()) < 3:
+        assert fly.poll() is None, fly.stderr.read()  # type: ignore[union-attr]
+        time.sleep(0.05)  # until a few rows are flown
+    fly.send_signal(signal.SIGINT)  # to the parent only: it passes it on to both sides
+    assert fly.wait(timeout=HANG_GUARD_S) == exit_codes.INTERRUPTED
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["mode"] == "decoupled" and summary["complete"] is False
+    assert summary["link"]["physics_ended"] == "interrupted" and summary["link"]["chip_ended"] in (
+        "interrupted",
+        "peer_ended",
+    )
+    assert len(read_flight_log(out / "flight.csv")) >= 2
+
+
+# --- clear errors ----------------------------------------------------------------------------------
+
+
+def test_addresses_in_use_and_bad_addresses_are_usage_errors(tmp_path: Path) -> None:
+    taken = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    taken.bind(("127.0.0.1", 0))
+    port = taken.getsockname()[1]
+    runner = CliRunner()
+    cases = [
+        (
+            ["serve", "physics", "--bind", f"127.0.0.1:{port}", "--no-out"],
+            f"--bind: 127.0.0.1:{port}: the address is in use",
+        ),
+        (["serve", "physics", "--bind", "localhost", "--no-out"], "--bind: expected HOST:PORT"),
+        (
+            ["serve", "physics", "--bind", "192.0.2.1:5000", "--no-out"],
+            "--bind: 192.0.2.1:5000: not an address of this machine",
+        ),
+        (
+            ["serve", "chip", "--peer", "no-such-host.invalid:5", "--no-out"],
+            "--peer: no-such-host.invalid:5: cannot resolve",
+        ),
+        (["serve", "chip", "--peer", "127.0.0.1:0", "--no-out"], "--peer: the port must be between 1 and 65535"),
+        (["fly", "--pace", "fast", "--no-out"], "--pace: only with --decoupled"),
+        (
+            ["fly", "--decoupled", "--controller", "host", "--no-out"],
+            "--decoupled: the decoupled mode flies the firmware",
+        ),
+        (
+            ["fly", "--decoupled", "--bind", f"127.0.0.1:{port}", "--seconds", "0.1", "--no-out"],
+            f"--bind: 127.0.0.1:{port}: the address is in use",
+        ),
+    ]
+    for args, message in cases:
+        result = runner.invoke(app, args)
+        assert result.exit_code == exit_codes.USAGE, (args, result.output)
+        assert message in result.output and "Traceback" not in result.output, (args, result.output)
+    taken.close()
+
+
+def test_a_side_that_fails_to_start_stops_the_other(tmp_path: Path) -> None:
+    """The chip side cannot load its firmware (its tile is powered off): the physics side, waiting
+    for a hello that will never come, is interrupted instead of waiting out --connect-timeout."""
+    config = ScenarioConfig(duration_s=0.5)
+    chip = ChipConfig(width=2, height=2, io_tile=(0, 0), powered_off=((0, 1),))  # the estimator's tile
+    with pytest.raises(SideFailed, match="ekf_tile: \\[0, 1\\] is powered off") as failure:
+        fly_decoupled(config, vehicle_preset(config.vehicle), FirmwareConfig(), 1, LinkConfig(), tmp_path, chip=chip)
+    assert failure.value.side == "chip"
+    physics = json.loads((tmp_path / "physics.json").read_text())
+    assert physics["ended"] == "interrupted" and physics["rows"] == 0
+    assert json.loads((tmp_path / "summary.json").read_text())["complete"] is False
