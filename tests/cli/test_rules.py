@@ -325,7 +325,8 @@ def test_piped_output_keeps_long_paths_and_brackets(tmp_path: Path, monkeypatch:
     out = tmp_path / ("a folder name long enough that an 80-column console would wrap it " * 2).strip() / "run[1]"
     result = invoke("fly", "--seconds", "0.02", "--out", out, "--video", tmp_path / "flight.mp4")
     assert result.exit_code == 0, result.output
-    assert f"run folder: {out} (scenario.toml, flight.csv, summary.json, flight.png, jobs.csv)" in lines(result)
+    files = "scenario.toml, flight.csv, summary.json, flight.png, flight.mcap, jobs.csv, chip-trace.json, report.html"
+    assert f"run folder: {out} ({files})" in lines(result)
     assert "no video: no OpenGL here; MP4 needs pip install 'robosoc[video]'" in lines(result)
     assert any(line.startswith("flying scenario default for 0.02 s") and line.endswith("Hz") for line in lines(result))
 
