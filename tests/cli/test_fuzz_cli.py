@@ -123,6 +123,12 @@ OPTIONS: dict[tuple[str, str], Spec] = {
     ("firmware replay", "--seconds"): Spec("float", 0.02, 600.0),
     ("firmware replay", "--seed"): Spec("int", 0, 2**63 - 1),
     ("firmware replay", "--out"): Spec("out_dir"),
+    ("table", "--iterations"): Spec("int", 1, 10_000),
+    ("table", "--release"): Spec("choice", choices=("event", "periodic", "both")),
+    ("table", "--closed-loop"): Spec("flag"),
+    ("table", "--seed"): Spec("int", 0, 2**63 - 1),
+    ("table", "--workers"): Spec("int", 1, 64),
+    ("table", "--out"): Spec("out_dir"),
 }
 
 PATH = "\0"  # "\0dir": one of the bad_paths fixture's paths
@@ -169,6 +175,9 @@ def base_command(command: str, option: str, elves: dict[str, Path], tmp: Path) -
         "firmware build": ["firmware", "build"],
         "firmware size": ["firmware", "size"],
         "firmware replay": ["firmware", "replay", *([] if option in ("LOG", "--seconds") else ["--seconds", "0.02"])],
+        "table": ["table", *([] if option == "--iterations" else ["--iterations", "1"]), "--workers", "1"]
+        if option != "--workers"
+        else ["table", "--iterations", "1"],
     }[command]
 
 
