@@ -112,7 +112,7 @@ class ReplayResult:
     cycles: int
     host_seconds: float
     dropped: list[str] = field(default_factory=list)
-    #: the estimator's state at the close of each sample period in which its tile slept (not mid-job)
+    #: the estimator's state at the close of each sample period in which no estimator job was mid-way
     estimates: list[flight_app.ChipEstimate] = field(default_factory=list)
 
     def jobs_of(self, task: str) -> list[JobRecord]:
@@ -254,14 +254,16 @@ class FirmwareRun:
     def close_period(self) -> None:
         """End the period of the last injected sample (the chip is at the next sample's cycle):
         snapshot the counters, collect the jobs the kernels logged, and read the estimator's state
-        (:func:`flight_app.read_estimate`, a host read: no cycle) if its tile sleeps.
+        (:func:`flight_app.read_estimate`, a host read: no cycle) unless a job is mid-way.
 
         Raises:
             RuntimeError: a tile's job log overflowed since the last call.
         """
         current = _snapshot(self.chip, self.tiles, self.model)
-        if self.chip.state(tuple(self.fw.ekf_tile)) == "sleeping":  # type: ignore[arg-type]  # not mid-job
-            self.estimates.append(flight_app.read_estimate(self.chip, self.fw, len(self.samples) - 1))
+        estimate = flight_app.read_estimate(self.chip, self.fw, len(self.samples) - 1)
+        # consistent unless a job is mid-way: every sample estimated, or the tile asleep
+        if estimate.jobs >= len(self.samples) or self.chip.state(tuple(self.fw.ekf_tile)) == "sleeping":  # type: ignore[arg-type]
+            self.estimates.append(estimate)
         self._periods.append(_delta(self._previous, current))
         self._previous = current
         for xy in self.tiles:
