@@ -177,6 +177,12 @@ OPTIONS: dict[tuple[str, str], Spec] = {
     ("report", "RUN_DIR"): Spec("in_dir"),
     ("report", "--out"): Spec("out_file"),
     ("report", "--mcap"): Spec("flag"),
+    ("table", "--iterations"): Spec("int", 1, 10_000),
+    ("table", "--release"): Spec("choice", choices=("event", "periodic", "both")),
+    ("table", "--closed-loop"): Spec("flag"),
+    ("table", "--seed"): Spec("int", 0, 2**63 - 1),
+    ("table", "--workers"): Spec("int", 1, 64),
+    ("table", "--out"): Spec("out_dir"),
 }
 
 PATH = "\0"  # "\0dir": one of the bad_paths fixture's paths
@@ -257,6 +263,9 @@ def base_command(command: str, option: str, elves: dict[str, Path], tmp: Path) -
         "scenario show": ["scenario", "show"],
         "firmware size": ["firmware", "size"],
         "firmware replay": ["firmware", "replay", *([] if option in ("LOG", "--seconds") else ["--seconds", "0.02"])],
+        "table": ["table", *([] if option == "--iterations" else ["--iterations", "1"]), "--workers", "1"]
+        if option != "--workers"
+        else ["table", "--iterations", "1"],
     }[command]
 
 

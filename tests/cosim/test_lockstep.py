@@ -69,8 +69,12 @@ def test_each_command_is_held_from_its_arrival_step_on(flight: ChipFlight) -> No
     assert (rows == chip).all()
 
 
-def test_the_chip_estimate_is_not_visible_to_the_host(flight: ChipFlight) -> None:
-    assert np.isnan(column(flight.rows, "est_height")).all()
+def test_rows_carry_the_chips_estimate_one_sample_behind(flight: ChipFlight) -> None:
+    """The estimate probe (host reads of the estimator tile): row k holds sample k - 1's estimate."""
+    height = column(flight.rows, "est_height")
+    assert np.isnan(height[0]) and not np.isnan(height[1:]).any()
+    by_sample = {e.sample: e.height for e in flight.run.estimates}
+    assert [by_sample[k - 1] for k in range(1, len(height))] == list(height[1:])
     assert not np.isnan(column(flight.rows, "z")).any()
 
 

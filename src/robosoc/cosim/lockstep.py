@@ -22,8 +22,10 @@ Per sensor sample k, taken at ``t_k`` (a multiple of the sensor period):
    quantised to the physics step containing the arrival cycle); then the world takes the step.
 
 The row's PWM columns are the command in force during the sample's first physics step.  The chip's
-state estimate never leaves the chip (only PWM messages reach the I/O tile), so the rows' estimate
-columns are NaN for the chip controller.
+state estimate never leaves the chip (only PWM messages reach the I/O tile); the host reads it from
+the estimator tile's memory at each sample period's close (:func:`flight_app.read_estimate`, no
+simulated cycle), so row k's estimate columns hold the chip's newest estimate at ``t_k``: that of
+sample k - 1 (the chip has not yet run sample k), NaN before the first.
 """
 
 from __future__ import annotations
@@ -42,6 +44,7 @@ from robosoc.config.firmware import FirmwareConfig
 from robosoc.config.ranges import check_seed
 from robosoc.config.scenario import PHYSICS_DT_S, ScenarioConfig
 from robosoc.config.vehicle import VehicleConfig
+from robosoc.control import quaternion
 from robosoc.control.flight import ROW_FIELDS, flight_row
 from robosoc.control.host import Estimate, HostController
 from robosoc.control.setpoint import Setpoint, setpoint_at
@@ -87,7 +90,7 @@ class LockstepController(Protocol):
 
 
 UNKNOWN_ESTIMATE = Estimate(np.full(4, math.nan), np.full(3, math.nan), math.nan, math.nan)
-"""What the host sees of the chip's estimate: nothing (it stays on the chip)."""
+"""The chip controller's estimate before the host has read one from the chip."""
 
 
 class ChipController:
@@ -191,7 +194,12 @@ class ChipController:
 
     @property
     def estimate(self) -> Estimate:
-        return UNKNOWN_ESTIMATE
+        """The newest estimate read from the estimator tile (:attr:`FirmwareRun.estimates`)."""
+        if self.run is None or not self.run.estimates:
+            return UNKNOWN_ESTIMATE
+        e = self.run.estimates[-1]
+        q = np.array(e.quaternion)
+        return Estimate(q, quaternion.to_euler(q), e.height, e.vertical_velocity)
 
 
 def fly_lockstep(

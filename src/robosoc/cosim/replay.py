@@ -114,6 +114,8 @@ class ReplayResult:
     cycles: int
     host_seconds: float
     dropped: list[str] = field(default_factory=list)
+    #: the estimator's state at the close of each sample period in which no estimator job was mid-way
+    estimates: list[flight_app.ChipEstimate] = field(default_factory=list)
 
     def jobs_of(self, task: str) -> list[JobRecord]:
         return [j for j in self.jobs if j.task == task]
@@ -218,6 +220,7 @@ class FirmwareRun:
         self._previous = _snapshot(self.chip, self.tiles, self.model)
         self._seen = dict.fromkeys(self.tiles, 0)
         self._logged: list[tuple[tuple[int, int], images.JobRecord, int]] = []  # (tile, record, period)
+        self.estimates: list[flight_app.ChipEstimate] = []
         self._start = time.perf_counter()
 
     @property
@@ -260,12 +263,17 @@ class FirmwareRun:
 
     def close_period(self) -> None:
         """End the period of the last injected sample (the chip is at the next sample's cycle):
-        snapshot the counters and collect the jobs the kernels logged.
+        snapshot the counters, collect the jobs the kernels logged, and read the estimator's state
+        (:func:`flight_app.read_estimate`, a host read: no cycle) unless a job is mid-way.
 
         Raises:
             RuntimeError: a tile's job log overflowed since the last call.
         """
         current = _snapshot(self.chip, self.tiles, self.model)
+        estimate = flight_app.read_estimate(self.chip, self.fw, len(self.samples) - 1)
+        # consistent unless a job is mid-way: every sample estimated, or the tile asleep
+        if estimate.jobs >= len(self.samples) or self.chip.state(tuple(self.fw.ekf_tile)) == "sleeping":  # type: ignore[arg-type]
+            self.estimates.append(estimate)
         self._periods.append(_delta(self._previous, current))
         self._previous = current
         for xy in self.tiles:
@@ -315,6 +323,7 @@ class FirmwareRun:
             firmware=self.fw, clock_ns=chip_.clock_ns, samples=list(samples), commands=list(self.commands),
             jobs=jobs, kernel_stats={xy: images.read_stats(chip_, xy) for xy in self.tiles}, counters=counters,
             task_energy_pj=task_energy, energy_pj=total, cycles=chip_.cycle, host_seconds=seconds,
+            estimates=list(self.estimates),
         )  # fmt: skip
 
 

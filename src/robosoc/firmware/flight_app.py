@@ -140,6 +140,55 @@ class AppStats:
     send_errors: int
 
 
+EST_STATE_SYMBOL = "app_est"
+"""The estimator task's state (``est_t app_est`` in flight_app.c), read by :func:`read_estimate`."""
+
+
+@dataclass(frozen=True)
+class ChipEstimate:
+    """The estimator task's state estimate as it stands in the estimator tile's memory.
+
+    ``sample`` is the index of the sample period at whose close it was read; ``jobs`` the
+    estimates the task had computed by then (``app_stats.est_jobs``)."""
+
+    sample: int
+    jobs: int
+    quaternion: tuple[float, float, float, float]  # w, x, y, z
+    height: float  # [m]
+    vertical_velocity: float  # [m/s]
+
+
+def read_estimate(chip: MPSoC, fw: FirmwareConfig, sample: int = -1) -> ChipEstimate:
+    """The estimator's quaternion, height and vertical speed, read from the estimator tile's memory
+    by symbol and DWARF member offsets: a host read that costs the chip no cycle.
+
+    Read it while the estimator task is not mid-job (e.g. while its tile sleeps), or the fields
+    may come from two different steps.
+
+    Raises:
+        ValueError: no flight application on the estimator tile, or main has not run.
+    """
+    from robosoc.chip.dwarf import member_offset
+
+    xy = tuple(fw.ekf_tile)
+    t = chip.config.tile_index(xy)  # type: ignore[arg-type]
+    program = chip.programs.get(t)
+    if program is None:
+        raise ValueError(f"tile {xy} has no program loaded")
+    stats = read_app_stats(chip, xy)  # type: ignore[arg-type]
+    base = program.address_of(EST_STATE_SYMBOL)
+    fmt = "<i" if fw.arith == "fixed" else "<f"
+    scale = 1.0 / 65536.0 if fw.arith == "fixed" else 1.0
+
+    def real(member: str, index: int = 0) -> float:
+        offset, _ = member_offset(program.path, "est_t", member)
+        (value,) = struct.unpack(fmt, chip.cores.read(base + offset + 4 * index, 4, tile=t))
+        return float(value) * scale
+
+    quaternion = (real("ekf.x", 0), real("ekf.x", 1), real("ekf.x", 2), real("ekf.x", 3))
+    return ChipEstimate(sample, stats.est_jobs, quaternion, real("alt.h"), real("alt.v"))
+
+
 def read_app_stats(chip: MPSoC, xy: tuple[int, int]) -> AppStats:
     """The application's counters on tile ``xy``.
 
@@ -166,15 +215,18 @@ __all__ = [
     "APP_SOURCE",
     "APP_STATS_SYMBOL",
     "ESTIMATE_PORT",
+    "EST_STATE_SYMBOL",
     "FIRST_SAMPLE_CYCLE",
     "PWM_PORT",
     "SAMPLE_PERIOD_US",
     "SENSOR_PORT",
     "AppStats",
+    "ChipEstimate",
     "app_tiles",
     "build",
     "defines",
     "read_app_stats",
+    "read_estimate",
     "sample_cycle",
     "sensor_payloads",
     "task_ids",
