@@ -68,7 +68,9 @@ def test_fly_decoupled_survives_every_fault_and_equals_lockstep(tmp_path: Path) 
     reference = fly_chip(config, vehicle_preset(config.vehicle), 5).rows
     pwm = [ROW_FIELDS.index(f"pwm{i}") for i in range(4)]
     assert reference[-1, pwm].min() > 0, "the reference flight has taken off"
-    assert np.array_equal(rows, reference, equal_nan=True)
+    # the estimate stays with the chip side (lockstep reads it by a memory probe): every other column equal
+    kept = [i for i, name in enumerate(ROW_FIELDS) if not name.startswith("est_")]
+    assert np.array_equal(rows[:, kept], reference[:, kept], equal_nan=True)
     for name in ("jobs.csv", "chip.json", "physics.json", "link-chip.log", "link-physics.log", "flight.png"):
         assert (out / name).stat().st_size > 0, name
 
