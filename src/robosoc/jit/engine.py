@@ -1,0 +1,171 @@
+"""The translator of one core: its tables, and translating the regions the dispatch loop asks for.
+
+``TranslatingCore(state).step_until(until)`` runs like ``run_cores(state.arrays(), [tile], until)``
+and leaves the same RUN_* status; in between it translates the regions that turn hot (``jit``: at
+their first arrival; ``auto``: after :data:`AUTO_THRESHOLD` arrivals).  Counts, cycles, outputs
+and errors are those of the interpreter (docs/translation.md).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from robosoc.jit.compiler import Compiler, shared_compiler
+from robosoc.jit.emit_ir import NAME_PLACEHOLDER, Target, emit_region
+from robosoc.jit.regions import CodeView, End, Region, discover
+from robosoc.kernels.core_layout import ERRATA_RTL, S_CODE_SIZE, S_ERRATA, S_MEM_BASE, S_MEM_SIZE, S_MUL, S_PC, S_RUN
+from robosoc.kernels.jit_dispatch import CTX_FLUSHES, CTX_SIZE, NEVER_TRANSLATE, RUN_TRANSLATE, JitArrays, run_translated
+
+if TYPE_CHECKING:
+    from robosoc.chip.core_state import CoreState
+
+#: Arrivals at a word without a translation before ``auto`` translates a region there.
+AUTO_THRESHOLD = 8
+THRESHOLDS = {"jit": 1, "auto": AUTO_THRESHOLD}
+M32 = 0xFFFFFFFF
+
+
+@dataclass
+class TranslationStats:
+    regions: int = 0
+    instructions: int = 0  # guest instructions translated
+    flushes: int = 0  # times self-modifying code made the core forget its translations
+
+
+class TranslatingCore:
+    """Runs one tile of a :class:`CoreState` with translated regions (engine ``jit`` or ``auto``)."""
+
+    def __init__(self, state: CoreState, tile: int = 0, mode: str = "jit", compiler: Compiler | None = None) -> None:
+        if mode not in THRESHOLDS:
+            raise ValueError(f"engine: must be one of {', '.join(map(repr, THRESHOLDS))}, got {mode!r}")
+        self.state = state
+        self.tile = tile
+        self.mode = mode
+        self.threshold = THRESHOLDS[mode]
+        self.compiler = compiler or shared_compiler()
+        self.stats = TranslationStats()
+        self._tiles = np.array([tile], dtype=np.int64)
+        self._code_size = -1
+        self._jt: JitArrays | None = None
+
+    # --- tables -------------------------------------------------------------------------------
+    def forget(self) -> None:
+        """Drop every translation (call after writing code from outside the core)."""
+        self._code_size = -1
+        self._jt = None
+
+    def _tables(self) -> JitArrays:
+        code = int(self.state.st[self.tile, S_CODE_SIZE])
+        if self._jt is None or code != self._code_size:
+            words = code // 4 + 1  # the word after the code: its fetch error is the interpreter's
+            hot = np.zeros(words, dtype=np.int32)
+            hot[-1] = NEVER_TRANSLATE
+            self._jt = JitArrays(
+                entry_fn=np.zeros(words, dtype=np.int64),
+                entry_blk=np.zeros(words, dtype=np.int64),
+                entry_slot=np.zeros(words, dtype=np.int64),
+                hot=hot,
+                tmap=np.zeros(words, dtype=np.uint8),
+                cnt=np.zeros(0, dtype=np.int64),
+                slot_ptr=np.zeros(1, dtype=np.int64),
+                slot_kc=np.zeros(0, dtype=np.int64),
+                slot_delta=np.zeros(0, dtype=np.int64),
+                ctx=np.zeros(CTX_SIZE, dtype=np.int64),
+            )
+            self._code_size = code
+            self._slots: list[list[tuple[int, int]]] = []
+            self._flushes_seen = 0
+        return self._jt
+
+    def _target(self) -> Target:
+        st = self.state.st[self.tile]
+        return Target(
+            base=int(st[S_MEM_BASE]),
+            mem_size=int(st[S_MEM_SIZE]),
+            code_size=int(st[S_CODE_SIZE]),
+            rtl_errata=int(st[S_ERRATA]) == ERRATA_RTL,
+        )
+
+    def _view(self) -> CodeView:
+        st = self.state.st[self.tile]
+        base = int(st[S_MEM_BASE])
+        m32 = self.state.m32[self.tile]
+        return CodeView(
+            word=lambda a: int(m32[(a - base) >> 2]) & M32,
+            base=base,
+            code_size=int(st[S_CODE_SIZE]),
+            mem_size=int(st[S_MEM_SIZE]),
+            has_mul=int(st[S_MUL]) != 0,
+        )
+
+    # --- translation --------------------------------------------------------------------------
+    def translate(self, pc: int) -> Region:
+        """Translate the region starting at ``pc`` and enter its blocks in the tables."""
+        jt = self._tables()
+        if jt.ctx[CTX_FLUSHES] != self._flushes_seen:
+            self.stats.flushes += int(jt.ctx[CTX_FLUSHES]) - self._flushes_seen
+            self._flushes_seen = int(jt.ctx[CTX_FLUSHES])
+        target = self._target()
+        region = discover(self._view(), pc)
+        base = target.base
+        if not region.blocks:
+            jt.hot[(pc - base) >> 2] = NEVER_TRANSLATE
+            return region
+        emitted = emit_region(target, region)
+        address = self.compiler.add(emitted.ir, NAME_PLACEHOLDER)
+        slot_base = len(self._slots)
+        self._slots.extend(emitted.slots)
+        self._grow_slots()
+        jt = self._jt
+        assert jt is not None
+        for start, k in emitted.block_index.items():
+            i = (start - base) >> 2
+            if jt.entry_fn[i] == 0:
+                jt.entry_fn[i] = address
+                jt.entry_blk[i] = k
+                jt.entry_slot[i] = slot_base
+        for block in region.blocks.values():
+            for insn in block.insns:
+                jt.tmap[(insn.pc - base) >> 2] = 1
+            if block.end is End.SIDE:
+                i = (block.next_pc - base) >> 2
+                if jt.entry_fn[i] == 0:
+                    jt.hot[i] = NEVER_TRANSLATE
+        if jt.entry_fn[(pc - base) >> 2] == 0:
+            jt.hot[(pc - base) >> 2] = NEVER_TRANSLATE
+        self.stats.regions += 1
+        self.stats.instructions += region.instructions
+        return region
+
+    def _grow_slots(self) -> None:
+        jt = self._jt
+        assert jt is not None
+        ptr = np.zeros(len(self._slots) + 1, dtype=np.int64)
+        kc: list[int] = []
+        delta: list[int] = []
+        for s, hist in enumerate(self._slots):
+            for k, d in hist:
+                kc.append(k)
+                delta.append(d)
+            ptr[s + 1] = len(kc)
+        self._jt = jt._replace(
+            cnt=np.zeros(len(self._slots), dtype=np.int64),  # all zero between dispatcher calls
+            slot_ptr=ptr,
+            slot_kc=np.array(kc, dtype=np.int64),
+            slot_delta=np.array(delta, dtype=np.int64),
+        )
+
+    # --- running ------------------------------------------------------------------------------
+    def step_until(self, until: int) -> int:
+        """Run the tile to cycle ``until`` (or an event); its RUN_* status, as ``run_cores`` leaves it."""
+        arrays = self.state.arrays()
+        st = self.state.st[self.tile]
+        while True:
+            run_translated(arrays, self._tiles, until, self._tables(), self.threshold)
+            status = int(st[S_RUN])
+            if status != RUN_TRANSLATE:
+                return status
+            self.translate(int(st[S_PC]))

@@ -1,0 +1,275 @@
+"""The compiled dispatch loop of the block translator: translated regions and the interpreter, alternating.
+
+The loop keeps the interpreter's instruction-boundary rules (:func:`robosoc.kernels.core.run_cores`):
+at every boundary at or after the next event it consults the interrupt controller, the end of the
+slice and the output buffer in the same order.  Between events it calls the translated region that
+has an entry at the pc (through a function pointer, :func:`call_region`), which runs blocks only
+while the block's worst-case cycles end before the next event (docs/translation.md).  Whatever a
+region does not do -- device accesses, misaligned or unmapped accesses, traps, illegal words, the
+idle loops the interpreter skips, blocks that could reach an event -- the interpreter does, one
+instruction at a time, by calling ``run_cores`` with the slice ending at the next cycle.
+
+A region returns one of the X_* codes with the pc and cycle in ``ctx``.  Instruction counts are
+kept per block (``cnt``: one slot per block and per side exit, each with a signed histogram over the
+interpreter's per-operation counters) and added to ``opc`` when the loop returns, so the counters
+equal the interpreter's.  A store into a word that any region translated (``tmap``) returns
+X_SMC; the loop then forgets every translation.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+from llvmlite import ir
+from numba import njit, types
+from numba.extending import intrinsic
+
+from robosoc.kernels.core import CoreArrays, fetch_error, run_cores
+from robosoc.kernels.core_layout import (
+    ERR_FETCH_DATA,
+    OUT_CAPACITY,
+    RUN_CHUNK,
+    RUN_ERROR,
+    RUN_MAX_CYCLES,
+    RUN_OUTPUT,
+    S_CODE_SIZE,
+    S_CYCLE,
+    S_ERR,
+    S_ERR_ADDR,
+    S_ERR_INSN,
+    S_ERR_PC,
+    S_IRQ_CHECK,
+    S_MAX_CYCLES,
+    S_MEM_BASE,
+    S_MEM_SIZE,
+    S_OUT_LEN,
+    S_PC,
+    S_RUN,
+)
+from robosoc.kernels.dev_irq import irq_event
+
+# region exit codes
+X_JUMP = 0  # control left the region: continue at ctx[CTX_PC]
+X_LIMIT = 1  # the block at ctx[CTX_PC] could reach the next event: the interpreter runs it
+X_SIDE = 2  # the instruction at ctx[CTX_PC] is the interpreter's (device, misaligned, unmapped ...)
+X_SMC = 3  # a store wrote a translated word; continue at ctx[CTX_PC] after forgetting translations
+
+# ctx slots
+CTX_PC = 0
+CTX_CYC = 1
+CTX_LIMIT = 2  # blocks run only while their last instruction starts before this cycle
+CTX_BLOCK = 3  # entry block of the called region
+CTX_FLUSHES = 4  # how many times the loop forgot every translation (self-modifying code)
+CTX_SIZE = 8
+
+# dispatcher results beyond the interpreter's RUN_* codes
+RUN_TRANSLATE = 100  # the pc in st[S_PC] turned hot: translate a region there and call again
+
+NEVER_TRANSLATE = -(1 << 30)  # hot counter of a word no region can start at
+
+_STORE_OPCODE = 0x23
+_SYSTEM_OPCODE = 0x73
+_JAL_X0_OPCODE = 0x6F  # jal with rd = x0 (low 12 bits)
+_NOP = 0x13
+M32 = 0xFFFFFFFF
+
+
+class JitArrays(NamedTuple):
+    """The translator's tables, one entry per word of the loaded code plus one (the word after it).
+
+    ``entry_fn`` native address of the region with a block starting at the word (0: none),
+    ``entry_blk`` that block's number, ``entry_slot`` the region's first count slot, ``hot`` arrivals at a word without an entry (NEVER_TRANSLATE:
+    none can start there), ``tmap`` 1 for words some region translated, ``cnt`` executions per count
+    slot, ``slot_ptr``/``slot_kc``/``slot_delta`` each slot's histogram (CSR), ``ctx`` the region
+    call's in/out slots.
+    """
+
+    entry_fn: np.ndarray
+    entry_blk: np.ndarray
+    entry_slot: np.ndarray
+    hot: np.ndarray
+    tmap: np.ndarray
+    cnt: np.ndarray
+    slot_ptr: np.ndarray
+    slot_kc: np.ndarray
+    slot_delta: np.ndarray
+    ctx: np.ndarray
+
+
+@intrinsic
+def call_region(typingctx, fn, ctx, regs, mem, dec, tmap, cnt, st, ctr):  # type: ignore[no-untyped-def]  # noqa: ARG001
+    """Call the translated region at native address ``fn`` with the array addresses; its X_* code."""
+    sig = types.int32(types.int64, *([types.int64] * 8))
+
+    def codegen(context, builder, signature, args):  # type: ignore[no-untyped-def]  # noqa: ARG001
+        i8p = ir.IntType(8).as_pointer()
+        fnty = ir.FunctionType(ir.IntType(32), [i8p] * 8)
+        f = builder.inttoptr(args[0], fnty.as_pointer())
+        return builder.call(f, [builder.inttoptr(a, i8p) for a in args[1:]])
+
+    return sig, codegen
+
+
+@njit(cache=True)
+def flush_counts(jt: JitArrays, opc_t: np.ndarray) -> None:
+    """Add every slot's executions times its histogram to the per-operation counters; zero the slots."""
+    cnt = jt.cnt
+    for s in range(cnt.shape[0]):
+        c = cnt[s]
+        if c != 0:
+            for e in range(jt.slot_ptr[s], jt.slot_ptr[s + 1]):
+                opc_t[jt.slot_kc[e]] += c * jt.slot_delta[e]
+            cnt[s] = 0
+
+
+@njit(cache=True)
+def _forget_translations(jt: JitArrays) -> None:
+    jt.entry_fn[:] = 0
+    jt.entry_blk[:] = 0
+    jt.entry_slot[:] = 0
+    jt.hot[:] = 0
+    jt.tmap[:] = 0
+    jt.ctx[CTX_FLUSHES] += 1
+
+
+@njit(cache=True, inline="always")
+def _store_hits_translation(jt: JitArrays, word: int, regs_t: np.ndarray, base: int, code: int) -> bool:
+    """Whether the store ``word`` (about to run with ``regs_t``) writes a translated word."""
+    if (word & 0x7F) != _STORE_OPCODE:
+        return False
+    imm = ((word >> 25) << 5) | ((word >> 7) & 31)
+    imm = (imm ^ 0x800) - 0x800
+    addr = (np.int64(regs_t[(word >> 15) & 31]) + imm) & M32
+    off = (addr - base) & M32
+    return off < code and jt.tmap[off >> 2] != 0
+
+
+@njit(cache=True)
+def run_translated(core: CoreArrays, tiles: np.ndarray, until: int, jt: JitArrays, threshold: int) -> None:
+    """Run core ``tiles[0]`` until cycle ``until`` like ``run_cores``, with translated regions.
+
+    Leaves the RUN_* status in st[t, S_RUN], or RUN_TRANSLATE with the pc of a word that turned
+    hot (``threshold`` arrivals without an entry) for the caller to translate.
+    """
+    st, ctr, opc, regs, m8, _m16, m32, dec, _out = core
+    t = tiles[0]
+    st_t = st[t]
+    regs_t = regs[t]
+    opc_t = opc[t]
+    base = st_t[S_MEM_BASE]
+    size = st_t[S_MEM_SIZE]
+    code = st_t[S_CODE_SIZE]
+    pc = st_t[S_PC]
+    cyc = st_t[S_CYCLE]
+    budget = st_t[S_MAX_CYCLES]
+    stop = until if budget < 0 else min(until, budget)
+    out_limit = OUT_CAPACITY - 8
+    ctx = jt.ctx
+    p_ctx = np.int64(ctx.ctypes.data)
+    p_regs = np.int64(regs_t.ctypes.data)
+    p_mem = np.int64(m8[t].ctypes.data)
+    p_dec = np.int64(dec[t].ctypes.data)
+    p_tmap = np.int64(jt.tmap.ctypes.data)
+    p_cnt = np.int64(jt.cnt.ctypes.data)
+    p_st = np.int64(st_t.ctypes.data)
+    p_ctr = np.int64(ctr[t].ctypes.data)
+    status = RUN_CHUNK
+    err = 0
+    err_addr = 0
+    while True:
+        # the interpreter's boundary: interrupt controller, end of the slice, output buffer
+        next_event = min(st_t[S_IRQ_CHECK], stop)
+        if cyc >= next_event:
+            if cyc >= st_t[S_IRQ_CHECK]:
+                pc, cyc = irq_event(st_t, ctr[t], pc, cyc)
+                err = fetch_error(pc, base, code, size)
+                if err != 0:
+                    err_addr = pc
+                    break
+            if cyc >= stop:
+                status = RUN_MAX_CYCLES if (budget >= 0 and cyc >= budget) else RUN_CHUNK
+                break
+            next_event = min(st_t[S_IRQ_CHECK], stop)
+        if st_t[S_OUT_LEN] >= out_limit:
+            status = RUN_OUTPUT
+            break
+        i = (pc - base) >> 2
+        interpret = False
+        fn = jt.entry_fn[i]
+        if fn != 0:
+            ctx[CTX_PC] = pc
+            ctx[CTX_CYC] = cyc
+            ctx[CTX_LIMIT] = next_event
+            ctx[CTX_BLOCK] = jt.entry_blk[i]
+            p_slots = p_cnt + 8 * jt.entry_slot[i]
+            x = call_region(fn, p_ctx, p_regs, p_mem, p_dec, p_tmap, p_slots, p_st, p_ctr)
+            pc = ctx[CTX_PC]
+            cyc = ctx[CTX_CYC]
+            if x == X_SMC:
+                _forget_translations(jt)
+            elif x != X_JUMP:
+                interpret = True
+        else:
+            h = jt.hot[i]
+            if h >= 0:
+                h += 1
+                jt.hot[i] = h
+                if h >= threshold:
+                    status = RUN_TRANSLATE
+                    break
+            interpret = True
+        if not interpret:
+            continue
+        # one instruction by the interpreter (two for a trap: its shadow runs before the vector)
+        word = np.int64(m32[t, i]) & M32 if (pc - base) < code else 0
+        smc = _store_hits_translation(jt, word, regs_t, base, code)
+        if (word & 0x7F) == _SYSTEM_OPCODE and (pc + 8 - base) < code:
+            smc = smc or _store_hits_translation(jt, np.int64(m32[t, i + 2]) & M32, regs_t, base, code)
+        step_to = cyc + 1
+        if (word & 0xFFF) == _JAL_X0_OPCODE and (
+            (word >> 12) == 0 or (word == 0xFFDFF06F and i > 0 and (np.int64(m32[t, i - 1]) & M32) == _NOP)
+        ):
+            step_to = next_event  # an idle loop: the interpreter skips its iterations up to the event
+        st_t[S_PC] = pc
+        st_t[S_CYCLE] = cyc
+        run_cores(core, tiles, step_to)
+        pc = st_t[S_PC]
+        cyc = st_t[S_CYCLE]
+        status = st_t[S_RUN]
+        if smc:
+            _forget_translations(jt)
+        if status != RUN_CHUNK:
+            flush_counts(jt, opc_t)
+            return
+    if err != 0:
+        status = RUN_ERROR
+        st_t[S_ERR] = err
+        st_t[S_ERR_PC] = pc
+        st_t[S_ERR_ADDR] = err_addr
+        wi = (pc - base) >> 2
+        st_t[S_ERR_INSN] = m32[t, wi] & M32 if 0 <= wi < size >> 2 else 0
+    st_t[S_PC] = pc & M32
+    st_t[S_CYCLE] = cyc
+    st_t[S_RUN] = status
+    flush_counts(jt, opc_t)
+
+
+__all__ = [
+    "CTX_BLOCK",
+    "CTX_CYC",
+    "CTX_FLUSHES",
+    "CTX_LIMIT",
+    "CTX_PC",
+    "CTX_SIZE",
+    "ERR_FETCH_DATA",
+    "NEVER_TRANSLATE",
+    "RUN_TRANSLATE",
+    "X_JUMP",
+    "X_LIMIT",
+    "X_SIDE",
+    "X_SMC",
+    "JitArrays",
+    "flush_counts",
+    "run_translated",
+]
