@@ -27,6 +27,7 @@ from robosoc.isa.table import (
     SINGLE_CYCLES,
     Timing,
 )
+from robosoc.isa.table import Fmt
 from robosoc.jit.regions import Block, End, Insn, Region
 from robosoc.kernels.core import _MUL_CHUNK
 from robosoc.kernels.core_layout import C_MUL_STALL, C_TAKEN, S_MUL_END, S_MULHSU_COUNT, S_MULHSU_PC
@@ -72,7 +73,7 @@ WORST_CYCLES: dict[Timing, int] = {
 
 def _bytes_const(values: np.ndarray) -> str:
     data = values.astype(np.uint8).tobytes()
-    return "c\"" + "".join(f"\\{b:02X}" for b in data) + "\""
+    return 'c"' + "".join(f"\\{b:02X}" for b in data) + '"'
 
 
 def _i32(v: int) -> int:
@@ -105,19 +106,29 @@ class EmittedRegion:
     name: str
     ir: str
     block_index: dict[int, int]  # block start pc -> switch value
-    slots: list[list[tuple[int, int]]] = field(default_factory=list)  # histogram (opc index, delta) per slot
+    #: count slots: (histogram as (opc index, delta) pairs, next slot or -1); a slot's executions are
+    #: also added to its next slot's (the chain of side-exit suffixes)
+    slots: list[tuple[list[tuple[int, int]], int]] = field(default_factory=list)
 
 
 class _Writer:
-    def __init__(self, target: Target, region: Region, slot_base: int) -> None:
+    """Writes one region.  Register values and the cycles since the last store of the cycle count
+    are tracked per straight-line path, so an instruction is its operation plus one register store.
+    """
+
+    def __init__(self, target: Target, region: Region) -> None:
         self.t = target
         self.region = region
-        self.slot_base = slot_base
-        self.slots: list[list[tuple[int, int]]] = []
+        self.slots: list[tuple[list[tuple[int, int]], int]] = []
         self.lines: list[str] = []
         self.n = 0
         self.uses_mul = False
         self.index = {pc: k for k, pc in enumerate(region.blocks)}
+        self.exits: list[tuple[str, int, str, int, int]] = []  # (label, code, pc i64, cycles, slot)
+        self.cur = "entry"
+        self.regs: dict[int, str] = {}
+        self.cyc = ""  # SSA value equal to the cycle count in %cycp
+        self.pending = 0  # cycles of the instructions since then
 
     def tmp(self) -> str:
         self.n += 1
@@ -132,23 +143,39 @@ class _Writer:
 
     def put_label(self, name: str) -> None:
         self.lines.append(f"{name}:")
+        self.cur = name
 
     # --- state ------------------------------------------------------------------------------
     def reg(self, r: int) -> str:
         if r == 0:
             return "0"
-        v = self.tmp()
-        self.emit(f"{v} = load i32, i32* %r{r}")
+        v = self.regs.get(r)
+        if v is None:
+            v = self.tmp()
+            self.emit(f"{v} = load i32, i32* %r{r}")
+            self.regs[r] = v
         return v
 
     def set_reg(self, rd: int, value: str) -> None:
         self.emit(f"store i32 {value}, i32* %r{rd if rd != 0 else SINK}")
+        if rd != 0:
+            self.regs[rd] = value
 
-    def cyc_add(self, n: int | str) -> None:
-        a, b = self.tmp(), self.tmp()
-        self.emit(f"{a} = load i64, i64* %cycp")
-        self.emit(f"{b} = add i64 {a}, {n}")
-        self.emit(f"store i64 {b}, i64* %cycp")
+    def store_cycles(self, extra: int | str = 0) -> None:
+        """Make %cycp hold the cycle count plus ``extra``."""
+        v = self.cyc
+        if self.pending:
+            w = self.tmp()
+            self.emit(f"{w} = add i64 {v}, {self.pending}")
+            v = w
+        if extra != 0:
+            w = self.tmp()
+            self.emit(f"{w} = add i64 {v}, {extra}")
+            v = w
+        if v != self.cyc:
+            self.emit(f"store i64 {v}, i64* %cycp")
+        self.cyc = v
+        self.pending = 0
 
     def add_i64(self, ptr: str, n: int | str) -> None:
         a, b = self.tmp(), self.tmp()
@@ -156,77 +183,89 @@ class _Writer:
         self.emit(f"{b} = add i64 {a}, {n}")
         self.emit(f"store i64 {b}, i64* {ptr}")
 
-    def slot(self, hist: list[tuple[int, int]]) -> int:
-        self.slots.append(hist)
-        return self.slot_base + len(self.slots) - 1
+    def slot(self, hist: list[tuple[int, int]], nxt: int = -1) -> int:
+        self.slots.append((hist, nxt))
+        return len(self.slots) - 1
 
-    def count(self, slot: int) -> None:
-        p = self.tmp()
-        self.emit(f"{p} = getelementptr i64, i64* %cnt, i64 {slot}")
-        self.add_i64(p, 1)
+    def exit_edge(self, code: int, pc: int | str, slot: int = -1, cycles: int | None = None) -> None:
+        """Record the current label as a way into the shared exit (the caller emits the branch)."""
+        self.exits.append((self.cur, code, str(pc), self.pending if cycles is None else cycles, slot))
 
-    def leave(self, code: int, pc: int | str, slot: int | None = None) -> None:
-        """Write pc and cycle to ctx and return ``code``."""
+    def leave(self, code: int, pc: int | str, slot: int = -1) -> None:
         if isinstance(pc, str):
             z = self.tmp()
             self.emit(f"{z} = zext i32 {pc} to i64")
             pc = z
-        self.emit(f"store i64 {pc}, i64* %ctx_pc")
-        c = self.tmp()
-        self.emit(f"{c} = load i64, i64* %cycp")
-        self.emit(f"store i64 {c}, i64* %ctx_cyc")
-        if slot is not None:
-            self.count(slot)
-        self.emit(f"ret i32 {code}")
+        self.exit_edge(code, pc, slot)
+        self.emit("br label %exit")
 
     def goto(self, pc: int) -> None:
-        """Continue at ``pc``: the block there, or leave the region."""
+        """Continue at ``pc`` (cycles stored): the block there, or leave the region."""
         if pc in self.index:
             self.emit(f"br label %b{self.index[pc]}")
         else:
             self.leave(X_JUMP, pc)
 
-    def branch_out(self, cond: str, stem: str) -> str:
-        """Branch to a new cold label when ``cond``; returns the cold label (emitted later by the caller)."""
-        cold, ok = self.label(f"{stem}.x"), self.label(f"{stem}.ok")
-        self.emit(f"br i1 {cond}, label %{cold}, label %{ok}")
-        self.pending = ok
-        return cold
+    def cond_exit(self, cond: str, code: int, pc: int, slot: int, stem: str) -> None:
+        """Leave through the shared exit when ``cond``, else go on in a new label."""
+        ok = self.label(stem)
+        self.exit_edge(code, pc, slot)
+        self.emit(f"br i1 {cond}, label %exit, label %{ok}")
+        self.put_label(ok)
 
-    # --- instructions -------------------------------------------------------------------------
+    # --- counting -----------------------------------------------------------------------------
     def kc(self, insn: Insn) -> int:
         return 2 * insn.op + (((insn.pc - self.t.base) >> 2) & 1)
 
-    def suffix(self, block: Block, k: int) -> list[tuple[int, int]]:
-        return [(self.kc(i), -1) for i in block.insns[k:]]
-
     def block(self, block: Block) -> None:
         k = self.index[block.start]
-        worst = sum(WORST_CYCLES[i.ins.timing] for i in block.insns[:-1])
+        insns = block.insns
+        worst = sum(WORST_CYCLES[i.ins.timing] for i in insns[:-1])
         self.put_label(f"b{k}")
+        self.regs = {}
         c, e, ok = self.tmp(), self.tmp(), self.tmp()
         self.emit(f"{c} = load i64, i64* %cycp")
+        self.cyc, self.pending = c, 0
         self.emit(f"{e} = add i64 {c}, {worst}")
         self.emit(f"{ok} = icmp slt i64 {e}, %limit")
-        self.emit(f"br i1 {ok}, label %b{k}.go, label %b{k}.lim")
-        self.put_label(f"b{k}.lim")
-        self.leave(X_LIMIT, block.start)
+        self.exit_edge(X_LIMIT, block.start, -1, 0)
+        self.emit(f"br i1 {ok}, label %b{k}.go, label %exit")
         self.put_label(f"b{k}.go")
-        if block.insns:
-            self.count(self.slot([(self.kc(i), 1) for i in block.insns]))
-        for j, insn in enumerate(block.insns):
-            self.insn(block, j, insn)
-        last = block.insns[-1] if block.insns else None
+        kcs = [self.kc(i) for i in insns]
+        # side exits at instruction j leave j.. uncounted: a chain of suffix slots, one per exit point
+        points = [j for j, i in enumerate(insns) if i.name in _LOADS or i.name in _STORES or i.name == "jalr"]
+        self.suffix: dict[int, int] = {}
+        nxt = -1
+        ends = [*points[1:], len(insns)] if points else []
+        for j, end in reversed(list(zip(points, ends, strict=True))):
+            nxt = self.slot([(kc, -1) for kc in kcs[j:end]], nxt)
+            self.suffix[j] = nxt
+        self.suffix_after: dict[int, int] = {}
+        for j, end in zip(points, ends, strict=True):  # after a store: the rest of the block
+            if insns[j].name not in _STORES:
+                continue
+            if end < len(insns):
+                self.suffix_after[j] = self.slot([(kc, -1) for kc in kcs[j + 1 : end]], self.suffix[end])
+            elif j + 1 < len(insns):
+                self.suffix_after[j] = self.slot([(kc, -1) for kc in kcs[j + 1 :]])
+            else:
+                self.suffix_after[j] = -1
+        if insns:
+            slot = self.slot([(kc, 1) for kc in kcs])
+            self.add_i64(f"%cnt.{slot}", 1)
+        for j, insn in enumerate(insns):
+            self.insn(j, insn)
         match block.end:
             case End.FALL:
+                self.store_cycles()
                 self.goto(block.next_pc)
             case End.SIDE:
                 self.leave(X_SIDE, block.next_pc)
             case End.BRANCH | End.JUMP | End.CALL | End.JALR:
-                assert last is not None
-                self.control(block, last)
+                self.control(len(insns) - 1, insns[-1])
 
-    def control(self, block: Block, insn: Insn) -> None:
+    # --- instructions -------------------------------------------------------------------------
+    def control(self, j: int, insn: Insn) -> None:
         pc = insn.pc
         name = insn.name
         if name in _BRANCH:
@@ -234,16 +273,18 @@ class _Writer:
             self.emit(f"{cond} = icmp {_BRANCH[name]} i32 {a}, {b}")
             taken, fall = self.label("tk"), self.label("nt")
             self.emit(f"br i1 {cond}, label %{taken}, label %{fall}")
+            cyc, pending = self.cyc, self.pending
             self.put_label(taken)
-            self.cyc_add(BRANCH_TAKEN_CYCLES)
+            self.store_cycles(BRANCH_TAKEN_CYCLES)
             self.add_i64("%ctr_taken", 1)
             self.goto((pc + insn.imm) & M32)
             self.put_label(fall)
-            self.cyc_add(BRANCH_NOT_TAKEN_CYCLES)
+            self.cyc, self.pending = cyc, pending
+            self.store_cycles(BRANCH_NOT_TAKEN_CYCLES)
             self.goto(pc + 4)
         elif name == "jal":
             self.set_reg(insn.rd, str(_i32(pc + 4)))
-            self.cyc_add(JUMP_CYCLES)
+            self.store_cycles(JUMP_CYCLES)
             target = (pc + insn.imm) & M32
             if insn.rd == 0:
                 self.goto(target)
@@ -259,21 +300,17 @@ class _Writer:
             self.emit(f"{off} = sub i32 {tgt}, {_i32(self.t.base)}")
             self.emit(f"{bad2} = icmp uge i32 {off}, {_i32(self.t.code_size)}")
             self.emit(f"{bad} = or i1 {bad1}, {bad2}")
-            cold = self.branch_out(bad, "jr")
-            ok = self.pending
-            self.put_label(cold)
-            self.leave(X_SIDE, pc, self.slot(self.suffix(block, len(block.insns) - 1)))
-            self.put_label(ok)
+            self.cond_exit(bad, X_SIDE, pc, self.suffix[j], "jr")
             self.set_reg(insn.rd, str(_i32(pc + 4)))
-            self.cyc_add(JUMP_CYCLES)
+            self.store_cycles(JUMP_CYCLES)
             self.leave(X_JUMP, tgt)
 
-    def insn(self, block: Block, j: int, insn: Insn) -> None:
+    def insn(self, j: int, insn: Insn) -> None:
         name = insn.name
         if insn.ins.timing in (Timing.BRANCH, Timing.JUMP):
             return  # the block's end
         if name in _LOADS or name in _STORES:
-            self.memory(block, j, insn)
+            self.memory(j, insn)
             return
         if insn.ins.timing is Timing.MULTIPLY:
             self.multiply(insn)
@@ -292,11 +329,11 @@ class _Writer:
             a, b, s = self.reg(insn.rs1), self.reg(insn.rs2), self.tmp()
             self.emit(f"{s} = and i32 {b}, 31")
             self.emit(f"{v} = {_SHIFT_R[name]} i32 {a}, {s}")
-        elif name in ("slt", "sltu", "slti", "sltiu"):
+        elif name in _SET:
             a = self.reg(insn.rs1)
-            b = self.reg(insn.rs2) if name in ("slt", "sltu") else str(_i32(insn.imm))
+            b = self.reg(insn.rs2) if insn.ins.fmt is Fmt.R else str(_i32(insn.imm))
             cond = self.tmp()
-            self.emit(f"{cond} = icmp {'ult' if name.startswith('sltu') or name == 'sltiu' else 'slt'} i32 {a}, {b}")
+            self.emit(f"{cond} = icmp {_SET[name]} i32 {a}, {b}")
             self.emit(f"{v} = zext i1 {cond} to i32")
         elif name == "lui":
             v = str(_i32(insn.imm))
@@ -308,9 +345,9 @@ class _Writer:
             raise AssertionError(f"no IR for {name}")
         if v:
             self.set_reg(insn.rd, v)
-        self.cyc_add(SINGLE_CYCLES)
+        self.pending += SINGLE_CYCLES
 
-    def memory(self, block: Block, j: int, insn: Insn) -> None:
+    def memory(self, j: int, insn: Insn) -> None:
         name = insn.name
         load = name in _LOADS
         bits, ext, align = _LOADS[name] if load else (_STORES[name][0], "", _STORES[name][1])
@@ -325,11 +362,7 @@ class _Writer:
             self.emit(f"{mis} = icmp ne i32 {m}, 0")
             self.emit(f"{both} = or i1 {bad}, {mis}")
             bad = both
-        cold = self.branch_out(bad, "m")
-        ok = self.pending
-        self.put_label(cold)
-        self.leave(X_SIDE, insn.pc, self.slot(self.suffix(block, j)))
-        self.put_label(ok)
+        self.cond_exit(bad, X_SIDE, insn.pc, self.suffix[j], "m")
         z, p = self.tmp(), self.tmp()
         self.emit(f"{z} = zext i32 {off} to i64")
         self.emit(f"{p} = getelementptr i8, i8* %mem, i64 {z}")
@@ -338,6 +371,7 @@ class _Writer:
         if bits != 8:
             q = self.tmp()
             self.emit(f"{q} = bitcast i8* {p} to {ty}*")
+        self.pending += MEMORY_CYCLES
         if load:
             v = self.tmp()
             self.emit(f"{v} = load {ty}, {ty}* {q}, align {bits // 8}")
@@ -346,7 +380,6 @@ class _Writer:
                 self.emit(f"{w} = {ext} {ty} {v} to i32")
                 v = w
             self.set_reg(insn.rd, v)
-            self.cyc_add(MEMORY_CYCLES)
             return
         v = self.reg(insn.rs2)
         if bits != 32:
@@ -354,7 +387,6 @@ class _Writer:
             self.emit(f"{w} = trunc i32 {v} to {ty}")
             v = w
         self.emit(f"store {ty} {v}, {ty}* {q}, align {bits // 8}")
-        self.cyc_add(MEMORY_CYCLES)
         code_words = self.t.code_size >> 2
         if code_words == 0:
             return
@@ -373,35 +405,25 @@ class _Writer:
         self.emit(f"{tp} = getelementptr i8, i8* %tmap, i64 {wz}")
         self.emit(f"{tv} = load i8, i8* {tp}")
         self.emit(f"{hit} = icmp ne i8 {tv}, 0")
-        smc = self.label("smc")
-        self.emit(f"br i1 {hit}, label %{smc}, label %{cont}")
-        self.put_label(smc)
-        self.leave(X_SMC, insn.pc + 4, self.slot(self.suffix(block, j + 1)))
+        self.exit_edge(X_SMC, insn.pc + 4, self.suffix_after[j])
+        self.emit(f"br i1 {hit}, label %exit, label %{cont}")
         self.put_label(cont)
 
     def multiply(self, insn: Insn) -> None:
         self.uses_mul = True
         name = insn.name
         a, b = self.reg(insn.rs1), self.reg(insn.rs2)
-        sa, sb, za, zb, v = self.tmp(), self.tmp(), self.tmp(), self.tmp(), self.tmp()
-        self.emit(f"{sa} = sext i32 {a} to i64")
-        self.emit(f"{sb} = sext i32 {b} to i64")
-        self.emit(f"{za} = zext i32 {a} to i64")
-        self.emit(f"{zb} = zext i32 {b} to i64")
-        p, h = self.tmp(), self.tmp()
+        p, h, v, x, y = self.tmp(), self.tmp(), self.tmp(), self.tmp(), self.tmp()
         if name == "mul":
-            self.emit(f"{p} = mul i64 {sa}, {sb}")
-            self.emit(f"{v} = trunc i64 {p} to i32")
+            self.emit(f"{v} = mul i32 {a}, {b}")
         else:
-            if name == "mulh":
-                self.emit(f"{p} = mul i64 {sa}, {sb}")
-                self.emit(f"{h} = ashr i64 {p}, 32")
-            elif name == "mulhu" or self.t.rtl_errata:  # the RTL's MULHSU returns the MULHU result
-                self.emit(f"{p} = mul i64 {za}, {zb}")
-                self.emit(f"{h} = lshr i64 {p}, 32")
-            else:
-                self.emit(f"{p} = mul i64 {sa}, {zb}")
-                self.emit(f"{h} = ashr i64 {p}, 32")
+            signed_a = name in ("mulh", "mulhsu") and not (name == "mulhsu" and self.t.rtl_errata)
+            signed_b = name == "mulh"
+            # the RTL's MULHSU returns the MULHU result (erratum): both unsigned in rtl mode
+            self.emit(f"{x} = {'sext' if signed_a else 'zext'} i32 {a} to i64")
+            self.emit(f"{y} = {'sext' if signed_b else 'zext'} i32 {b} to i64")
+            self.emit(f"{p} = mul i64 {x}, {y}")
+            self.emit(f"{h} = lshr i64 {p}, 32")
             self.emit(f"{v} = trunc i64 {h} to i32")
         self.set_reg(insn.rd, v)
         if name == "mulhsu":
@@ -411,43 +433,59 @@ class _Writer:
             self.emit(f"{neg} = icmp slt i64 {old}, 0")
             self.emit(f"{new} = select i1 {neg}, i64 {insn.pc}, i64 {old}")
             self.emit(f"store i64 {new}, i64* %st_mulhsu_pc")
-        # latency: three byte-table lookups as mul_latency does, then the tail table
-        steps: list[str] = []
-        off = "0"
-        for k in range(3):
-            sh, w, idx, base_i, gp, e8, e, s, o = (self.tmp() for _ in range(9))
-            self.emit(f"{sh} = lshr i64 {zb}, {8 * k}")
-            self.emit(f"{w} = and i64 {sh}, 2047")
-            self.emit(f"{base_i} = shl i64 {off}, 11")
-            self.emit(f"{idx} = or i64 {base_i}, {w}")
-            self.emit(f"{gp} = getelementptr [8192 x i8], [8192 x i8]* @mulchunk, i64 0, i64 {idx}")
-            self.emit(f"{e8} = load i8, i8* {gp}")
-            self.emit(f"{e} = zext i8 {e8} to i64")
-            self.emit(f"{s} = lshr i64 {e}, 4")
-            self.emit(f"{o} = and i64 {e}, 15")
-            steps.append(s)
-            off = o
-        top, base_i, idx, gp, t8, tail = (self.tmp() for _ in range(6))
-        self.emit(f"{top} = lshr i64 {zb}, 24")
-        self.emit(f"{base_i} = shl i64 {off}, 8")
-        self.emit(f"{idx} = or i64 {base_i}, {top}")
-        self.emit(f"{gp} = getelementptr [1024 x i8], [1024 x i8]* @multail, i64 0, i64 {idx}")
-        self.emit(f"{t8} = load i8, i8* {gp}")
-        self.emit(f"{tail} = zext i8 {t8} to i64")
-        acc = tail
-        for s in steps:
-            nxt = self.tmp()
-            self.emit(f"{nxt} = add i64 {acc}, {s}")
-            acc = nxt
-        lat = self.tmp()
-        self.emit(f"{lat} = add i64 {acc}, {MUL_BASE_CYCLES}")
-        stall = self.tmp()
+        lat, stall = self.tmp(), self.tmp()
+        self.emit(f"{lat} = call i64 @mul_latency(i32 {b})")
         self.emit(f"{stall} = add i64 {lat}, -1")
         self.add_i64("%ctr_mulstall", stall)
-        self.cyc_add(lat)
-        c = self.tmp()
-        self.emit(f"{c} = load i64, i64* %cycp")
-        self.emit(f"store i64 {c}, i64* %st_mulend")  # the interrupt controller's erratum window
+        self.store_cycles(lat)
+        self.emit(f"store i64 {self.cyc}, i64* %st_mulend")  # the interrupt controller's erratum window
+
+
+_SET = {"slt": "slt", "slti": "slt", "sltu": "ult", "sltiu": "ult"}
+
+#: mul_latency(i32 rs2) -> i64: three byte-table lookups as kernels.core.mul_latency does, then the tail
+_MUL_LATENCY_IR = f"""
+@mulchunk = internal unnamed_addr constant [8192 x i8] {_bytes_const(_MUL_CHUNK.reshape(-1))}
+@multail = internal unnamed_addr constant [1024 x i8] {_bytes_const(_TAIL.reshape(-1))}
+define internal i64 @mul_latency(i32 %b32) nounwind readnone {{
+  %b = zext i32 %b32 to i64
+  %w0 = and i64 %b, 2047
+  %g0 = getelementptr [8192 x i8], [8192 x i8]* @mulchunk, i64 0, i64 %w0
+  %e0b = load i8, i8* %g0
+  %e0 = zext i8 %e0b to i64
+  %s0 = lshr i64 %e0, 4
+  %o0 = and i64 %e0, 15
+  %h1 = lshr i64 %b, 8
+  %w1a = and i64 %h1, 2047
+  %o0s = shl i64 %o0, 11
+  %w1 = or i64 %o0s, %w1a
+  %g1 = getelementptr [8192 x i8], [8192 x i8]* @mulchunk, i64 0, i64 %w1
+  %e1b = load i8, i8* %g1
+  %e1 = zext i8 %e1b to i64
+  %s1 = lshr i64 %e1, 4
+  %o1 = and i64 %e1, 15
+  %h2 = lshr i64 %b, 16
+  %w2a = and i64 %h2, 2047
+  %o1s = shl i64 %o1, 11
+  %w2 = or i64 %o1s, %w2a
+  %g2 = getelementptr [8192 x i8], [8192 x i8]* @mulchunk, i64 0, i64 %w2
+  %e2b = load i8, i8* %g2
+  %e2 = zext i8 %e2b to i64
+  %s2 = lshr i64 %e2, 4
+  %o2 = and i64 %e2, 15
+  %top = lshr i64 %b, 24
+  %o2s = shl i64 %o2, 8
+  %w3 = or i64 %o2s, %top
+  %g3 = getelementptr [1024 x i8], [1024 x i8]* @multail, i64 0, i64 %w3
+  %tb = load i8, i8* %g3
+  %t = zext i8 %tb to i64
+  %a1 = add i64 %t, %s0
+  %a2 = add i64 %a1, %s1
+  %a3 = add i64 %a2, %s2
+  %lat = add i64 %a3, {MUL_BASE_CYCLES}
+  ret i64 %lat
+}}
+"""
 
 
 def emit_region(target: Target, region: Region, name: str = NAME_PLACEHOLDER) -> EmittedRegion:
@@ -455,11 +493,37 @@ def emit_region(target: Target, region: Region, name: str = NAME_PLACEHOLDER) ->
 
     Count slots are numbered from 0: the dispatch loop passes the region's first slot as ``cnt``.
     """
-    w = _Writer(target, region, 0)
-    body_start = len(w.lines)
+    w = _Writer(target, region)
     for block in region.blocks.values():
         w.block(block)
-    body = w.lines[body_start:]
+    body = w.lines
+    phis = {
+        "code": ("i32", 1),
+        "pc": ("i64", 2),
+        "cycles": ("i64", 3),
+        "slot": ("i64", 4),
+    }
+    exit_lines = ["exit:"]
+    for var, (ty, k) in phis.items():
+        incoming = ", ".join(f"[ {e[k]}, %{e[0]} ]" for e in w.exits)
+        exit_lines.append(f"  %x.{var} = phi {ty} {incoming}")
+    exit_lines += [
+        "  store i64 %x.pc, i64* %ctx_pc",
+        "  %x.c0 = load i64, i64* %cycp",
+        "  %x.c = add i64 %x.c0, %x.cycles",
+        "  store i64 %x.c, i64* %ctx_cyc",
+        "  %x.has = icmp sge i64 %x.slot, 0",
+        "  br i1 %x.has, label %exit.count, label %exit.ret",
+        "exit.count:",
+        "  %x.sp = getelementptr i64, i64* %cnt, i64 %x.slot",
+        "  %x.n0 = load i64, i64* %x.sp",
+        "  %x.n1 = add i64 %x.n0, 1",
+        "  store i64 %x.n1, i64* %x.sp",
+        "  br label %exit.ret",
+        "exit.ret:",
+        "  ret i32 %x.code",
+    ]
+    slot_geps = [f"  %cnt.{s} = getelementptr i64, i64* %cnt, i64 {s}" for s in range(len(w.slots))]
     head = [
         f"define i32 @{name}(i8* noalias %ctxp, i8* noalias %regsp, i8* noalias %mem, i8* noalias %decp, "
         "i8* noalias %tmap, i8* noalias %cntp, i8* noalias %stp, i8* noalias %ctrp) nounwind {",
@@ -480,6 +544,7 @@ def emit_region(target: Target, region: Region, name: str = NAME_PLACEHOLDER) ->
         f"  %st_mulhsu_n = getelementptr i64, i64* %st, i64 {S_MULHSU_COUNT}",
         f"  %st_mulhsu_pc = getelementptr i64, i64* %st, i64 {S_MULHSU_PC}",
         *(f"  %r{r} = getelementptr i32, i32* %regs, i64 {r}" for r in range(1, SINK + 1)),
+        *slot_geps,
         "  %cycp = alloca i64",
         "  %cyc0 = load i64, i64* %ctx_cyc",
         "  store i64 %cyc0, i64* %cycp",
@@ -489,11 +554,5 @@ def emit_region(target: Target, region: Region, name: str = NAME_PLACEHOLDER) ->
         "bad:",
         "  unreachable",
     ]
-    globals_ = []
-    if w.uses_mul:
-        globals_ = [
-            f"@mulchunk = internal unnamed_addr constant [8192 x i8] {_bytes_const(_MUL_CHUNK.reshape(-1))}",
-            f"@multail = internal unnamed_addr constant [1024 x i8] {_bytes_const(_TAIL.reshape(-1))}",
-        ]
-    text = "\n".join([*globals_, *head, *body, "}", ""])
+    text = "\n".join([_MUL_LATENCY_IR if w.uses_mul else "", *head, *body, *exit_lines, "}", ""])
     return EmittedRegion(name=name, ir=text, block_index=dict(w.index), slots=w.slots)

@@ -17,7 +17,14 @@ from robosoc.jit.compiler import Compiler, shared_compiler
 from robosoc.jit.emit_ir import NAME_PLACEHOLDER, Target, emit_region
 from robosoc.jit.regions import CodeView, End, Region, discover
 from robosoc.kernels.core_layout import ERRATA_RTL, S_CODE_SIZE, S_ERRATA, S_MEM_BASE, S_MEM_SIZE, S_MUL, S_PC, S_RUN
-from robosoc.kernels.jit_dispatch import CTX_FLUSHES, CTX_SIZE, NEVER_TRANSLATE, RUN_TRANSLATE, JitArrays, run_translated
+from robosoc.kernels.jit_dispatch import (
+    CTX_FLUSHES,
+    CTX_SIZE,
+    NEVER_TRANSLATE,
+    RUN_TRANSLATE,
+    JitArrays,
+    run_translated,
+)
 
 if TYPE_CHECKING:
     from robosoc.chip.core_state import CoreState
@@ -71,12 +78,16 @@ class TranslatingCore:
                 tmap=np.zeros(words, dtype=np.uint8),
                 cnt=np.zeros(0, dtype=np.int64),
                 slot_ptr=np.zeros(1, dtype=np.int64),
+                slot_next=np.zeros(0, dtype=np.int64),
                 slot_kc=np.zeros(0, dtype=np.int64),
                 slot_delta=np.zeros(0, dtype=np.int64),
                 ctx=np.zeros(CTX_SIZE, dtype=np.int64),
             )
             self._code_size = code
-            self._slots: list[list[tuple[int, int]]] = []
+            self._slot_hist: list[np.ndarray] = []  # per region: (kc, delta) rows of its slots
+            self._slot_len: list[np.ndarray] = []
+            self._slot_next: list[np.ndarray] = []
+            self._nslots = 0
             self._flushes_seen = 0
         return self._jt
 
@@ -109,16 +120,15 @@ class TranslatingCore:
             self.stats.flushes += int(jt.ctx[CTX_FLUSHES]) - self._flushes_seen
             self._flushes_seen = int(jt.ctx[CTX_FLUSHES])
         target = self._target()
-        region = discover(self._view(), pc)
         base = target.base
+        region = discover(self._view(), pc, translated=lambda a: jt.entry_fn[(a - base) >> 2] != 0)
         if not region.blocks:
             jt.hot[(pc - base) >> 2] = NEVER_TRANSLATE
             return region
         emitted = emit_region(target, region)
         address = self.compiler.add(emitted.ir, NAME_PLACEHOLDER)
-        slot_base = len(self._slots)
-        self._slots.extend(emitted.slots)
-        self._grow_slots()
+        slot_base = self._nslots
+        self._add_slots(emitted.slots, slot_base)
         jt = self._jt
         assert jt is not None
         for start, k in emitted.block_index.items():
@@ -140,22 +150,23 @@ class TranslatingCore:
         self.stats.instructions += region.instructions
         return region
 
-    def _grow_slots(self) -> None:
+    def _add_slots(self, slots: list[tuple[list[tuple[int, int]], int]], slot_base: int) -> None:
+        hist = [row for h, _ in slots for row in h]
+        self._slot_hist.append(np.array(hist, dtype=np.int64).reshape(-1, 2))
+        self._slot_len.append(np.array([len(h) for h, _ in slots], dtype=np.int64))
+        self._slot_next.append(np.array([n + slot_base if n >= 0 else -1 for _, n in slots], dtype=np.int64))
+        self._nslots += len(slots)
+        rows = np.concatenate(self._slot_hist)
+        ptr = np.zeros(self._nslots + 1, dtype=np.int64)
+        np.cumsum(np.concatenate(self._slot_len), out=ptr[1:])
         jt = self._jt
         assert jt is not None
-        ptr = np.zeros(len(self._slots) + 1, dtype=np.int64)
-        kc: list[int] = []
-        delta: list[int] = []
-        for s, hist in enumerate(self._slots):
-            for k, d in hist:
-                kc.append(k)
-                delta.append(d)
-            ptr[s + 1] = len(kc)
         self._jt = jt._replace(
-            cnt=np.zeros(len(self._slots), dtype=np.int64),  # all zero between dispatcher calls
+            cnt=np.zeros(self._nslots, dtype=np.int64),  # all zero between dispatcher calls
             slot_ptr=ptr,
-            slot_kc=np.array(kc, dtype=np.int64),
-            slot_delta=np.array(delta, dtype=np.int64),
+            slot_next=np.concatenate(self._slot_next),
+            slot_kc=rows[:, 0].copy(),
+            slot_delta=rows[:, 1].copy(),
         )
 
     # --- running ------------------------------------------------------------------------------

@@ -21,7 +21,7 @@ from robosoc.isa.table import INSTRUCTIONS, OP, Cls, Fmt, Instr, Timing, lookup
 NOP_WORD = 0x00000013  # addi x0, x0, 0
 
 #: Most instructions a region may hold (bounds compile time); targets beyond leave the region.
-MAX_REGION_INSTRUCTIONS = 3000
+MAX_REGION_INSTRUCTIONS = 400
 #: Longest block: a longer run is cut with a fall-through, so the pre-block event check stays tight.
 MAX_BLOCK_INSTRUCTIONS = 64
 
@@ -149,15 +149,24 @@ def _fetch(view: CodeView, pc: int) -> Insn | None:
     return insn if translatable(insn, view) else None
 
 
-def discover(view: CodeView, start: int, max_instructions: int = MAX_REGION_INSTRUCTIONS) -> Region:
-    """The region reachable from ``start`` (which must be a word of the loaded code)."""
+def discover(
+    view: CodeView,
+    start: int,
+    max_instructions: int = MAX_REGION_INSTRUCTIONS,
+    translated: Callable[[int], bool] = lambda pc: False,
+) -> Region:
+    """The region reachable from ``start`` (which must be a word of the loaded code).
+
+    Targets for which ``translated`` is true (blocks of earlier regions) are left to those
+    regions rather than translated again.
+    """
     leaders: list[int] = [start]
     queued = {start}
     visited: set[int] = set()
     count = 0
 
     def add(pc: int) -> None:
-        if view.in_code(pc) and pc not in queued:
+        if view.in_code(pc) and pc not in queued and not translated(pc):
             queued.add(pc)
             leaders.append(pc)
 
@@ -166,6 +175,8 @@ def discover(view: CodeView, start: int, max_instructions: int = MAX_REGION_INST
         pc = leaders[k]
         k += 1
         while view.in_code(pc) and pc not in visited and count < max_instructions:
+            if pc != start and translated(pc):
+                break
             insn = _fetch(view, pc)
             if insn is None:
                 break

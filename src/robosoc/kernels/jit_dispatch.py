@@ -61,6 +61,9 @@ CTX_CYC = 1
 CTX_LIMIT = 2  # blocks run only while their last instruction starts before this cycle
 CTX_BLOCK = 3  # entry block of the called region
 CTX_FLUSHES = 4  # how many times the loop forgot every translation (self-modifying code)
+CTX_CALLS = 5  # region calls (statistics)
+CTX_STEPS = 6  # instructions handed to the interpreter (statistics)
+CTX_LIMITS = 7  # region exits because a block could reach the next event (statistics)
 CTX_SIZE = 8
 
 # dispatcher results beyond the interpreter's RUN_* codes
@@ -81,7 +84,8 @@ class JitArrays(NamedTuple):
     ``entry_fn`` native address of the region with a block starting at the word (0: none),
     ``entry_blk`` that block's number, ``entry_slot`` the region's first count slot, ``hot`` arrivals at a word without an entry (NEVER_TRANSLATE:
     none can start there), ``tmap`` 1 for words some region translated, ``cnt`` executions per count
-    slot, ``slot_ptr``/``slot_kc``/``slot_delta`` each slot's histogram (CSR), ``ctx`` the region
+    slot, ``slot_ptr``/``slot_kc``/``slot_delta`` each slot's histogram (CSR), ``slot_next`` the slot whose
+    count a slot's executions are also added to (-1: none; always an earlier slot), ``ctx`` the region
     call's in/out slots.
     """
 
@@ -92,17 +96,18 @@ class JitArrays(NamedTuple):
     tmap: np.ndarray
     cnt: np.ndarray
     slot_ptr: np.ndarray
+    slot_next: np.ndarray
     slot_kc: np.ndarray
     slot_delta: np.ndarray
     ctx: np.ndarray
 
 
 @intrinsic
-def call_region(typingctx, fn, ctx, regs, mem, dec, tmap, cnt, st, ctr):  # type: ignore[no-untyped-def]  # noqa: ARG001
+def call_region(typingctx, fn, ctx, regs, mem, dec, tmap, cnt, st, ctr):  # type: ignore[no-untyped-def]
     """Call the translated region at native address ``fn`` with the array addresses; its X_* code."""
     sig = types.int32(types.int64, *([types.int64] * 8))
 
-    def codegen(context, builder, signature, args):  # type: ignore[no-untyped-def]  # noqa: ARG001
+    def codegen(context, builder, signature, args):  # type: ignore[no-untyped-def]
         i8p = ir.IntType(8).as_pointer()
         fnty = ir.FunctionType(ir.IntType(32), [i8p] * 8)
         f = builder.inttoptr(args[0], fnty.as_pointer())
@@ -115,11 +120,14 @@ def call_region(typingctx, fn, ctx, regs, mem, dec, tmap, cnt, st, ctr):  # type
 def flush_counts(jt: JitArrays, opc_t: np.ndarray) -> None:
     """Add every slot's executions times its histogram to the per-operation counters; zero the slots."""
     cnt = jt.cnt
-    for s in range(cnt.shape[0]):
+    for s in range(cnt.shape[0] - 1, -1, -1):  # a slot's next is an earlier slot
         c = cnt[s]
         if c != 0:
             for e in range(jt.slot_ptr[s], jt.slot_ptr[s + 1]):
                 opc_t[jt.slot_kc[e]] += c * jt.slot_delta[e]
+            nxt = jt.slot_next[s]
+            if nxt >= 0:
+                cnt[nxt] += c
             cnt[s] = 0
 
 
@@ -204,12 +212,15 @@ def run_translated(core: CoreArrays, tiles: np.ndarray, until: int, jt: JitArray
             ctx[CTX_BLOCK] = jt.entry_blk[i]
             p_slots = p_cnt + 8 * jt.entry_slot[i]
             x = call_region(fn, p_ctx, p_regs, p_mem, p_dec, p_tmap, p_slots, p_st, p_ctr)
+            ctx[CTX_CALLS] += 1
             pc = ctx[CTX_PC]
             cyc = ctx[CTX_CYC]
             if x == X_SMC:
                 _forget_translations(jt)
             elif x != X_JUMP:
                 interpret = True
+                if x == X_LIMIT:
+                    ctx[CTX_LIMITS] += 1
         else:
             h = jt.hot[i]
             if h >= 0:
@@ -233,6 +244,7 @@ def run_translated(core: CoreArrays, tiles: np.ndarray, until: int, jt: JitArray
             step_to = next_event  # an idle loop: the interpreter skips its iterations up to the event
         st_t[S_PC] = pc
         st_t[S_CYCLE] = cyc
+        ctx[CTX_STEPS] += 1
         run_cores(core, tiles, step_to)
         pc = st_t[S_PC]
         cyc = st_t[S_CYCLE]
