@@ -1,14 +1,16 @@
 """LLVM IR of one region: each block checks the next event, counts itself, then runs its instructions.
 
 The IR is written as text (faster to produce than llvmlite's builder objects).  The function takes
-the addresses of the dispatch context and of the core's arrays (registers, SRAM bytes, predecode
-rows, translated-word map, count slots, state, counters), all distinct arrays, hence ``noalias``::
+the addresses of the dispatch context and of the core's arrays (registers, SRAM bytes, count
+slots, state, counters), all distinct arrays, hence ``noalias``::
 
-    i32 @name(ctx, regs, mem, dec, tmap, cnt, st, ctr)
+    i32 @name(ctx, regs, mem, cnt, st, ctr)
 
 and returns an X_* code of :mod:`robosoc.kernels.jit_dispatch`.  Guest registers stay in the
 register array (one load/store each; LLVM forwards them inside a block), the cycle count is a
-local that LLVM folds into one add per block.  Costs come from the timing classes of
+local that LLVM folds into one add per block.  Loads outside SRAM, stores outside its data part
+(devices, and the loaded code: self-modifying code) and misaligned accesses leave the region
+before the instruction, for the interpreter.  Costs come from the timing classes of
 :mod:`robosoc.isa.table`; instruction counts are count slots (see the dispatch module).
 """
 
@@ -31,7 +33,19 @@ from robosoc.isa.table import Fmt
 from robosoc.jit.regions import Block, End, Insn, Region
 from robosoc.kernels.core import _MUL_CHUNK
 from robosoc.kernels.core_layout import C_MUL_STALL, C_TAKEN, S_MUL_END, S_MULHSU_COUNT, S_MULHSU_PC
-from robosoc.kernels.jit_dispatch import CTX_BLOCK, CTX_CYC, CTX_LIMIT, CTX_PC, X_JUMP, X_LIMIT, X_SIDE, X_SMC
+from robosoc.kernels.jit_dispatch import (
+    CTX_BLOCK,
+    CTX_CNT,
+    CTX_CYC,
+    CTX_ENTRY_BLK,
+    CTX_ENTRY_FN,
+    CTX_ENTRY_SLOT,
+    CTX_LIMIT,
+    CTX_PC,
+    X_JUMP,
+    X_LIMIT,
+    X_SIDE,
+)
 
 NAME_PLACEHOLDER = "REGION_NAME"
 SINK = 32  # the interpreter's register for rd = x0 (written, never read)
@@ -187,17 +201,19 @@ class _Writer:
         self.slots.append((hist, nxt))
         return len(self.slots) - 1
 
-    def exit_edge(self, code: int, pc: int | str, slot: int = -1, cycles: int | None = None) -> None:
-        """Record the current label as a way into the shared exit (the caller emits the branch)."""
-        self.exits.append((self.cur, code, str(pc), self.pending if cycles is None else cycles, slot))
+    def exit_edge(self, code: int, pc: int | str, slot: int = -1, cycles: int | None = None) -> str:
+        """A new exit block for the current path (emitted at the end); the caller branches to it."""
+        name = self.label("x")
+        self.exits.append((name, code, str(pc), self.pending if cycles is None else cycles, slot))
+        return name
 
     def leave(self, code: int, pc: int | str, slot: int = -1) -> None:
         if isinstance(pc, str):
             z = self.tmp()
             self.emit(f"{z} = zext i32 {pc} to i64")
             pc = z
-        self.exit_edge(code, pc, slot)
-        self.emit("br label %exit")
+        x = self.exit_edge(code, pc, slot)
+        self.emit(f"br label %{x}")
 
     def goto(self, pc: int) -> None:
         """Continue at ``pc`` (cycles stored): the block there, or leave the region."""
@@ -209,8 +225,8 @@ class _Writer:
     def cond_exit(self, cond: str, code: int, pc: int, slot: int, stem: str) -> None:
         """Leave through the shared exit when ``cond``, else go on in a new label."""
         ok = self.label(stem)
-        self.exit_edge(code, pc, slot)
-        self.emit(f"br i1 {cond}, label %exit, label %{ok}")
+        x = self.exit_edge(code, pc, slot)
+        self.emit(f"br i1 {cond}, label %{x}, label %{ok}")
         self.put_label(ok)
 
     # --- counting -----------------------------------------------------------------------------
@@ -228,8 +244,8 @@ class _Writer:
         self.cyc, self.pending = c, 0
         self.emit(f"{e} = add i64 {c}, {worst}")
         self.emit(f"{ok} = icmp slt i64 {e}, %limit")
-        self.exit_edge(X_LIMIT, block.start, -1, 0)
-        self.emit(f"br i1 {ok}, label %b{k}.go, label %exit")
+        x = self.exit_edge(X_LIMIT, block.start, -1, 0)
+        self.emit(f"br i1 {ok}, label %b{k}.go, label %{x}")
         self.put_label(f"b{k}.go")
         kcs = [self.kc(i) for i in insns]
         # side exits at instruction j leave j.. uncounted: a chain of suffix slots, one per exit point
@@ -240,16 +256,6 @@ class _Writer:
         for j, end in reversed(list(zip(points, ends, strict=True))):
             nxt = self.slot([(kc, -1) for kc in kcs[j:end]], nxt)
             self.suffix[j] = nxt
-        self.suffix_after: dict[int, int] = {}
-        for j, end in zip(points, ends, strict=True):  # after a store: the rest of the block
-            if insns[j].name not in _STORES:
-                continue
-            if end < len(insns):
-                self.suffix_after[j] = self.slot([(kc, -1) for kc in kcs[j + 1 : end]], self.suffix[end])
-            elif j + 1 < len(insns):
-                self.suffix_after[j] = self.slot([(kc, -1) for kc in kcs[j + 1 :]])
-            else:
-                self.suffix_after[j] = -1
         if insns:
             slot = self.slot([(kc, 1) for kc in kcs])
             self.add_i64(f"%cnt.{slot}", 1)
@@ -355,7 +361,12 @@ class _Writer:
         self.emit(f"{addr} = add i32 {a}, {insn.imm}")
         self.emit(f"{off} = sub i32 {addr}, {_i32(self.t.base)}")
         bad = self.tmp()
-        self.emit(f"{bad} = icmp uge i32 {off}, {_i32(self.t.mem_size)}")
+        if load:
+            self.emit(f"{bad} = icmp uge i32 {off}, {_i32(self.t.mem_size)}")
+        else:  # stores into the loaded code are the interpreter's (self-modifying code)
+            data = self.tmp()
+            self.emit(f"{data} = sub i32 {off}, {_i32(self.t.code_size)}")
+            self.emit(f"{bad} = icmp uge i32 {data}, {_i32(self.t.mem_size - self.t.code_size)}")
         if align:
             m, mis, both = self.tmp(), self.tmp(), self.tmp()
             self.emit(f"{m} = and i32 {off}, {align}")
@@ -387,27 +398,6 @@ class _Writer:
             self.emit(f"{w} = trunc i32 {v} to {ty}")
             v = w
         self.emit(f"store {ty} {v}, {ty}* {q}, align {bits // 8}")
-        code_words = self.t.code_size >> 2
-        if code_words == 0:
-            return
-        wi, inside = self.tmp(), self.tmp()
-        self.emit(f"{wi} = lshr i32 {off}, 2")
-        self.emit(f"{inside} = icmp ult i32 {wi}, {code_words}")
-        code_lbl, cont = self.label("code"), self.label("cont")
-        self.emit(f"br i1 {inside}, label %{code_lbl}, label %{cont}")
-        self.put_label(code_lbl)
-        wz, d, dp = self.tmp(), self.tmp(), self.tmp()
-        self.emit(f"{wz} = zext i32 {wi} to i64")
-        self.emit(f"{d} = shl i64 {wz}, 1")
-        self.emit(f"{dp} = getelementptr i32, i32* %dec, i64 {d}")
-        self.emit(f"store i32 0, i32* {dp}")  # the word may be code: the interpreter decodes it again
-        tp, tv, hit = self.tmp(), self.tmp(), self.tmp()
-        self.emit(f"{tp} = getelementptr i8, i8* %tmap, i64 {wz}")
-        self.emit(f"{tv} = load i8, i8* {tp}")
-        self.emit(f"{hit} = icmp ne i8 {tv}, 0")
-        self.exit_edge(X_SMC, insn.pc + 4, self.suffix_after[j])
-        self.emit(f"br i1 {hit}, label %exit, label %{cont}")
-        self.put_label(cont)
 
     def multiply(self, insn: Insn) -> None:
         self.uses_mul = True
@@ -439,6 +429,76 @@ class _Writer:
         self.add_i64("%ctr_mulstall", stall)
         self.store_cycles(lat)
         self.emit(f"store i64 {self.cyc}, i64* %st_mulend")  # the interrupt controller's erratum window
+
+
+#: leave(ctx, cnt, cycle, pc, slot, code): the region's way out: pc and cycle to ctx, one count to
+#: ``slot`` (none when negative), returns ``code``.  Out of line: exits are many and cold.
+_LEAVE_IR = f"""
+define internal i32 @leave(i64* %ctx, i64* %cnt, i64 %cyc, i64 %pc, i64 %slot, i32 %code) noinline nounwind {{
+  %p = getelementptr i64, i64* %ctx, i64 {CTX_PC}
+  store i64 %pc, i64* %p
+  %c = getelementptr i64, i64* %ctx, i64 {CTX_CYC}
+  store i64 %cyc, i64* %c
+  %has = icmp sge i64 %slot, 0
+  br i1 %has, label %count, label %done
+count:
+  %sp = getelementptr i64, i64* %cnt, i64 %slot
+  %n0 = load i64, i64* %sp
+  %n1 = add i64 %n0, 1
+  store i64 %n1, i64* %sp
+  br label %done
+done:
+  ret i32 %code
+}}
+"""
+
+_PARAMS = (
+    "i8* noalias %ctxp, i8* noalias %regsp, i8* noalias %mem, i8* noalias %cntp, i8* noalias %stp, i8* noalias %ctrp"
+)
+_ARGS = "i8* %ctxp, i8* %regsp, i8* %mem, i8* %cntp, i8* %stp, i8* %ctrp"
+
+
+def _jump_ir(target: Target) -> str:
+    """jump(region arguments): continue at ctx's pc in the region with a block there, else return X_JUMP."""
+    return f"""
+define internal i32 @jump({_PARAMS}) nounwind {{
+  %ctx = bitcast i8* %ctxp to i64*
+  %pp = getelementptr i64, i64* %ctx, i64 {CTX_PC}
+  %pc = load i64, i64* %pp
+  %off = sub i64 %pc, {target.base}
+  %i = lshr i64 %off, 2
+  %fp = getelementptr i64, i64* %ctx, i64 {CTX_ENTRY_FN}
+  %fa = load i64, i64* %fp
+  %ft = inttoptr i64 %fa to i64*
+  %fe = getelementptr i64, i64* %ft, i64 %i
+  %fn = load i64, i64* %fe
+  %none = icmp eq i64 %fn, 0
+  br i1 %none, label %out, label %go
+out:
+  ret i32 {X_JUMP}
+go:
+  %bp = getelementptr i64, i64* %ctx, i64 {CTX_ENTRY_BLK}
+  %ba = load i64, i64* %bp
+  %bt = inttoptr i64 %ba to i64*
+  %be = getelementptr i64, i64* %bt, i64 %i
+  %blk = load i64, i64* %be
+  %bo = getelementptr i64, i64* %ctx, i64 {CTX_BLOCK}
+  store i64 %blk, i64* %bo
+  %sp = getelementptr i64, i64* %ctx, i64 {CTX_ENTRY_SLOT}
+  %sa = load i64, i64* %sp
+  %stt = inttoptr i64 %sa to i64*
+  %se = getelementptr i64, i64* %stt, i64 %i
+  %slot = load i64, i64* %se
+  %cp = getelementptr i64, i64* %ctx, i64 {CTX_CNT}
+  %ca = load i64, i64* %cp
+  %so = shl i64 %slot, 3
+  %cn = add i64 %ca, %so
+  %cntp2 = inttoptr i64 %cn to i8*
+  %f = inttoptr i64 %fn to i32 ({", ".join(["i8*"] * 6)})*
+  %r = musttail call i32 %f(i8* %ctxp, i8* %regsp, i8* %mem, i8* %cntp2, i8* %stp, i8* %ctrp)
+  ret i32 %r
+}}
+"""
 
 
 _SET = {"slt": "slt", "slti": "slt", "sltu": "ult", "sltiu": "ult"}
@@ -497,40 +557,27 @@ def emit_region(target: Target, region: Region, name: str = NAME_PLACEHOLDER) ->
     for block in region.blocks.values():
         w.block(block)
     body = w.lines
-    phis = {
-        "code": ("i32", 1),
-        "pc": ("i64", 2),
-        "cycles": ("i64", 3),
-        "slot": ("i64", 4),
-    }
-    exit_lines = ["exit:"]
-    for var, (ty, k) in phis.items():
-        incoming = ", ".join(f"[ {e[k]}, %{e[0]} ]" for e in w.exits)
-        exit_lines.append(f"  %x.{var} = phi {ty} {incoming}")
-    exit_lines += [
-        "  store i64 %x.pc, i64* %ctx_pc",
-        "  %x.c0 = load i64, i64* %cycp",
-        "  %x.c = add i64 %x.c0, %x.cycles",
-        "  store i64 %x.c, i64* %ctx_cyc",
-        "  %x.has = icmp sge i64 %x.slot, 0",
-        "  br i1 %x.has, label %exit.count, label %exit.ret",
-        "exit.count:",
-        "  %x.sp = getelementptr i64, i64* %cnt, i64 %x.slot",
-        "  %x.n0 = load i64, i64* %x.sp",
-        "  %x.n1 = add i64 %x.n0, 1",
-        "  store i64 %x.n1, i64* %x.sp",
-        "  br label %exit.ret",
-        "exit.ret:",
-        "  ret i32 %x.code",
-    ]
+    exit_lines = []
+    for label, code, pc, cycles, slot in w.exits:
+        exit_lines += [f"{label}:", f"  %{label}.c = load i64, i64* %cycp", f"  %{label}.d = add i64 %{label}.c, {cycles}"]
+        if code == X_JUMP:  # straight into the region translated there, if any (same signature: a true tail call)
+            exit_lines += [
+                f"  store i64 {pc}, i64* %ctx_pc",
+                f"  store i64 %{label}.d, i64* %ctx_cyc",
+                f"  %{label}.r = musttail call i32 @jump({_ARGS})",
+                f"  ret i32 %{label}.r",
+            ]
+        else:
+            exit_lines += [
+                f"  %{label}.r = tail call i32 @leave(i64* %ctx, i64* %cnt, i64 %{label}.d, i64 {pc}, i64 {slot}, i32 {code})",
+                f"  ret i32 %{label}.r",
+            ]
     slot_geps = [f"  %cnt.{s} = getelementptr i64, i64* %cnt, i64 {s}" for s in range(len(w.slots))]
     head = [
-        f"define i32 @{name}(i8* noalias %ctxp, i8* noalias %regsp, i8* noalias %mem, i8* noalias %decp, "
-        "i8* noalias %tmap, i8* noalias %cntp, i8* noalias %stp, i8* noalias %ctrp) nounwind {",
+        f"define i32 @{name}({_PARAMS}) nounwind {{",
         "entry:",
         "  %ctx = bitcast i8* %ctxp to i64*",
         "  %regs = bitcast i8* %regsp to i32*",
-        "  %dec = bitcast i8* %decp to i32*",
         "  %cnt = bitcast i8* %cntp to i64*",
         "  %st = bitcast i8* %stp to i64*",
         "  %ctr = bitcast i8* %ctrp to i64*",
@@ -554,5 +601,5 @@ def emit_region(target: Target, region: Region, name: str = NAME_PLACEHOLDER) ->
         "bad:",
         "  unreachable",
     ]
-    text = "\n".join([_MUL_LATENCY_IR if w.uses_mul else "", *head, *body, *exit_lines, "}", ""])
+    text = "\n".join([_LEAVE_IR, _jump_ir(target), _MUL_LATENCY_IR if w.uses_mul else "", *head, *body, *exit_lines, "}", ""])
     return EmittedRegion(name=name, ir=text, block_index=dict(w.index), slots=w.slots)

@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from robosoc.jit.compiler import Compiler, shared_compiler
-from robosoc.jit.emit_ir import NAME_PLACEHOLDER, Target, emit_region
+from robosoc.jit.emit_ir import NAME_PLACEHOLDER, EmittedRegion, Target, emit_region
 from robosoc.jit.regions import CodeView, End, Region, discover
 from robosoc.kernels.core_layout import ERRATA_RTL, S_CODE_SIZE, S_ERRATA, S_MEM_BASE, S_MEM_SIZE, S_MUL, S_PC, S_RUN
 from robosoc.kernels.jit_dispatch import (
@@ -35,11 +35,27 @@ THRESHOLDS = {"jit": 1, "auto": AUTO_THRESHOLD}
 M32 = 0xFFFFFFFF
 
 
+@dataclass(frozen=True)
+class _Translated:
+    """A region translated in this process, reusable while its words hold the same instructions."""
+
+    region: Region
+    emitted: EmittedRegion
+    address: int
+    pcs: np.ndarray  # word indices of the translated instructions
+    words: np.ndarray  # their contents when translated
+
+
+#: (target, multiplier, start pc) -> regions translated there in this process (any core, any run)
+_TRANSLATED: dict[tuple[Target, bool, int], list[_Translated]] = {}
+
+
 @dataclass
 class TranslationStats:
     regions: int = 0
     instructions: int = 0  # guest instructions translated
     flushes: int = 0  # times self-modifying code made the core forget its translations
+    reused: int = 0  # regions this process had translated already (same words)
 
 
 class TranslatingCore:
@@ -121,12 +137,23 @@ class TranslatingCore:
             self._flushes_seen = int(jt.ctx[CTX_FLUSHES])
         target = self._target()
         base = target.base
-        region = discover(self._view(), pc, translated=lambda a: jt.entry_fn[(a - base) >> 2] != 0)
-        if not region.blocks:
-            jt.hot[(pc - base) >> 2] = NEVER_TRANSLATE
-            return region
-        emitted = emit_region(target, region)
-        address = self.compiler.add(emitted.ir, NAME_PLACEHOLDER)
+        view = self._view()
+        m32 = self.state.m32[self.tile]
+        key = (target, view.has_mul, pc)
+        for done in _TRANSLATED.get(key, []):
+            if np.array_equal(m32[done.pcs], done.words):
+                region, emitted, address = done.region, done.emitted, done.address
+                self.stats.reused += 1
+                break
+        else:
+            region = discover(view, pc, translated=lambda a: jt.entry_fn[(a - base) >> 2] != 0)
+            if not region.blocks:
+                jt.hot[(pc - base) >> 2] = NEVER_TRANSLATE
+                return region
+            emitted = emit_region(target, region)
+            address = self.compiler.add(emitted.ir, NAME_PLACEHOLDER)
+            pcs = np.array(sorted((p - base) >> 2 for p in region.words()), dtype=np.int64)
+            _TRANSLATED.setdefault(key, []).append(_Translated(region, emitted, address, pcs, m32[pcs].copy()))
         slot_base = self._nslots
         self._add_slots(emitted.slots, slot_base)
         jt = self._jt

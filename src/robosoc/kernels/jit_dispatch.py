@@ -12,8 +12,8 @@ instruction at a time, by calling ``run_cores`` with the slice ending at the nex
 A region returns one of the X_* codes with the pc and cycle in ``ctx``.  Instruction counts are
 kept per block (``cnt``: one slot per block and per side exit, each with a signed histogram over the
 interpreter's per-operation counters) and added to ``opc`` when the loop returns, so the counters
-equal the interpreter's.  A store into a word that any region translated (``tmap``) returns
-X_SMC; the loop then forgets every translation.
+equal the interpreter's.  Stores into the loaded code are always the interpreter's; when one
+writes a word some region translated (``tmap``), the loop forgets every translation.
 """
 
 from __future__ import annotations
@@ -50,10 +50,9 @@ from robosoc.kernels.core_layout import (
 from robosoc.kernels.dev_irq import irq_event
 
 # region exit codes
-X_JUMP = 0  # control left the region: continue at ctx[CTX_PC]
+X_JUMP = 0  # control left the region for a pc without a translation: continue at ctx[CTX_PC]
 X_LIMIT = 1  # the block at ctx[CTX_PC] could reach the next event: the interpreter runs it
-X_SIDE = 2  # the instruction at ctx[CTX_PC] is the interpreter's (device, misaligned, unmapped ...)
-X_SMC = 3  # a store wrote a translated word; continue at ctx[CTX_PC] after forgetting translations
+X_SIDE = 2  # the instruction at ctx[CTX_PC] is the interpreter's (device, code store, misaligned ...)
 
 # ctx slots
 CTX_PC = 0
@@ -64,7 +63,12 @@ CTX_FLUSHES = 4  # how many times the loop forgot every translation (self-modify
 CTX_CALLS = 5  # region calls (statistics)
 CTX_STEPS = 6  # instructions handed to the interpreter (statistics)
 CTX_LIMITS = 7  # region exits because a block could reach the next event (statistics)
-CTX_SIZE = 8
+# addresses of the tables a region reads to jump straight into the next region (JitArrays)
+CTX_ENTRY_FN = 8
+CTX_ENTRY_BLK = 9
+CTX_ENTRY_SLOT = 10
+CTX_CNT = 11
+CTX_SIZE = 16
 
 # dispatcher results beyond the interpreter's RUN_* codes
 RUN_TRANSLATE = 100  # the pc in st[S_PC] turned hot: translate a region there and call again
@@ -103,13 +107,13 @@ class JitArrays(NamedTuple):
 
 
 @intrinsic
-def call_region(typingctx, fn, ctx, regs, mem, dec, tmap, cnt, st, ctr):  # type: ignore[no-untyped-def]
+def call_region(typingctx, fn, ctx, regs, mem, cnt, st, ctr):  # type: ignore[no-untyped-def]
     """Call the translated region at native address ``fn`` with the array addresses; its X_* code."""
-    sig = types.int32(types.int64, *([types.int64] * 8))
+    sig = types.int32(types.int64, *([types.int64] * 6))
 
     def codegen(context, builder, signature, args):  # type: ignore[no-untyped-def]
         i8p = ir.IntType(8).as_pointer()
-        fnty = ir.FunctionType(ir.IntType(32), [i8p] * 8)
+        fnty = ir.FunctionType(ir.IntType(32), [i8p] * 6)
         f = builder.inttoptr(args[0], fnty.as_pointer())
         return builder.call(f, [builder.inttoptr(a, i8p) for a in args[1:]])
 
@@ -160,7 +164,7 @@ def run_translated(core: CoreArrays, tiles: np.ndarray, until: int, jt: JitArray
     Leaves the RUN_* status in st[t, S_RUN], or RUN_TRANSLATE with the pc of a word that turned
     hot (``threshold`` arrivals without an entry) for the caller to translate.
     """
-    st, ctr, opc, regs, m8, _m16, m32, dec, _out = core
+    st, ctr, opc, regs, m8, _m16, m32, _dec, _out = core
     t = tiles[0]
     st_t = st[t]
     regs_t = regs[t]
@@ -177,11 +181,13 @@ def run_translated(core: CoreArrays, tiles: np.ndarray, until: int, jt: JitArray
     p_ctx = np.int64(ctx.ctypes.data)
     p_regs = np.int64(regs_t.ctypes.data)
     p_mem = np.int64(m8[t].ctypes.data)
-    p_dec = np.int64(dec[t].ctypes.data)
-    p_tmap = np.int64(jt.tmap.ctypes.data)
     p_cnt = np.int64(jt.cnt.ctypes.data)
     p_st = np.int64(st_t.ctypes.data)
     p_ctr = np.int64(ctr[t].ctypes.data)
+    ctx[CTX_ENTRY_FN] = np.int64(jt.entry_fn.ctypes.data)
+    ctx[CTX_ENTRY_BLK] = np.int64(jt.entry_blk.ctypes.data)
+    ctx[CTX_ENTRY_SLOT] = np.int64(jt.entry_slot.ctypes.data)
+    ctx[CTX_CNT] = p_cnt
     status = RUN_CHUNK
     err = 0
     err_addr = 0
@@ -211,13 +217,11 @@ def run_translated(core: CoreArrays, tiles: np.ndarray, until: int, jt: JitArray
             ctx[CTX_LIMIT] = next_event
             ctx[CTX_BLOCK] = jt.entry_blk[i]
             p_slots = p_cnt + 8 * jt.entry_slot[i]
-            x = call_region(fn, p_ctx, p_regs, p_mem, p_dec, p_tmap, p_slots, p_st, p_ctr)
+            x = call_region(fn, p_ctx, p_regs, p_mem, p_slots, p_st, p_ctr)
             ctx[CTX_CALLS] += 1
             pc = ctx[CTX_PC]
             cyc = ctx[CTX_CYC]
-            if x == X_SMC:
-                _forget_translations(jt)
-            elif x != X_JUMP:
+            if x != X_JUMP:
                 interpret = True
                 if x == X_LIMIT:
                     ctx[CTX_LIMITS] += 1
@@ -280,7 +284,6 @@ __all__ = [
     "X_JUMP",
     "X_LIMIT",
     "X_SIDE",
-    "X_SMC",
     "JitArrays",
     "flush_counts",
     "run_translated",
