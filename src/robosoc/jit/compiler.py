@@ -82,30 +82,31 @@ class Compiler:
             Path(tmp).replace(path)  # readers see a whole object or none
         return obj, False
 
-    def add(self, ir_template: str, placeholder: str) -> int:
-        """Compile (or load) a module of one function and return its native address.
+    def add(self, ir_template: str, placeholder: str, names: list[str]) -> list[int]:
+        """Compile (or load) a module and return the native address of each function in ``names``.
 
-        The function is named in ``ir_template`` by ``placeholder``; its real name is derived
-        from the cache key, so a region translated again (another run, or after self-modifying
-        code) reuses the code already loaded.
+        Functions are named in ``ir_template`` with ``placeholder`` as the stem; the real stem is
+        derived from the cache key, so a region translated again (another run, or after
+        self-modifying code) reuses the code already loaded.
         """
         start = time.perf_counter()
-        name = "r" + self.key(ir_template)[:32]
-        address = self.loaded.get(name)
-        if address is None:
-            obj, hit = self.object_code(ir_template.replace(placeholder, name))
+        stem = "r" + self.key(ir_template)[:32]
+        real = [n.replace(placeholder, stem) for n in names]
+        if real[0] not in self.loaded:
+            obj, hit = self.object_code(ir_template.replace(placeholder, stem))
             self.engine.add_object_file(llvm.ObjectFileRef.from_data(obj))
             self.engine.finalize_object()
-            address = self.engine.get_function_address(name)
-            if not address:
-                raise RuntimeError(f"translated function {name} not found after loading its object")
-            self.loaded[name] = address
+            for n in real:
+                address = self.engine.get_function_address(n)
+                if not address:
+                    raise RuntimeError(f"translated function {n} not found after loading its object")
+                self.loaded[n] = address
             self.stats.modules += 1
             self.stats.cache_hits += int(hit)
         else:
             self.stats.reused += 1
         self.stats.seconds += time.perf_counter() - start
-        return address
+        return [self.loaded[n] for n in real]
 
 
 _SHARED: Compiler | None = None

@@ -1,14 +1,17 @@
-"""LLVM IR of one region: each block checks the next event, counts itself, then runs its instructions.
+"""LLVM IR of one region: one function per block, chained by tail calls.
 
-The IR is written as text (faster to produce than llvmlite's builder objects).  The function takes
-the addresses of the dispatch context and of the core's arrays (registers, SRAM bytes, count
-slots, state, counters), all distinct arrays, hence ``noalias``::
+Each block function checks that its worst-case cycles end before the next event, counts itself,
+runs its instructions and continues with a tail call: to the next block of the region (a direct
+jump in native code), or through the entry table to whichever region has a block at the target
+(an indirect jump), or returns an X_* code of :mod:`robosoc.kernels.jit_dispatch` to the dispatch
+loop.  Every block function has the signature (all arrays distinct, hence ``noalias``)::
 
-    i32 @name(ctx, regs, mem, cnt, st, ctr)
+    i32 @block(i64* ctx, i32* regs, i8* mem, i64* cnt, i64 cycle)
 
-and returns an X_* code of :mod:`robosoc.kernels.jit_dispatch`.  Guest registers stay in the
-register array (one load/store each; LLVM forwards them inside a block), the cycle count is a
-local that LLVM folds into one add per block.  Loads outside SRAM, stores outside its data part
+so every tail call is a true one (``musttail``).  Guest registers stay in the register array (a
+load at first use in a block, a store per write), the cycle count is an argument, the state and
+counter arrays are reached through ``ctx``.  The IR is written as text (faster to produce than
+llvmlite's builder objects).  Loads outside SRAM, stores outside its data part
 (devices, and the loaded code: self-modifying code) and misaligned accesses leave the region
 before the instruction, for the interpreter.  Costs come from the timing classes of
 :mod:`robosoc.isa.table`; instruction counts are count slots (see the dispatch module).
@@ -27,21 +30,21 @@ from robosoc.isa.table import (
     MEMORY_CYCLES,
     MUL_BASE_CYCLES,
     SINGLE_CYCLES,
+    Fmt,
     Timing,
 )
-from robosoc.isa.table import Fmt
 from robosoc.jit.regions import Block, End, Insn, Region
 from robosoc.kernels.core import _MUL_CHUNK
 from robosoc.kernels.core_layout import C_MUL_STALL, C_TAKEN, S_MUL_END, S_MULHSU_COUNT, S_MULHSU_PC
 from robosoc.kernels.jit_dispatch import (
-    CTX_BLOCK,
     CTX_CNT,
+    CTX_CTR,
     CTX_CYC,
-    CTX_ENTRY_BLK,
     CTX_ENTRY_FN,
     CTX_ENTRY_SLOT,
     CTX_LIMIT,
     CTX_PC,
+    CTX_ST,
     X_JUMP,
     X_LIMIT,
     X_SIDE,
@@ -96,6 +99,7 @@ def _i32(v: int) -> int:
     return v - (1 << 32) if v >> 31 else v
 
 
+MAX_SWITCH = 64  # most in-region targets a jalr compares with before leaving the region
 _ALU_RR = {"add": "add", "sub": "sub", "xor": "xor", "or": "or", "and": "and"}
 _ALU_RI = {"addi": "add", "xori": "xor", "ori": "or", "andi": "and"}
 _SHIFT_I = {"slli": "shl", "srli": "lshr", "srai": "ashr"}
@@ -117,31 +121,41 @@ class Target:
 
 @dataclass
 class EmittedRegion:
-    name: str
     ir: str
-    block_index: dict[int, int]  # block start pc -> switch value
+    block_names: dict[int, str]  # block start pc -> function name (with the region's name placeholder)
     #: count slots: (histogram as (opc index, delta) pairs, next slot or -1); a slot's executions are
     #: also added to its next slot's (the chain of side-exit suffixes)
     slots: list[tuple[list[tuple[int, int]], int]] = field(default_factory=list)
 
 
+_PARAMS = "i64* noalias %ctx, i32* noalias %regs, i8* noalias %mem, i64* noalias %cnt, i64 %cyc"
+_FN_TYPE = "i32 (i64*, i32*, i8*, i64*, i64)"
+
+
 class _Writer:
-    """Writes one region.  Register values and the cycles since the last store of the cycle count
-    are tracked per straight-line path, so an instruction is its operation plus one register store.
+    """Writes one region.  Register values and the cycles since the block started are tracked
+    along each path, so an instruction is its operation plus one register store.
     """
 
-    def __init__(self, target: Target, region: Region) -> None:
+    def __init__(self, target: Target, region: Region, name: str) -> None:
         self.t = target
         self.region = region
+        self.name = name
         self.slots: list[tuple[list[tuple[int, int]], int]] = []
         self.lines: list[str] = []
         self.n = 0
         self.uses_mul = False
-        self.index = {pc: k for k, pc in enumerate(region.blocks)}
-        self.exits: list[tuple[str, int, str, int, int]] = []  # (label, code, pc i64, cycles, slot)
-        self.cur = "entry"
+        self.fn = {pc: f"{name}_{k}" for k, pc in enumerate(region.blocks)}
+        # where a jalr may land inside the region: return sites and callees of its calls
+        indirect: list[int] = []
+        for b in region.blocks.values():
+            if b.end is End.CALL:
+                indirect += [b.insns[-1].pc + b.insns[-1].imm, b.next_pc]
+            elif b.end is End.JALR and b.insns[-1].rd != 0:
+                indirect.append(b.next_pc)
+        self.indirect = sorted({t & M32 for t in indirect if t & M32 in self.fn})[:MAX_SWITCH]
         self.regs: dict[int, str] = {}
-        self.cyc = ""  # SSA value equal to the cycle count in %cycp
+        self.cyc = "%cyc"  # SSA value of the cycle count at the last dynamic change
         self.pending = 0  # cycles of the instructions since then
 
     def tmp(self) -> str:
@@ -157,7 +171,6 @@ class _Writer:
 
     def put_label(self, name: str) -> None:
         self.lines.append(f"{name}:")
-        self.cur = name
 
     # --- state ------------------------------------------------------------------------------
     def reg(self, r: int) -> str:
@@ -165,31 +178,32 @@ class _Writer:
             return "0"
         v = self.regs.get(r)
         if v is None:
-            v = self.tmp()
-            self.emit(f"{v} = load i32, i32* %r{r}")
+            p, v = self.tmp(), self.tmp()
+            self.emit(f"{p} = getelementptr i32, i32* %regs, i64 {r}")
+            self.emit(f"{v} = load i32, i32* {p}")
             self.regs[r] = v
         return v
 
     def set_reg(self, rd: int, value: str) -> None:
-        self.emit(f"store i32 {value}, i32* %r{rd if rd != 0 else SINK}")
+        p = self.tmp()
+        self.emit(f"{p} = getelementptr i32, i32* %regs, i64 {rd if rd != 0 else SINK}")
+        self.emit(f"store i32 {value}, i32* {p}")
         if rd != 0:
             self.regs[rd] = value
 
-    def store_cycles(self, extra: int | str = 0) -> None:
-        """Make %cycp hold the cycle count plus ``extra``."""
+    def cycles(self, extra: int | str = 0) -> str:
+        """The cycle count after the instructions so far plus ``extra``, as an SSA value."""
         v = self.cyc
-        if self.pending:
+        total = self.pending + (extra if isinstance(extra, int) else 0)
+        if total:
             w = self.tmp()
-            self.emit(f"{w} = add i64 {v}, {self.pending}")
+            self.emit(f"{w} = add i64 {v}, {total}")
             v = w
-        if extra != 0:
+        if isinstance(extra, str):
             w = self.tmp()
             self.emit(f"{w} = add i64 {v}, {extra}")
             v = w
-        if v != self.cyc:
-            self.emit(f"store i64 {v}, i64* %cycp")
-        self.cyc = v
-        self.pending = 0
+        return v
 
     def add_i64(self, ptr: str, n: int | str) -> None:
         a, b = self.tmp(), self.tmp()
@@ -197,36 +211,76 @@ class _Writer:
         self.emit(f"{b} = add i64 {a}, {n}")
         self.emit(f"store i64 {b}, i64* {ptr}")
 
+    def ctx_ptr(self, slot: int) -> str:
+        """The address held in ctx[slot] as an i64*."""
+        g, a, p = self.tmp(), self.tmp(), self.tmp()
+        self.emit(f"{g} = getelementptr i64, i64* %ctx, i64 {slot}")
+        self.emit(f"{a} = load i64, i64* {g}")
+        self.emit(f"{p} = inttoptr i64 {a} to i64*")
+        return p
+
+    def field(self, base: str, index: int) -> str:
+        p = self.tmp()
+        self.emit(f"{p} = getelementptr i64, i64* {base}, i64 {index}")
+        return p
+
     def slot(self, hist: list[tuple[int, int]], nxt: int = -1) -> int:
         self.slots.append((hist, nxt))
         return len(self.slots) - 1
 
-    def exit_edge(self, code: int, pc: int | str, slot: int = -1, cycles: int | None = None) -> str:
-        """A new exit block for the current path (emitted at the end); the caller branches to it."""
-        name = self.label("x")
-        self.exits.append((name, code, str(pc), self.pending if cycles is None else cycles, slot))
-        return name
+    # --- leaving a block ----------------------------------------------------------------------
+    def leave(self, code: int, pc: int | str, slot: int = -1, cyc: str | None = None) -> None:
+        """Return ``code`` to the dispatch loop with pc and cycle in ctx (and one count to ``slot``)."""
+        cyc = cyc or self.cycles()
+        self.emit(f"store i64 {pc}, i64* %ctx_pc")
+        self.emit(f"store i64 {cyc}, i64* %ctx_cyc")
+        if slot >= 0:
+            self.add_i64(self.field("%cnt", slot), 1)
+        self.emit(f"ret i32 {code}")
 
-    def leave(self, code: int, pc: int | str, slot: int = -1) -> None:
-        if isinstance(pc, str):
-            z = self.tmp()
-            self.emit(f"{z} = zext i32 {pc} to i64")
-            pc = z
-        x = self.exit_edge(code, pc, slot)
-        self.emit(f"br label %{x}")
+    def tail(self, fn: str, cnt: str, cyc: str) -> None:
+        r = self.tmp()
+        self.emit(f"{r} = musttail call i32 {fn}(i64* %ctx, i32* %regs, i8* %mem, i64* {cnt}, i64 {cyc})")
+        self.emit(f"ret i32 {r}")
 
-    def goto(self, pc: int) -> None:
-        """Continue at ``pc`` (cycles stored): the block there, or leave the region."""
-        if pc in self.index:
-            self.emit(f"br label %b{self.index[pc]}")
+    def jump(self, pc: str, cyc: str) -> None:
+        """Continue at the dynamic ``pc`` (i64): the region with a block there, else the dispatch loop."""
+        off, i = self.tmp(), self.tmp()
+        self.emit(f"{off} = sub i64 {pc}, {self.t.base}")
+        self.emit(f"{i} = lshr i64 {off}, 2")
+        fe, fa = self.tmp(), self.tmp()
+        self.emit(f"{fe} = getelementptr i64, i64* {self.ctx_ptr(CTX_ENTRY_FN)}, i64 {i}")
+        self.emit(f"{fa} = load i64, i64* {fe}")
+        none, go, out = self.tmp(), self.label("go"), self.label("out")
+        self.emit(f"{none} = icmp eq i64 {fa}, 0")
+        self.emit(f"br i1 {none}, label %{out}, label %{go}")
+        self.put_label(out)
+        self.leave(X_JUMP, pc, cyc=cyc)
+        self.put_label(go)
+        se, sl, ca, so, cn, cp, f = (self.tmp() for _ in range(7))
+        self.emit(f"{se} = getelementptr i64, i64* {self.ctx_ptr(CTX_ENTRY_SLOT)}, i64 {i}")
+        self.emit(f"{sl} = load i64, i64* {se}")
+        self.emit(f"{ca} = load i64, i64* {self.field('%ctx', CTX_CNT)}")
+        self.emit(f"{so} = shl i64 {sl}, 3")
+        self.emit(f"{cn} = add i64 {ca}, {so}")
+        self.emit(f"{cp} = inttoptr i64 {cn} to i64*")
+        self.emit(f"{f} = inttoptr i64 {fa} to {_FN_TYPE}*")
+        self.tail(f, cp, cyc)
+
+    def goto(self, pc: int, cyc: str) -> None:
+        """Continue at the static ``pc``: this region's block there, or through the entry table."""
+        pc &= M32
+        if pc in self.fn:
+            self.tail(f"@{self.fn[pc]}", "%cnt", cyc)
         else:
-            self.leave(X_JUMP, pc)
+            self.jump(str(pc), cyc)
 
     def cond_exit(self, cond: str, code: int, pc: int, slot: int, stem: str) -> None:
-        """Leave through the shared exit when ``cond``, else go on in a new label."""
-        ok = self.label(stem)
-        x = self.exit_edge(code, pc, slot)
+        """Leave to the dispatch loop when ``cond``, else go on in a new label."""
+        x, ok = self.label(f"{stem}.x"), self.label(stem)
         self.emit(f"br i1 {cond}, label %{x}, label %{ok}")
+        self.put_label(x)
+        self.leave(code, pc, slot)
         self.put_label(ok)
 
     # --- counting -----------------------------------------------------------------------------
@@ -234,19 +288,21 @@ class _Writer:
         return 2 * insn.op + (((insn.pc - self.t.base) >> 2) & 1)
 
     def block(self, block: Block) -> None:
-        k = self.index[block.start]
         insns = block.insns
         worst = sum(WORST_CYCLES[i.ins.timing] for i in insns[:-1])
-        self.put_label(f"b{k}")
-        self.regs = {}
-        c, e, ok = self.tmp(), self.tmp(), self.tmp()
-        self.emit(f"{c} = load i64, i64* %cycp")
-        self.cyc, self.pending = c, 0
-        self.emit(f"{e} = add i64 {c}, {worst}")
-        self.emit(f"{ok} = icmp slt i64 {e}, %limit")
-        x = self.exit_edge(X_LIMIT, block.start, -1, 0)
-        self.emit(f"br i1 {ok}, label %b{k}.go, label %{x}")
-        self.put_label(f"b{k}.go")
+        self.lines.append(f"define i32 @{self.fn[block.start]}({_PARAMS}) nounwind {{")
+        self.put_label("entry")
+        self.emit(f"%ctx_pc = getelementptr i64, i64* %ctx, i64 {CTX_PC}")
+        self.emit(f"%ctx_cyc = getelementptr i64, i64* %ctx, i64 {CTX_CYC}")
+        self.regs, self.cyc, self.pending = {}, "%cyc", 0
+        lim, e, ok = self.tmp(), self.tmp(), self.tmp()
+        self.emit(f"{lim} = load i64, i64* {self.field('%ctx', CTX_LIMIT)}")
+        self.emit(f"{e} = add i64 %cyc, {worst}")
+        self.emit(f"{ok} = icmp slt i64 {e}, {lim}")
+        self.emit(f"br i1 {ok}, label %go, label %lim")
+        self.put_label("lim")
+        self.leave(X_LIMIT, block.start)
+        self.put_label("go")
         kcs = [self.kc(i) for i in insns]
         # side exits at instruction j leave j.. uncounted: a chain of suffix slots, one per exit point
         points = [j for j, i in enumerate(insns) if i.name in _LOADS or i.name in _STORES or i.name == "jalr"]
@@ -257,18 +313,17 @@ class _Writer:
             nxt = self.slot([(kc, -1) for kc in kcs[j:end]], nxt)
             self.suffix[j] = nxt
         if insns:
-            slot = self.slot([(kc, 1) for kc in kcs])
-            self.add_i64(f"%cnt.{slot}", 1)
+            self.add_i64(self.field("%cnt", self.slot([(kc, 1) for kc in kcs])), 1)
         for j, insn in enumerate(insns):
             self.insn(j, insn)
         match block.end:
             case End.FALL:
-                self.store_cycles()
-                self.goto(block.next_pc)
+                self.goto(block.next_pc, self.cycles())
             case End.SIDE:
                 self.leave(X_SIDE, block.next_pc)
             case End.BRANCH | End.JUMP | End.CALL | End.JALR:
                 self.control(len(insns) - 1, insns[-1])
+        self.lines.append("}")
 
     # --- instructions -------------------------------------------------------------------------
     def control(self, j: int, insn: Insn) -> None:
@@ -277,25 +332,16 @@ class _Writer:
         if name in _BRANCH:
             a, b, cond = self.reg(insn.rs1), self.reg(insn.rs2), self.tmp()
             self.emit(f"{cond} = icmp {_BRANCH[name]} i32 {a}, {b}")
-            taken, fall = self.label("tk"), self.label("nt")
-            self.emit(f"br i1 {cond}, label %{taken}, label %{fall}")
-            cyc, pending = self.cyc, self.pending
-            self.put_label(taken)
-            self.store_cycles(BRANCH_TAKEN_CYCLES)
-            self.add_i64("%ctr_taken", 1)
-            self.goto((pc + insn.imm) & M32)
-            self.put_label(fall)
-            self.cyc, self.pending = cyc, pending
-            self.store_cycles(BRANCH_NOT_TAKEN_CYCLES)
-            self.goto(pc + 4)
+            self.emit(f"br i1 {cond}, label %taken, label %fall")
+            self.put_label("taken")
+            taken = self.cycles(BRANCH_TAKEN_CYCLES)
+            self.add_i64(self.field(self.ctx_ptr(CTX_CTR), C_TAKEN), 1)
+            self.goto(pc + insn.imm, taken)
+            self.put_label("fall")
+            self.goto(pc + 4, self.cycles(BRANCH_NOT_TAKEN_CYCLES))
         elif name == "jal":
             self.set_reg(insn.rd, str(_i32(pc + 4)))
-            self.store_cycles(JUMP_CYCLES)
-            target = (pc + insn.imm) & M32
-            if insn.rd == 0:
-                self.goto(target)
-            else:
-                self.leave(X_JUMP, target)
+            self.goto(pc + insn.imm, self.cycles(JUMP_CYCLES))
         else:  # jalr: the target is checked as the interpreter's fetch_error does
             a, s, tgt = self.reg(insn.rs1), self.tmp(), self.tmp()
             self.emit(f"{s} = add i32 {a}, {insn.imm}")
@@ -308,8 +354,16 @@ class _Writer:
             self.emit(f"{bad} = or i1 {bad1}, {bad2}")
             self.cond_exit(bad, X_SIDE, pc, self.suffix[j], "jr")
             self.set_reg(insn.rd, str(_i32(pc + 4)))
-            self.store_cycles(JUMP_CYCLES)
-            self.leave(X_JUMP, tgt)
+            cyc = self.cycles(JUMP_CYCLES)
+            cases = " ".join(f"i32 {_i32(t)}, label %in{k}" for k, t in enumerate(self.indirect))
+            self.emit(f"switch i32 {tgt}, label %other [ {cases} ]")
+            for k, t in enumerate(self.indirect):
+                self.put_label(f"in{k}")
+                self.tail(f"@{self.fn[t]}", "%cnt", cyc)
+            self.put_label("other")
+            z = self.tmp()
+            self.emit(f"{z} = zext i32 {tgt} to i64")
+            self.jump(z, cyc)
 
     def insn(self, j: int, insn: Insn) -> None:
         name = insn.name
@@ -416,92 +470,26 @@ class _Writer:
             self.emit(f"{h} = lshr i64 {p}, 32")
             self.emit(f"{v} = trunc i64 {h} to i32")
         self.set_reg(insn.rd, v)
+        st = self.ctx_ptr(CTX_ST)
         if name == "mulhsu":
-            self.add_i64("%st_mulhsu_n", 1)
+            self.add_i64(self.field(st, S_MULHSU_COUNT), 1)
+            pp = self.field(st, S_MULHSU_PC)
             old, neg, new = self.tmp(), self.tmp(), self.tmp()
-            self.emit(f"{old} = load i64, i64* %st_mulhsu_pc")
+            self.emit(f"{old} = load i64, i64* {pp}")
             self.emit(f"{neg} = icmp slt i64 {old}, 0")
             self.emit(f"{new} = select i1 {neg}, i64 {insn.pc}, i64 {old}")
-            self.emit(f"store i64 {new}, i64* %st_mulhsu_pc")
+            self.emit(f"store i64 {new}, i64* {pp}")
         lat, stall = self.tmp(), self.tmp()
         self.emit(f"{lat} = call i64 @mul_latency(i32 {b})")
         self.emit(f"{stall} = add i64 {lat}, -1")
-        self.add_i64("%ctr_mulstall", stall)
-        self.store_cycles(lat)
-        self.emit(f"store i64 {self.cyc}, i64* %st_mulend")  # the interrupt controller's erratum window
-
-
-#: leave(ctx, cnt, cycle, pc, slot, code): the region's way out: pc and cycle to ctx, one count to
-#: ``slot`` (none when negative), returns ``code``.  Out of line: exits are many and cold.
-_LEAVE_IR = f"""
-define internal i32 @leave(i64* %ctx, i64* %cnt, i64 %cyc, i64 %pc, i64 %slot, i32 %code) noinline nounwind {{
-  %p = getelementptr i64, i64* %ctx, i64 {CTX_PC}
-  store i64 %pc, i64* %p
-  %c = getelementptr i64, i64* %ctx, i64 {CTX_CYC}
-  store i64 %cyc, i64* %c
-  %has = icmp sge i64 %slot, 0
-  br i1 %has, label %count, label %done
-count:
-  %sp = getelementptr i64, i64* %cnt, i64 %slot
-  %n0 = load i64, i64* %sp
-  %n1 = add i64 %n0, 1
-  store i64 %n1, i64* %sp
-  br label %done
-done:
-  ret i32 %code
-}}
-"""
-
-_PARAMS = (
-    "i8* noalias %ctxp, i8* noalias %regsp, i8* noalias %mem, i8* noalias %cntp, i8* noalias %stp, i8* noalias %ctrp"
-)
-_ARGS = "i8* %ctxp, i8* %regsp, i8* %mem, i8* %cntp, i8* %stp, i8* %ctrp"
-
-
-def _jump_ir(target: Target) -> str:
-    """jump(region arguments): continue at ctx's pc in the region with a block there, else return X_JUMP."""
-    return f"""
-define internal i32 @jump({_PARAMS}) nounwind {{
-  %ctx = bitcast i8* %ctxp to i64*
-  %pp = getelementptr i64, i64* %ctx, i64 {CTX_PC}
-  %pc = load i64, i64* %pp
-  %off = sub i64 %pc, {target.base}
-  %i = lshr i64 %off, 2
-  %fp = getelementptr i64, i64* %ctx, i64 {CTX_ENTRY_FN}
-  %fa = load i64, i64* %fp
-  %ft = inttoptr i64 %fa to i64*
-  %fe = getelementptr i64, i64* %ft, i64 %i
-  %fn = load i64, i64* %fe
-  %none = icmp eq i64 %fn, 0
-  br i1 %none, label %out, label %go
-out:
-  ret i32 {X_JUMP}
-go:
-  %bp = getelementptr i64, i64* %ctx, i64 {CTX_ENTRY_BLK}
-  %ba = load i64, i64* %bp
-  %bt = inttoptr i64 %ba to i64*
-  %be = getelementptr i64, i64* %bt, i64 %i
-  %blk = load i64, i64* %be
-  %bo = getelementptr i64, i64* %ctx, i64 {CTX_BLOCK}
-  store i64 %blk, i64* %bo
-  %sp = getelementptr i64, i64* %ctx, i64 {CTX_ENTRY_SLOT}
-  %sa = load i64, i64* %sp
-  %stt = inttoptr i64 %sa to i64*
-  %se = getelementptr i64, i64* %stt, i64 %i
-  %slot = load i64, i64* %se
-  %cp = getelementptr i64, i64* %ctx, i64 {CTX_CNT}
-  %ca = load i64, i64* %cp
-  %so = shl i64 %slot, 3
-  %cn = add i64 %ca, %so
-  %cntp2 = inttoptr i64 %cn to i8*
-  %f = inttoptr i64 %fn to i32 ({", ".join(["i8*"] * 6)})*
-  %r = musttail call i32 %f(i8* %ctxp, i8* %regsp, i8* %mem, i8* %cntp2, i8* %stp, i8* %ctrp)
-  ret i32 %r
-}}
-"""
+        self.add_i64(self.field(self.ctx_ptr(CTX_CTR), C_MUL_STALL), stall)
+        self.cyc = self.cycles(lat)
+        self.pending = 0
+        self.emit(f"store i64 {self.cyc}, i64* {self.field(st, S_MUL_END)}")  # the controller's erratum window
 
 
 _SET = {"slt": "slt", "slti": "slt", "sltu": "ult", "sltiu": "ult"}
+
 
 #: mul_latency(i32 rs2) -> i64: three byte-table lookups as kernels.core.mul_latency does, then the tail
 _MUL_LATENCY_IR = f"""
@@ -549,57 +537,12 @@ define internal i64 @mul_latency(i32 %b32) nounwind readnone {{
 
 
 def emit_region(target: Target, region: Region, name: str = NAME_PLACEHOLDER) -> EmittedRegion:
-    """The IR module of ``region`` as function ``name``.
+    """The IR module of ``region``: one function per block, named ``{name}_{k}``.
 
     Count slots are numbered from 0: the dispatch loop passes the region's first slot as ``cnt``.
     """
-    w = _Writer(target, region)
+    w = _Writer(target, region, name)
     for block in region.blocks.values():
         w.block(block)
-    body = w.lines
-    exit_lines = []
-    for label, code, pc, cycles, slot in w.exits:
-        exit_lines += [f"{label}:", f"  %{label}.c = load i64, i64* %cycp", f"  %{label}.d = add i64 %{label}.c, {cycles}"]
-        if code == X_JUMP:  # straight into the region translated there, if any (same signature: a true tail call)
-            exit_lines += [
-                f"  store i64 {pc}, i64* %ctx_pc",
-                f"  store i64 %{label}.d, i64* %ctx_cyc",
-                f"  %{label}.r = musttail call i32 @jump({_ARGS})",
-                f"  ret i32 %{label}.r",
-            ]
-        else:
-            exit_lines += [
-                f"  %{label}.r = tail call i32 @leave(i64* %ctx, i64* %cnt, i64 %{label}.d, i64 {pc}, i64 {slot}, i32 {code})",
-                f"  ret i32 %{label}.r",
-            ]
-    slot_geps = [f"  %cnt.{s} = getelementptr i64, i64* %cnt, i64 {s}" for s in range(len(w.slots))]
-    head = [
-        f"define i32 @{name}({_PARAMS}) nounwind {{",
-        "entry:",
-        "  %ctx = bitcast i8* %ctxp to i64*",
-        "  %regs = bitcast i8* %regsp to i32*",
-        "  %cnt = bitcast i8* %cntp to i64*",
-        "  %st = bitcast i8* %stp to i64*",
-        "  %ctr = bitcast i8* %ctrp to i64*",
-        f"  %ctx_pc = getelementptr i64, i64* %ctx, i64 {CTX_PC}",
-        f"  %ctx_cyc = getelementptr i64, i64* %ctx, i64 {CTX_CYC}",
-        f"  %ctx_limit = getelementptr i64, i64* %ctx, i64 {CTX_LIMIT}",
-        f"  %ctx_block = getelementptr i64, i64* %ctx, i64 {CTX_BLOCK}",
-        f"  %ctr_taken = getelementptr i64, i64* %ctr, i64 {C_TAKEN}",
-        f"  %ctr_mulstall = getelementptr i64, i64* %ctr, i64 {C_MUL_STALL}",
-        f"  %st_mulend = getelementptr i64, i64* %st, i64 {S_MUL_END}",
-        f"  %st_mulhsu_n = getelementptr i64, i64* %st, i64 {S_MULHSU_COUNT}",
-        f"  %st_mulhsu_pc = getelementptr i64, i64* %st, i64 {S_MULHSU_PC}",
-        *(f"  %r{r} = getelementptr i32, i32* %regs, i64 {r}" for r in range(1, SINK + 1)),
-        *slot_geps,
-        "  %cycp = alloca i64",
-        "  %cyc0 = load i64, i64* %ctx_cyc",
-        "  store i64 %cyc0, i64* %cycp",
-        "  %limit = load i64, i64* %ctx_limit",
-        "  %blk = load i64, i64* %ctx_block",
-        "  switch i64 %blk, label %bad [ " + " ".join(f"i64 {k}, label %b{k}" for k in w.index.values()) + " ]",
-        "bad:",
-        "  unreachable",
-    ]
-    text = "\n".join([_LEAVE_IR, _jump_ir(target), _MUL_LATENCY_IR if w.uses_mul else "", *head, *body, *exit_lines, "}", ""])
-    return EmittedRegion(name=name, ir=text, block_index=dict(w.index), slots=w.slots)
+    text = "\n".join([_MUL_LATENCY_IR if w.uses_mul else "", *w.lines, ""])
+    return EmittedRegion(ir=text, block_names=dict(w.fn), slots=w.slots)

@@ -41,13 +41,13 @@ class _Translated:
 
     region: Region
     emitted: EmittedRegion
-    address: int
+    addresses: list[int]  # of the block functions, in block order
     pcs: np.ndarray  # word indices of the translated instructions
     words: np.ndarray  # their contents when translated
 
 
-#: (target, multiplier, start pc) -> regions translated there in this process (any core, any run)
-_TRANSLATED: dict[tuple[Target, bool, int], list[_Translated]] = {}
+#: (target, multiplier) -> regions translated in this process (any core, any run), in order
+_TRANSLATED: dict[tuple[Target, bool], list[_Translated]] = {}
 
 
 @dataclass
@@ -88,7 +88,6 @@ class TranslatingCore:
             hot[-1] = NEVER_TRANSLATE
             self._jt = JitArrays(
                 entry_fn=np.zeros(words, dtype=np.int64),
-                entry_blk=np.zeros(words, dtype=np.int64),
                 entry_slot=np.zeros(words, dtype=np.int64),
                 hot=hot,
                 tmap=np.zeros(words, dtype=np.uint8),
@@ -105,6 +104,7 @@ class TranslatingCore:
             self._slot_next: list[np.ndarray] = []
             self._nslots = 0
             self._flushes_seen = 0
+            self._install_known()
         return self._jt
 
     def _target(self) -> Target:
@@ -129,53 +129,70 @@ class TranslatingCore:
         )
 
     # --- translation --------------------------------------------------------------------------
+    def _install_known(self) -> None:
+        """Enter every region this process translated for the same build whose words are unchanged."""
+        m32 = self.state.m32[self.tile]
+        for done in _TRANSLATED.get(self._key(), []):
+            if np.array_equal(m32[done.pcs], done.words):
+                self._install(done)
+                self.stats.reused += 1
+
+    def _key(self) -> tuple[Target, bool]:
+        return self._target(), int(self.state.st[self.tile, S_MUL]) != 0
+
     def translate(self, pc: int) -> Region:
         """Translate the region starting at ``pc`` and enter its blocks in the tables."""
         jt = self._tables()
-        if jt.ctx[CTX_FLUSHES] != self._flushes_seen:
+        if jt.ctx[CTX_FLUSHES] != self._flushes_seen:  # self-modifying code: the loop forgot everything
             self.stats.flushes += int(jt.ctx[CTX_FLUSHES]) - self._flushes_seen
             self._flushes_seen = int(jt.ctx[CTX_FLUSHES])
-        target = self._target()
+            self._install_known()
+            if jt.entry_fn[(pc - self._target().base) >> 2] != 0:
+                return Region(pc, {})
+        target, has_mul = self._key()
         base = target.base
         view = self._view()
         m32 = self.state.m32[self.tile]
-        key = (target, view.has_mul, pc)
-        for done in _TRANSLATED.get(key, []):
-            if np.array_equal(m32[done.pcs], done.words):
-                region, emitted, address = done.region, done.emitted, done.address
-                self.stats.reused += 1
-                break
-        else:
-            region = discover(view, pc, translated=lambda a: jt.entry_fn[(a - base) >> 2] != 0)
-            if not region.blocks:
-                jt.hot[(pc - base) >> 2] = NEVER_TRANSLATE
-                return region
+        region = discover(view, pc, translated=lambda a: jt.entry_fn[(a - base) >> 2] != 0)
+        if region.blocks:
             emitted = emit_region(target, region)
-            address = self.compiler.add(emitted.ir, NAME_PLACEHOLDER)
+            names = list(emitted.block_names.values())
+            addresses = self.compiler.add(emitted.ir, NAME_PLACEHOLDER, names)
             pcs = np.array(sorted((p - base) >> 2 for p in region.words()), dtype=np.int64)
-            _TRANSLATED.setdefault(key, []).append(_Translated(region, emitted, address, pcs, m32[pcs].copy()))
-        slot_base = self._nslots
-        self._add_slots(emitted.slots, slot_base)
+        else:
+            emitted, addresses = EmittedRegion(ir="", block_names={}), []
+            pcs = np.array([(pc - base) >> 2], dtype=np.int64)
+        done = _Translated(region, emitted, addresses, pcs, m32[pcs].copy())
+        _TRANSLATED.setdefault((target, has_mul), []).append(done)
+        self._install(done)
+        self.stats.regions += 1
+        self.stats.instructions += region.instructions
+        return region
+
+    def _install(self, done: _Translated) -> None:
         jt = self._jt
         assert jt is not None
-        for start, k in emitted.block_index.items():
+        base = self._target().base
+        region = done.region
+        if not region.blocks:
+            jt.hot[(region.start - base) >> 2] = NEVER_TRANSLATE
+            return
+        slot_base = self._nslots
+        self._add_slots(done.emitted.slots, slot_base)
+        jt = self._jt
+        for start, address in zip(done.emitted.block_names, done.addresses, strict=True):
             i = (start - base) >> 2
             if jt.entry_fn[i] == 0:
                 jt.entry_fn[i] = address
-                jt.entry_blk[i] = k
                 jt.entry_slot[i] = slot_base
+        jt.tmap[done.pcs] = 1
         for block in region.blocks.values():
-            for insn in block.insns:
-                jt.tmap[(insn.pc - base) >> 2] = 1
             if block.end is End.SIDE:
                 i = (block.next_pc - base) >> 2
                 if jt.entry_fn[i] == 0:
                     jt.hot[i] = NEVER_TRANSLATE
-        if jt.entry_fn[(pc - base) >> 2] == 0:
-            jt.hot[(pc - base) >> 2] = NEVER_TRANSLATE
-        self.stats.regions += 1
-        self.stats.instructions += region.instructions
-        return region
+        if jt.entry_fn[(region.start - base) >> 2] == 0:
+            jt.hot[(region.start - base) >> 2] = NEVER_TRANSLATE
 
     def _add_slots(self, slots: list[tuple[list[tuple[int, int]], int]], slot_base: int) -> None:
         hist = [row for h, _ in slots for row in h]

@@ -1,8 +1,10 @@
-"""Region discovery: the basic blocks reachable from a start pc without following a call.
+"""Region discovery: the basic blocks reachable from a start pc, callees included, up to a size cap.
 
-A region is what one guest function looks like from its entry: blocks joined by conditional
-branches and ``jal x0`` jumps, plus the return sites after the calls it makes.  Calls, ``jalr``
-and targets beyond the size cap leave the region; an instruction the translator does not handle
+A region starts as one guest function: blocks joined by conditional branches and ``jal x0``
+jumps, plus the return sites after the calls it makes; the callees of direct calls join it too
+(until the cap), so that a call and its return stay inside the native code (the emitter turns a
+``jalr`` into a switch over the region's return sites and callees).  Targets already translated
+elsewhere and beyond the cap leave the region; an instruction the translator does not handle
 ends its block with a *side exit*, after which the interpreter executes it (docs/translation.md).
 
 Instructions are decoded here from the memory words with :mod:`robosoc.isa.table` (the same rows
@@ -187,8 +189,10 @@ def discover(
                 add(pc + insn.imm)
                 add(pc + 4)
                 break
-            if fmt is Fmt.J:
-                add(pc + insn.imm if insn.rd == 0 else pc + 4)
+            if fmt is Fmt.J:  # a call's callee joins the region too, its returns come back in it
+                add(pc + insn.imm)
+                if insn.rd != 0:
+                    add(pc + 4)
                 break
             if fmt is Fmt.JALR:
                 if insn.rd != 0:

@@ -58,16 +58,17 @@ X_SIDE = 2  # the instruction at ctx[CTX_PC] is the interpreter's (device, code 
 CTX_PC = 0
 CTX_CYC = 1
 CTX_LIMIT = 2  # blocks run only while their last instruction starts before this cycle
-CTX_BLOCK = 3  # entry block of the called region
 CTX_FLUSHES = 4  # how many times the loop forgot every translation (self-modifying code)
 CTX_CALLS = 5  # region calls (statistics)
 CTX_STEPS = 6  # instructions handed to the interpreter (statistics)
 CTX_LIMITS = 7  # region exits because a block could reach the next event (statistics)
-# addresses of the tables a region reads to jump straight into the next region (JitArrays)
+# addresses of the tables a region reads to jump straight into the next region (JitArrays), and
+# of the core's state and counter rows
 CTX_ENTRY_FN = 8
-CTX_ENTRY_BLK = 9
-CTX_ENTRY_SLOT = 10
-CTX_CNT = 11
+CTX_ENTRY_SLOT = 9
+CTX_CNT = 10
+CTX_ST = 11
+CTX_CTR = 12
 CTX_SIZE = 16
 
 # dispatcher results beyond the interpreter's RUN_* codes
@@ -85,8 +86,8 @@ M32 = 0xFFFFFFFF
 class JitArrays(NamedTuple):
     """The translator's tables, one entry per word of the loaded code plus one (the word after it).
 
-    ``entry_fn`` native address of the region with a block starting at the word (0: none),
-    ``entry_blk`` that block's number, ``entry_slot`` the region's first count slot, ``hot`` arrivals at a word without an entry (NEVER_TRANSLATE:
+    ``entry_fn`` native address of the translated block starting at the word (0: none),
+    ``entry_slot`` its region's first count slot, ``hot`` arrivals at a word without an entry (NEVER_TRANSLATE:
     none can start there), ``tmap`` 1 for words some region translated, ``cnt`` executions per count
     slot, ``slot_ptr``/``slot_kc``/``slot_delta`` each slot's histogram (CSR), ``slot_next`` the slot whose
     count a slot's executions are also added to (-1: none; always an earlier slot), ``ctx`` the region
@@ -94,7 +95,6 @@ class JitArrays(NamedTuple):
     """
 
     entry_fn: np.ndarray
-    entry_blk: np.ndarray
     entry_slot: np.ndarray
     hot: np.ndarray
     tmap: np.ndarray
@@ -107,15 +107,17 @@ class JitArrays(NamedTuple):
 
 
 @intrinsic
-def call_region(typingctx, fn, ctx, regs, mem, cnt, st, ctr):  # type: ignore[no-untyped-def]
-    """Call the translated region at native address ``fn`` with the array addresses; its X_* code."""
-    sig = types.int32(types.int64, *([types.int64] * 6))
+def call_region(typingctx, fn, ctx, regs, mem, cnt, cyc):  # type: ignore[no-untyped-def]
+    """Call the translated block at native address ``fn`` (array addresses, cycle); its X_* code."""
+    sig = types.int32(types.int64, *([types.int64] * 5))
 
     def codegen(context, builder, signature, args):  # type: ignore[no-untyped-def]
-        i8p = ir.IntType(8).as_pointer()
-        fnty = ir.FunctionType(ir.IntType(32), [i8p] * 6)
+        i64 = ir.IntType(64)
+        ptrs = [i64.as_pointer(), ir.IntType(32).as_pointer(), ir.IntType(8).as_pointer(), i64.as_pointer()]
+        fnty = ir.FunctionType(ir.IntType(32), [*ptrs, i64])
         f = builder.inttoptr(args[0], fnty.as_pointer())
-        return builder.call(f, [builder.inttoptr(a, i8p) for a in args[1:]])
+        call_args = [builder.inttoptr(a, t) for a, t in zip(args[1:5], ptrs, strict=True)]
+        return builder.call(f, [*call_args, args[5]])
 
     return sig, codegen
 
@@ -138,7 +140,6 @@ def flush_counts(jt: JitArrays, opc_t: np.ndarray) -> None:
 @njit(cache=True)
 def _forget_translations(jt: JitArrays) -> None:
     jt.entry_fn[:] = 0
-    jt.entry_blk[:] = 0
     jt.entry_slot[:] = 0
     jt.hot[:] = 0
     jt.tmap[:] = 0
@@ -185,9 +186,10 @@ def run_translated(core: CoreArrays, tiles: np.ndarray, until: int, jt: JitArray
     p_st = np.int64(st_t.ctypes.data)
     p_ctr = np.int64(ctr[t].ctypes.data)
     ctx[CTX_ENTRY_FN] = np.int64(jt.entry_fn.ctypes.data)
-    ctx[CTX_ENTRY_BLK] = np.int64(jt.entry_blk.ctypes.data)
     ctx[CTX_ENTRY_SLOT] = np.int64(jt.entry_slot.ctypes.data)
     ctx[CTX_CNT] = p_cnt
+    ctx[CTX_ST] = p_st
+    ctx[CTX_CTR] = p_ctr
     status = RUN_CHUNK
     err = 0
     err_addr = 0
@@ -212,12 +214,8 @@ def run_translated(core: CoreArrays, tiles: np.ndarray, until: int, jt: JitArray
         interpret = False
         fn = jt.entry_fn[i]
         if fn != 0:
-            ctx[CTX_PC] = pc
-            ctx[CTX_CYC] = cyc
             ctx[CTX_LIMIT] = next_event
-            ctx[CTX_BLOCK] = jt.entry_blk[i]
-            p_slots = p_cnt + 8 * jt.entry_slot[i]
-            x = call_region(fn, p_ctx, p_regs, p_mem, p_slots, p_st, p_ctr)
+            x = call_region(fn, p_ctx, p_regs, p_mem, p_cnt + 8 * jt.entry_slot[i], cyc)
             ctx[CTX_CALLS] += 1
             pc = ctx[CTX_PC]
             cyc = ctx[CTX_CYC]
@@ -272,7 +270,6 @@ def run_translated(core: CoreArrays, tiles: np.ndarray, until: int, jt: JitArray
 
 
 __all__ = [
-    "CTX_BLOCK",
     "CTX_CYC",
     "CTX_FLUSHES",
     "CTX_LIMIT",
