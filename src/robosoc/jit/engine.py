@@ -50,6 +50,11 @@ class _Translated:
 _TRANSLATED: dict[tuple[Target, bool], list[_Translated]] = {}
 
 
+def translated_instructions() -> int:
+    """Guest instructions in the regions this process translated."""
+    return sum(t.region.instructions for regions in _TRANSLATED.values() for t in regions)
+
+
 @dataclass
 class TranslationStats:
     regions: int = 0
