@@ -35,14 +35,13 @@ from robosoc.isa.table import (
 )
 from robosoc.jit.regions import Block, End, Insn, Region
 from robosoc.kernels.core import _MUL_CHUNK
-from robosoc.kernels.core_layout import C_MUL_STALL, C_TAKEN, S_MUL_END, S_MULHSU_COUNT, S_MULHSU_PC
+from robosoc.kernels.core_layout import C_MUL_STALL, C_TAKEN, OPC_SIZE, S_MUL_END, S_MULHSU_COUNT, S_MULHSU_PC
 from robosoc.kernels.jit_dispatch import (
     CTX_CNT,
     CTX_CTR,
     CTX_CYC,
     CTX_ENTRY_FN,
     CTX_ENTRY_SLOT,
-    CTX_LIMIT,
     CTX_PC,
     CTX_ST,
     X_JUMP,
@@ -124,12 +123,14 @@ class EmittedRegion:
     ir: str
     block_names: dict[int, str]  # block start pc -> function name (with the region's name placeholder)
     #: count slots: (histogram as (opc index, delta) pairs, next slot or -1); a slot's executions are
-    #: also added to its next slot's (the chain of side-exit suffixes)
+    #: also added to its next slot's (the chain of a block's prefixes); index TAKEN_INDEX counts taken branches
     slots: list[tuple[list[tuple[int, int]], int]] = field(default_factory=list)
 
 
-_PARAMS = "i64* noalias %ctx, i32* noalias %regs, i8* noalias %mem, i64* noalias %cnt, i64 %cyc"
-_FN_TYPE = "i32 (i64*, i32*, i8*, i64*, i64)"
+_PARAMS = "i64* noalias %ctx, i32* noalias %regs, i8* noalias %mem, i64* noalias %cnt, i64 %cyc, i64 %limit"
+_FN_TYPE = "i32 (i64*, i32*, i8*, i64*, i64, i64)"
+#: count-slot index of the taken-branch counter: past the per-operation counters (see flush_counts)
+TAKEN_INDEX = OPC_SIZE + C_TAKEN
 
 
 class _Writer:
@@ -240,7 +241,7 @@ class _Writer:
 
     def tail(self, fn: str, cnt: str, cyc: str) -> None:
         r = self.tmp()
-        self.emit(f"{r} = musttail call i32 {fn}(i64* %ctx, i32* %regs, i8* %mem, i64* {cnt}, i64 {cyc})")
+        self.emit(f"{r} = musttail call i32 {fn}(i64* %ctx, i32* %regs, i8* %mem, i64* {cnt}, i64 {cyc}, i64 %limit)")
         self.emit(f"ret i32 {r}")
 
     def jump(self, pc: str, cyc: str) -> None:
@@ -284,6 +285,15 @@ class _Writer:
         self.put_label(ok)
 
     # --- counting -----------------------------------------------------------------------------
+    def count_end(self, taken: bool = False) -> None:
+        """Count the block's instructions on a way out at its end (a taken branch counts as such too)."""
+        last, prev = self.rest
+        hist = [(kc, 1) for kc in self.kcs[last:]] + ([(TAKEN_INDEX, 1)] if taken else [])
+        if hist:
+            self.add_i64(self.field("%cnt", self.slot(hist, prev)), 1)
+        elif prev >= 0:
+            self.add_i64(self.field("%cnt", prev), 1)
+
     def kc(self, insn: Insn) -> int:
         return 2 * insn.op + (((insn.pc - self.t.base) >> 2) & 1)
 
@@ -295,31 +305,33 @@ class _Writer:
         self.emit(f"%ctx_pc = getelementptr i64, i64* %ctx, i64 {CTX_PC}")
         self.emit(f"%ctx_cyc = getelementptr i64, i64* %ctx, i64 {CTX_CYC}")
         self.regs, self.cyc, self.pending = {}, "%cyc", 0
-        lim, e, ok = self.tmp(), self.tmp(), self.tmp()
-        self.emit(f"{lim} = load i64, i64* {self.field('%ctx', CTX_LIMIT)}")
+        e, ok = self.tmp(), self.tmp()
         self.emit(f"{e} = add i64 %cyc, {worst}")
-        self.emit(f"{ok} = icmp slt i64 {e}, {lim}")
+        self.emit(f"{ok} = icmp slt i64 {e}, %limit")
         self.emit(f"br i1 {ok}, label %go, label %lim")
         self.put_label("lim")
         self.leave(X_LIMIT, block.start)
         self.put_label("go")
-        kcs = [self.kc(i) for i in insns]
-        # side exits at instruction j leave j.. uncounted: a chain of suffix slots, one per exit point
+        # Each way out counts one slot for the instructions executed: a side exit at instruction j
+        # counts the prefix before j (a chain of slots, one per exit point), the block's ends the rest
+        # after the last exit point (and the taken branch) chained to that point's prefix.
+        self.kcs = [self.kc(i) for i in insns]
         points = [j for j, i in enumerate(insns) if i.name in _LOADS or i.name in _STORES or i.name == "jalr"]
-        self.suffix: dict[int, int] = {}
-        nxt = -1
-        ends = [*points[1:], len(insns)] if points else []
-        for j, end in reversed(list(zip(points, ends, strict=True))):
-            nxt = self.slot([(kc, -1) for kc in kcs[j:end]], nxt)
-            self.suffix[j] = nxt
-        if insns:
-            self.add_i64(self.field("%cnt", self.slot([(kc, 1) for kc in kcs])), 1)
+        self.prefix: dict[int, int] = {}
+        last, nxt = 0, -1
+        for j in points:
+            nxt = self.slot([(kc, 1) for kc in self.kcs[last:j]], nxt)
+            self.prefix[j] = nxt
+            last = j
+        self.rest = (last, nxt)
         for j, insn in enumerate(insns):
             self.insn(j, insn)
         match block.end:
             case End.FALL:
+                self.count_end()
                 self.goto(block.next_pc, self.cycles())
             case End.SIDE:
+                self.count_end()
                 self.leave(X_SIDE, block.next_pc)
             case End.BRANCH | End.JUMP | End.CALL | End.JALR:
                 self.control(len(insns) - 1, insns[-1])
@@ -334,13 +346,14 @@ class _Writer:
             self.emit(f"{cond} = icmp {_BRANCH[name]} i32 {a}, {b}")
             self.emit(f"br i1 {cond}, label %taken, label %fall")
             self.put_label("taken")
-            taken = self.cycles(BRANCH_TAKEN_CYCLES)
-            self.add_i64(self.field(self.ctx_ptr(CTX_CTR), C_TAKEN), 1)
-            self.goto(pc + insn.imm, taken)
+            self.count_end(taken=True)
+            self.goto(pc + insn.imm, self.cycles(BRANCH_TAKEN_CYCLES))
             self.put_label("fall")
+            self.count_end()
             self.goto(pc + 4, self.cycles(BRANCH_NOT_TAKEN_CYCLES))
         elif name == "jal":
             self.set_reg(insn.rd, str(_i32(pc + 4)))
+            self.count_end()
             self.goto(pc + insn.imm, self.cycles(JUMP_CYCLES))
         else:  # jalr: the target is checked as the interpreter's fetch_error does
             a, s, tgt = self.reg(insn.rs1), self.tmp(), self.tmp()
@@ -352,8 +365,9 @@ class _Writer:
             self.emit(f"{off} = sub i32 {tgt}, {_i32(self.t.base)}")
             self.emit(f"{bad2} = icmp uge i32 {off}, {_i32(self.t.code_size)}")
             self.emit(f"{bad} = or i1 {bad1}, {bad2}")
-            self.cond_exit(bad, X_SIDE, pc, self.suffix[j], "jr")
+            self.cond_exit(bad, X_SIDE, pc, self.prefix[j], "jr")
             self.set_reg(insn.rd, str(_i32(pc + 4)))
+            self.count_end()
             cyc = self.cycles(JUMP_CYCLES)
             cases = " ".join(f"i32 {_i32(t)}, label %in{k}" for k, t in enumerate(self.indirect))
             self.emit(f"switch i32 {tgt}, label %other [ {cases} ]")
@@ -427,7 +441,7 @@ class _Writer:
             self.emit(f"{mis} = icmp ne i32 {m}, 0")
             self.emit(f"{both} = or i1 {bad}, {mis}")
             bad = both
-        self.cond_exit(bad, X_SIDE, insn.pc, self.suffix[j], "m")
+        self.cond_exit(bad, X_SIDE, insn.pc, self.prefix[j], "m")
         z, p = self.tmp(), self.tmp()
         self.emit(f"{z} = zext i32 {off} to i64")
         self.emit(f"{p} = getelementptr i8, i8* %mem, i64 {z}")

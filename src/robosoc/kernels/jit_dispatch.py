@@ -28,6 +28,7 @@ from numba.extending import intrinsic
 from robosoc.kernels.core import CoreArrays, fetch_error, run_cores
 from robosoc.kernels.core_layout import (
     ERR_FETCH_DATA,
+    OPC_SIZE,
     OUT_CAPACITY,
     RUN_CHUNK,
     RUN_ERROR,
@@ -57,7 +58,6 @@ X_SIDE = 2  # the instruction at ctx[CTX_PC] is the interpreter's (device, code 
 # ctx slots
 CTX_PC = 0
 CTX_CYC = 1
-CTX_LIMIT = 2  # blocks run only while their last instruction starts before this cycle
 CTX_FLUSHES = 4  # how many times the loop forgot every translation (self-modifying code)
 CTX_CALLS = 5  # region calls (statistics)
 CTX_STEPS = 6  # instructions handed to the interpreter (statistics)
@@ -107,30 +107,37 @@ class JitArrays(NamedTuple):
 
 
 @intrinsic
-def call_region(typingctx, fn, ctx, regs, mem, cnt, cyc):  # type: ignore[no-untyped-def]
-    """Call the translated block at native address ``fn`` (array addresses, cycle); its X_* code."""
-    sig = types.int32(types.int64, *([types.int64] * 5))
+def call_region(typingctx, fn, ctx, regs, mem, cnt, cyc, limit):  # type: ignore[no-untyped-def]
+    """Call the translated block at native address ``fn`` (array addresses, cycle, limit); its X_* code."""
+    sig = types.int32(types.int64, *([types.int64] * 6))
 
     def codegen(context, builder, signature, args):  # type: ignore[no-untyped-def]
         i64 = ir.IntType(64)
         ptrs = [i64.as_pointer(), ir.IntType(32).as_pointer(), ir.IntType(8).as_pointer(), i64.as_pointer()]
-        fnty = ir.FunctionType(ir.IntType(32), [*ptrs, i64])
+        fnty = ir.FunctionType(ir.IntType(32), [*ptrs, i64, i64])
         f = builder.inttoptr(args[0], fnty.as_pointer())
         call_args = [builder.inttoptr(a, t) for a, t in zip(args[1:5], ptrs, strict=True)]
-        return builder.call(f, [*call_args, args[5]])
+        return builder.call(f, [*call_args, args[5], args[6]])
 
     return sig, codegen
 
 
 @njit(cache=True)
-def flush_counts(jt: JitArrays, opc_t: np.ndarray) -> None:
-    """Add every slot's executions times its histogram to the per-operation counters; zero the slots."""
+def flush_counts(jt: JitArrays, opc_t: np.ndarray, ctr_t: np.ndarray) -> None:
+    """Add every slot's executions times its histogram to the counters; zero the slots.
+
+    A histogram index below OPC_SIZE is a per-operation counter, OPC_SIZE + k is ``ctr[k]``.
+    """
     cnt = jt.cnt
     for s in range(cnt.shape[0] - 1, -1, -1):  # a slot's next is an earlier slot
         c = cnt[s]
         if c != 0:
             for e in range(jt.slot_ptr[s], jt.slot_ptr[s + 1]):
-                opc_t[jt.slot_kc[e]] += c * jt.slot_delta[e]
+                k = jt.slot_kc[e]
+                if k < OPC_SIZE:
+                    opc_t[k] += c * jt.slot_delta[e]
+                else:
+                    ctr_t[k - OPC_SIZE] += c * jt.slot_delta[e]
             nxt = jt.slot_next[s]
             if nxt >= 0:
                 cnt[nxt] += c
@@ -214,8 +221,7 @@ def run_translated(core: CoreArrays, tiles: np.ndarray, until: int, jt: JitArray
         interpret = False
         fn = jt.entry_fn[i]
         if fn != 0:
-            ctx[CTX_LIMIT] = next_event
-            x = call_region(fn, p_ctx, p_regs, p_mem, p_cnt + 8 * jt.entry_slot[i], cyc)
+            x = call_region(fn, p_ctx, p_regs, p_mem, p_cnt + 8 * jt.entry_slot[i], cyc, next_event)
             ctx[CTX_CALLS] += 1
             pc = ctx[CTX_PC]
             cyc = ctx[CTX_CYC]
@@ -254,7 +260,7 @@ def run_translated(core: CoreArrays, tiles: np.ndarray, until: int, jt: JitArray
         if smc:
             _forget_translations(jt)
         if status != RUN_CHUNK:
-            flush_counts(jt, opc_t)
+            flush_counts(jt, opc_t, ctr[t])
             return
     if err != 0:
         status = RUN_ERROR
@@ -266,13 +272,12 @@ def run_translated(core: CoreArrays, tiles: np.ndarray, until: int, jt: JitArray
     st_t[S_PC] = pc & M32
     st_t[S_CYCLE] = cyc
     st_t[S_RUN] = status
-    flush_counts(jt, opc_t)
+    flush_counts(jt, opc_t, ctr[t])
 
 
 __all__ = [
     "CTX_CYC",
     "CTX_FLUSHES",
-    "CTX_LIMIT",
     "CTX_PC",
     "CTX_SIZE",
     "ERR_FETCH_DATA",
