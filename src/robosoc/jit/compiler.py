@@ -22,7 +22,7 @@ import llvmlite.binding as llvm
 from robosoc.toolchain.cache import cache_root
 
 #: Bumped whenever the pipeline or the IR conventions change, to invalidate old objects.
-PIPELINE_VERSION = 2
+PIPELINE_VERSION = 3
 
 
 @dataclass

@@ -98,7 +98,7 @@ def _i32(v: int) -> int:
     return v - (1 << 32) if v >> 31 else v
 
 
-MAX_SWITCH = 64  # most in-region targets a jalr compares with before leaving the region
+MAX_SWITCH = 8  # most return sites a return compares its target with before the entry table
 _ALU_RR = {"add": "add", "sub": "sub", "xor": "xor", "or": "or", "and": "and"}
 _ALU_RI = {"addi": "add", "xori": "xor", "ori": "or", "andi": "and"}
 _SHIFT_I = {"slli": "shl", "srli": "lshr", "srai": "ashr"}
@@ -147,14 +147,10 @@ class _Writer:
         self.n = 0
         self.uses_mul = False
         self.fn = {pc: f"{name}_{k}" for k, pc in enumerate(region.blocks)}
-        # where a jalr may land inside the region: return sites and callees of its calls
-        indirect: list[int] = []
-        for b in region.blocks.values():
-            if b.end is End.CALL:
-                indirect += [b.insns[-1].pc + b.insns[-1].imm, b.next_pc]
-            elif b.end is End.JALR and b.insns[-1].rd != 0:
-                indirect.append(b.next_pc)
-        self.indirect = sorted({t & M32 for t in indirect if t & M32 in self.fn})[:MAX_SWITCH]
+        # where a return (jalr x0, 0(ra)) may land inside the region: the return sites of its calls,
+        # when there are few (else returns go through the entry table)
+        sites = {b.next_pc for b in region.blocks.values() if b.end is End.CALL and b.next_pc in self.fn}
+        self.returns = sorted(sites) if len(sites) <= MAX_SWITCH else []
         self.regs: dict[int, str] = {}
         self.cyc = "%cyc"  # SSA value of the cycle count at the last dynamic change
         self.pending = 0  # cycles of the instructions since then
@@ -233,11 +229,9 @@ class _Writer:
     def leave(self, code: int, pc: int | str, slot: int = -1, cyc: str | None = None) -> None:
         """Return ``code`` to the dispatch loop with pc and cycle in ctx (and one count to ``slot``)."""
         cyc = cyc or self.cycles()
-        self.emit(f"store i64 {pc}, i64* %ctx_pc")
-        self.emit(f"store i64 {cyc}, i64* %ctx_cyc")
-        if slot >= 0:
-            self.add_i64(self.field("%cnt", slot), 1)
-        self.emit(f"ret i32 {code}")
+        r = self.tmp()
+        self.emit(f"{r} = tail call i32 @leave(i64* %ctx, i64* %cnt, i64 {cyc}, i64 {pc}, i64 {slot}, i32 {code})")
+        self.emit(f"ret i32 {r}")
 
     def tail(self, fn: str, cnt: str, cyc: str) -> None:
         r = self.tmp()
@@ -302,8 +296,6 @@ class _Writer:
         worst = sum(WORST_CYCLES[i.ins.timing] for i in insns[:-1])
         self.lines.append(f"define i32 @{self.fn[block.start]}({_PARAMS}) nounwind {{")
         self.put_label("entry")
-        self.emit(f"%ctx_pc = getelementptr i64, i64* %ctx, i64 {CTX_PC}")
-        self.emit(f"%ctx_cyc = getelementptr i64, i64* %ctx, i64 {CTX_CYC}")
         self.regs, self.cyc, self.pending = {}, "%cyc", 0
         e, ok = self.tmp(), self.tmp()
         self.emit(f"{e} = add i64 %cyc, {worst}")
@@ -369,9 +361,10 @@ class _Writer:
             self.set_reg(insn.rd, str(_i32(pc + 4)))
             self.count_end()
             cyc = self.cycles(JUMP_CYCLES)
-            cases = " ".join(f"i32 {_i32(t)}, label %in{k}" for k, t in enumerate(self.indirect))
+            targets = self.returns if (insn.rd, insn.rs1, insn.imm) == (0, 1, 0) else []
+            cases = " ".join(f"i32 {_i32(t)}, label %in{k}" for k, t in enumerate(targets))
             self.emit(f"switch i32 {tgt}, label %other [ {cases} ]")
-            for k, t in enumerate(self.indirect):
+            for k, t in enumerate(targets):
                 self.put_label(f"in{k}")
                 self.tail(f"@{self.fn[t]}", "%cnt", cyc)
             self.put_label("other")
@@ -502,6 +495,27 @@ class _Writer:
         self.emit(f"store i64 {self.cyc}, i64* {self.field(st, S_MUL_END)}")  # the controller's erratum window
 
 
+#: leave(ctx, cnt, cycle, pc, slot, code): back to the dispatch loop with pc and cycle in ctx, one
+#: count to ``slot`` (none when negative); out of line, as ways out are many and cold.
+_LEAVE_IR = f"""
+define internal i32 @leave(i64* %ctx, i64* %cnt, i64 %cyc, i64 %pc, i64 %slot, i32 %code) noinline nounwind cold {{
+  %p = getelementptr i64, i64* %ctx, i64 {CTX_PC}
+  store i64 %pc, i64* %p
+  %c = getelementptr i64, i64* %ctx, i64 {CTX_CYC}
+  store i64 %cyc, i64* %c
+  %has = icmp sge i64 %slot, 0
+  br i1 %has, label %count, label %done
+count:
+  %sp = getelementptr i64, i64* %cnt, i64 %slot
+  %n0 = load i64, i64* %sp
+  %n1 = add i64 %n0, 1
+  store i64 %n1, i64* %sp
+  br label %done
+done:
+  ret i32 %code
+}}
+"""
+
 _SET = {"slt": "slt", "slti": "slt", "sltu": "ult", "sltiu": "ult"}
 
 
@@ -558,5 +572,5 @@ def emit_region(target: Target, region: Region, name: str = NAME_PLACEHOLDER) ->
     w = _Writer(target, region, name)
     for block in region.blocks.values():
         w.block(block)
-    text = "\n".join([_MUL_LATENCY_IR if w.uses_mul else "", *w.lines, ""])
+    text = "\n".join([_LEAVE_IR, _MUL_LATENCY_IR if w.uses_mul else "", *w.lines, ""])
     return EmittedRegion(ir=text, block_names=dict(w.fn), slots=w.slots)
