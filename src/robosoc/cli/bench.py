@@ -33,7 +33,8 @@ def bench_core(
         ),
     ] = "interp",
     compare: Annotated[
-        bool, typer.Option("--compare/--no-compare", help="Also time the interpreter in the same run (not with interp).")
+        bool,
+        typer.Option("--compare/--no-compare", help="Also time the interpreter in the same run (not with interp)."),
     ] = True,
 ) -> None:
     """Simulated MIPS of one core on an EKF-like workload (7x7 matrix inverse and multiply)."""

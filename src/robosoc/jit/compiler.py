@@ -41,7 +41,9 @@ class Compiler:
         llvm.initialize_native_asmprinter()
         target = llvm.Target.from_default_triple()
         cpu, features = llvm.get_host_cpu_name(), llvm.get_host_cpu_features().flatten()
-        self.tm = target.create_target_machine(cpu=cpu, features=features, opt=2, reloc="pic", codemodel="small", jit=True)
+        self.tm = target.create_target_machine(
+            cpu=cpu, features=features, opt=2, reloc="pic", codemodel="small", jit=True
+        )
         self.engine = llvm.create_mcjit_compiler(llvm.parse_assembly(""), self.tm)
         self.pto = llvm.create_pipeline_tuning_options(speed_level=2)
         self.pb = llvm.create_pass_builder(self.tm, self.pto)

@@ -20,6 +20,7 @@ from robosoc.kernels.core_layout import ERRATA_RTL, S_CODE_SIZE, S_ERRATA, S_MEM
 from robosoc.kernels.jit_dispatch import (
     CTX_FLUSHES,
     CTX_SIZE,
+    CTX_WORDS,
     NEVER_TRANSLATE,
     RUN_TRANSLATE,
     JitArrays,
@@ -29,9 +30,13 @@ from robosoc.kernels.jit_dispatch import (
 if TYPE_CHECKING:
     from robosoc.chip.core_state import CoreState
 
-#: Arrivals at a word without a translation before ``auto`` translates a region there.
-AUTO_THRESHOLD = 8
+#: Arrivals at a word without a translation before ``auto`` translates a region there; between
+#: arrivals the interpreter runs AUTO_STRETCH cycles at its own speed, so arrivals sample where
+#: the program spends its time.
+AUTO_THRESHOLD = 3
+AUTO_STRETCH = 20_000
 THRESHOLDS = {"jit": 1, "auto": AUTO_THRESHOLD}
+STRETCHES = {"jit": 0, "auto": AUTO_STRETCH}
 M32 = 0xFFFFFFFF
 
 
@@ -96,6 +101,8 @@ class TranslatingCore:
                 entry_slot=np.zeros(words, dtype=np.int64),
                 hot=hot,
                 tmap=np.zeros(words, dtype=np.uint8),
+                tpcs=np.zeros(0, dtype=np.int64),
+                twords=np.zeros(0, dtype=np.int32),
                 cnt=np.zeros(0, dtype=np.int64),
                 slot_ptr=np.zeros(1, dtype=np.int64),
                 slot_next=np.zeros(0, dtype=np.int64),
@@ -191,6 +198,11 @@ class TranslatingCore:
                 jt.entry_fn[i] = address
                 jt.entry_slot[i] = slot_base
         jt.tmap[done.pcs] = 1
+        n = int(jt.ctx[CTX_WORDS])
+        self._jt = jt = jt._replace(
+            tpcs=np.concatenate([jt.tpcs[:n], done.pcs]), twords=np.concatenate([jt.twords[:n], done.words])
+        )
+        jt.ctx[CTX_WORDS] = n + len(done.pcs)
         for block in region.blocks.values():
             if block.end is End.SIDE:
                 i = (block.next_pc - base) >> 2
@@ -224,7 +236,7 @@ class TranslatingCore:
         arrays = self.state.arrays()
         st = self.state.st[self.tile]
         while True:
-            run_translated(arrays, self._tiles, until, self._tables(), self.threshold)
+            run_translated(arrays, self._tiles, until, self._tables(), self.threshold, STRETCHES[self.mode])
             status = int(st[S_RUN])
             if status != RUN_TRANSLATE:
                 return status

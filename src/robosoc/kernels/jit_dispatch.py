@@ -69,6 +69,7 @@ CTX_ENTRY_SLOT = 9
 CTX_CNT = 10
 CTX_ST = 11
 CTX_CTR = 12
+CTX_WORDS = 13  # entries of tpcs/twords that hold translated words (0 after forgetting them)
 CTX_SIZE = 16
 
 # dispatcher results beyond the interpreter's RUN_* codes
@@ -88,7 +89,8 @@ class JitArrays(NamedTuple):
 
     ``entry_fn`` native address of the translated block starting at the word (0: none),
     ``entry_slot`` its region's first count slot, ``hot`` arrivals at a word without an entry (NEVER_TRANSLATE:
-    none can start there), ``tmap`` 1 for words some region translated, ``cnt`` executions per count
+    none can start there), ``tmap`` 1 for words some region translated, ``tpcs``/``twords`` those words' indices and
+    contents when translated, ``cnt`` executions per count
     slot, ``slot_ptr``/``slot_kc``/``slot_delta`` each slot's histogram (CSR), ``slot_next`` the slot whose
     count a slot's executions are also added to (-1: none; always an earlier slot), ``ctx`` the region
     call's in/out slots.
@@ -98,6 +100,8 @@ class JitArrays(NamedTuple):
     entry_slot: np.ndarray
     hot: np.ndarray
     tmap: np.ndarray
+    tpcs: np.ndarray
+    twords: np.ndarray
     cnt: np.ndarray
     slot_ptr: np.ndarray
     slot_next: np.ndarray
@@ -150,6 +154,7 @@ def _forget_translations(jt: JitArrays) -> None:
     jt.entry_slot[:] = 0
     jt.hot[:] = 0
     jt.tmap[:] = 0
+    jt.ctx[CTX_WORDS] = 0
     jt.ctx[CTX_FLUSHES] += 1
 
 
@@ -166,11 +171,16 @@ def _store_hits_translation(jt: JitArrays, word: int, regs_t: np.ndarray, base: 
 
 
 @njit(cache=True)
-def run_translated(core: CoreArrays, tiles: np.ndarray, until: int, jt: JitArrays, threshold: int) -> None:
+def run_translated(
+    core: CoreArrays, tiles: np.ndarray, until: int, jt: JitArrays, threshold: int, stretch: int
+) -> None:
     """Run core ``tiles[0]`` until cycle ``until`` like ``run_cores``, with translated regions.
 
     Leaves the RUN_* status in st[t, S_RUN], or RUN_TRANSLATE with the pc of a word that turned
-    hot (``threshold`` arrivals without an entry) for the caller to translate.
+    hot (``threshold`` arrivals without an entry) for the caller to translate.  At a word without a
+    translation the interpreter runs one instruction (``stretch`` 0), or ``stretch`` cycles at its
+    own speed, after which the translated words are compared with what was translated (a store the
+    interpreter made into them forgets every translation).
     """
     st, ctr, opc, regs, m8, _m16, m32, _dec, _out = core
     t = tiles[0]
@@ -238,6 +248,21 @@ def run_translated(core: CoreArrays, tiles: np.ndarray, until: int, jt: JitArray
                     status = RUN_TRANSLATE
                     break
             interpret = True
+            if stretch > 0:
+                st_t[S_PC] = pc
+                st_t[S_CYCLE] = cyc
+                run_cores(core, tiles, min(stop, cyc + stretch))
+                pc = st_t[S_PC]
+                cyc = st_t[S_CYCLE]
+                status = st_t[S_RUN]
+                for k in range(ctx[CTX_WORDS]):
+                    if m32[t, jt.tpcs[k]] != jt.twords[k]:
+                        _forget_translations(jt)
+                        break
+                if status != RUN_CHUNK:
+                    flush_counts(jt, opc_t, ctr[t])
+                    return
+                continue
         if not interpret:
             continue
         # one instruction by the interpreter (two for a trap: its shadow runs before the vector)
