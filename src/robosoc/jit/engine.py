@@ -90,6 +90,10 @@ class TranslatingCore:
         self._code_size = -1
         self._jt = None
 
+    def tables(self) -> JitArrays:
+        """The tables the dispatch loop reads (its statistics are in ``ctx``: CTX_CALLS, CTX_STEPS ...)."""
+        return self._tables()
+
     def _tables(self) -> JitArrays:
         code = int(self.state.st[self.tile, S_CODE_SIZE])
         if self._jt is None or code != self._code_size:

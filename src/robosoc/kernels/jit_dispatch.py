@@ -266,6 +266,7 @@ def run_translated(
         if not interpret:
             continue
         # one instruction by the interpreter (two for a trap: its shadow runs before the vector)
+        i = (pc - base) >> 2
         word = np.int64(m32[t, i]) & M32 if (pc - base) < code else 0
         smc = _store_hits_translation(jt, word, regs_t, base, code)
         if (word & 0x7F) == _SYSTEM_OPCODE and (pc + 8 - base) < code:
