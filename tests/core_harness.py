@@ -14,20 +14,24 @@ def exit_with(reg: int) -> list[int]:
     return [*A.li(31, 0xE0000000), A.store("sw", reg, 31, 0)]
 
 
-def make_soc(words: list[int], mul: bool = True, sram_size: int = 64 * 1024, errata: str = "spec") -> SingleCoreSoC:
+def make_soc(
+    words: list[int], mul: bool = True, sram_size: int = 64 * 1024, errata: str = "spec", engine: str = "interp"
+) -> SingleCoreSoC:
     """A fresh SoC with ``words`` at the start of SRAM and the pc there.
 
-    ``errata``: "spec" (RISC-V results, the RTL's errata only reported) or "rtl" (reproduce them).
+    ``errata``: "spec" (RISC-V results, the RTL's errata only reported) or "rtl" (reproduce them);
+    ``engine``: "interp", "jit" or "auto".  The whole SRAM counts as code (stores anywhere may
+    modify instructions).
     """
-    soc = SingleCoreSoC(mul=mul, sram_size=sram_size, errata=errata)
+    soc = SingleCoreSoC(mul=mul, sram_size=sram_size, errata=errata, engine=engine)
     soc.state.write(SRAM_BASE, A.words_to_bytes(words))
     soc.state.pc = SRAM_BASE
     return soc
 
 
 def run_words(
-    words: list[int], mul: bool = True, max_cycles: int | None = 1_000_000, errata: str = "spec"
+    words: list[int], mul: bool = True, max_cycles: int | None = 1_000_000, errata: str = "spec", engine: str = "interp"
 ) -> tuple[SingleCoreSoC, RunResult]:
-    soc = make_soc(words, mul, errata=errata)
+    soc = make_soc(words, mul, errata=errata, engine=engine)
     result = soc.run(max_cycles=max_cycles)
     return soc, result

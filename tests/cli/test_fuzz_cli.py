@@ -73,6 +73,7 @@ OPTIONS: dict[tuple[str, str], Spec] = {
     ("run", "--profile"): Spec("int", 0, 2**61),
     ("run", "--errata"): Spec("choice", choices=("spec", "rtl")),
     ("run", "--exit-code"): Spec("choice", choices=("status", "program")),
+    ("run", "--engine"): Spec("choice", choices=("interp", "jit", "auto")),
     ("run", "--gdb"): Spec("int", 0, 65535),  # 0: any free port (never tried: it would wait for GDB)
     ("run", "--tile"): Spec("tile"),
     ("cc", "FILES"): Spec("in_file"),
@@ -145,6 +146,8 @@ OPTIONS: dict[tuple[str, str], Spec] = {
     ("serve chip", "--connect-timeout"): Spec("float", 0.05, 3600.0),
     ("bench core", "--runs"): Spec("int", 1, 1000),
     ("bench core", "--mul"): Spec("flag"),
+    ("bench core", "--engine"): Spec("choice", choices=("interp", "jit", "auto")),
+    ("bench core", "--compare"): Spec("flag"),
     ("bench physics", "--seconds"): Spec("float", 0.001, 3600.0),
     ("bench physics", "--runs"): Spec("int", 1, 1000),
     ("bench noc", "--size"): Spec("mesh"),

@@ -132,3 +132,20 @@ def test_errata_mode_must_be_known(mulhsu_elf: Path):
     result = CliRunner().invoke(app, ["run", str(mulhsu_elf), "--errata", "hardware"])
     assert result.exit_code == 2
     assert "--errata: must be one of spec, rtl, got 'hardware'" in result.stderr
+
+
+@pytest.mark.parametrize("engine", ["jit", "auto"])
+def test_every_engine_gives_the_same_run(elf: Path, tmp_path: Path, engine: str):
+    records = {}
+    for name in ("interp", engine):
+        stats = tmp_path / f"{name}.json"
+        result = CliRunner().invoke(app, ["run", str(elf), "--stats", str(stats), "--engine", name])
+        assert result.exit_code == 4 and "product 7006652" in result.stdout
+        records[name] = json.loads(stats.read_text())
+    assert records[engine]["counters"] == records["interp"]["counters"]
+    assert records[engine]["energy_nj"] == records["interp"]["energy_nj"]
+
+
+def test_engine_is_refused_where_it_does_not_run(elf: Path):
+    result = CliRunner().invoke(app, ["run", str(elf), "--engine", "jit", "--mesh", "2x2"])
+    assert result.exit_code == 2 and "--engine" in result.stderr

@@ -2,8 +2,11 @@
 
 The workload is ``firmware/bench/matrix_bench.c``: 7x7 Gauss-Jordan inverse and product, in
 soft-float and in Q16.16, as the seed's EKF does.  After a warm-up run (JIT compile or load from
-the numba cache) the program runs ``runs`` times on a fresh core each; each run's MIPS is
-instructions / host seconds of the simulation loop with every counter on.
+the numba cache; with a translating engine also the translation of the program's code) the
+program runs ``runs`` times on a fresh core each; each run's MIPS is instructions / host seconds
+of the simulation loop with every counter on.  With ``engine`` jit or auto and ``compare``, the
+interpreter runs in the same loop, alternating with the engine, and the ratio is printed; the
+results of both engines must be identical (cycles, counters, output), else the benchmark fails.
 """
 
 from __future__ import annotations
@@ -19,48 +22,84 @@ ITERATIONS = 300  # about 34 M instructions with the multiplier
 
 
 def run_core_benchmark(
-    runs: int = 7, mul: bool = True, iterations: int = ITERATIONS, console: Console | None = None
+    runs: int = 7,
+    mul: bool = True,
+    iterations: int = ITERATIONS,
+    engine: str = "interp",
+    compare: bool = True,
+    console: Console | None = None,
 ) -> float:
-    """Print per-run figures, median and spread; returns the median MIPS.
+    """Print per-run figures, median and spread; returns the median MIPS of ``engine``.
 
     Raises:
-        ValueError: ``runs`` or ``iterations`` below 1.
+        ValueError: ``runs`` or ``iterations`` below 1, or an unknown engine.
+        RuntimeError: the workload failed its self-check, or two engines disagreed.
     """
     from robosoc.chip.elf import load_elf
     from robosoc.chip.single import SingleCoreSoC
     from robosoc.config.ranges import check_int
     from robosoc.firmware import MATRIX_BENCH_SOURCE
+    from robosoc.jit import ENGINES
     from robosoc.toolchain import build_elf
 
     check_int("runs", runs, 1)
     check_int("iterations", iterations, 1)
+    if engine not in ENGINES:
+        raise ValueError(f"engine: must be one of {', '.join(ENGINES)}, got {engine!r}")
     console = console or Console(stderr=False)
     elf = build_elf([MATRIX_BENCH_SOURCE], mul=mul, defines={"BENCH_ITERATIONS": iterations, "BENCH_QUIET": None})
     program = load_elf(elf)
+    engines = [engine] if engine == "interp" or not compare else [engine, "interp"]
+    reference: dict[str, int] | None = None
 
-    def one_run() -> tuple[int, int, float]:
-        soc = SingleCoreSoC(mul=mul)
+    def one_run(name: str) -> tuple[int, int, float]:
+        nonlocal reference
+        soc = SingleCoreSoC(mul=mul, engine=name)
         soc.load(program)
         result = soc.run(max_cycles=10**11)
         if result.exit_code != 0:
             raise RuntimeError(f"benchmark workload failed its self-check (exit code {result.exit_code})")
+        if reference is None:
+            reference = result.counters
+        elif result.counters != reference:
+            raise RuntimeError(f"engine {name} gave other counters than the first run: the engines disagree")
         return result.instructions, result.cycles, result.host_seconds
 
-    start = time.perf_counter()
-    one_run()
-    warm = time.perf_counter() - start
+    warm: dict[str, float] = {}
+    for name in engines:
+        start = time.perf_counter()
+        one_run(name)
+        warm[name] = time.perf_counter() - start
 
-    rows = []
+    rows: dict[str, list[tuple[int, int, float]]] = {name: [] for name in engines}
     with Progress(console=console, transient=True) as progress:
-        task = progress.add_task("timed runs", total=runs)
+        task = progress.add_task("timed runs", total=runs * len(engines))
         for _ in range(runs):
-            rows.append(one_run())
-            progress.advance(task)
+            for name in engines:
+                rows[name].append(one_run(name))
+                progress.advance(task)
 
+    medians: dict[str, float] = {}
+    for name in engines:
+        medians[name] = _report(console, name, rows[name], mul, iterations, warm[name])
+    if engine != "interp":
+        _report_translation(console)
+    if len(engines) > 1:
+        console.print(
+            f"{engine} / interp: {medians[engine] / medians['interp']:.2f}x "
+            f"(median {medians[engine]:.1f} against {medians['interp']:.1f} MIPS, alternating runs)"
+        )
+    print(f"core: {medians[engine]:.0f} MIPS")
+    return medians[engine]
+
+
+def _report(
+    console: Console, engine: str, rows: list[tuple[int, int, float]], mul: bool, iterations: int, warm: float
+) -> float:
     mips = [i / s / 1e6 for i, _, s in rows]
     mcps = [c / s / 1e6 for _, c, s in rows]
     instructions, cycles, _ = rows[0]
-    table = Table(title=f"robosoc bench core ({'with' if mul else 'without'} multiplier)")
+    table = Table(title=f"robosoc bench core ({'with' if mul else 'without'} multiplier, engine {engine})")
     table.add_column("run", justify="right")
     table.add_column("host s", justify="right")
     table.add_column("MIPS", justify="right")
@@ -75,8 +114,21 @@ def run_core_benchmark(
         f"(CPI {cycles / instructions:.2f}); first run incl. JIT/cache load {warm:.2f} s"
     )
     console.print(
-        f"MIPS median {med:.1f}, min {min(mips):.1f}, max {max(mips):.1f}, "
+        f"{engine}: MIPS median {med:.1f}, min {min(mips):.1f}, max {max(mips):.1f}, "
         f"IQR {quartiles[0]:.1f}..{quartiles[2]:.1f}; simulated {statistics.median(mcps):.1f} M cycles/s"
     )
-    print(f"core: {med:.0f} MIPS")
     return med
+
+
+def _report_translation(console: Console) -> None:
+    from robosoc.jit.compiler import shared_compiler
+    from robosoc.jit.engine import translated_instructions
+
+    stats = shared_compiler().stats
+    n = translated_instructions()
+    compiled = stats.modules - stats.cache_hits
+    per_k = f", {stats.seconds / n * 1000:.3f} s per 1000 guest instructions" if n else ""
+    console.print(
+        f"translation: {n:,} guest instructions in {stats.modules} modules ({compiled} compiled, "
+        f"{stats.cache_hits} from the disk cache), {stats.seconds:.2f} s{per_k}"
+    )

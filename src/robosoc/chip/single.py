@@ -21,6 +21,7 @@ from robosoc.chip.counters import counters_dict
 from robosoc.chip.elf import Program, Region, load_elf
 from robosoc.config.ranges import DEVICE_MAP_BASE, MAX_CYCLES, check_int
 from robosoc.isa.disasm import disassemble
+from robosoc.jit import ENGINES
 from robosoc.kernels.core import run_cores
 from robosoc.kernels.core_layout import (
     ADDRESS_ERRORS,
@@ -48,6 +49,7 @@ from robosoc.kernels.core_layout import (
 
 if TYPE_CHECKING:
     from robosoc.chip.profile import Sampler
+    from robosoc.jit.engine import TranslatingCore
 
 CHUNK_CYCLES = 1 << 24
 _TILE0 = np.zeros(1, dtype=np.int64)  # host returns between slices: output is flushed, Ctrl-C is seen
@@ -201,7 +203,9 @@ class RunResult:
 class SingleCoreSoC:
     """One HF-RISCV core with its SRAM at 0x40000000 and the SoC devices."""
 
-    def __init__(self, *, mul: bool = True, sram_size: int = DEFAULT_SRAM_SIZE, errata: str = "spec") -> None:
+    def __init__(
+        self, *, mul: bool = True, sram_size: int = DEFAULT_SRAM_SIZE, errata: str = "spec", engine: str = "interp"
+    ) -> None:
         """A core after reset.
 
         Args:
@@ -209,14 +213,25 @@ class SingleCoreSoC:
             sram_size: bytes of SRAM at 0x40000000, a multiple of 4 ending below the devices at 0xe0000000.
             errata: "spec" (RISC-V results, each RTL erratum the program hits is counted and warned
                 about) or "rtl" (reproduce the RTL's errata, still counted).
+            engine: "interp" (the interpreter), "jit" (translate regions at their first arrival) or
+                "auto" (translate the regions that turn hot); every engine gives the same cycles,
+                counters, outputs and errors (docs/translation.md).
         """
         if errata not in ERRATA_MODES:
             raise ValueError(f"errata: must be one of {', '.join(map(repr, ERRATA_MODES))}, got {errata!r}")
+        if engine not in ENGINES:
+            raise ValueError(f"engine: must be one of {', '.join(map(repr, ENGINES))}, got {engine!r}")
         check_int("sram_size", sram_size, 4, DEVICE_MAP_BASE - SRAM_BASE, "bytes")
         self.mul = mul
         self.errata = errata
         self.state = CoreState.new(mul=mul, sram_size=sram_size, base=SRAM_BASE, errata=ERRATA_MODES[errata])
         self.program: Program | None = None
+        self.engine = engine
+        self.translator: TranslatingCore | None = None
+        if engine != "interp":
+            from robosoc.jit.engine import TranslatingCore
+
+            self.translator = TranslatingCore(self.state, mode=engine)
 
     def regions(self) -> list[Region]:
         return [Region(SRAM_BASE, self.state.size, "SRAM")]
@@ -228,6 +243,12 @@ class SingleCoreSoC:
             self.state.write(addr, data)
         self.state.pc = program.entry
         self.program = program
+        self.forget_translations()
+
+    def forget_translations(self) -> None:
+        """Drop translated code: needed after writing the core's memory from outside (``state.write``)."""
+        if self.translator is not None:
+            self.translator.forget()
 
     def symbolize(self, pc: int) -> str:
         if self.program is None:
@@ -254,11 +275,17 @@ class SingleCoreSoC:
                 set from outside); the kernel itself trusts the pc it starts from.
         """
         check_pc(self.state, 0, self.symbolize)
+        if self.translator is not None:
+            return self.translator.step_until(until)
         run_cores(self.state.arrays(), _TILE0, until)
         return int(self.state.st[0, S_RUN])
 
     def set_breakpoint(self, addr: int, on: bool = True) -> None:
-        """Stop before the instruction at ``addr``: ``step_until`` then returns RUN_BREAK."""
+        """Stop before the instruction at ``addr``: ``step_until`` then returns RUN_BREAK.
+
+        Translated code does not see breakpoints: the core runs on the interpreter from here on.
+        """
+        self.translator = None
         self.state.set_breakpoint(addr, on)
 
     def drain_output(self) -> bytes:
@@ -348,8 +375,9 @@ def run_elf(
     sram_size: int = DEFAULT_SRAM_SIZE,
     on_output: Callable[[bytes], object] | None = None,
     errata: str = "spec",
+    engine: str = "interp",
 ) -> RunResult:
     """Load an ELF into a fresh single-core SoC and run it to its exit."""
-    soc = SingleCoreSoC(mul=mul, sram_size=sram_size, errata=errata)
+    soc = SingleCoreSoC(mul=mul, sram_size=sram_size, errata=errata, engine=engine)
     soc.load(load_elf(path, soc.regions()))
     return soc.run(max_cycles=max_cycles, on_output=on_output)

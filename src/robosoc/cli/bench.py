@@ -9,6 +9,7 @@ from robosoc.cli import exit_codes, files, options
 from robosoc.cli.app import bench_app
 from robosoc.cli.console import make_console
 from robosoc.config.firmware import ARITH_CHOICES
+from robosoc.jit import ENGINES
 
 MAX_RUNS = 1000
 #: Largest NoC benchmark: generated-cycles x tiles (the traffic draws one number per tile and cycle).
@@ -25,11 +26,22 @@ def bench_core(
         typer.Option(help=f"Timed runs after the JIT warm-up, 1..{MAX_RUNS}.", callback=options.int_range(1, MAX_RUNS)),
     ] = 7,
     mul: Annotated[bool, typer.Option("--mul/--no-mul", help="Build the workload with the multiplier.")] = True,
+    engine: Annotated[
+        str,
+        typer.Option(
+            help="interp, jit or auto (docs/translation.md); the last line gives this engine's median.",
+            callback=options.choice(*ENGINES),
+        ),
+    ] = "interp",
+    compare: Annotated[
+        bool,
+        typer.Option("--compare/--no-compare", help="Also time the interpreter in the same run (not with interp)."),
+    ] = True,
 ) -> None:
     """Simulated MIPS of one core on an EKF-like workload (7x7 matrix inverse and multiply)."""
     from robosoc.benchmarks.core import run_core_benchmark
 
-    run_core_benchmark(runs=runs, mul=mul, console=make_console())
+    run_core_benchmark(runs=runs, mul=mul, engine=engine, compare=compare, console=make_console())
 
 
 @bench_app.command("physics", epilog=exit_codes.EPILOG)

@@ -15,6 +15,7 @@ from robosoc.cli.app import app
 from robosoc.cli.errors import CliError
 from robosoc.cli.gdb_option import GDB_HELP, TILE_HELP, check_gdb_options, gdb_session
 from robosoc.config.ranges import MAX_CYCLES
+from robosoc.jit import ENGINES
 
 if TYPE_CHECKING:
     from robosoc.analysis.energy import EnergyModel
@@ -67,6 +68,15 @@ Errata = Annotated[
         "--errata",
         help="spec: RISC-V results, report each HF-RISCV RTL erratum hit; rtl: reproduce the RTL's errata.",
         callback=options.choice(*ERRATA_CHOICES),
+    ),
+]
+Engine = Annotated[
+    str,
+    typer.Option(
+        "--engine",
+        help="interp: the interpreter; jit: translate code to native code at first use; auto: translate the "
+        "code that turns hot.  Same cycles, counters and outputs with each (one core; docs/translation.md).",
+        callback=options.choice(*ENGINES),
     ),
 ]
 ExitCode = Annotated[
@@ -127,6 +137,7 @@ def run(
     profile: Profile = 0,
     errata: Errata = "spec",
     exit_code: ExitCode = exit_codes.EXIT_CODE_STATUS,
+    engine: Engine = "interp",
     gdb: Annotated[int | None, typer.Option("--gdb", help=GDB_HELP, callback=options.int_range(0, 65535, ""))] = None,
     tile: Annotated[str | None, typer.Option("--tile", help=TILE_HELP)] = None,
 ) -> None:
@@ -141,6 +152,8 @@ def run(
     if on_chip and (trace or profile):
         raise options.fail("--trace" if trace else "--profile", "works on one core (without --mesh/--chip/--off)")
     options.exclusive(mesh=mesh is not None, chip=chip is not None)
+    if engine != "interp" and (on_chip or gdb is not None):
+        raise options.fail("--engine", f"{engine} runs one core without --gdb (the MPSoC and GDB use the interpreter)")
     if chip is not None:
         for name, field in (("sram_size", "tile.sram_bytes"), ("mul", "tile.multiplier")):
             if options.given(ctx, name):
@@ -161,7 +174,7 @@ def run(
                   exit_code, inputs, gdb=gdb, gdb_tile=tile)  # fmt: skip
     else:
         _run_single(programs[0], mul, max_cycles, stats, model, sram_size, trace, profile, errata, exit_code,
-                    inputs, gdb=gdb)  # fmt: skip
+                    inputs, gdb=gdb, engine=engine)  # fmt: skip
 
 
 def _run_single(
@@ -177,11 +190,12 @@ def _run_single(
     exit_mode: str,
     inputs: list[Path],
     gdb: int | None = None,
+    engine: str = "interp",
 ) -> None:
     from robosoc.chip.single import RtlErratum, SingleCoreSoC
 
     try:
-        soc = SingleCoreSoC(mul=mul, sram_size=sram_size, errata=errata)
+        soc = SingleCoreSoC(mul=mul, sram_size=sram_size, errata=errata, engine=engine)
     except ValueError as exc:
         raise CliError(str(exc)) from exc
     soc.load(files.load_program(program, None, soc.regions()))

@@ -1,0 +1,122 @@
+"""Compiling region IR to native code with llvmlite, and the on-disk object cache.
+
+A light pass pipeline (SROA, instcombine, simplifycfg, dead-store elimination) and O2 code
+generation: the trade-off between compile time and speed the issue's prototype found best.  The
+compiled object of a module is cached under ``$ROBOSOC_CACHE/jit/`` keyed by the IR text (which
+holds the code words, the multiplier, the memory and code size and the errata mode it was written
+for), the LLVM version, the host CPU and its features, and the pipeline version; a hit skips
+optimisation and code generation and loads the object into the JIT.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import tempfile
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import llvmlite.binding as llvm
+
+from robosoc.toolchain.cache import cache_root
+
+#: Bumped whenever the pipeline or the IR conventions change, to invalidate old objects.
+PIPELINE_VERSION = 3
+
+
+@dataclass
+class CompileStats:
+    modules: int = 0
+    cache_hits: int = 0
+    reused: int = 0  # already loaded in this process
+    seconds: float = 0.0
+
+
+class Compiler:
+    """One MCJIT engine that native regions are added to; addresses stay valid for its lifetime."""
+
+    def __init__(self, cache: bool = True) -> None:
+        llvm.initialize_native_target()
+        llvm.initialize_native_asmprinter()
+        target = llvm.Target.from_default_triple()
+        cpu, features = llvm.get_host_cpu_name(), llvm.get_host_cpu_features().flatten()
+        self.tm = target.create_target_machine(
+            cpu=cpu, features=features, opt=2, reloc="pic", codemodel="small", jit=True
+        )
+        self.engine = llvm.create_mcjit_compiler(llvm.parse_assembly(""), self.tm)
+        self.pto = llvm.create_pipeline_tuning_options(speed_level=2)
+        self.pb = llvm.create_pass_builder(self.tm, self.pto)
+        self.cache_dir = cache_root() / "jit" if cache else None
+        self.env = f"llvm{llvm.llvm_version_info} {target.triple} {cpu} {features} pipeline{PIPELINE_VERSION}"
+        self.stats = CompileStats()
+        self.loaded: dict[str, int] = {}
+
+    def key(self, ir_text: str) -> str:
+        return hashlib.sha256((self.env + "\n" + ir_text).encode()).hexdigest()
+
+    def _optimise(self, module: llvm.ModuleRef) -> None:
+        pm = llvm.create_new_module_pass_manager()
+        pm.add_sroa_pass()
+        pm.add_instruction_combine_pass()
+        pm.add_simplify_cfg_pass()
+        pm.add_dead_store_elimination_pass()
+        pm.add_instruction_combine_pass()
+        pm.run(module, self.pb)
+
+    def object_code(self, ir_text: str) -> tuple[bytes, bool]:
+        """The native object of an IR module, from the cache when there: (bytes, was cached)."""
+        path = None
+        if self.cache_dir is not None:
+            key = self.key(ir_text)
+            path = self.cache_dir / key[:2] / f"{key}.o"
+            if path.is_file():
+                return path.read_bytes(), True
+        module = llvm.parse_assembly(ir_text)
+        module.verify()
+        self._optimise(module)
+        obj = self.tm.emit_object(module)
+        if path is not None:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".tmp")
+            with os.fdopen(fd, "wb") as f:
+                f.write(obj)
+            Path(tmp).replace(path)  # readers see a whole object or none
+        return obj, False
+
+    def add(self, ir_template: str, placeholder: str, names: list[str]) -> list[int]:
+        """Compile (or load) a module and return the native address of each function in ``names``.
+
+        Functions are named in ``ir_template`` with ``placeholder`` as the stem; the real stem is
+        derived from the cache key, so a region translated again (another run, or after
+        self-modifying code) reuses the code already loaded.
+        """
+        start = time.perf_counter()
+        stem = "r" + self.key(ir_template)[:32]
+        real = [n.replace(placeholder, stem) for n in names]
+        if real[0] not in self.loaded:
+            obj, hit = self.object_code(ir_template.replace(placeholder, stem))
+            self.engine.add_object_file(llvm.ObjectFileRef.from_data(obj))
+            self.engine.finalize_object()
+            for n in real:
+                address = self.engine.get_function_address(n)
+                if not address:
+                    raise RuntimeError(f"translated function {n} not found after loading its object")
+                self.loaded[n] = address
+            self.stats.modules += 1
+            self.stats.cache_hits += int(hit)
+        else:
+            self.stats.reused += 1
+        self.stats.seconds += time.perf_counter() - start
+        return [self.loaded[n] for n in real]
+
+
+_SHARED: Compiler | None = None
+
+
+def shared_compiler() -> Compiler:
+    """The process's compiler (one JIT engine: regions compiled once are reused by every core and run)."""
+    global _SHARED
+    if _SHARED is None:
+        _SHARED = Compiler()
+    return _SHARED

@@ -1,0 +1,576 @@
+"""LLVM IR of one region: one function per block, chained by tail calls.
+
+Each block function checks that its worst-case cycles end before the next event, counts itself,
+runs its instructions and continues with a tail call: to the next block of the region (a direct
+jump in native code), or through the entry table to whichever region has a block at the target
+(an indirect jump), or returns an X_* code of :mod:`robosoc.kernels.jit_dispatch` to the dispatch
+loop.  Every block function has the signature (all arrays distinct, hence ``noalias``)::
+
+    i32 @block(i64* ctx, i32* regs, i8* mem, i64* cnt, i64 cycle)
+
+so every tail call is a true one (``musttail``).  Guest registers stay in the register array (a
+load at first use in a block, a store per write), the cycle count is an argument, the state and
+counter arrays are reached through ``ctx``.  The IR is written as text (faster to produce than
+llvmlite's builder objects).  Loads outside SRAM, stores outside its data part
+(devices, and the loaded code: self-modifying code) and misaligned accesses leave the region
+before the instruction, for the interpreter.  Costs come from the timing classes of
+:mod:`robosoc.isa.table`; instruction counts are count slots (see the dispatch module).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from robosoc.isa.table import (
+    BRANCH_NOT_TAKEN_CYCLES,
+    BRANCH_TAKEN_CYCLES,
+    JUMP_CYCLES,
+    MEMORY_CYCLES,
+    MUL_BASE_CYCLES,
+    SINGLE_CYCLES,
+    Fmt,
+    Timing,
+)
+from robosoc.jit.regions import Block, End, Insn, Region
+from robosoc.kernels.core import _MUL_CHUNK
+from robosoc.kernels.core_layout import C_MUL_STALL, C_TAKEN, OPC_SIZE, S_MUL_END, S_MULHSU_COUNT, S_MULHSU_PC
+from robosoc.kernels.jit_dispatch import (
+    CTX_CNT,
+    CTX_CTR,
+    CTX_CYC,
+    CTX_ENTRY_FN,
+    CTX_ENTRY_SLOT,
+    CTX_PC,
+    CTX_ST,
+    X_JUMP,
+    X_LIMIT,
+    X_SIDE,
+)
+
+NAME_PLACEHOLDER = "REGION_NAME"
+SINK = 32  # the interpreter's register for rd = x0 (written, never read)
+M32 = 0xFFFFFFFF
+
+
+def multiplier_tail_table() -> np.ndarray:
+    """Cycles after bit 24 of the multiplier's scan: ``[entry offset 0..3, rs2 bits 24..31]``.
+
+    Continues :func:`robosoc.kernels.core.mul_latency` from where its byte table leaves the
+    counter (24 + offset): steps while c < 28 (c grows by 1 when bits c..c+3 are not all zero,
+    else by 4), one step per bit from c to 31, and the last step.
+    """
+    table = np.zeros((4, 256), dtype=np.int64)
+    for off in range(4):
+        for top in range(256):
+            b = top << 24
+            c, steps = 24 + off, 0
+            while c < 28:
+                c += 1 if (b >> c) & 15 else 4
+                steps += 1
+            table[off, top] = steps + (31 - c) + 1
+    return table
+
+
+_TAIL = multiplier_tail_table()
+#: Most cycles one multiply takes (every step advances the counter by one bit).
+MUL_WORST_CYCLES = MUL_BASE_CYCLES + int(_TAIL[0].max()) + 3 * int((_MUL_CHUNK[0] >> 4).max())
+
+#: Most cycles an instruction of each timing class takes: the pre-block event check uses these.
+WORST_CYCLES: dict[Timing, int] = {
+    Timing.SINGLE: SINGLE_CYCLES,
+    Timing.MEMORY: MEMORY_CYCLES,
+    Timing.BRANCH: max(BRANCH_TAKEN_CYCLES, BRANCH_NOT_TAKEN_CYCLES),
+    Timing.JUMP: JUMP_CYCLES,
+    Timing.MULTIPLY: MUL_WORST_CYCLES,
+}
+
+
+def _bytes_const(values: np.ndarray) -> str:
+    data = values.astype(np.uint8).tobytes()
+    return 'c"' + "".join(f"\\{b:02X}" for b in data) + '"'
+
+
+def _i32(v: int) -> int:
+    """A 32-bit constant as LLVM prints it (signed)."""
+    v &= M32
+    return v - (1 << 32) if v >> 31 else v
+
+
+MAX_SWITCH = 8  # most return sites a return compares its target with before the entry table
+_ALU_RR = {"add": "add", "sub": "sub", "xor": "xor", "or": "or", "and": "and"}
+_ALU_RI = {"addi": "add", "xori": "xor", "ori": "or", "andi": "and"}
+_SHIFT_I = {"slli": "shl", "srli": "lshr", "srai": "ashr"}
+_SHIFT_R = {"sll": "shl", "srl": "lshr", "sra": "ashr"}
+_BRANCH = {"beq": "eq", "bne": "ne", "blt": "slt", "bge": "sge", "bltu": "ult", "bgeu": "uge"}
+_LOADS = {"lb": (8, "sext", 0), "lbu": (8, "zext", 0), "lh": (16, "sext", 1), "lhu": (16, "zext", 1), "lw": (32, "", 3)}
+_STORES = {"sb": (8, 0), "sh": (16, 1), "sw": (32, 3)}
+
+
+@dataclass(frozen=True)
+class Target:
+    """What the translated code is specialised for (all of it is part of the cache key)."""
+
+    base: int
+    mem_size: int
+    code_size: int
+    rtl_errata: bool
+
+
+@dataclass
+class EmittedRegion:
+    ir: str
+    block_names: dict[int, str]  # block start pc -> function name (with the region's name placeholder)
+    #: count slots: (histogram as (opc index, delta) pairs, next slot or -1); a slot's executions are
+    #: also added to its next slot's (the chain of a block's prefixes); index TAKEN_INDEX counts taken branches
+    slots: list[tuple[list[tuple[int, int]], int]] = field(default_factory=list)
+
+
+_PARAMS = "i64* noalias %ctx, i32* noalias %regs, i8* noalias %mem, i64* noalias %cnt, i64 %cyc, i64 %limit"
+_FN_TYPE = "i32 (i64*, i32*, i8*, i64*, i64, i64)"
+#: count-slot index of the taken-branch counter: past the per-operation counters (see flush_counts)
+TAKEN_INDEX = OPC_SIZE + C_TAKEN
+
+
+class _Writer:
+    """Writes one region.  Register values and the cycles since the block started are tracked
+    along each path, so an instruction is its operation plus one register store.
+    """
+
+    def __init__(self, target: Target, region: Region, name: str) -> None:
+        self.t = target
+        self.region = region
+        self.name = name
+        self.slots: list[tuple[list[tuple[int, int]], int]] = []
+        self.lines: list[str] = []
+        self.n = 0
+        self.uses_mul = False
+        self.fn = {pc: f"{name}_{k}" for k, pc in enumerate(region.blocks)}
+        # where a return (jalr x0, 0(ra)) may land inside the region: the return sites of its calls,
+        # when there are few (else returns go through the entry table)
+        sites = {b.next_pc for b in region.blocks.values() if b.end is End.CALL and b.next_pc in self.fn}
+        self.returns = sorted(sites) if len(sites) <= MAX_SWITCH else []
+        self.regs: dict[int, str] = {}
+        self.cyc = "%cyc"  # SSA value of the cycle count at the last dynamic change
+        self.pending = 0  # cycles of the instructions since then
+
+    def tmp(self) -> str:
+        self.n += 1
+        return f"%t{self.n}"
+
+    def label(self, stem: str) -> str:
+        self.n += 1
+        return f"{stem}{self.n}"
+
+    def emit(self, line: str) -> None:
+        self.lines.append("  " + line)
+
+    def put_label(self, name: str) -> None:
+        self.lines.append(f"{name}:")
+
+    # --- state ------------------------------------------------------------------------------
+    def reg(self, r: int) -> str:
+        if r == 0:
+            return "0"
+        v = self.regs.get(r)
+        if v is None:
+            p, v = self.tmp(), self.tmp()
+            self.emit(f"{p} = getelementptr i32, i32* %regs, i64 {r}")
+            self.emit(f"{v} = load i32, i32* {p}")
+            self.regs[r] = v
+        return v
+
+    def set_reg(self, rd: int, value: str) -> None:
+        p = self.tmp()
+        self.emit(f"{p} = getelementptr i32, i32* %regs, i64 {rd if rd != 0 else SINK}")
+        self.emit(f"store i32 {value}, i32* {p}")
+        if rd != 0:
+            self.regs[rd] = value
+
+    def cycles(self, extra: int | str = 0) -> str:
+        """The cycle count after the instructions so far plus ``extra``, as an SSA value."""
+        v = self.cyc
+        total = self.pending + (extra if isinstance(extra, int) else 0)
+        if total:
+            w = self.tmp()
+            self.emit(f"{w} = add i64 {v}, {total}")
+            v = w
+        if isinstance(extra, str):
+            w = self.tmp()
+            self.emit(f"{w} = add i64 {v}, {extra}")
+            v = w
+        return v
+
+    def add_i64(self, ptr: str, n: int | str) -> None:
+        a, b = self.tmp(), self.tmp()
+        self.emit(f"{a} = load i64, i64* {ptr}")
+        self.emit(f"{b} = add i64 {a}, {n}")
+        self.emit(f"store i64 {b}, i64* {ptr}")
+
+    def ctx_ptr(self, slot: int) -> str:
+        """The address held in ctx[slot] as an i64*."""
+        g, a, p = self.tmp(), self.tmp(), self.tmp()
+        self.emit(f"{g} = getelementptr i64, i64* %ctx, i64 {slot}")
+        self.emit(f"{a} = load i64, i64* {g}")
+        self.emit(f"{p} = inttoptr i64 {a} to i64*")
+        return p
+
+    def field(self, base: str, index: int) -> str:
+        p = self.tmp()
+        self.emit(f"{p} = getelementptr i64, i64* {base}, i64 {index}")
+        return p
+
+    def slot(self, hist: list[tuple[int, int]], nxt: int = -1) -> int:
+        self.slots.append((hist, nxt))
+        return len(self.slots) - 1
+
+    # --- leaving a block ----------------------------------------------------------------------
+    def leave(self, code: int, pc: int | str, slot: int = -1, cyc: str | None = None) -> None:
+        """Return ``code`` to the dispatch loop with pc and cycle in ctx (and one count to ``slot``)."""
+        cyc = cyc or self.cycles()
+        r = self.tmp()
+        self.emit(f"{r} = tail call i32 @leave(i64* %ctx, i64* %cnt, i64 {cyc}, i64 {pc}, i64 {slot}, i32 {code})")
+        self.emit(f"ret i32 {r}")
+
+    def tail(self, fn: str, cnt: str, cyc: str) -> None:
+        r = self.tmp()
+        self.emit(f"{r} = musttail call i32 {fn}(i64* %ctx, i32* %regs, i8* %mem, i64* {cnt}, i64 {cyc}, i64 %limit)")
+        self.emit(f"ret i32 {r}")
+
+    def jump(self, pc: str, cyc: str) -> None:
+        """Continue at the dynamic ``pc`` (i64): the region with a block there, else the dispatch loop."""
+        off, i = self.tmp(), self.tmp()
+        self.emit(f"{off} = sub i64 {pc}, {self.t.base}")
+        self.emit(f"{i} = lshr i64 {off}, 2")
+        fe, fa = self.tmp(), self.tmp()
+        self.emit(f"{fe} = getelementptr i64, i64* {self.ctx_ptr(CTX_ENTRY_FN)}, i64 {i}")
+        self.emit(f"{fa} = load i64, i64* {fe}")
+        none, go, out = self.tmp(), self.label("go"), self.label("out")
+        self.emit(f"{none} = icmp eq i64 {fa}, 0")
+        self.emit(f"br i1 {none}, label %{out}, label %{go}")
+        self.put_label(out)
+        self.leave(X_JUMP, pc, cyc=cyc)
+        self.put_label(go)
+        se, sl, ca, so, cn, cp, f = (self.tmp() for _ in range(7))
+        self.emit(f"{se} = getelementptr i64, i64* {self.ctx_ptr(CTX_ENTRY_SLOT)}, i64 {i}")
+        self.emit(f"{sl} = load i64, i64* {se}")
+        self.emit(f"{ca} = load i64, i64* {self.field('%ctx', CTX_CNT)}")
+        self.emit(f"{so} = shl i64 {sl}, 3")
+        self.emit(f"{cn} = add i64 {ca}, {so}")
+        self.emit(f"{cp} = inttoptr i64 {cn} to i64*")
+        self.emit(f"{f} = inttoptr i64 {fa} to {_FN_TYPE}*")
+        self.tail(f, cp, cyc)
+
+    def goto(self, pc: int, cyc: str) -> None:
+        """Continue at the static ``pc``: this region's block there, or through the entry table."""
+        pc &= M32
+        if pc in self.fn:
+            self.tail(f"@{self.fn[pc]}", "%cnt", cyc)
+        else:
+            self.jump(str(pc), cyc)
+
+    def cond_exit(self, cond: str, code: int, pc: int, slot: int, stem: str) -> None:
+        """Leave to the dispatch loop when ``cond``, else go on in a new label."""
+        x, ok = self.label(f"{stem}.x"), self.label(stem)
+        self.emit(f"br i1 {cond}, label %{x}, label %{ok}")
+        self.put_label(x)
+        self.leave(code, pc, slot)
+        self.put_label(ok)
+
+    # --- counting -----------------------------------------------------------------------------
+    def count_end(self, taken: bool = False) -> None:
+        """Count the block's instructions on a way out at its end (a taken branch counts as such too)."""
+        last, prev = self.rest
+        hist = [(kc, 1) for kc in self.kcs[last:]] + ([(TAKEN_INDEX, 1)] if taken else [])
+        if hist:
+            self.add_i64(self.field("%cnt", self.slot(hist, prev)), 1)
+        elif prev >= 0:
+            self.add_i64(self.field("%cnt", prev), 1)
+
+    def kc(self, insn: Insn) -> int:
+        return 2 * insn.op + (((insn.pc - self.t.base) >> 2) & 1)
+
+    def block(self, block: Block) -> None:
+        insns = block.insns
+        worst = sum(WORST_CYCLES[i.ins.timing] for i in insns[:-1])
+        self.lines.append(f"define i32 @{self.fn[block.start]}({_PARAMS}) nounwind {{")
+        self.put_label("entry")
+        self.regs, self.cyc, self.pending = {}, "%cyc", 0
+        e, ok = self.tmp(), self.tmp()
+        self.emit(f"{e} = add i64 %cyc, {worst}")
+        self.emit(f"{ok} = icmp slt i64 {e}, %limit")
+        self.emit(f"br i1 {ok}, label %go, label %lim")
+        self.put_label("lim")
+        self.leave(X_LIMIT, block.start)
+        self.put_label("go")
+        # Each way out counts one slot for the instructions executed: a side exit at instruction j
+        # counts the prefix before j (a chain of slots, one per exit point), the block's ends the rest
+        # after the last exit point (and the taken branch) chained to that point's prefix.
+        self.kcs = [self.kc(i) for i in insns]
+        points = [j for j, i in enumerate(insns) if i.name in _LOADS or i.name in _STORES or i.name == "jalr"]
+        self.prefix: dict[int, int] = {}
+        last, nxt = 0, -1
+        for j in points:
+            nxt = self.slot([(kc, 1) for kc in self.kcs[last:j]], nxt)
+            self.prefix[j] = nxt
+            last = j
+        self.rest = (last, nxt)
+        for j, insn in enumerate(insns):
+            self.insn(j, insn)
+        match block.end:
+            case End.FALL:
+                self.count_end()
+                self.goto(block.next_pc, self.cycles())
+            case End.SIDE:
+                self.count_end()
+                self.leave(X_SIDE, block.next_pc)
+            case End.BRANCH | End.JUMP | End.CALL | End.JALR:
+                self.control(len(insns) - 1, insns[-1])
+        self.lines.append("}")
+
+    # --- instructions -------------------------------------------------------------------------
+    def control(self, j: int, insn: Insn) -> None:
+        pc = insn.pc
+        name = insn.name
+        if name in _BRANCH:
+            a, b, cond = self.reg(insn.rs1), self.reg(insn.rs2), self.tmp()
+            self.emit(f"{cond} = icmp {_BRANCH[name]} i32 {a}, {b}")
+            self.emit(f"br i1 {cond}, label %taken, label %fall")
+            self.put_label("taken")
+            self.count_end(taken=True)
+            self.goto(pc + insn.imm, self.cycles(BRANCH_TAKEN_CYCLES))
+            self.put_label("fall")
+            self.count_end()
+            self.goto(pc + 4, self.cycles(BRANCH_NOT_TAKEN_CYCLES))
+        elif name == "jal":
+            self.set_reg(insn.rd, str(_i32(pc + 4)))
+            self.count_end()
+            self.goto(pc + insn.imm, self.cycles(JUMP_CYCLES))
+        else:  # jalr: the target is checked as the interpreter's fetch_error does
+            a, s, tgt = self.reg(insn.rs1), self.tmp(), self.tmp()
+            self.emit(f"{s} = add i32 {a}, {insn.imm}")
+            self.emit(f"{tgt} = and i32 {s}, -2")
+            m, off, bad1, bad2, bad = self.tmp(), self.tmp(), self.tmp(), self.tmp(), self.tmp()
+            self.emit(f"{m} = and i32 {tgt}, 3")
+            self.emit(f"{bad1} = icmp ne i32 {m}, 0")
+            self.emit(f"{off} = sub i32 {tgt}, {_i32(self.t.base)}")
+            self.emit(f"{bad2} = icmp uge i32 {off}, {_i32(self.t.code_size)}")
+            self.emit(f"{bad} = or i1 {bad1}, {bad2}")
+            self.cond_exit(bad, X_SIDE, pc, self.prefix[j], "jr")
+            self.set_reg(insn.rd, str(_i32(pc + 4)))
+            self.count_end()
+            cyc = self.cycles(JUMP_CYCLES)
+            targets = self.returns if (insn.rd, insn.rs1, insn.imm) == (0, 1, 0) else []
+            cases = " ".join(f"i32 {_i32(t)}, label %in{k}" for k, t in enumerate(targets))
+            self.emit(f"switch i32 {tgt}, label %other [ {cases} ]")
+            for k, t in enumerate(targets):
+                self.put_label(f"in{k}")
+                self.tail(f"@{self.fn[t]}", "%cnt", cyc)
+            self.put_label("other")
+            z = self.tmp()
+            self.emit(f"{z} = zext i32 {tgt} to i64")
+            self.jump(z, cyc)
+
+    def insn(self, j: int, insn: Insn) -> None:
+        name = insn.name
+        if insn.ins.timing in (Timing.BRANCH, Timing.JUMP):
+            return  # the block's end
+        if name in _LOADS or name in _STORES:
+            self.memory(j, insn)
+            return
+        if insn.ins.timing is Timing.MULTIPLY:
+            self.multiply(insn)
+            return
+        v = self.tmp()
+        if name in _ALU_RR:
+            a, b = self.reg(insn.rs1), self.reg(insn.rs2)
+            self.emit(f"{v} = {_ALU_RR[name]} i32 {a}, {b}")
+        elif name in _ALU_RI:
+            a = self.reg(insn.rs1)
+            self.emit(f"{v} = {_ALU_RI[name]} i32 {a}, {_i32(insn.imm)}")
+        elif name in _SHIFT_I:
+            a = self.reg(insn.rs1)
+            self.emit(f"{v} = {_SHIFT_I[name]} i32 {a}, {insn.imm}")
+        elif name in _SHIFT_R:
+            a, b, s = self.reg(insn.rs1), self.reg(insn.rs2), self.tmp()
+            self.emit(f"{s} = and i32 {b}, 31")
+            self.emit(f"{v} = {_SHIFT_R[name]} i32 {a}, {s}")
+        elif name in _SET:
+            a = self.reg(insn.rs1)
+            b = self.reg(insn.rs2) if insn.ins.fmt is Fmt.R else str(_i32(insn.imm))
+            cond = self.tmp()
+            self.emit(f"{cond} = icmp {_SET[name]} i32 {a}, {b}")
+            self.emit(f"{v} = zext i1 {cond} to i32")
+        elif name == "lui":
+            v = str(_i32(insn.imm))
+        elif name == "auipc":
+            v = str(_i32(insn.pc + insn.imm))
+        elif name == "fence":
+            v = ""
+        else:
+            raise AssertionError(f"no IR for {name}")
+        if v:
+            self.set_reg(insn.rd, v)
+        self.pending += SINGLE_CYCLES
+
+    def memory(self, j: int, insn: Insn) -> None:
+        name = insn.name
+        load = name in _LOADS
+        bits, ext, align = _LOADS[name] if load else (_STORES[name][0], "", _STORES[name][1])
+        a, addr, off = self.reg(insn.rs1), self.tmp(), self.tmp()
+        self.emit(f"{addr} = add i32 {a}, {insn.imm}")
+        self.emit(f"{off} = sub i32 {addr}, {_i32(self.t.base)}")
+        bad = self.tmp()
+        if load:
+            self.emit(f"{bad} = icmp uge i32 {off}, {_i32(self.t.mem_size)}")
+        else:  # stores into the loaded code are the interpreter's (self-modifying code)
+            data = self.tmp()
+            self.emit(f"{data} = sub i32 {off}, {_i32(self.t.code_size)}")
+            self.emit(f"{bad} = icmp uge i32 {data}, {_i32(self.t.mem_size - self.t.code_size)}")
+        if align:
+            m, mis, both = self.tmp(), self.tmp(), self.tmp()
+            self.emit(f"{m} = and i32 {off}, {align}")
+            self.emit(f"{mis} = icmp ne i32 {m}, 0")
+            self.emit(f"{both} = or i1 {bad}, {mis}")
+            bad = both
+        self.cond_exit(bad, X_SIDE, insn.pc, self.prefix[j], "m")
+        z, p = self.tmp(), self.tmp()
+        self.emit(f"{z} = zext i32 {off} to i64")
+        self.emit(f"{p} = getelementptr i8, i8* %mem, i64 {z}")
+        ty = f"i{bits}"
+        q = p
+        if bits != 8:
+            q = self.tmp()
+            self.emit(f"{q} = bitcast i8* {p} to {ty}*")
+        self.pending += MEMORY_CYCLES
+        if load:
+            v = self.tmp()
+            self.emit(f"{v} = load {ty}, {ty}* {q}, align {bits // 8}")
+            if bits != 32:
+                w = self.tmp()
+                self.emit(f"{w} = {ext} {ty} {v} to i32")
+                v = w
+            self.set_reg(insn.rd, v)
+            return
+        v = self.reg(insn.rs2)
+        if bits != 32:
+            w = self.tmp()
+            self.emit(f"{w} = trunc i32 {v} to {ty}")
+            v = w
+        self.emit(f"store {ty} {v}, {ty}* {q}, align {bits // 8}")
+
+    def multiply(self, insn: Insn) -> None:
+        self.uses_mul = True
+        name = insn.name
+        a, b = self.reg(insn.rs1), self.reg(insn.rs2)
+        p, h, v, x, y = self.tmp(), self.tmp(), self.tmp(), self.tmp(), self.tmp()
+        if name == "mul":
+            self.emit(f"{v} = mul i32 {a}, {b}")
+        else:
+            signed_a = name in ("mulh", "mulhsu") and not (name == "mulhsu" and self.t.rtl_errata)
+            signed_b = name == "mulh"
+            # the RTL's MULHSU returns the MULHU result (erratum): both unsigned in rtl mode
+            self.emit(f"{x} = {'sext' if signed_a else 'zext'} i32 {a} to i64")
+            self.emit(f"{y} = {'sext' if signed_b else 'zext'} i32 {b} to i64")
+            self.emit(f"{p} = mul i64 {x}, {y}")
+            self.emit(f"{h} = lshr i64 {p}, 32")
+            self.emit(f"{v} = trunc i64 {h} to i32")
+        self.set_reg(insn.rd, v)
+        st = self.ctx_ptr(CTX_ST)
+        if name == "mulhsu":
+            self.add_i64(self.field(st, S_MULHSU_COUNT), 1)
+            pp = self.field(st, S_MULHSU_PC)
+            old, neg, new = self.tmp(), self.tmp(), self.tmp()
+            self.emit(f"{old} = load i64, i64* {pp}")
+            self.emit(f"{neg} = icmp slt i64 {old}, 0")
+            self.emit(f"{new} = select i1 {neg}, i64 {insn.pc}, i64 {old}")
+            self.emit(f"store i64 {new}, i64* {pp}")
+        lat, stall = self.tmp(), self.tmp()
+        self.emit(f"{lat} = call i64 @mul_latency(i32 {b})")
+        self.emit(f"{stall} = add i64 {lat}, -1")
+        self.add_i64(self.field(self.ctx_ptr(CTX_CTR), C_MUL_STALL), stall)
+        self.cyc = self.cycles(lat)
+        self.pending = 0
+        self.emit(f"store i64 {self.cyc}, i64* {self.field(st, S_MUL_END)}")  # the controller's erratum window
+
+
+#: leave(ctx, cnt, cycle, pc, slot, code): back to the dispatch loop with pc and cycle in ctx, one
+#: count to ``slot`` (none when negative); out of line, as ways out are many and cold.
+_LEAVE_IR = f"""
+define internal i32 @leave(i64* %ctx, i64* %cnt, i64 %cyc, i64 %pc, i64 %slot, i32 %code) noinline nounwind cold {{
+  %p = getelementptr i64, i64* %ctx, i64 {CTX_PC}
+  store i64 %pc, i64* %p
+  %c = getelementptr i64, i64* %ctx, i64 {CTX_CYC}
+  store i64 %cyc, i64* %c
+  %has = icmp sge i64 %slot, 0
+  br i1 %has, label %count, label %done
+count:
+  %sp = getelementptr i64, i64* %cnt, i64 %slot
+  %n0 = load i64, i64* %sp
+  %n1 = add i64 %n0, 1
+  store i64 %n1, i64* %sp
+  br label %done
+done:
+  ret i32 %code
+}}
+"""
+
+_SET = {"slt": "slt", "slti": "slt", "sltu": "ult", "sltiu": "ult"}
+
+
+#: mul_latency(i32 rs2) -> i64: three byte-table lookups as kernels.core.mul_latency does, then the tail
+_MUL_LATENCY_IR = f"""
+@mulchunk = internal unnamed_addr constant [8192 x i8] {_bytes_const(_MUL_CHUNK.reshape(-1))}
+@multail = internal unnamed_addr constant [1024 x i8] {_bytes_const(_TAIL.reshape(-1))}
+define internal i64 @mul_latency(i32 %b32) nounwind readnone {{
+  %b = zext i32 %b32 to i64
+  %w0 = and i64 %b, 2047
+  %g0 = getelementptr [8192 x i8], [8192 x i8]* @mulchunk, i64 0, i64 %w0
+  %e0b = load i8, i8* %g0
+  %e0 = zext i8 %e0b to i64
+  %s0 = lshr i64 %e0, 4
+  %o0 = and i64 %e0, 15
+  %h1 = lshr i64 %b, 8
+  %w1a = and i64 %h1, 2047
+  %o0s = shl i64 %o0, 11
+  %w1 = or i64 %o0s, %w1a
+  %g1 = getelementptr [8192 x i8], [8192 x i8]* @mulchunk, i64 0, i64 %w1
+  %e1b = load i8, i8* %g1
+  %e1 = zext i8 %e1b to i64
+  %s1 = lshr i64 %e1, 4
+  %o1 = and i64 %e1, 15
+  %h2 = lshr i64 %b, 16
+  %w2a = and i64 %h2, 2047
+  %o1s = shl i64 %o1, 11
+  %w2 = or i64 %o1s, %w2a
+  %g2 = getelementptr [8192 x i8], [8192 x i8]* @mulchunk, i64 0, i64 %w2
+  %e2b = load i8, i8* %g2
+  %e2 = zext i8 %e2b to i64
+  %s2 = lshr i64 %e2, 4
+  %o2 = and i64 %e2, 15
+  %top = lshr i64 %b, 24
+  %o2s = shl i64 %o2, 8
+  %w3 = or i64 %o2s, %top
+  %g3 = getelementptr [1024 x i8], [1024 x i8]* @multail, i64 0, i64 %w3
+  %tb = load i8, i8* %g3
+  %t = zext i8 %tb to i64
+  %a1 = add i64 %t, %s0
+  %a2 = add i64 %a1, %s1
+  %a3 = add i64 %a2, %s2
+  %lat = add i64 %a3, {MUL_BASE_CYCLES}
+  ret i64 %lat
+}}
+"""
+
+
+def emit_region(target: Target, region: Region, name: str = NAME_PLACEHOLDER) -> EmittedRegion:
+    """The IR module of ``region``: one function per block, named ``{name}_{k}``.
+
+    Count slots are numbered from 0: the dispatch loop passes the region's first slot as ``cnt``.
+    """
+    w = _Writer(target, region, name)
+    for block in region.blocks.values():
+        w.block(block)
+    text = "\n".join([_LEAVE_IR, _MUL_LATENCY_IR if w.uses_mul else "", *w.lines, ""])
+    return EmittedRegion(ir=text, block_names=dict(w.fn), slots=w.slots)

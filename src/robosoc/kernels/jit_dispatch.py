@@ -1,0 +1,318 @@
+"""The compiled dispatch loop of the block translator: translated regions and the interpreter, alternating.
+
+The loop keeps the interpreter's instruction-boundary rules (:func:`robosoc.kernels.core.run_cores`):
+at every boundary at or after the next event it consults the interrupt controller, the end of the
+slice and the output buffer in the same order.  Between events it calls the translated region that
+has an entry at the pc (through a function pointer, :func:`call_region`), which runs blocks only
+while the block's worst-case cycles end before the next event (docs/translation.md).  Whatever a
+region does not do -- device accesses, misaligned or unmapped accesses, traps, illegal words, the
+idle loops the interpreter skips, blocks that could reach an event -- the interpreter does, one
+instruction at a time, by calling ``run_cores`` with the slice ending at the next cycle.
+
+A region returns one of the X_* codes with the pc and cycle in ``ctx``.  Instruction counts are
+kept per block (``cnt``: one slot per block and per side exit, each with a signed histogram over the
+interpreter's per-operation counters) and added to ``opc`` when the loop returns, so the counters
+equal the interpreter's.  Stores into the loaded code are always the interpreter's; when one
+writes a word some region translated (``tmap``), the loop forgets every translation.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+from llvmlite import ir
+from numba import njit, types
+from numba.extending import intrinsic
+
+from robosoc.kernels.core import CoreArrays, fetch_error, run_cores
+from robosoc.kernels.core_layout import (
+    ERR_FETCH_DATA,
+    OPC_SIZE,
+    OUT_CAPACITY,
+    RUN_CHUNK,
+    RUN_ERROR,
+    RUN_MAX_CYCLES,
+    RUN_OUTPUT,
+    S_CODE_SIZE,
+    S_CYCLE,
+    S_ERR,
+    S_ERR_ADDR,
+    S_ERR_INSN,
+    S_ERR_PC,
+    S_IRQ_CHECK,
+    S_MAX_CYCLES,
+    S_MEM_BASE,
+    S_MEM_SIZE,
+    S_OUT_LEN,
+    S_PC,
+    S_RUN,
+)
+from robosoc.kernels.dev_irq import irq_event
+
+# region exit codes
+X_JUMP = 0  # control left the region for a pc without a translation: continue at ctx[CTX_PC]
+X_LIMIT = 1  # the block at ctx[CTX_PC] could reach the next event: the interpreter runs it
+X_SIDE = 2  # the instruction at ctx[CTX_PC] is the interpreter's (device, code store, misaligned ...)
+
+# ctx slots
+CTX_PC = 0
+CTX_CYC = 1
+CTX_FLUSHES = 4  # how many times the loop forgot every translation (self-modifying code)
+CTX_CALLS = 5  # region calls (statistics)
+CTX_STEPS = 6  # instructions handed to the interpreter (statistics)
+CTX_LIMITS = 7  # region exits because a block could reach the next event (statistics)
+# addresses of the tables a region reads to jump straight into the next region (JitArrays), and
+# of the core's state and counter rows
+CTX_ENTRY_FN = 8
+CTX_ENTRY_SLOT = 9
+CTX_CNT = 10
+CTX_ST = 11
+CTX_CTR = 12
+CTX_WORDS = 13  # entries of tpcs/twords that hold translated words (0 after forgetting them)
+CTX_SIZE = 16
+
+# dispatcher results beyond the interpreter's RUN_* codes
+RUN_TRANSLATE = 100  # the pc in st[S_PC] turned hot: translate a region there and call again
+
+NEVER_TRANSLATE = -(1 << 30)  # hot counter of a word no region can start at
+
+_STORE_OPCODE = 0x23
+_SYSTEM_OPCODE = 0x73
+_JAL_X0_OPCODE = 0x6F  # jal with rd = x0 (low 12 bits)
+_NOP = 0x13
+M32 = 0xFFFFFFFF
+
+
+class JitArrays(NamedTuple):
+    """The translator's tables, one entry per word of the loaded code plus one (the word after it).
+
+    ``entry_fn`` native address of the translated block starting at the word (0: none),
+    ``entry_slot`` its region's first count slot, ``hot`` arrivals at a word without an entry (NEVER_TRANSLATE:
+    none can start there), ``tmap`` 1 for words some region translated, ``tpcs``/``twords`` those words' indices and
+    contents when translated, ``cnt`` executions per count
+    slot, ``slot_ptr``/``slot_kc``/``slot_delta`` each slot's histogram (CSR), ``slot_next`` the slot whose
+    count a slot's executions are also added to (-1: none; always an earlier slot), ``ctx`` the region
+    call's in/out slots.
+    """
+
+    entry_fn: np.ndarray
+    entry_slot: np.ndarray
+    hot: np.ndarray
+    tmap: np.ndarray
+    tpcs: np.ndarray
+    twords: np.ndarray
+    cnt: np.ndarray
+    slot_ptr: np.ndarray
+    slot_next: np.ndarray
+    slot_kc: np.ndarray
+    slot_delta: np.ndarray
+    ctx: np.ndarray
+
+
+@intrinsic
+def call_region(typingctx, fn, ctx, regs, mem, cnt, cyc, limit):  # type: ignore[no-untyped-def]
+    """Call the translated block at native address ``fn`` (array addresses, cycle, limit); its X_* code."""
+    sig = types.int32(types.int64, *([types.int64] * 6))
+
+    def codegen(context, builder, signature, args):  # type: ignore[no-untyped-def]
+        i64 = ir.IntType(64)
+        ptrs = [i64.as_pointer(), ir.IntType(32).as_pointer(), ir.IntType(8).as_pointer(), i64.as_pointer()]
+        fnty = ir.FunctionType(ir.IntType(32), [*ptrs, i64, i64])
+        f = builder.inttoptr(args[0], fnty.as_pointer())
+        call_args = [builder.inttoptr(a, t) for a, t in zip(args[1:5], ptrs, strict=True)]
+        return builder.call(f, [*call_args, args[5], args[6]])
+
+    return sig, codegen
+
+
+@njit(cache=True)
+def flush_counts(jt: JitArrays, opc_t: np.ndarray, ctr_t: np.ndarray) -> None:
+    """Add every slot's executions times its histogram to the counters; zero the slots.
+
+    A histogram index below OPC_SIZE is a per-operation counter, OPC_SIZE + k is ``ctr[k]``.
+    """
+    cnt = jt.cnt
+    for s in range(cnt.shape[0] - 1, -1, -1):  # a slot's next is an earlier slot
+        c = cnt[s]
+        if c != 0:
+            for e in range(jt.slot_ptr[s], jt.slot_ptr[s + 1]):
+                k = jt.slot_kc[e]
+                if k < OPC_SIZE:
+                    opc_t[k] += c * jt.slot_delta[e]
+                else:
+                    ctr_t[k - OPC_SIZE] += c * jt.slot_delta[e]
+            nxt = jt.slot_next[s]
+            if nxt >= 0:
+                cnt[nxt] += c
+            cnt[s] = 0
+
+
+@njit(cache=True)
+def _forget_translations(jt: JitArrays) -> None:
+    jt.entry_fn[:] = 0
+    jt.entry_slot[:] = 0
+    jt.hot[:] = 0
+    jt.tmap[:] = 0
+    jt.ctx[CTX_WORDS] = 0
+    jt.ctx[CTX_FLUSHES] += 1
+
+
+@njit(cache=True, inline="always")
+def _store_hits_translation(jt: JitArrays, word: int, regs_t: np.ndarray, base: int, code: int) -> bool:
+    """Whether the store ``word`` (about to run with ``regs_t``) writes a translated word."""
+    if (word & 0x7F) != _STORE_OPCODE:
+        return False
+    imm = ((word >> 25) << 5) | ((word >> 7) & 31)
+    imm = (imm ^ 0x800) - 0x800
+    addr = (np.int64(regs_t[(word >> 15) & 31]) + imm) & M32
+    off = (addr - base) & M32
+    return off < code and jt.tmap[off >> 2] != 0
+
+
+@njit(cache=True)
+def run_translated(
+    core: CoreArrays, tiles: np.ndarray, until: int, jt: JitArrays, threshold: int, stretch: int
+) -> None:
+    """Run core ``tiles[0]`` until cycle ``until`` like ``run_cores``, with translated regions.
+
+    Leaves the RUN_* status in st[t, S_RUN], or RUN_TRANSLATE with the pc of a word that turned
+    hot (``threshold`` arrivals without an entry) for the caller to translate.  At a word without a
+    translation the interpreter runs one instruction (``stretch`` 0), or ``stretch`` cycles at its
+    own speed, after which the translated words are compared with what was translated (a store the
+    interpreter made into them forgets every translation).
+    """
+    st, ctr, opc, regs, m8, _m16, m32, _dec, _out = core
+    t = tiles[0]
+    st_t = st[t]
+    regs_t = regs[t]
+    opc_t = opc[t]
+    base = st_t[S_MEM_BASE]
+    size = st_t[S_MEM_SIZE]
+    code = st_t[S_CODE_SIZE]
+    pc = st_t[S_PC]
+    cyc = st_t[S_CYCLE]
+    budget = st_t[S_MAX_CYCLES]
+    stop = until if budget < 0 else min(until, budget)
+    out_limit = OUT_CAPACITY - 8
+    ctx = jt.ctx
+    p_ctx = np.int64(ctx.ctypes.data)
+    p_regs = np.int64(regs_t.ctypes.data)
+    p_mem = np.int64(m8[t].ctypes.data)
+    p_cnt = np.int64(jt.cnt.ctypes.data)
+    p_st = np.int64(st_t.ctypes.data)
+    p_ctr = np.int64(ctr[t].ctypes.data)
+    ctx[CTX_ENTRY_FN] = np.int64(jt.entry_fn.ctypes.data)
+    ctx[CTX_ENTRY_SLOT] = np.int64(jt.entry_slot.ctypes.data)
+    ctx[CTX_CNT] = p_cnt
+    ctx[CTX_ST] = p_st
+    ctx[CTX_CTR] = p_ctr
+    status = RUN_CHUNK
+    err = 0
+    err_addr = 0
+    while True:
+        # the interpreter's boundary: interrupt controller, end of the slice, output buffer
+        next_event = min(st_t[S_IRQ_CHECK], stop)
+        if cyc >= next_event:
+            if cyc >= st_t[S_IRQ_CHECK]:
+                pc, cyc = irq_event(st_t, ctr[t], pc, cyc)
+                err = fetch_error(pc, base, code, size)
+                if err != 0:
+                    err_addr = pc
+                    break
+            if cyc >= stop:
+                status = RUN_MAX_CYCLES if (budget >= 0 and cyc >= budget) else RUN_CHUNK
+                break
+            next_event = min(st_t[S_IRQ_CHECK], stop)
+        if st_t[S_OUT_LEN] >= out_limit:
+            status = RUN_OUTPUT
+            break
+        i = (pc - base) >> 2
+        interpret = False
+        fn = jt.entry_fn[i]
+        if fn != 0:
+            x = call_region(fn, p_ctx, p_regs, p_mem, p_cnt + 8 * jt.entry_slot[i], cyc, next_event)
+            ctx[CTX_CALLS] += 1
+            pc = ctx[CTX_PC]
+            cyc = ctx[CTX_CYC]
+            if x != X_JUMP:
+                interpret = True
+                if x == X_LIMIT:
+                    ctx[CTX_LIMITS] += 1
+        else:
+            h = jt.hot[i]
+            if h >= 0:
+                h += 1
+                jt.hot[i] = h
+                if h >= threshold:
+                    status = RUN_TRANSLATE
+                    break
+            interpret = True
+            if stretch > 0:
+                st_t[S_PC] = pc
+                st_t[S_CYCLE] = cyc
+                run_cores(core, tiles, min(stop, cyc + stretch))
+                pc = st_t[S_PC]
+                cyc = st_t[S_CYCLE]
+                status = st_t[S_RUN]
+                for k in range(ctx[CTX_WORDS]):
+                    if m32[t, jt.tpcs[k]] != jt.twords[k]:
+                        _forget_translations(jt)
+                        break
+                if status != RUN_CHUNK:
+                    flush_counts(jt, opc_t, ctr[t])
+                    return
+                continue
+        if not interpret:
+            continue
+        # one instruction by the interpreter (two for a trap: its shadow runs before the vector)
+        i = (pc - base) >> 2
+        word = np.int64(m32[t, i]) & M32 if (pc - base) < code else 0
+        smc = _store_hits_translation(jt, word, regs_t, base, code)
+        if (word & 0x7F) == _SYSTEM_OPCODE and (pc + 8 - base) < code:
+            smc = smc or _store_hits_translation(jt, np.int64(m32[t, i + 2]) & M32, regs_t, base, code)
+        step_to = cyc + 1
+        if (word & 0xFFF) == _JAL_X0_OPCODE and (
+            (word >> 12) == 0 or (word == 0xFFDFF06F and i > 0 and (np.int64(m32[t, i - 1]) & M32) == _NOP)
+        ):
+            step_to = next_event  # an idle loop: the interpreter skips its iterations up to the event
+        st_t[S_PC] = pc
+        st_t[S_CYCLE] = cyc
+        ctx[CTX_STEPS] += 1
+        run_cores(core, tiles, step_to)
+        pc = st_t[S_PC]
+        cyc = st_t[S_CYCLE]
+        status = st_t[S_RUN]
+        if smc:
+            _forget_translations(jt)
+        if status != RUN_CHUNK:
+            flush_counts(jt, opc_t, ctr[t])
+            return
+    if err != 0:
+        status = RUN_ERROR
+        st_t[S_ERR] = err
+        st_t[S_ERR_PC] = pc
+        st_t[S_ERR_ADDR] = err_addr
+        wi = (pc - base) >> 2
+        st_t[S_ERR_INSN] = m32[t, wi] & M32 if 0 <= wi < size >> 2 else 0
+    st_t[S_PC] = pc & M32
+    st_t[S_CYCLE] = cyc
+    st_t[S_RUN] = status
+    flush_counts(jt, opc_t, ctr[t])
+
+
+__all__ = [
+    "CTX_CYC",
+    "CTX_FLUSHES",
+    "CTX_PC",
+    "CTX_SIZE",
+    "ERR_FETCH_DATA",
+    "NEVER_TRANSLATE",
+    "RUN_TRANSLATE",
+    "X_JUMP",
+    "X_LIMIT",
+    "X_SIDE",
+    "JitArrays",
+    "flush_counts",
+    "run_translated",
+]

@@ -1,0 +1,215 @@
+"""The translating engines against the interpreter on hand-made and random programs: interrupts,
+self-modifying code, every error, and the translator's cache (docs/translation.md).
+
+Each comparison runs the same words on a fresh core with the interpreter and with the engine and
+requires the same outcome: exit code or error message, cycles, counters, state, registers and
+memory.  The random programs are the interrupt-heavy ones of ``test_irq_differential`` (timer
+interrupts at random periods, polling loops, critical sections, device reads, multiplies).
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+import test_irq_differential as irq
+
+import rv32_asm as A
+from core_harness import exit_with, make_soc
+from robosoc.chip.core_state import SRAM_BASE
+from robosoc.chip.single import CoreError, CycleBudgetExceeded, SingleCoreSoC
+from robosoc.jit.compiler import Compiler
+from robosoc.jit.emit_ir import MUL_WORST_CYCLES, Target, emit_region, multiplier_tail_table
+from robosoc.jit.regions import CodeView, discover
+from robosoc.kernels.core import _MUL_CHUNK, mul_latency
+from robosoc.kernels.jit_dispatch import CTX_FLUSHES, CTX_STEPS
+
+ENGINES = ["jit", "auto"]
+#: random programs per flavour: each is new code, compiled afresh (the comparison costs compile time)
+SEEDS = {"jit": 3, "auto": 2}
+
+
+def outcome(soc: SingleCoreSoC, max_cycles: int) -> tuple[object, dict[str, np.ndarray]]:
+    """(exit code or error text, the core's arrays) after running ``soc``."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        try:
+            result: object = (soc.run(max_cycles=max_cycles).exit_code, soc.counters())
+        except (CoreError, CycleBudgetExceeded) as exc:
+            result = (type(exc).__name__, str(exc), soc.counters())
+    arrays = {n: getattr(soc.state, n).copy() for n in ("st", "ctr", "opc", "regs", "m8")}
+    return result, arrays
+
+
+def assert_same(words: list[int], engine: str, max_cycles: int = 200_000, code_words: int | None = None, **kw):
+    """Run ``words`` with the interpreter and with ``engine``; everything must be equal.  Returns the engine's SoC."""
+    runs = []
+    for name in ("interp", engine):
+        soc = make_soc(words, engine=name, **kw)
+        if code_words is not None:  # only the program is code: stores beyond it run translated
+            soc.state.set_code_size(4 * code_words)
+            soc.forget_translations()
+        runs.append((soc, *outcome(soc, max_cycles)))
+    (_, want, want_arrays), (soc, got, got_arrays) = runs
+    assert got == want
+    for name, arr in want_arrays.items():
+        assert np.array_equal(got_arrays[name], arr), f"{name} differs"
+    return soc
+
+
+# ---------------------------------------------------------------- random programs with interrupts
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+@pytest.mark.parametrize("mul,errata", irq.FLAVOURS, ids=["rv32i", "rv32im-spec", "rv32im-rtl"])
+def test_random_interrupt_programs_run_as_on_the_interpreter(mul: bool, errata: str, engine: str) -> None:
+    translated = 0
+    for k in range(SEEDS[engine]):
+        words, _ = irq.build(7000 + 100 * irq.FLAVOURS.index((mul, errata)) + k, mul, errata)
+        # alternately with the whole SRAM as code (every store is the interpreter's) and with only
+        # the program as code (stores to the records run translated)
+        code = None if k % 2 == 0 else len(words)
+        soc = assert_same(words, engine, irq.MAX_CYCLES, code, mul=mul, sram_size=irq.SRAM_SIZE, errata=errata)
+        translated += soc.translator.stats.instructions + soc.translator.stats.reused
+    assert translated > 0
+
+
+def test_random_interrupt_programs_are_mostly_translated() -> None:
+    """The comparison above is only worth something if the engine runs most instructions itself."""
+    words, _ = irq.build(7001, True, "spec")
+    soc = assert_same(words, "jit", irq.MAX_CYCLES, len(words), mul=True, sram_size=irq.SRAM_SIZE)
+    steps = int(soc.translator.tables().ctx[CTX_STEPS])
+    assert soc.counters()["interrupts"] >= 5
+    assert steps < soc.counters()["instructions"] // 2
+
+
+# ---------------------------------------------------------------- self-modifying code
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+@pytest.mark.parametrize("width", ["sw", "sh", "sb"])
+def test_a_store_into_translated_code_is_seen(width: str, engine: str) -> None:
+    # a loop runs `addi x10, x10, 1` (translated), then rewrites it to `addi x10, x10, 100` and runs again
+    target = SRAM_BASE + 4 * 6
+    new = A.i("addi", 10, 10, 100)
+    value = {"sw": new, "sh": new >> 16, "sb": new >> 24}[width]
+    offset = {"sw": 0, "sh": 2, "sb": 3}[width]
+    words = [
+        *A.li(5, target + offset),  # 2 words
+        *A.li(6, value),  # 2 words
+        A.i("addi", 7, 0, 50),  # loop count
+        A.i("addi", 8, 0, 2),  # passes
+        A.i("addi", 10, 10, 1),  # target (word 6)
+        A.i("addi", 7, 7, -1),
+        A.branch("bne", 7, 0, -8),
+        A.store(width, 6, 5, 0),  # rewrite the target
+        A.i("addi", 7, 0, 50),
+        A.i("addi", 8, 8, -1),
+        A.branch("bne", 8, 0, -24),
+        *exit_with(10),
+    ]
+    soc = assert_same(words, engine, 100_000, len(words))
+    # the stale translation would add 1 in both passes: 100; the rewritten word adds more
+    assert int(soc.regs[10]) > 100
+    if engine == "jit":
+        assert soc.translator.tables().ctx[CTX_FLUSHES] >= 1  # the translation was forgotten
+
+
+# ---------------------------------------------------------------- errors
+
+
+ERROR_PROGRAMS = {
+    "illegal": [A.NOP, 0xFFFFFFFF],
+    "div": [A.r("div", 10, 11, 12)],
+    "misaligned load": [*A.li(6, SRAM_BASE + 0x100), A.load("lw", 10, 6, 2)],
+    "misaligned store": [*A.li(6, SRAM_BASE + 0x100), A.store("sh", 10, 6, 3)],
+    "unmapped load": [*A.li(6, 0x20000000), A.load("lw", 10, 6, 0)],
+    "unmapped store": [*A.li(6, 0xE2000000), A.store("sb", 10, 6, 0)],
+    "read-only store": [*A.li(6, 0xE1024000), A.store("sw", 10, 6, 0)],
+    "jump outside": [A.jal(0, 0x10000)],
+    "misaligned jalr": [*A.li(6, SRAM_BASE + 0x102), A.jalr(1, 6, 0)],
+    "fall off the code": [A.NOP, A.NOP],
+    "budget": [A.i("addi", 10, 10, 1), A.jal(0, -4)],
+}
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+@pytest.mark.parametrize("name", sorted(ERROR_PROGRAMS))
+def test_errors_are_the_interpreters(name: str, engine: str) -> None:
+    words = [A.i("addi", 11, 0, 3)] * 5 + ERROR_PROGRAMS[name]  # some translated work first
+    assert_same(words, engine, 5_000, len(words))
+
+
+def test_multiply_without_multiplier_is_the_interpreters() -> None:
+    assert_same([A.i("addi", 12, 0, 3), A.r("mul", 10, 11, 12)], "jit", 5_000, 2, mul=False)
+
+
+# ---------------------------------------------------------------- multiplier timing
+
+
+def test_translated_multiplier_latency_is_the_interpreters() -> None:
+    # the emitter's tail table continues kernels.core.mul_latency's byte table: same latency for all
+    tail = multiplier_tail_table()
+    rng = np.random.default_rng(5)
+    values = [0, 1, 0xF, 0xFF, 0xFFFF, 0x80000000, 0xFFFFFFFF, *rng.integers(0, 2**32, 3000).tolist()]
+    values += [1 << k for k in range(32)] + [0xF << k for k in range(29)]
+    for b in values:
+        off, steps = 0, 0
+        for k in range(3):
+            e = int(_MUL_CHUNK[off, (b >> (8 * k)) & 2047])
+            steps += e >> 4
+            off = e & 15
+        assert 5 + steps + int(tail[off, b >> 24]) == mul_latency(b), hex(b)
+        assert mul_latency(b) <= MUL_WORST_CYCLES
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_multiplies_with_random_operands(engine: str) -> None:
+    rng = np.random.default_rng(9)
+    words = []
+    for _ in range(200):
+        a, b = (int(v) for v in rng.integers(0, 2**32, 2))
+        op = ["mul", "mulh", "mulhu", "mulhsu"][int(rng.integers(0, 4))]
+        words += [*A.li(11, a), *A.li(12, b), A.r(op, 13, 11, 12), A.r("xor", 10, 10, 13)]
+    for errata in ("spec", "rtl"):
+        assert_same([*words, *exit_with(10)], engine, 1_000_000, len(words) + 3, errata=errata)
+
+
+# ---------------------------------------------------------------- the compile cache
+
+
+def _region_ir(words: list[int], mem_size: int = 64 * 1024) -> str:
+    view = CodeView(lambda a: words[(a - SRAM_BASE) >> 2], SRAM_BASE, 4 * len(words), mem_size, True)
+    region = discover(view, SRAM_BASE)
+    return emit_region(Target(SRAM_BASE, mem_size, 4 * len(words), False), region).ir
+
+
+def test_compiled_objects_are_cached_by_code_and_options(tmp_path, monkeypatch) -> None:
+    monkeypatch.setenv("ROBOSOC_CACHE", str(tmp_path))
+    words = [A.i("addi", 10, 10, 1), A.i("addi", 11, 11, 2), A.branch("bne", 10, 11, -8), *exit_with(10)]
+    ir = _region_ir(words)
+    first = Compiler()
+    _, hit = first.object_code(ir)
+    assert not hit and len(list((tmp_path / "jit").rglob("*.o"))) == 1
+    second = Compiler()  # a new process would start like this
+    obj, hit = second.object_code(ir)
+    assert hit and obj == first.object_code(ir)[0]
+    # changed code, changed options: other objects
+    assert not second.object_code(_region_ir([A.i("addi", 10, 10, 2), *words[1:]]))[1]
+    assert not second.object_code(_region_ir(words, mem_size=128 * 1024))[1]
+    assert len(list((tmp_path / "jit").rglob("*.o"))) == 3
+
+
+def test_a_region_translated_once_is_reused_by_the_next_core() -> None:
+    words = [A.i("addi", 10, 0, 0), A.i("addi", 10, 10, 1), A.i("addi", 11, 0, 40), A.branch("bne", 10, 11, -8)]
+    words += exit_with(10)
+    a = make_soc(words, engine="jit")
+    a.run(max_cycles=10_000)
+    b = make_soc(words, engine="jit")
+    b.run(max_cycles=10_000)
+    assert b.translator.stats.reused >= 1 and b.translator.stats.regions == 0
+    # a changed word is translated afresh
+    c = make_soc([*words[:2], A.i("addi", 11, 0, 41), *words[3:]], engine="jit")
+    c.run(max_cycles=10_000)
+    assert c.translator.stats.regions >= 1
