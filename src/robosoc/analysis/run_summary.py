@@ -32,6 +32,8 @@ from typing import Any
 
 import numpy as np
 
+from robosoc.config.chip import ChipConfig
+from robosoc.config.firmware import FirmwareConfig
 from robosoc.config.scenario import ScenarioConfig
 from robosoc.control.flight import ROW_FIELDS, column, flight_metrics
 from robosoc.cosim.replay import ENERGY_PARTS, ReplayResult, task_summary
@@ -56,9 +58,13 @@ __all__ = [
     "HOST_TIMING_KEYS",
     "SCHEMA",
     "TASK_KEYS",
+    "chip_figures",
+    "energy_figures",
+    "firmware_figures",
     "fleet_summary",
     "flight_summary",
     "json_safe",
+    "task_figures",
     "vehicle_summary",
     "write_summary",
 ]
@@ -82,12 +88,33 @@ def flight_summary(rows: np.ndarray, scenario: ScenarioConfig, rest_height: floa
     }
 
 
-def _tasks(result: ReplayResult) -> dict[str, dict[str, float]]:
+def task_figures(result: ReplayResult) -> dict[str, dict[str, float]]:
+    """The ``tasks`` object: per task its jobs' response, execution and energy figures."""
     figures = task_summary(result.jobs, result.clock_ns)
     return {name: {key: values[key] for key in TASK_KEYS} for name, values in figures.items()}
 
 
-def _energy(result: ReplayResult) -> dict[str, Any]:
+def firmware_figures(fw: FirmwareConfig) -> dict[str, Any]:
+    """The ``firmware`` object: the build and its task mapping."""
+    return {
+        "build": fw.label,
+        "arith": fw.arith,
+        "multiplier": fw.multiplier,
+        "release": fw.release,
+        "scheduler": fw.scheduler,
+        "ekf_tile": list(fw.ekf_tile),
+        "pid_tile": list(fw.pid_tile),
+    }
+
+
+def chip_figures(chip: ChipConfig, result: ReplayResult | None) -> dict[str, Any]:
+    """The ``chip`` object: mesh and clock."""
+    clock = result.clock_ns if result is not None else chip.tile.clock_period_ns
+    return {"width": chip.width, "height": chip.height, "clock_ns": clock}
+
+
+def energy_figures(result: ReplayResult) -> dict[str, Any]:
+    """The ``energy`` object: per tile and NoC, and their total."""
     tiles = {f"{x},{y}": result.energy_pj[f"tile {(x, y)}"] / 1e6 for x, y in result.counters}
     noc = result.energy_pj["noc"] / 1e6
     return {"total_uj": sum(tiles.values()) + noc, "tiles_uj": tiles, "noc_uj": noc}
@@ -114,7 +141,6 @@ def vehicle_summary(
         complete: false for an interrupted or crashed flight; ``stopped`` then says why.
     """
     chip = scenario.controller == "chip"
-    fw = scenario.firmware
     summary: dict[str, Any] = {
         "schema": SCHEMA,
         "complete": complete,
@@ -122,31 +148,15 @@ def vehicle_summary(
         "seed": scenario.seed,
         "controller": scenario.controller,
         "mode": MODE_LOCKSTEP,
-        "firmware": {
-            "build": fw.label,
-            "arith": fw.arith,
-            "multiplier": fw.multiplier,
-            "release": fw.release,
-            "scheduler": fw.scheduler,
-            "ekf_tile": list(fw.ekf_tile),
-            "pid_tile": list(fw.pid_tile),
-        }
-        if chip
-        else None,
-        "chip": {
-            "width": scenario.chip.width,
-            "height": scenario.chip.height,
-            "clock_ns": result.clock_ns if result is not None else scenario.chip.tile.clock_period_ns,
-        }
-        if chip
-        else None,
+        "firmware": firmware_figures(scenario.firmware) if chip else None,
+        "chip": chip_figures(scenario.chip, result) if chip else None,
         "simulated_s": simulated_s,
         "host_s": host_s,
         "real_time_factor": simulated_s / host_s if host_s > 0 else math.nan,
         "flight": flight_summary(rows, scenario, rest_height),
-        "tasks": _tasks(result) if result is not None else None,
+        "tasks": task_figures(result) if result is not None else None,
         "deadline_misses": result.deadline_misses if result is not None else None,
-        "energy": _energy(result) if result is not None else None,
+        "energy": energy_figures(result) if result is not None else None,
     }
     if stopped is not None:
         summary["stopped"] = stopped

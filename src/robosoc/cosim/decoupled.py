@@ -26,6 +26,7 @@ from multiprocessing.connection import Connection, wait
 from pathlib import Path
 from typing import Any
 
+from robosoc.analysis.run_summary import write_summary
 from robosoc.config.chip import ChipConfig
 from robosoc.config.firmware import FirmwareConfig
 from robosoc.config.link import LinkConfig
@@ -34,7 +35,7 @@ from robosoc.config.vehicle import VehicleConfig
 from robosoc.control.flight_log import CsvFlightLog
 from robosoc.cosim.decoupled_chip import ChipOutcome, serve_chip
 from robosoc.cosim.decoupled_physics import Ended, PhysicsOutcome, serve_physics
-from robosoc.cosim.decoupled_summary import chip_record, decoupled_summary, physics_record, write_json
+from robosoc.cosim.decoupled_summary import chip_record, decoupled_summary, physics_record
 from robosoc.cosim.link import Address, LinkError
 from robosoc.cosim.replay import write_jobs_csv
 
@@ -68,7 +69,7 @@ def run_physics_side(
             log.close()
     record = physics_record(outcome, scenario, vehicle)
     if out is not None:
-        write_json(record, out / "physics.json")
+        write_summary(record, out / "physics.json")
     return outcome, record
 
 
@@ -94,7 +95,7 @@ def run_chip_side(
     if out is not None:
         if outcome.result is not None:
             write_jobs_csv(outcome.result.jobs, out / "jobs.csv")
-        write_json(record, out / "chip.json")
+        write_summary(record, out / "chip.json")
     return outcome, record
 
 
@@ -273,7 +274,7 @@ def fly_decoupled(
         interrupted=interrupted or any(s.error is not None and s.error[0] == "interrupted" for s in sides),
     )
     result.summary = decoupled_summary(result.physics, result.chip, scenario=scenario, seed=seed, config=config)
-    write_json(result.summary, out / "summary.json")
+    write_summary(result.summary, out / "summary.json")
     if failed and not interrupted:
         side = failed[0]
         assert side.error is not None

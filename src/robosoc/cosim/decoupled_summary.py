@@ -8,22 +8,26 @@ run, and ``"link"``, the datagram counts of both directions.  Each side writes i
 
 from __future__ import annotations
 
-import json
 import math
-import os
 from collections.abc import Mapping
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from robosoc.analysis.run_summary import (
+    SCHEMA,
+    chip_figures,
+    energy_figures,
+    firmware_figures,
+    flight_summary,
+    task_figures,
+)
 from robosoc.config.chip import ChipConfig
 from robosoc.config.firmware import FirmwareConfig
 from robosoc.config.link import LinkConfig
 from robosoc.config.scenario import ScenarioConfig
 from robosoc.config.vehicle import VehicleConfig
-from robosoc.control.flight import flight_metrics
-from robosoc.cosim.replay import TASK_NAMES, ReplayResult
+from robosoc.cosim.replay import ReplayResult
 
 __all__ = [
     "SCHEMA",
@@ -33,87 +37,22 @@ __all__ = [
     "flight_part",
     "link_summary",
     "physics_record",
-    "write_json",
 ]
-
-SCHEMA = 1
-
-
-def _finite(value: Any) -> Any:
-    """``value`` with every NaN or infinity replaced by None (JSON has neither)."""
-    if isinstance(value, float):
-        return value if math.isfinite(value) else None
-    if isinstance(value, Mapping):
-        return {k: _finite(v) for k, v in value.items()}
-    if isinstance(value, list | tuple):
-        return [_finite(v) for v in value]
-    return value
-
-
-def write_json(data: Mapping[str, Any], path: Path) -> None:
-    """Write ``data`` (NaN as null) to ``path`` through a temporary file, so a reader never sees half."""
-    tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(json.dumps(_finite(data), indent=2) + "\n", encoding="utf-8")
-    os.replace(tmp, path)
 
 
 def flight_part(rows: np.ndarray, scenario: ScenarioConfig, vehicle: VehicleConfig) -> dict[str, Any]:
     """The ``"flight"`` object of a flight's rows (figures NaN, written null, where they cannot be had)."""
-    if len(rows) == 0:
-        return {}
-    m = flight_metrics(rows, scenario.flight, vehicle.rest_height)
-    return {
-        "hover_rms_m": m.hover_rms,
-        "hover_max_m": m.hover_max,
-        "overshoot_m": m.overshoot,
-        "tracking_rms_deg": dict(zip(("roll", "pitch", "yaw"), m.tracking_rms, strict=True)),
-        "step_rise_s": [{"axis": a, "time_s": t, "rise_s": r} for a, t, r in m.step_rise],
-        "attitude_estimate_rms_deg": m.ekf_rms,
-        "height_estimate_rms_m": m.height_estimate_rms,
-    }
-
-
-def _mean(values: list[float]) -> float:
-    return sum(values) / len(values) if values else math.nan
+    return flight_summary(rows, scenario, vehicle.rest_height) or {}
 
 
 def chip_part(result: ReplayResult, fw: FirmwareConfig, chip: ChipConfig) -> dict[str, Any]:
     """The ``"firmware"``, ``"chip"``, ``"tasks"``, ``"deadline_misses"`` and ``"energy"`` objects."""
-    tasks: dict[str, Any] = {}
-    for name in TASK_NAMES:
-        jobs = result.jobs_of(name)
-        if not jobs:
-            continue
-        us = result.clock_ns / 1000
-        tasks[name] = {
-            "jobs": len(jobs),
-            "response_us_mean": _mean([j.response_cycles * us for j in jobs]),
-            "response_us_max": max(j.response_cycles for j in jobs) * us,
-            "exec_cycles_mean": _mean([j.exec_cycles for j in jobs]),
-            "exec_cycles_max": max(j.exec_cycles for j in jobs),
-            "energy_nj_mean": _mean([j.energy_total_pj / 1000 for j in jobs]),
-            **{
-                f"energy_nj_{part}_mean": _mean([j.energy_pj[part] / 1000 for j in jobs])
-                for part in ("task", "kernel", "idle", "noc")
-            },
-            "deadline_misses": sum(not j.deadline_met for j in jobs),
-        }
-    tiles = {f"{x},{y}": result.energy_pj[f"tile {(x, y)}"] / 1e6 for (x, y) in result.counters}
-    noc = result.energy_pj["noc"] / 1e6
     return {
-        "firmware": {
-            "build": fw.label,
-            "arith": fw.arith,
-            "multiplier": fw.multiplier,
-            "release": fw.release,
-            "scheduler": fw.scheduler,
-            "ekf_tile": list(fw.ekf_tile),
-            "pid_tile": list(fw.pid_tile),
-        },
-        "chip": {"width": chip.width, "height": chip.height, "clock_ns": result.clock_ns},
-        "tasks": tasks,
+        "firmware": firmware_figures(fw),
+        "chip": chip_figures(chip, result),
+        "tasks": task_figures(result),
         "deadline_misses": result.deadline_misses,
-        "energy": {"total_uj": sum(tiles.values()) + noc, "tiles_uj": tiles, "noc_uj": noc},
+        "energy": energy_figures(result),
     }
 
 

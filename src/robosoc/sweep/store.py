@@ -18,27 +18,17 @@ from __future__ import annotations
 import csv
 import io
 import json
-import math
 import os
 import shutil
 from pathlib import Path
 from typing import Any
 
+from robosoc.analysis.run_summary import json_safe
 from robosoc.sweep.plan import Point
 from robosoc.sweep.point import PointResult, metric
 
 TABLE_LEADING = ("index", "key", "seed", "status", "error")
 """The first columns of ``points.csv``; then the varied fields, then the metrics."""
-
-
-def _json_safe(value: Any) -> Any:
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    if isinstance(value, dict):
-        return {k: _json_safe(v) for k, v in value.items()}
-    if isinstance(value, list | tuple):
-        return [_json_safe(v) for v in value]
-    return value
 
 
 def write_atomic(path: Path, data: bytes) -> None:
@@ -101,7 +91,7 @@ class SweepStore:
             "worker_s": result.worker_s,
             "summary": result.summary,
         }
-        text = json.dumps(_json_safe(record), indent=1, allow_nan=False) + "\n"
+        text = json.dumps(json_safe(record), indent=1, allow_nan=False) + "\n"
         write_atomic(self.results_dir / f"{point.key}.json", text.encode())
         return record
 
