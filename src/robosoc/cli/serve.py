@@ -19,7 +19,7 @@ from robosoc.cli.console import make_console, note, plain
 from robosoc.cli.errors import CliError
 from robosoc.cli.link_options import DEFAULT_BIND, Bind, ConnectTimeout, Faults, Hold, Pace, PeerTimeout, Resend
 from robosoc.cli.link_report import end_of_side, print_link_counts
-from robosoc.config.firmware import ARITH_CHOICES, FirmwareConfig
+from robosoc.config.firmware import ARITH_CHOICES
 from robosoc.config.vehicle import VEHICLE_PRESETS
 
 if TYPE_CHECKING:
@@ -42,9 +42,10 @@ Seconds = Annotated[
     ),
 ]
 Seed = Annotated[
-    int,
+    int | None,
     typer.Option(
-        help="Seeds every random number (physics; faults injected here), 0..2**63-1.", callback=options.seed()
+        help="Seeds every random number (physics; faults injected here), 0..2**63-1 (default: the scenario's).",
+        callback=options.seed(),
     ),
 ]
 Scenario = Annotated[Path | None, typer.Option(help="Scenario TOML file (default: built-in).")]
@@ -65,20 +66,20 @@ Peer = Annotated[
 
 
 def resolve_scenario(
-    scenario: Path | None, seconds: float | None, vehicle: str | None
+    scenario: Path | None, seconds: float | None, vehicle: str | None, seed: int | None
 ) -> tuple[ScenarioConfig, VehicleConfig]:
     """The scenario of the options, as ``robosoc fly`` resolves it (errors name the option or field)."""
-    from robosoc.config.scenario import ScenarioConfig
+    from robosoc.cli.scenario import load_scenario
     from robosoc.config.vehicle import vehicle_preset
 
-    config = ScenarioConfig()
-    if scenario is not None:
-        config, _ = files.load_toml(ScenarioConfig, scenario, "--scenario")
+    config, _ = load_scenario(scenario, "--scenario")
     changes = {}
     if seconds is not None:
         changes["--seconds"] = ("duration_s", seconds)
     if vehicle is not None:
         changes["--vehicle"] = ("vehicle", vehicle)
+    if seed is not None:
+        changes["--seed"] = ("seed", seed)
     config = options.override(config, changes, [str(scenario)] if scenario is not None else ())
     if round(config.duration_s * config.sensors.rate_hz) < 1:
         where = "--seconds" if seconds is not None else f"--scenario: {scenario}: duration_s"
@@ -98,7 +99,7 @@ def _out(out: Path | None, no_out: bool, side: str, name: str, seed: int, scenar
 @serve_app.command("physics", epilog=exit_codes.SERVE_EPILOG)
 def serve_physics_command(
     seconds: Seconds = None,
-    seed: Seed = 1,
+    seed: Seed = None,
     scenario: Scenario = None,
     vehicle: Vehicle = None,
     out: Annotated[
@@ -124,7 +125,8 @@ def serve_physics_command(
     from robosoc.cosim.link import LinkError, parse_address
 
     console = make_console()
-    config, craft = resolve_scenario(scenario, seconds, vehicle)
+    config, craft = resolve_scenario(scenario, seconds, vehicle, seed)
+    seed = config.seed
     link = link_options.link_config(pace, hold, faults, resend, peer_timeout, connect_timeout)
     folder = _out(out, no_out, "physics", config.name, seed, scenario)
     address = bind or parse_address(DEFAULT_BIND, any_port=True)
@@ -174,14 +176,20 @@ def serve_physics_command(
 @serve_app.command("chip", epilog=exit_codes.SERVE_EPILOG)
 def serve_chip_command(
     seconds: Seconds = None,
-    seed: Seed = 1,
+    seed: Seed = None,
     scenario: Scenario = None,
     vehicle: Vehicle = None,
     arith: Annotated[
-        str,
-        typer.Option(help="float (soft-float) or fixed (Q16.16) firmware.", callback=options.choice(*ARITH_CHOICES)),
-    ] = "fixed",
-    mul: Annotated[bool, typer.Option("--mul/--no-mul", help="Cores with the multiplier or without.")] = True,
+        str | None,
+        typer.Option(
+            help="float (soft-float) or fixed (Q16.16) firmware (default: the scenario's).",
+            callback=options.choice(*ARITH_CHOICES),
+        ),
+    ] = None,
+    mul: Annotated[
+        bool | None,
+        typer.Option("--mul/--no-mul", help="Cores with the multiplier or without (default: the scenario's)."),
+    ] = None,
     peer: Peer = None,
     bind: Annotated[
         link_options.Address | None,
@@ -207,11 +215,14 @@ def serve_chip_command(
     from robosoc.cosim.link import LinkError, parse_address
 
     console = make_console()
-    config, craft = resolve_scenario(scenario, seconds, vehicle)
+    config, craft = resolve_scenario(scenario, seconds, vehicle, seed)
+    seed = config.seed
     link = link_options.link_config(
         faults=faults, resend=resend, peer_timeout=peer_timeout, connect_timeout=connect_timeout
     )
-    fw = options.override(FirmwareConfig(), {"--arith": ("arith", arith), "--mul/--no-mul": ("multiplier", mul)})
+    changes = {option: (field, value) for option, field, value in (
+        ("--arith", "arith", arith), ("--mul/--no-mul", "multiplier", mul)) if value is not None}  # fmt: skip
+    fw = options.override(config.firmware, changes, [str(scenario)] if scenario is not None else ())
     folder = _out(out, no_out, "chip", config.name, seed, scenario)
     target = peer or parse_address(DEFAULT_BIND, any_port=False)
     try:
