@@ -102,15 +102,21 @@ def test_truth_of_each_vehicle_is_its_own_slice_of_the_state() -> None:
 
 
 def test_reset_stops_the_commands_and_samples_at_time_zero() -> None:
-    world = World([default_vehicle()], QUIET)
+    vehicle = default_vehicle()
+    world = World([vehicle], QUIET)
     quad = world.quadrotors[0]
+    assert quad.config is vehicle and quad.pwm == (0, 0, 0, 0)
     with pytest.raises(AssertionError, match="reset the world first"):
         quad.sensors()
-    world.reset(0)
+    world.reset()
+    assert world.seed == 0
+    world.reset(5)
+    assert world.seed == 5
     quad.apply_pwm([200, 201, 202, 203])
     world.advance(0.05)
     assert quad.pwm == (200, 201, 202, 203)
     world.reset(0)
+    assert world.steps == 0 and world.time == 0.0
     assert quad.pwm == (0, 0, 0, 0)
     assert quad.propulsion.voltages == [0.0] * 4
     assert quad.sensors().time == 0.0
@@ -129,3 +135,27 @@ def test_gust_ramps_follow_the_half_cosine_off_its_midpoint() -> None:
     assert gust_profile(gust, 1.3) == pytest.approx(high, rel=1e-12)
     assert gust_profile(gust, 2.7) == pytest.approx(high, rel=1e-12)
     assert gust_profile(gust, 2.9) == pytest.approx(low, rel=1e-12)
+
+
+def test_wind_is_constant_plus_ou_gusts_from_its_own_stream_plus_the_scheduled_gust() -> None:
+    # docs: SeedSequence(seed).spawn(1 + vehicles)[0] drives the wind; the OU state starts at σ·n and
+    # advances as g ← φ·g + σ·sqrt(1 − φ²)·n every update period, φ = exp(−Δt/τ).
+    constant = np.array([1.0, -2.0, 0.5])
+    sigma, tau, period = 0.8, 2.0, 0.02
+    gust = GustConfig(start_s=0.2, duration_s=0.6, rise_s=0.1, velocity=(3.0, -1.0, 2.0))
+    config = WindConfig(constant=tuple(constant), gust_sigma=sigma, gust_tau_s=tau, update_s=period, gusts=(gust,))
+    world = World([default_vehicle()], QUIET, config)
+    world.reset(11)
+    rng = np.random.default_rng(np.random.SeedSequence(11).spawn(2)[0])
+    g = sigma * rng.standard_normal(3)
+    np.testing.assert_allclose(world.wind.velocity, constant + g, rtol=1e-12)
+    phi = math.exp(-period / tau)
+    for k in range(1, 51):
+        world.advance(k * period - 0.001)  # held between updates
+        assert world.wind.velocity == pytest.approx(
+            tuple(constant + g + gust_profile(gust, (k - 1) * period) * np.array(gust.velocity)), rel=1e-12
+        )
+        world.advance(k * period)
+        g = phi * g + sigma * math.sqrt(1.0 - phi * phi) * rng.standard_normal(3)
+        expected = constant + g + gust_profile(gust, k * period) * np.array(gust.velocity)
+        np.testing.assert_allclose(world.wind.velocity, expected, rtol=1e-12)
