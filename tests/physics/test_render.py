@@ -139,6 +139,7 @@ def test_renderer_on_a_backend_that_cannot_start_says_which() -> None:
 def test_frame_sink_writes_numbered_pngs_that_read_back(tmp_path: Path) -> None:
     folder = tmp_path / "frames" / "run"
     sink = FrameSink(folder, 25.0)
+    assert FrameSink(folder, 25.0).frames == 0  # the folder exists now: opening it again is fine
     frames = [np.full((6, 8, 3), value, dtype=np.uint8) for value in (0, 100, 255)]
     frames[1][2, 3] = (10, 20, 30)
     for frame in frames:
@@ -152,10 +153,13 @@ def test_frame_sink_writes_numbered_pngs_that_read_back(tmp_path: Path) -> None:
 
 def test_frame_sink_writes_an_mp4_with_every_frame(tmp_path: Path) -> None:
     pytest.importorskip("imageio_ffmpeg")
-    path = tmp_path / "out" / "flight.MP4"
+    path = tmp_path / "out" / "nested" / "flight.MP4"
     sink = FrameSink(path, 25.0)
+    FrameSink(tmp_path / "out" / "nested" / "again.mp4", 25.0).close()  # an existing folder is fine
     for k in range(5):
-        sink.add(np.full((48, 64, 3), 40 * k, dtype=np.uint8))
+        # 40 × 56: multiples of 8 (the macro block asked for) but not of 16 (imageio's default), so a
+        # frame that comes back resized would show
+        sink.add(np.full((40, 56, 3), 40 * k, dtype=np.uint8))
     sink.close()
     sink.close()  # closing twice is harmless
     assert sink.frames == 5
@@ -165,5 +169,16 @@ def test_frame_sink_writes_an_mp4_with_every_frame(tmp_path: Path) -> None:
     assert reader.get_meta_data()["fps"] == pytest.approx(25.0)
     video = np.array([reader.get_data(i) for i in range(reader.count_frames())])
     reader.close()
-    assert video.shape[:3] == (5, 48, 64)
-    np.testing.assert_allclose(video[:, 24, 32].mean(axis=1), [40.0 * k for k in range(5)], atol=6)
+    assert video.shape[:3] == (5, 40, 56)
+    np.testing.assert_allclose(video[:, 20, 28].mean(axis=1), [40.0 * k for k in range(5)], atol=6)
+
+
+def test_mp4_without_imageio_says_how_to_get_it(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setitem(sys.modules, "imageio.v2", None)  # import fails as if not installed
+    with pytest.raises(RenderUnavailable) as error:
+        FrameSink(tmp_path / "v.mp4", 25.0)
+    assert str(error.value) == (
+        "writing MP4 needs the optional 'video' extra (pip install 'robosoc[video]'); "
+        "give a folder instead to get PNG frames"
+    )
+    assert not (tmp_path / "v.mp4").exists()
