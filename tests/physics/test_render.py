@@ -99,6 +99,18 @@ def test_probe_that_outlives_its_timeout_counts_as_a_failure(monkeypatch: pytest
     monkeypatch.setenv("MUJOCO_GL", "egl")
     with pytest.raises(RenderUnavailable, match=r"\(egl: Command .* timed out after 0\.001 seconds\)"):
         find_backend(timeout_s=0.001)
+    monkeypatch.delenv("MUJOCO_GL")  # a timed-out EGL probe does not stop the OSMesa one
+    with pytest.raises(RenderUnavailable, match=r"\(egl: Command .* timed out after .*; osmesa: Command .* timed out"):
+        find_backend(timeout_s=0.001)
+
+
+def test_probe_failing_silently_is_reported_as_failed(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    (tmp_path / "mujoco.py").write_text("raise SystemExit(3)\n")
+    monkeypatch.setenv("PYTHONPATH", str(tmp_path))
+    monkeypatch.setenv("MUJOCO_GL", "egl")
+    with pytest.raises(RenderUnavailable) as error:
+        find_backend()
+    assert str(error.value) == "no OpenGL backend for offscreen rendering (egl: failed)"
 
 
 @needs_egl
@@ -124,6 +136,7 @@ def test_offscreen_frame_is_the_tracked_body_seen_from_above_the_ground(tmp_path
         mujoco.mj_forward(world.model, world.data)
         moved = renderer.render(world.data)
         assert moved[height // 2 - 4 : height // 2 + 4, width // 2 - 4 : width // 2 + 4].astype(float).mean() < 90
+        assert not np.array_equal(moved, frame)  # the floor lies further below: the frame changed
     finally:
         renderer.close()
 
