@@ -15,6 +15,7 @@ from robosoc.config.vehicle import default_vehicle, laser_vehicle
 from robosoc.physics import World
 from robosoc.physics.frames import euler_from_quat, quat_to_matrix
 from robosoc.physics.propulsion import Propulsion
+from robosoc.physics.sensors import SensorModel
 from robosoc.physics.wind import gust_profile
 
 QUIET = SensorConfig(noise=False)
@@ -159,3 +160,19 @@ def test_wind_is_constant_plus_ou_gusts_from_its_own_stream_plus_the_scheduled_g
         g = phi * g + sigma * math.sqrt(1.0 - phi * phi) * rng.standard_normal(3)
         expected = constant + g + gust_profile(gust, k * period) * np.array(gust.velocity)
         np.testing.assert_allclose(world.wind.velocity, expected, rtol=1e-12)
+
+
+@pytest.mark.parametrize("flip", [1.0, -1.0])
+def test_sensor_sample_of_a_moving_tilted_body_matches_scipy(flip: float) -> None:
+    # accel = Rᵀ(t)·((v(t) − v(t−T))/T + g·z), gyro = rotation vector of R(t−T)ᵀ·R(t) over T,
+    # mag = Rᵀ(t)·field; −q is the same attitude as q.
+    model = SensorModel(QUIET, 0.001)
+    before, after = _zyx(0.2, -0.1, 0.5), _zyx(0.26, -0.05, 0.43)
+    v0, v1, window = np.array([0.5, -1.0, 0.2]), np.array([0.9, -0.7, -0.1]), 0.01
+    model.reset(np.random.default_rng(0), v0, _wxyz(before))
+    sample = model.sample(0.01, 2.0, flip * _wxyz(after), v1, window)
+    r = after.as_matrix()
+    np.testing.assert_allclose(sample.accel, r.T @ ((v1 - v0) / window + [0.0, 0.0, 9.8]), rtol=1e-9)
+    np.testing.assert_allclose(sample.gyro, (before.inv() * after).as_rotvec() / window, rtol=1e-9)
+    np.testing.assert_allclose(sample.mag, r.T @ [0.5, 0.0, -0.866], rtol=1e-12)
+    assert sample.baro_altitude == 2.0

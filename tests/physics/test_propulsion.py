@@ -135,3 +135,31 @@ def test_hover_pwm_below_one_when_the_idle_thrust_nearly_carries_the_mass() -> N
     assert hover_pwm(MOTOR, mass, 9.8) == pytest.approx(0.4, abs=1e-9)
     # Lighter than the idle thrust: the lowest command, PWM 0, already carries it.
     assert hover_pwm(MOTOR, 0.5 * mass, 9.8) == pytest.approx(0.0, abs=1e-9)
+
+
+def test_motor_state_starts_and_resets_to_zero() -> None:
+    prop = Propulsion(MOTOR, 0.275, DT)
+    assert (prop.omega, prop.voltages, prop.forces, prop.torques) == ([0.0] * 4,) * 4
+    prop.reset([400.0, 410.0, 420.0, 430.0])
+    prop.set_pwm([100, 110, 120, 130])
+    prop.step(0.3, 0.2, -0.1)
+    prop.reset()
+    assert (prop.omega, prop.voltages, prop.forces, prop.torques) == ([0.0] * 4,) * 4
+
+
+def test_each_rotor_sees_its_own_inflow_and_the_wrench_sums_them_by_the_plus_layout() -> None:
+    # quadrotor.md: v1 = [w − l·q, w − l·p, w + l·q, w + l·p]; τ = ((F3 − F1)·l, (F2 − F0)·l, M0 + M2 − M1 − M3).
+    arm, w, p, q = 0.3, 0.4, 1.5, -2.5
+    omega = [400.0, 430.0, 460.0, 490.0]
+    prop = Propulsion(MOTOR_CT2, arm, DT)
+    prop.reset(omega)
+    prop.set_pwm([100, 140, 180, 220])
+    fz, tx, ty, tz = prop.step(w, p, q)
+    for i, inflow in enumerate((w - arm * q, w - arm * p, w + arm * q, w + arm * p)):
+        thrust = MOTOR_CT2.ct0s * omega[i] ** 2 + MOTOR_CT2.ct1s * inflow * omega[i] + MOTOR_CT2.ct2s * inflow**2
+        assert prop.forces[i] == pytest.approx(thrust, rel=1e-12)
+    f, m = prop.forces, prop.torques
+    assert (fz, tx, ty, tz) == pytest.approx(
+        (sum(f), (f[3] - f[1]) * arm, (f[2] - f[0]) * arm, m[0] + m[2] - m[1] - m[3]), rel=1e-12
+    )
+    assert len(set(m)) == 4 and tz != 0.0
