@@ -18,7 +18,8 @@ never modified.  Each run starts from fresh mutants (``--resume`` keeps the prev
 mutmut then checks again only what changed); mutmut's output goes to ``<layer dir>/mutmut.log``.
 
 Score = killed / (mutants - skipped): mutants no selected test reaches ("no tests") and survivors
-both count against it.  The survivors are listed (``mutmut show NAME`` in the layer directory shows
+both count against it.  A mutant whose test process dies of a signal (SIGABRT, SIGSEGV) counts as
+killed and is shown as "of which crashed".  The survivors are listed (``mutmut show NAME`` in the layer directory shows
 a diff).
 """
 
@@ -37,6 +38,9 @@ from typing import Any
 
 ROOT = Path(__file__).resolve().parents[1]
 KILLED = {1, 3, 36, 37, -24, 24, 152, 255}  # mutmut's killed, timeout and type-check exit codes
+# A test process killed by a signal (SIGABRT, SIGSEGV: e.g. an OpenGL library aborting) failed too:
+# mutmut calls it "suspicious", here it counts as killed and is reported as "crashed".
+CRASHED = {-6, -11}
 STATUS = {0: "survived", 33: "no tests", 5: "no tests", 34: "skipped", None: "not checked"}
 
 
@@ -77,8 +81,9 @@ def score(workdir: Path) -> tuple[Counter[str], list[str]]:
     survivors = []
     for meta in sorted((workdir / "mutants").rglob("*.meta")):
         for name, code in json.loads(meta.read_text())["exit_code_by_key"].items():
-            status = "killed" if code in KILLED else STATUS.get(code, "suspicious")
+            status = "killed" if code in KILLED | CRASHED else STATUS.get(code, "suspicious")
             counts[status] += 1
+            counts["of which crashed"] += code in CRASHED
             if status in ("survived", "no tests", "suspicious", "not checked"):
                 survivors.append(f"{status:9} {name}")
     return counts, survivors
@@ -86,7 +91,7 @@ def score(workdir: Path) -> tuple[Counter[str], list[str]]:
 
 def report(layer: str, workdir: Path) -> float:
     counts, survivors = score(workdir)
-    total = sum(counts.values()) - counts["skipped"]
+    total = sum(counts.values()) - counts["skipped"] - counts["of which crashed"]
     value = 100.0 * counts["killed"] / total if total else float("nan")
     detail = ", ".join(f"{k} {v}" for k, v in sorted(counts.items()))
     print(f"\n{layer}: mutation score {value:.1f} % ({counts['killed']} of {total} killed; {detail})")

@@ -1,5 +1,6 @@
 """Motor model invariants from quadrotor.md: hover, full thrust, idle speed, step response, signs."""
 
+import dataclasses
 import math
 
 import pytest
@@ -102,3 +103,63 @@ def test_voltage_is_pwm_times_supply_over_255() -> None:
     prop.set_pwm([255, 128, 1, 0])
     assert prop.voltages == [14.8, 128 * 14.8 / 255, 14.8 / 255, 0.0]
     assert math.isclose(prop.voltages[1], 7.4290196, rel_tol=1e-6)
+
+
+# A motor with an inflow-squared thrust term (the hector default has CT2s = 0), so that each term of
+# the thrust polynomial shows.
+MOTOR_CT2 = dataclasses.replace(MOTOR, ct2s=2.0e-3)
+
+
+@pytest.mark.parametrize("motor", [MOTOR, MOTOR_CT2], ids=["hector", "ct2s"])
+@pytest.mark.parametrize(("pwm", "inflow"), [(121, 0.0), (200, -3.0), (60, 2.5), (255, 1.0), (0, 0.0)])
+def test_steady_state_is_an_equilibrium_of_the_motor_step(motor: MotorConfig, pwm: int, inflow: float) -> None:
+    # The equilibrium solved by bisection, fed to the explicit-Euler step (written separately): the
+    # step must see the same thrust and electrical torque and leave the speed where it is.
+    omega, force, torque = steady_state(motor, pwm, inflow)
+    # quadrotor.md: F = CT0s·ω² + CT1s·v1·ω + CT2s·v1², and dω/dt = 0 ⇔ M_e = k_t·F + k_m·ω.
+    thrust = motor.ct0s * omega * omega + motor.ct1s * inflow * omega + motor.ct2s * inflow * inflow
+    assert force == pytest.approx(thrust, rel=1e-12)
+    assert torque == pytest.approx(motor.k_t * force + motor.k_m * omega, rel=1e-9)
+    prop = Propulsion(motor, 0.275, DT)
+    prop.reset([omega] * 4)
+    prop.set_pwm([pwm] * 4)
+    prop.step(inflow, 0.0, 0.0)  # no body rates: every rotor sees the same inflow
+    assert prop.forces == pytest.approx([force] * 4, rel=1e-12)
+    assert prop.torques == pytest.approx([torque] * 4, rel=1e-12)
+    assert prop.omega == pytest.approx([omega] * 4, abs=1e-9)
+
+
+def test_hover_pwm_below_one_when_the_idle_thrust_nearly_carries_the_mass() -> None:
+    # A light vehicle: the thrust at PWM 0.4 (idle already gives 4 · 1.36 N) is its weight.
+    mass = 4.0 * steady_state(MOTOR, 0.4)[1] / 9.8
+    assert hover_pwm(MOTOR, mass, 9.8) == pytest.approx(0.4, abs=1e-9)
+    # Lighter than the idle thrust: the lowest command, PWM 0, already carries it.
+    assert hover_pwm(MOTOR, 0.5 * mass, 9.8) == pytest.approx(0.0, abs=1e-9)
+
+
+def test_motor_state_starts_and_resets_to_zero() -> None:
+    prop = Propulsion(MOTOR, 0.275, DT)
+    assert (prop.omega, prop.voltages, prop.forces, prop.torques) == ([0.0] * 4,) * 4
+    prop.reset([400.0, 410.0, 420.0, 430.0])
+    prop.set_pwm([100, 110, 120, 130])
+    prop.step(0.3, 0.2, -0.1)
+    prop.reset()
+    assert (prop.omega, prop.voltages, prop.forces, prop.torques) == ([0.0] * 4,) * 4
+
+
+def test_each_rotor_sees_its_own_inflow_and_the_wrench_sums_them_by_the_plus_layout() -> None:
+    # quadrotor.md: v1 = [w − l·q, w − l·p, w + l·q, w + l·p]; τ = ((F3 − F1)·l, (F2 − F0)·l, M0 + M2 − M1 − M3).
+    arm, w, p, q = 0.3, 0.4, 1.5, -2.5
+    omega = [400.0, 430.0, 460.0, 490.0]
+    prop = Propulsion(MOTOR_CT2, arm, DT)
+    prop.reset(omega)
+    prop.set_pwm([100, 140, 180, 220])
+    fz, tx, ty, tz = prop.step(w, p, q)
+    for i, inflow in enumerate((w - arm * q, w - arm * p, w + arm * q, w + arm * p)):
+        thrust = MOTOR_CT2.ct0s * omega[i] ** 2 + MOTOR_CT2.ct1s * inflow * omega[i] + MOTOR_CT2.ct2s * inflow**2
+        assert prop.forces[i] == pytest.approx(thrust, rel=1e-12)
+    f, m = prop.forces, prop.torques
+    assert (fz, tx, ty, tz) == pytest.approx(
+        (sum(f), (f[3] - f[1]) * arm, (f[2] - f[0]) * arm, m[0] + m[2] - m[1] - m[3]), rel=1e-12
+    )
+    assert len(set(m)) == 4 and tz != 0.0

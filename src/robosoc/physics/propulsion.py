@@ -170,7 +170,7 @@ def steady_state(motor: MotorConfig, pwm: float, inflow: float = 0.0) -> tuple[f
         else:
             hi = mid
     om = 0.5 * (lo + hi)
-    force = motor.ct0s * om * om + motor.ct1s * inflow * om
+    force = motor.ct0s * om * om + motor.ct1s * inflow * om + motor.ct2s * inflow * inflow
     t = (u * motor.beta_m - motor.psi * om) / (2 * motor.r_a)
     torque = motor.psi * (t + math.sqrt(t * t + u * motor.alpha_m / motor.r_a))
     return om, force, torque
