@@ -40,7 +40,7 @@ T = TypeVar("T")
 #: The kernel whose compiled form marks the cache as filled (the MPSoC's main loop).
 MARKER = "chip.run_chip-*.nbi"
 
-COMPILING = "compiling the chip simulator with numba (first run only, cached afterwards; 1 to 2 minutes) ..."
+COMPILING = "compiling the chip simulator with numba (first run only, cached afterwards; about a minute) ..."
 
 #: ``jal x0, 0``: a core spinning on one instruction, enough to make numba compile everything.
 SPIN = (0x0000006F).to_bytes(4, "little")
