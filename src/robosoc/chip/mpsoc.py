@@ -278,7 +278,8 @@ class MPSoC:
         self.gst[kc.G_IO_COUNT] = 0
 
     # --- running ---------------------------------------------------------------------------
-    def _book(self) -> kc.ChipBook:
+    def book(self) -> kc.ChipBook:
+        """The chip loop's own arrays, as the kernels take them."""
         return kc.ChipBook(self.cst, self.acc, self.snap, self.gst, self.xout, self.io_out, self.rec)
 
     def step(self, until: int) -> int:
@@ -292,7 +293,7 @@ class MPSoC:
                 check_pc(
                     self.cores, self.config.tile_index(xy), lambda pc, xy=xy: self.symbolize(xy, pc), f"tile {xy}: "
                 )
-        kc.run_chip(self.cores.arrays(), self.noc, self._book(), until)
+        kc.run_chip(self.cores.arrays(), self.noc, self.book(), until)
         self._drain_io()
         self._drain_rec()
         return int(self.gst[kc.G_STATUS])
@@ -436,7 +437,7 @@ class MPSoC:
         """Attribute everything not yet attributed to the tasks running now."""
         for t in range(self.config.n_tiles):
             if self.cst[t, kc.K_STATE] not in (kc.K_OFF, kc.K_IO):
-                kc.account(t, self.cores.arrays(), self._book(), int(self.cores.st[t, S_CYCLE]))
+                kc.account(t, self.cores.arrays(), self.book(), int(self.cores.st[t, S_CYCLE]))
 
     def task_counters(self, xy: tuple[int, int]) -> dict[int, dict[str, int]]:
         """Counters per task id of one tile (task 0 is the kernel/idle), for tasks that ran."""

@@ -7,24 +7,40 @@ install that takes on the order of a minute of CPU, during which a flight would 
 tells the user and compiles by running a throwaway chip (:func:`compile_kernels`), so that the
 flight's progress bar and real-time factor measure flying only.  The firmware build (the zig
 compiler, a separate process) runs meanwhile in a thread (:func:`prepare_chip`): on a fresh install
-it is cold too, and the two together use both cores of a 2-core machine.
+it is cold too.
+
+numba compiles one function at a time, in one thread, but a callee (``cache=True``) that another
+process has compiled meanwhile is loaded from the cache when the caller's compilation reaches it.
+:func:`compile_kernels` therefore splits the main loop's larger callees in two groups: a child
+process compiles one (:data:`CHILD_KERNELS`) while this one compiles the other
+(:data:`PARENT_KERNELS`), each for the exact argument types the main loop calls them with; then
+this process compiles the main loop, which finds both groups in the cache, while the firmware
+build has the other core.
 """
 
 from __future__ import annotations
 
+import os
+import pickle
+import subprocess
+import sys
+import tempfile
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
-from typing import TypeVar
+from typing import IO, TYPE_CHECKING, Any, TypeVar
 
 from robosoc.config.chip import ChipConfig
+
+if TYPE_CHECKING:
+    from robosoc.chip.mpsoc import MPSoC
 
 T = TypeVar("T")
 
 #: The kernel whose compiled form marks the cache as filled (the MPSoC's main loop).
 MARKER = "chip.run_chip-*.nbi"
 
-COMPILING = "compiling the chip simulator with numba (first run only, cached afterwards; 1 to 2 minutes) ..."
+COMPILING = "compiling the chip simulator with numba (first run only, cached afterwards; about a minute) ..."
 
 #: ``jal x0, 0``: a core spinning on one instruction, enough to make numba compile everything.
 SPIN = (0x0000006F).to_bytes(4, "little")
@@ -44,9 +60,23 @@ def kernels_cached() -> bool:
     return any(numba_cache_dir().rglob(MARKER))
 
 
-def compile_kernels(chip: ChipConfig) -> None:
-    """Run a throwaway ``chip`` whose first core spins, so that numba compiles (and caches) the chip's
-    kernels: the main loop with the cores, devices and NoC it calls, and the accounting."""
+#: Callees of the main loop a child process compiles, largest first (module, function); together
+#: with :data:`PARENT_KERNELS` about half of the compilation each (the main loop is the rest).
+CHILD_KERNELS = (("chip", "ni_access"), ("chip", "_take_deliveries"), ("chip", "_wake_if_due"), ("chip", "_noc_next"))
+#: Callees of the main loop this process compiles meanwhile.
+PARENT_KERNELS = (
+    ("chip", "_noc_advance"),
+    ("dev_irq", "irq_event"),
+    ("soc_bus", "mmio_store"),
+    ("soc_bus", "mmio_load"),
+    ("core", "decode_word"),
+    ("chip", "_keep_output"),
+    ("dev_irq", "trap"),
+)
+
+
+def throwaway_chip(chip: ChipConfig) -> MPSoC:
+    """An MPSoC of ``chip`` whose first core spins (building it compiles nothing)."""
     from robosoc.chip.core_state import SRAM_BASE
     from robosoc.chip.elf import Program, Segment
     from robosoc.chip.mpsoc import MPSoC
@@ -54,6 +84,81 @@ def compile_kernels(chip: ChipConfig) -> None:
     mpsoc = MPSoC(chip)
     spin = Program(Path("<spin>"), SRAM_BASE, [(SRAM_BASE, SPIN)], segment_info=[Segment(SRAM_BASE, SPIN, True, False)])
     mpsoc.load(mpsoc.core_tiles()[0], spin)
+    return mpsoc
+
+
+def kernel_signatures(mpsoc: MPSoC) -> dict[tuple[str, str], tuple[Any, ...]]:
+    """The numba argument types with which the main loop calls each of :data:`CHILD_KERNELS` and
+    :data:`PARENT_KERNELS` on ``mpsoc``'s arrays (any other type would compile a second version)."""
+    from numba import typeof, types
+
+    core, noc, book = mpsoc.cores.arrays(), mpsoc.noc, mpsoc.book()
+    i64 = types.int64
+    st, cst, row = typeof(core.st), typeof(book.cst), typeof(core.st[0])
+    return {
+        ("chip", "ni_access"): (i64, typeof(core), typeof(book), typeof(noc)),
+        ("chip", "_take_deliveries"): (st, typeof(book), typeof(noc)),
+        ("chip", "_wake_if_due"): (i64, st, cst, i64),
+        ("chip", "_noc_next"): (typeof(noc), cst),
+        ("chip", "_noc_advance"): (typeof(noc), cst, i64),
+        ("dev_irq", "irq_event"): (row, typeof(core.ctr[0]), i64, i64),
+        ("soc_bus", "mmio_store"): (row, typeof(core.out[0]), i64, i64, i64),
+        ("soc_bus", "mmio_load"): (row, i64, i64),
+        ("core", "decode_word"): (typeof(core.m32[0, 0]), typeof(core.dec[0]), types.uint64),
+        ("chip", "_keep_output"): (i64, st, cst, typeof(core.out), typeof(book.xout)),
+        ("dev_irq", "trap"): (row, i64, i64),
+    }
+
+
+def compile_callees(chip: ChipConfig, which: tuple[tuple[str, str], ...]) -> None:
+    """Compile (and cache) the kernels ``which`` for the types the main loop calls them with."""
+    import importlib
+
+    signatures = kernel_signatures(throwaway_chip(chip))
+    for module, name in which:
+        getattr(importlib.import_module(f"robosoc.kernels.{module}"), name).compile(signatures[module, name])
+
+
+def _compile_in_child() -> None:
+    """The child process: compile :data:`CHILD_KERNELS` for the pickled ChipConfig on stdin."""
+    compile_callees(pickle.load(sys.stdin.buffer), CHILD_KERNELS)
+
+
+def _start_child(chip: ChipConfig, err: IO[bytes]) -> subprocess.Popen[bytes]:
+    """A fresh interpreter (not multiprocessing, which would re-run the caller's script) on the
+    same robosoc and numba cache, compiling :data:`CHILD_KERNELS`; its error output goes to ``err``."""
+    import robosoc
+
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(numba_cache_dir()))
+    env["PYTHONPATH"] = os.pathsep.join([str(Path(robosoc.__file__).parent.parent), env.get("PYTHONPATH", "")])
+    code = f"from {__name__} import _compile_in_child; _compile_in_child()"
+    child = subprocess.Popen([sys.executable, "-c", code], stdin=subprocess.PIPE, stderr=err, env=env)
+    assert child.stdin is not None
+    child.stdin.write(pickle.dumps(chip))
+    child.stdin.close()
+    return child
+
+
+def compile_kernels(chip: ChipConfig) -> None:
+    """Run a throwaway ``chip`` whose first core spins, so that numba compiles (and caches) the chip's
+    kernels: the main loop with the cores, devices and NoC it calls, and the accounting.  Half of
+    the main loop's callees are compiled in a child process meanwhile.
+
+    Raises:
+        RuntimeError: the child process failed (its error output is in the message).
+    """
+    with tempfile.TemporaryFile() as err:
+        child = _start_child(chip, err)
+        try:
+            compile_callees(chip, PARENT_KERNELS)
+        finally:
+            child.wait()
+        if child.returncode != 0:
+            err.seek(0)
+            raise RuntimeError(
+                f"compiling the chip kernels in a child process failed:\n{err.read().decode(errors='replace')}"
+            )
+    mpsoc = throwaway_chip(chip)
     mpsoc.step(10_000)
     mpsoc.finish_accounting()
 

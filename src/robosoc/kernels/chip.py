@@ -503,7 +503,6 @@ def run_chip(core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int) -> 
     look_idle = gst[G_LOOK_IDLE]
     look_active = gst[G_LOOK_ACTIVE]
     run = np.empty(n, dtype=np.int64)
-    one = np.empty(1, dtype=np.int64)
     xcap = xout.shape[1]
     T = gst[G_TIME]
     status = CHIP_UNTIL
@@ -520,6 +519,7 @@ def run_chip(core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int) -> 
                 if cst[t, K_STATE] == K_RUN:
                     run[k] = t
                     k += 1
+            lo = hi = 0  # run[lo:hi] run next: nobody, every core is where it stopped
         else:
             if io_out.shape[0] - gst[G_IO_COUNT] < n:
                 status = CHIP_IO_FULL
@@ -590,27 +590,33 @@ def run_chip(core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int) -> 
             for t in range(n):
                 if cst[t, K_STATE] == K_SLEEP and cst[t, K_WAKE] < H:
                     _wake_if_due(t, st, cst, H)
-            # run the awake cores to H; NI accesses are performed here, then the core goes on
+            # the awake cores run to H (below); NI accesses are performed here, then the core goes on
             k = 0
             for t in range(n):
                 if cst[t, K_STATE] == K_RUN:
                     run[k] = t
                     k += 1
-            run_cores(core, run[:k], H)
+            lo, hi = 0, k
         # Stopped cores are handled in global cycle order, so that an NI access sees the network
         # exactly as it is in its cycle: in an idle quantum the NoC is brought up to the access
         # first, with every packet sent before it by any core (a send cannot reach another tile
         # within the quantum, but it can hold up the sender's own injection, which NI_STATUS shows).
+        # run_cores has this one call site: inlined, the core interpreter is most of what numba compiles
         failed = -1
         suspended = False
         while True:
+            if hi > lo:
+                run_cores(core, run[lo:hi], H)  # the awake cores to H, then each stopped one on
+                hi = lo
             t = np.int64(-1)  # not the literal -1: numba would compile ni_access and its callees for it too
+            rt = 0  # t is run[rt]
             for r in range(k):
                 u = run[r]
                 if cst[u, K_STATE] != K_RUN or (st[u, S_RUN] == RUN_CHUNK and st[u, S_CYCLE] >= H):
                     continue
                 if t < 0 or st[u, S_CYCLE] < st[t, S_CYCLE]:
                     t = u
+                    rt = r
             if t < 0:
                 break
             why = st[t, S_RUN]
@@ -657,8 +663,7 @@ def run_chip(core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int) -> 
                 gst[G_BREAK_TILE] = t
                 suspended = True
                 break
-            one[0] = t
-            run_cores(core, one, H)
+            lo, hi = rt, rt + 1  # run t on
         for r in range(k):
             if st[run[r], S_OUT_LEN] > 0:
                 _keep_output(run[r], st, cst, out, xout)

@@ -399,7 +399,9 @@ def run_cores(core: CoreArrays, tiles: np.ndarray, until: int) -> None:
                     cyc += MEMORY_CYCLES
                     pc += 4
                 else:
-                    status, err, pc, cyc = store_device(st[t], ctr[t], out[t], opc_t, kc, addr, regs_t[rs2], pc, cyc)
+                    status, err, pc, cyc = store_device(
+                        st[t], ctr[t], out[t], opc_t, kc, addr, np.int64(regs_t[rs2]), pc, cyc
+                    )  # int64 like the other store: one compiled mmio_store
                     if status != RUN_CHUNK:
                         err_addr = addr
                         break

@@ -340,7 +340,8 @@ def noc_check_packet(cfg, tile, mem, t, length):
     return STATUS_OK
 
 
-@njit(cache=True)
+# an explicit signature: called with a constant code too, numba would compile it once more for that literal
+@njit("void(int64[::1], int64, int64, int64)", cache=True)
 def _report(glob, code, t, cycle):
     if glob[G_STATUS] == STATUS_OK:
         glob[G_STATUS] = code

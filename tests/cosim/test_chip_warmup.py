@@ -1,0 +1,37 @@
+"""The first run's compilation: the callees compiled ahead (in a child process and in this one) are
+compiled for exactly the types the chip's main loop calls them with, so numba keeps one version of
+each (a second one would mean the main loop compiled its own, and the child's work was wasted)."""
+
+from __future__ import annotations
+
+import pickle
+
+from robosoc.config.firmware import FirmwareConfig
+from robosoc.cosim.chip_warmup import (
+    CHILD_KERNELS,
+    PARENT_KERNELS,
+    kernel_signatures,
+    numba_cache_dir,
+    throwaway_chip,
+)
+
+
+def _cached_signatures(module: str, name: str) -> list[tuple[object, ...]]:
+    """The argument types of every version of ``robosoc.kernels.<module>.<name>`` in numba's cache
+    (its index file: a pickled version string, then the pickled (stamp, overloads) pair)."""
+    (index,) = numba_cache_dir().rglob(f"{module}.{name}-*.nbi")
+    with index.open("rb") as f:
+        pickle.load(f)
+        _, overloads = pickle.loads(f.read())
+    return [key[0] for key in overloads]
+
+
+def test_ahead_compiled_callees_have_the_main_loop_types() -> None:
+    # the ordinary run path: the main loop compiles (or loads) its callees for the types it uses
+    mpsoc = throwaway_chip(FirmwareConfig().seed_chip())
+    mpsoc.step(10_000)
+    signatures = kernel_signatures(mpsoc)
+    assert set(signatures) == set(CHILD_KERNELS) | set(PARENT_KERNELS)
+    assert not set(CHILD_KERNELS) & set(PARENT_KERNELS)
+    for (module, name), sig in signatures.items():
+        assert _cached_signatures(module, name) == [tuple(sig)], f"{module}.{name}"
