@@ -50,7 +50,6 @@ def _files(out: Path) -> dict[str, bytes]:
 
 
 def test_local_pool_and_dask_local_cluster_give_the_same_rows(tmp_path):
-    pytest.importorskip("dask.distributed")
     sweep = tmp_path / "sixteen.toml"
     sweep.write_text(SIXTEEN)
     config = load_sweep(sweep)
