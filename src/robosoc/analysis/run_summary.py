@@ -142,25 +142,16 @@ def vehicle_summary(
     """
     chip = scenario.controller == "chip"
     summary: dict[str, Any] = {
-        "schema": SCHEMA,
-        "complete": complete,
-        "scenario": scenario.name,
-        "seed": scenario.seed,
-        "controller": scenario.controller,
-        "mode": MODE_LOCKSTEP,
+        **_identity(scenario, complete),
         "firmware": firmware_figures(scenario.firmware) if chip else None,
         "chip": chip_figures(scenario.chip, result) if chip else None,
-        "simulated_s": simulated_s,
-        "host_s": host_s,
-        "real_time_factor": simulated_s / host_s if host_s > 0 else math.nan,
+        **_pace(simulated_s, host_s),
         "flight": flight_summary(rows, scenario, rest_height),
         "tasks": task_figures(result) if result is not None else None,
         "deadline_misses": result.deadline_misses if result is not None else None,
         "energy": energy_figures(result) if result is not None else None,
     }
-    if stopped is not None:
-        summary["stopped"] = stopped
-    return summary
+    return _with_reason(summary, stopped)
 
 
 def fleet_summary(
@@ -175,20 +166,40 @@ def fleet_summary(
 ) -> dict[str, Any]:
     """The top-level summary of a run of several vehicles: the shared fields, the closest approach of
     any two vehicles (their body origins, in metres) and each vehicle's summary."""
+    misses = sum(v["deadline_misses"] or 0 for v in vehicles) if scenario.controller == "chip" else None
     summary: dict[str, Any] = {
+        **_identity(scenario, complete),
+        **_pace(simulated_s, host_s),
+        "deadline_misses": misses,
+        "min_separation_m": min_separation_m,
+        "vehicles": list(vehicles),
+    }
+    return _with_reason(summary, stopped)
+
+
+def _identity(scenario: ScenarioConfig, complete: bool) -> dict[str, Any]:
+    """The fields that say which run a summary is of."""
+    return {
         "schema": SCHEMA,
         "complete": complete,
         "scenario": scenario.name,
         "seed": scenario.seed,
         "controller": scenario.controller,
         "mode": MODE_LOCKSTEP,
+    }
+
+
+def _pace(simulated_s: float, host_s: float) -> dict[str, float]:
+    """Simulated and host time, and their ratio."""
+    return {
         "simulated_s": simulated_s,
         "host_s": host_s,
         "real_time_factor": simulated_s / host_s if host_s > 0 else math.nan,
-        "deadline_misses": sum(v["deadline_misses"] or 0 for v in vehicles) if scenario.controller == "chip" else None,
-        "min_separation_m": min_separation_m,
-        "vehicles": list(vehicles),
     }
+
+
+def _with_reason(summary: dict[str, Any], stopped: str | None) -> dict[str, Any]:
+    """``summary`` with why the flight stopped early, if it did."""
     if stopped is not None:
         summary["stopped"] = stopped
     return summary

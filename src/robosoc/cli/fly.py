@@ -16,9 +16,9 @@ from robosoc.cli.app import app
 from robosoc.cli.console import make_console, note, plain
 from robosoc.cli.errors import CliError
 from robosoc.cli.scenario import load_scenario
-from robosoc.config.firmware import ARITH_CHOICES
+from robosoc.cli.scenario_options import Arith, Duration, Mul, ScenarioOpt, Seed, Vehicle
+from robosoc.cli.scenario_options import SecondsAlias as Seconds
 from robosoc.config.scenario import CONTROLLERS, MAX_VEHICLES
-from robosoc.config.vehicle import VEHICLE_PRESETS
 
 VIDEO_FPS = 25.0
 
@@ -37,40 +37,6 @@ Controller = Annotated[
         "(default: the scenario's, chip).",
         callback=options.choice(*CONTROLLERS),
     ),
-]
-Arith = Annotated[
-    str | None,
-    typer.Option(
-        help="Firmware arithmetic: float (soft-float) or fixed (Q16.16) (default: the scenario's, fixed).",
-        callback=options.choice(*ARITH_CHOICES),
-    ),
-]
-Mul = Annotated[
-    bool | None,
-    typer.Option("--mul/--no-mul", help="Firmware built for cores with the multiplier or without (default: with)."),
-]
-DURATION_HELP = (
-    "Flight length in seconds, whole ms in 0.001..3600, at least one sensor period (default: the scenario's)."
-)
-Duration = Annotated[
-    float | None,
-    typer.Option(help=DURATION_HELP, callback=options.float_range(0.001, 3600.0, unit="s")),
-]
-Seconds = Annotated[
-    float | None,
-    typer.Option(help=DURATION_HELP, callback=options.float_range(0.001, 3600.0, unit="s"), hidden=True),
-]
-Seed = Annotated[
-    int | None,
-    typer.Option(
-        help="Seeds every random number (noise, biases, gusts), 0..2**63-1 (default: the scenario's, 1).",
-        callback=options.seed(),
-    ),
-]
-ScenarioOpt = Annotated[Path | None, typer.Option(help="Scenario TOML file (same as the SCENARIO argument).")]
-Vehicle = Annotated[
-    str | None,
-    typer.Option(help="default or laser (default: the scenario's).", callback=options.choice(*VEHICLE_PRESETS)),
 ]
 Vehicles = Annotated[
     int | None,

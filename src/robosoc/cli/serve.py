@@ -19,8 +19,7 @@ from robosoc.cli.console import make_console, note, plain
 from robosoc.cli.errors import CliError
 from robosoc.cli.link_options import DEFAULT_BIND, Bind, ConnectTimeout, Faults, Hold, Pace, PeerTimeout, Resend
 from robosoc.cli.link_report import end_of_side, print_link_counts
-from robosoc.config.firmware import ARITH_CHOICES
-from robosoc.config.vehicle import VEHICLE_PRESETS
+from robosoc.cli.scenario_options import Arith, Duration, Mul, ScenarioOpt, Seed, Vehicle
 
 if TYPE_CHECKING:
     from robosoc.config.scenario import ScenarioConfig
@@ -34,25 +33,7 @@ serve_app = typer.Typer(
 )
 app.add_typer(serve_app, name="serve")
 
-Seconds = Annotated[
-    float | None,
-    typer.Option(
-        help="Flight length in seconds, whole ms in 0.001..3600, at least one sensor period (default: the scenario's).",
-        callback=options.float_range(0.001, 3600.0, unit="s"),
-    ),
-]
-Seed = Annotated[
-    int | None,
-    typer.Option(
-        help="Seeds every random number (physics; faults injected here), 0..2**63-1 (default: the scenario's).",
-        callback=options.seed(),
-    ),
-]
-Scenario = Annotated[Path | None, typer.Option(help="Scenario TOML file (default: built-in).")]
-Vehicle = Annotated[
-    str | None,
-    typer.Option(help="default or laser (default: the scenario's).", callback=options.choice(*VEHICLE_PRESETS)),
-]
+Scenario = ScenarioOpt
 NoOut = Annotated[bool, typer.Option("--no-out", help="Write no files.")]
 Peer = Annotated[
     link_options.Address | None,
@@ -98,7 +79,7 @@ def _out(out: Path | None, no_out: bool, side: str, name: str, seed: int, scenar
 
 @serve_app.command("physics", epilog=exit_codes.SERVE_EPILOG)
 def serve_physics_command(
-    seconds: Seconds = None,
+    seconds: Duration = None,
     seed: Seed = None,
     scenario: Scenario = None,
     vehicle: Vehicle = None,
@@ -175,21 +156,12 @@ def serve_physics_command(
 
 @serve_app.command("chip", epilog=exit_codes.SERVE_EPILOG)
 def serve_chip_command(
-    seconds: Seconds = None,
+    seconds: Duration = None,
     seed: Seed = None,
     scenario: Scenario = None,
     vehicle: Vehicle = None,
-    arith: Annotated[
-        str | None,
-        typer.Option(
-            help="float (soft-float) or fixed (Q16.16) firmware (default: the scenario's).",
-            callback=options.choice(*ARITH_CHOICES),
-        ),
-    ] = None,
-    mul: Annotated[
-        bool | None,
-        typer.Option("--mul/--no-mul", help="Cores with the multiplier or without (default: the scenario's)."),
-    ] = None,
+    arith: Arith = None,
+    mul: Mul = None,
     peer: Peer = None,
     bind: Annotated[
         link_options.Address | None,

@@ -128,26 +128,30 @@ def _send(conn: Connection, *message: object) -> None:
 
 def _physics_process(conn: Connection, args: tuple) -> None:
     _interrupt_once()
-    try:
-        _, record = run_physics_side(
+    _report(
+        conn,
+        lambda: run_physics_side(
             *args,
             on_listen=lambda address: _send(conn, "listening", address),
             on_start=lambda: _send(conn, "status", "physics: the chip said hello; flying"),
             on_sample=lambda done, total: _send(conn, "progress", done, total),
-        )
-        _send(conn, "done", record)
-    except LinkError as exc:
-        _send(conn, "error", "link", str(exc))
-    except KeyboardInterrupt:
-        _send(conn, "error", "interrupted", "interrupted before the flight")
-    except BaseException:
-        _send(conn, "error", "internal", traceback.format_exc())
+        ),
+    )
 
 
 def _chip_process(conn: Connection, args: tuple, chip: ChipConfig | None) -> None:
     _interrupt_once()
+
+    def status(text: str) -> None:
+        _send(conn, "status", f"chip: {text}")
+
+    _report(conn, lambda: run_chip_side(*args, chip=chip, on_status=status))
+
+
+def _report(conn: Connection, side: Callable[[], tuple[Any, dict]]) -> None:
+    """Run one side and send its record, or how it failed, to the parent."""
     try:
-        _, record = run_chip_side(*args, chip=chip, on_status=lambda text: _send(conn, "status", f"chip: {text}"))
+        _, record = side()
         _send(conn, "done", record)
     except LinkError as exc:
         _send(conn, "error", "link", str(exc))
