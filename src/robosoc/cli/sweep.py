@@ -70,7 +70,7 @@ def sweep_command(
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 
     from robosoc.analysis.sweep_plots import sweep_html, write_sweep_plots
-    from robosoc.config.sweep import load_sweep
+    from robosoc.config.sweep import sweep_from_mapping
     from robosoc.config.validate import ConfigError
     from robosoc.sweep.point import OK
     from robosoc.sweep.runner import run_sweep
@@ -78,7 +78,7 @@ def sweep_command(
     console = make_console()
     files.input_file(file, None, "sweep file")
     try:
-        config = load_sweep(file)
+        config = sweep_from_mapping(files.read_toml(file), str(file), file.parent, file.stem)
         from robosoc.sweep.plan import plan
 
         total = len(plan(config))
