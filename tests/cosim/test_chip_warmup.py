@@ -4,7 +4,10 @@ each (a second one would mean the main loop compiled its own, and the child's wo
 
 from __future__ import annotations
 
+import importlib
 import pickle
+
+from numba.core.caching import _CacheLocator
 
 from robosoc.config.firmware import FirmwareConfig
 from robosoc.cosim.chip_warmup import (
@@ -19,7 +22,11 @@ from robosoc.cosim.chip_warmup import (
 def _cached_signatures(module: str, name: str) -> list[tuple[object, ...]]:
     """The argument types of every version of ``robosoc.kernels.<module>.<name>`` in numba's cache
     (its index file: a pickled version string, then the pickled (stamp, overloads) pair)."""
-    (index,) = numba_cache_dir().rglob(f"{module}.{name}-*.nbi")
+    # numba keeps each source folder's kernels in a sub-folder named after its path: other checkouts
+    # sharing the cache have their own
+    source = importlib.import_module(f"robosoc.kernels.{module}").__file__
+    folder = numba_cache_dir() / _CacheLocator.get_suitable_cache_subpath(source)
+    (index,) = folder.glob(f"{module}.{name}-*.nbi")
     with index.open("rb") as f:
         pickle.load(f)
         _, overloads = pickle.loads(f.read())
