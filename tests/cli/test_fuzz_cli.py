@@ -117,7 +117,8 @@ OPTIONS: dict[tuple[str, str], Spec] = {
     ("fly", "--resend"): Spec("int", 0, 8),
     ("fly", "--peer-timeout"): Spec("float", 0.05, 3600.0),
     ("fly", "--bind"): Spec("address"),
-    ("serve physics", "--seconds"): Spec("float", 0.01, 3600.0),
+    ("serve physics", "--duration"): Spec("float", 0.01, 3600.0),
+    ("serve physics", "--seconds"): Spec("float", 0.01, 3600.0),  # the hidden alias of --duration
     ("serve physics", "--seed"): Spec("int", 0, 2**63 - 1),
     ("serve physics", "--scenario"): Spec("in_file"),
     ("serve physics", "--vehicle"): Spec("choice", choices=("default", "laser")),
@@ -130,7 +131,8 @@ OPTIONS: dict[tuple[str, str], Spec] = {
     ("serve physics", "--resend"): Spec("int", 0, 8),
     ("serve physics", "--peer-timeout"): Spec("float", 0.05, 3600.0),
     ("serve physics", "--connect-timeout"): Spec("float", 0.05, 3600.0),
-    ("serve chip", "--seconds"): Spec("float", 0.01, 3600.0),
+    ("serve chip", "--duration"): Spec("float", 0.01, 3600.0),
+    ("serve chip", "--seconds"): Spec("float", 0.01, 3600.0),  # the hidden alias of --duration
     ("serve chip", "--seed"): Spec("int", 0, 2**63 - 1),
     ("serve chip", "--scenario"): Spec("in_file"),
     ("serve chip", "--vehicle"): Spec("choice", choices=("default", "laser")),

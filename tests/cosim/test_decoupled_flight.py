@@ -202,6 +202,19 @@ def test_addresses_in_use_and_bad_addresses_are_usage_errors(tmp_path: Path) -> 
             f"--bind: 127.0.0.1:{port}: the address is in use",
         ),
     ]
+    # the scenario as fly takes it: SCENARIO or --scenario, --duration or --seconds, never both
+    bad = tmp_path / "bad.toml"
+    bad.write_text("duration_s = -1\n")
+    good = tmp_path / "good.toml"
+    good.write_text(SCENARIO_TOML)
+    for side in ("physics", "chip"):
+        cases += [
+            (["serve", side, str(bad), "--no-out"], f"{bad}"),
+            (["serve", side, str(good), "--scenario", str(good), "--no-out"], "--scenario: cannot be combined"),
+            (["serve", side, "--duration", "1", "--seconds", "1", "--no-out"], "--duration: cannot be combined"),
+            (["serve", side, str(good), "--duration", "0.001", "--no-out"], "--duration: a flight lasts at least"),
+            (["serve", side, "--seconds", "0.001", "--no-out"], "--seconds: a flight lasts at least"),
+        ]
     for args, message in cases:
         result = runner.invoke(app, args)
         assert result.exit_code == exit_codes.USAGE, (args, result.output)

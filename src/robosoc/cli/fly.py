@@ -16,20 +16,22 @@ from robosoc.cli.app import app
 from robosoc.cli.console import make_console, note, plain
 from robosoc.cli.errors import CliError
 from robosoc.cli.scenario import load_scenario
-from robosoc.cli.scenario_options import Arith, Duration, Mul, ScenarioOpt, Seed, Vehicle
+from robosoc.cli.scenario_options import (
+    Arith,
+    Duration,
+    Mul,
+    ScenarioArg,
+    ScenarioOpt,
+    Seed,
+    Vehicle,
+    duration_change,
+    scenario_source,
+)
 from robosoc.cli.scenario_options import SecondsAlias as Seconds
 from robosoc.config.scenario import CONTROLLERS, MAX_VEHICLES
 
 VIDEO_FPS = 25.0
 
-ScenarioArg = Annotated[
-    Path | None,
-    typer.Argument(
-        metavar="SCENARIO",
-        help="Scenario TOML file (default: built-in; robosoc scenario show prints every field).",
-        show_default=False,
-    ),
-]
 Controller = Annotated[
     str | None,
     typer.Option(
@@ -121,11 +123,9 @@ def fly_command(
         controller = "chip"
         link = link_options.link_config(pace, hold, faults, resend, peer_timeout)
     # --- end of the decoupled mode's checks ---
-    options.exclusive(scenario=scenario is not None, scenario_file=scenario_file is not None)
-    options.exclusive(duration=duration is not None, seconds=seconds is not None)
+    path, label = scenario_source(scenario, scenario_file)
+    length = duration_change(duration, seconds)
     options.exclusive(out=out is not None, no_out=no_out)
-    path = scenario if scenario is not None else scenario_file
-    label = "--scenario" if scenario is not None else None
     config, named = load_scenario(path, label)
     sources: list[tuple[str, tuple[str, ...]]] = [(str(path), named)] if path is not None else []
     files_used = [str(path)] if path is not None else []
@@ -133,14 +133,14 @@ def fly_command(
     changes: dict[str, tuple[str, Any]] = {}
     for option, field, value in (
         ("--controller", "controller", controller),
-        ("--duration", "duration_s", duration),
-        ("--seconds", "duration_s", seconds),
         ("--seed", "seed", seed),
         ("--vehicle", "vehicle", vehicle),
         ("--vehicles", "vehicles", vehicles),
     ):
         if value is not None:
             changes[option] = (field, value)
+    if length is not None:
+        changes[length[0]] = ("duration_s", length[1])
     fw_changes: dict[str, tuple[str, Any]] = {}
     if arith is not None:
         fw_changes["--arith"] = ("arith", arith)

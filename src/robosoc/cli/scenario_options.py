@@ -43,12 +43,32 @@ Seed = Annotated[
         callback=options.seed(),
     ),
 ]
-ScenarioOpt = Annotated[
-    Path | None, typer.Option(help="Scenario TOML file (default: built-in; robosoc scenario show prints every field).")
-]
+SCENARIO_HELP = "Scenario TOML file (default: built-in; robosoc scenario show prints every field)."
+ScenarioArg = Annotated[Path | None, typer.Argument(metavar="SCENARIO", help=SCENARIO_HELP, show_default=False)]
+ScenarioOpt = Annotated[Path | None, typer.Option(help=SCENARIO_HELP)]
+ScenarioAlias = Annotated[Path | None, typer.Option("--scenario", help=SCENARIO_HELP, hidden=True)]
 Vehicle = Annotated[
     str | None,
     typer.Option(help="default or laser (default: the scenario's).", callback=options.choice(*VEHICLE_PRESETS)),
 ]
 
-__all__ = ["DURATION_HELP", "Arith", "Duration", "Mul", "ScenarioOpt", "SecondsAlias", "Seed", "Vehicle"]
+
+def scenario_source(option: Path | None, argument: Path | None) -> tuple[Path | None, str | None]:
+    """The scenario file given as SCENARIO or as ``--scenario`` (not both), and the label its errors
+    carry (None: the file name alone)."""
+    options.exclusive(scenario=option is not None, scenario_file=argument is not None)
+    return (option, "--scenario") if option is not None else (argument, None)
+
+
+def duration_change(duration: float | None, seconds: float | None) -> tuple[str, float] | None:
+    """(the option as typed, its value) of ``--duration`` or its alias ``--seconds`` (not both)."""
+    options.exclusive(duration=duration is not None, seconds=seconds is not None)
+    if duration is not None:
+        return "--duration", duration
+    return ("--seconds", seconds) if seconds is not None else None
+
+
+__all__ = [
+    "DURATION_HELP", "SCENARIO_HELP", "Arith", "Duration", "Mul", "ScenarioAlias", "ScenarioArg", "ScenarioOpt",
+    "SecondsAlias", "Seed", "Vehicle", "duration_change", "scenario_source",
+]  # fmt: skip

@@ -19,7 +19,18 @@ from robosoc.cli.console import make_console, note, plain
 from robosoc.cli.errors import CliError
 from robosoc.cli.link_options import DEFAULT_BIND, Bind, ConnectTimeout, Faults, Hold, Pace, PeerTimeout, Resend
 from robosoc.cli.link_report import end_of_side, print_link_counts
-from robosoc.cli.scenario_options import Arith, Duration, Mul, ScenarioOpt, Seed, Vehicle
+from robosoc.cli.scenario_options import (
+    Arith,
+    Duration,
+    Mul,
+    ScenarioAlias,
+    ScenarioArg,
+    SecondsAlias,
+    Seed,
+    Vehicle,
+    duration_change,
+    scenario_source,
+)
 
 if TYPE_CHECKING:
     from robosoc.config.scenario import ScenarioConfig
@@ -33,7 +44,6 @@ serve_app = typer.Typer(
 )
 app.add_typer(serve_app, name="serve")
 
-Scenario = ScenarioOpt
 NoOut = Annotated[bool, typer.Option("--no-out", help="Write no files.")]
 Peer = Annotated[
     link_options.Address | None,
@@ -47,25 +57,33 @@ Peer = Annotated[
 
 
 def resolve_scenario(
-    scenario: Path | None, seconds: float | None, vehicle: str | None, seed: int | None
-) -> tuple[ScenarioConfig, VehicleConfig]:
-    """The scenario of the options, as ``robosoc fly`` resolves it (errors name the option or field)."""
+    scenario: Path | None,
+    scenario_file: Path | None,
+    duration: float | None,
+    seconds: float | None,
+    vehicle: str | None,
+    seed: int | None,
+) -> tuple[ScenarioConfig, VehicleConfig, Path | None]:
+    """The scenario of the options and its file, as ``robosoc fly`` resolves them (SCENARIO or
+    ``--scenario``, ``--duration`` or ``--seconds``; errors name the option or field)."""
     from robosoc.cli.scenario import load_scenario
     from robosoc.config.vehicle import vehicle_preset
 
-    config, _ = load_scenario(scenario, "--scenario")
+    path, label = scenario_source(scenario, scenario_file)
+    length = duration_change(duration, seconds)
+    config, _ = load_scenario(path, label)
     changes = {}
-    if seconds is not None:
-        changes["--seconds"] = ("duration_s", seconds)
+    if length is not None:
+        changes[length[0]] = ("duration_s", length[1])
     if vehicle is not None:
         changes["--vehicle"] = ("vehicle", vehicle)
     if seed is not None:
         changes["--seed"] = ("seed", seed)
-    config = options.override(config, changes, [str(scenario)] if scenario is not None else ())
+    config = options.override(config, changes, [str(path)] if path is not None else ())
     if round(config.duration_s * config.sensors.rate_hz) < 1:
-        where = "--seconds" if seconds is not None else f"--scenario: {scenario}: duration_s"
+        where = length[0] if length is not None else f"{path}: duration_s"
         raise options.fail(where, f"a flight lasts at least one sensor period, got {config.duration_s:g} s")
-    return config, vehicle_preset(config.vehicle)
+    return config, vehicle_preset(config.vehicle), path
 
 
 def _out(out: Path | None, no_out: bool, side: str, name: str, seed: int, scenario: Path | None) -> Path | None:
@@ -79,9 +97,11 @@ def _out(out: Path | None, no_out: bool, side: str, name: str, seed: int, scenar
 
 @serve_app.command("physics", epilog=exit_codes.SERVE_EPILOG)
 def serve_physics_command(
-    seconds: Duration = None,
+    scenario_file: ScenarioArg = None,
+    duration: Duration = None,
+    seconds: SecondsAlias = None,
     seed: Seed = None,
-    scenario: Scenario = None,
+    scenario: ScenarioAlias = None,
     vehicle: Vehicle = None,
     out: Annotated[
         Path | None,
@@ -106,7 +126,7 @@ def serve_physics_command(
     from robosoc.cosim.link import LinkError, parse_address
 
     console = make_console()
-    config, craft = resolve_scenario(scenario, seconds, vehicle, seed)
+    config, craft, scenario = resolve_scenario(scenario, scenario_file, duration, seconds, vehicle, seed)
     seed = config.seed
     link = link_options.link_config(pace, hold, faults, resend, peer_timeout, connect_timeout)
     folder = _out(out, no_out, "physics", config.name, seed, scenario)
@@ -156,9 +176,11 @@ def serve_physics_command(
 
 @serve_app.command("chip", epilog=exit_codes.SERVE_EPILOG)
 def serve_chip_command(
-    seconds: Duration = None,
+    scenario_file: ScenarioArg = None,
+    duration: Duration = None,
+    seconds: SecondsAlias = None,
     seed: Seed = None,
-    scenario: Scenario = None,
+    scenario: ScenarioAlias = None,
     vehicle: Vehicle = None,
     arith: Arith = None,
     mul: Mul = None,
@@ -187,7 +209,7 @@ def serve_chip_command(
     from robosoc.cosim.link import LinkError, parse_address
 
     console = make_console()
-    config, craft = resolve_scenario(scenario, seconds, vehicle, seed)
+    config, craft, scenario = resolve_scenario(scenario, scenario_file, duration, seconds, vehicle, seed)
     seed = config.seed
     link = link_options.link_config(
         faults=faults, resend=resend, peer_timeout=peer_timeout, connect_timeout=connect_timeout
