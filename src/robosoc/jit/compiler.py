@@ -22,7 +22,7 @@ import llvmlite.binding as llvm
 from robosoc.toolchain.cache import cache_root
 
 #: Bumped whenever the pipeline or the IR conventions change, to invalidate old objects.
-PIPELINE_VERSION = 3
+PIPELINE_VERSION = 4
 
 
 @dataclass
@@ -30,7 +30,12 @@ class CompileStats:
     modules: int = 0
     cache_hits: int = 0
     reused: int = 0  # already loaded in this process
-    seconds: float = 0.0
+    seconds: float = 0.0  # wall time of add(): everything below plus loading into the JIT
+    parse_seconds: float = 0.0
+    optimise_seconds: float = 0.0
+    codegen_seconds: float = 0.0
+    load_seconds: float = 0.0  # into the JIT engine (linking)
+    cpu_seconds: float = 0.0  # process time of add()
 
 
 class Compiler:
@@ -60,8 +65,6 @@ class Compiler:
         pm.add_sroa_pass()
         pm.add_instruction_combine_pass()
         pm.add_simplify_cfg_pass()
-        pm.add_dead_store_elimination_pass()
-        pm.add_instruction_combine_pass()
         pm.run(module, self.pb)
 
     def object_code(self, ir_text: str) -> tuple[bytes, bool]:
@@ -72,10 +75,17 @@ class Compiler:
             path = self.cache_dir / key[:2] / f"{key}.o"
             if path.is_file():
                 return path.read_bytes(), True
+        t0 = time.perf_counter()
         module = llvm.parse_assembly(ir_text)
         module.verify()
+        t1 = time.perf_counter()
         self._optimise(module)
+        t2 = time.perf_counter()
         obj = self.tm.emit_object(module)
+        t3 = time.perf_counter()
+        self.stats.parse_seconds += t1 - t0
+        self.stats.optimise_seconds += t2 - t1
+        self.stats.codegen_seconds += t3 - t2
         if path is not None:
             path.parent.mkdir(parents=True, exist_ok=True)
             fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".tmp")
@@ -91,13 +101,15 @@ class Compiler:
         derived from the cache key, so a region translated again (another run, or after
         self-modifying code) reuses the code already loaded.
         """
-        start = time.perf_counter()
+        start, cpu = time.perf_counter(), time.process_time()
         stem = "r" + self.key(ir_template)[:32]
         real = [n.replace(placeholder, stem) for n in names]
         if real[0] not in self.loaded:
             obj, hit = self.object_code(ir_template.replace(placeholder, stem))
+            t0 = time.perf_counter()
             self.engine.add_object_file(llvm.ObjectFileRef.from_data(obj))
             self.engine.finalize_object()
+            self.stats.load_seconds += time.perf_counter() - t0
             for n in real:
                 address = self.engine.get_function_address(n)
                 if not address:
@@ -108,6 +120,7 @@ class Compiler:
         else:
             self.stats.reused += 1
         self.stats.seconds += time.perf_counter() - start
+        self.stats.cpu_seconds += time.process_time() - cpu
         return [self.loaded[n] for n in real]
 
 

@@ -46,7 +46,7 @@ class _Translated:
 
     region: Region
     emitted: EmittedRegion
-    addresses: list[int]  # of the block functions, in block order
+    address: int  # of the region function (0: nothing translated)
     pcs: np.ndarray  # word indices of the translated instructions
     words: np.ndarray  # their contents when translated
 
@@ -103,6 +103,7 @@ class TranslatingCore:
             self._jt = JitArrays(
                 entry_fn=np.zeros(words, dtype=np.int64),
                 entry_slot=np.zeros(words, dtype=np.int64),
+                entry_blk=np.zeros(words, dtype=np.int64),
                 hot=hot,
                 tmap=np.zeros(words, dtype=np.uint8),
                 tpcs=np.zeros(0, dtype=np.int64),
@@ -172,13 +173,12 @@ class TranslatingCore:
         region = discover(view, pc, translated=lambda a: jt.entry_fn[(a - base) >> 2] != 0)
         if region.blocks:
             emitted = emit_region(target, region)
-            names = list(emitted.block_names.values())
-            addresses = self.compiler.add(emitted.ir, NAME_PLACEHOLDER, names)
+            address = self.compiler.add(emitted.ir, NAME_PLACEHOLDER, [emitted.function])[0]
             pcs = np.array(sorted((p - base) >> 2 for p in region.words()), dtype=np.int64)
         else:
-            emitted, addresses = EmittedRegion(ir="", block_names={}), []
+            emitted, address = EmittedRegion(ir="", function="", blocks={}), 0
             pcs = np.array([(pc - base) >> 2], dtype=np.int64)
-        done = _Translated(region, emitted, addresses, pcs, m32[pcs].copy())
+        done = _Translated(region, emitted, address, pcs, m32[pcs].copy())
         _TRANSLATED.setdefault((target, has_mul), []).append(done)
         self._install(done)
         self.stats.regions += 1
@@ -196,11 +196,12 @@ class TranslatingCore:
         slot_base = self._nslots
         self._add_slots(done.emitted.slots, slot_base)
         jt = self._jt
-        for start, address in zip(done.emitted.block_names, done.addresses, strict=True):
+        for start, k in done.emitted.blocks.items():
             i = (start - base) >> 2
             if jt.entry_fn[i] == 0:
-                jt.entry_fn[i] = address
+                jt.entry_fn[i] = done.address
                 jt.entry_slot[i] = slot_base
+                jt.entry_blk[i] = k
         jt.tmap[done.pcs] = 1
         n = int(jt.ctx[CTX_WORDS])
         self._jt = jt = jt._replace(
