@@ -62,6 +62,7 @@ class Compiler:
 
     def _optimise(self, module: llvm.ModuleRef) -> None:
         pm = llvm.create_new_module_pass_manager()
+        pm.add_always_inliner_pass()
         pm.add_sroa_pass()
         pm.add_instruction_combine_pass()
         pm.add_simplify_cfg_pass()

@@ -162,8 +162,6 @@ class _Writer:
         self.cyc = "%cyc"  # SSA value of the cycle count at the last dynamic change
         self.pending = 0  # cycles of the instructions since then
         self.cur = "entry"  # the basic block being written
-        #: ways out to the dispatch loop: (from label, X_* code, pc, count slot or -1, cycle)
-        self.exits: list[tuple[str, int, int | str, int, str]] = []
         self.jumps: list[tuple[str, str, str]] = []  # through the entry table: (from label, pc, cycle)
 
     def tmp(self) -> str:
@@ -252,9 +250,13 @@ class _Writer:
     # --- leaving a block ----------------------------------------------------------------------
     def leave(self, code: int, pc: int | str, slot: int = -1, cyc: str | None = None) -> None:
         """Return ``code`` to the dispatch loop with pc and cycle in ctx (and one count to ``slot``)."""
-        self.exits.append((self.cur, code, pc, slot, cyc or self.cycles()))
+        cyc = cyc or self.cycles()
         self.flush()
-        self.emit("br label %exit")
+        self.emit(f"store i64 {pc}, i64* {self.field('%ctx', CTX_PC)}")
+        self.emit(f"store i64 {cyc}, i64* {self.field('%ctx', CTX_CYC)}")
+        if slot >= 0:
+            self.add_i64(self.field("%cnt", slot), 1)
+        self.emit(f"ret i32 {code}")
 
     def branch(self, pc: int, cyc: str) -> None:
         """Continue at this region's block at ``pc`` (a branch within the function)."""
@@ -268,8 +270,8 @@ class _Writer:
         self.flush()
         self.emit("br label %jump")
 
-    def exit_blocks(self) -> None:
-        """The function's two shared ways out: ``jump`` (through the entry table) and ``exit``."""
+    def jump_block(self) -> None:
+        """The function's shared way out through the entry table (``jump``), when a block uses it."""
         if self.jumps:
             self.put_label("jump")
             self.emit(f"%jpc = phi i64 {', '.join(f'[ {pc}, %{lb} ]' for lb, pc, _ in self.jumps)}")
@@ -282,8 +284,9 @@ class _Writer:
             self.emit(f"{fa} = load i64, i64* {fe}")
             none = self.tmp()
             self.emit(f"{none} = icmp eq i64 {fa}, 0")
-            self.exits.append(("jump", X_JUMP, "%jpc", -1, "%jcyc"))
-            self.emit("br i1 " + none + ", label %exit, label %jgo")
+            self.emit(f"br i1 {none}, label %jx, label %jgo")
+            self.put_label("jx")
+            self.leave(X_JUMP, "%jpc", -1, "%jcyc")
             self.put_label("jgo")
             se, sl, be, bl, ca, so, cn, cp, f, r = (self.tmp() for _ in range(10))
             self.emit(f"{se} = getelementptr i64, i64* {self.ctx_ptr(CTX_ENTRY_SLOT)}, i64 {i}")
@@ -298,19 +301,6 @@ class _Writer:
             args = f"i64* %ctx, i32* %regs, i8* %mem, i64* {cp}, i64 %jcyc, i64 %limit, i64 {bl}"
             self.emit(f"{r} = musttail call i32 {f}({args})")
             self.emit(f"ret i32 {r}")
-        if self.exits:
-            self.put_label("exit")
-            for var, ty, k in (("%xcode", "i32", 1), ("%xpc", "i64", 2), ("%xslot", "i64", 3), ("%xcyc", "i64", 4)):
-                self.emit(f"{var} = phi {ty} {', '.join(f'[ {x[k]}, %{x[0]} ]' for x in self.exits)}")
-            self.emit(f"store i64 %xpc, i64* {self.field('%ctx', CTX_PC)}")
-            self.emit(f"store i64 %xcyc, i64* {self.field('%ctx', CTX_CYC)}")
-            self.emit("%xhas = icmp sge i64 %xslot, 0")
-            self.emit("br i1 %xhas, label %xcount, label %xdone")
-            self.put_label("xcount")
-            self.add_i64(self.field("%cnt", "%xslot"), 1)
-            self.emit("br label %xdone")
-            self.put_label("xdone")
-            self.emit("ret i32 %xcode")
 
     def goto(self, pc: int, cyc: str) -> None:
         """Continue at the static ``pc``: this region's block there, or through the entry table."""
@@ -322,10 +312,11 @@ class _Writer:
 
     def cond_exit(self, cond: str, code: int, pc: int, slot: int, stem: str) -> None:
         """Leave to the dispatch loop when ``cond``, else go on in a new label."""
-        ok = self.label(stem)
-        self.exits.append((self.cur, code, pc, slot, self.cycles()))
+        x, ok = self.label(f"{stem}.x"), self.label(stem)
         self.flush()
-        self.emit(f"br i1 {cond}, label %exit, label %{ok}")
+        self.emit(f"br i1 {cond}, label %{x}, label %{ok}")
+        self.put_label(x)
+        self.leave(code, pc, slot)
         self.put_label(ok)
 
     # --- counting -----------------------------------------------------------------------------
@@ -382,7 +373,7 @@ class _Writer:
         """The region function: the entry switch over the block index, then every block."""
         for block in self.region.blocks.values():
             self.block(block)
-        self.exit_blocks()
+        self.jump_block()
         body, self.lines = self.lines, [f"define i32 @{self.name}({_PARAMS}) nounwind {{", "entry:"]
         self.emit("%cycp = alloca i64")
         self.emit("store i64 %cyc, i64* %cycp")
@@ -568,7 +559,7 @@ def _mul_latency_ir() -> str:
     lines = [
         f"@mulchunk = internal unnamed_addr constant [8192 x i8] {_bytes_const(_MUL_CHUNK.reshape(-1))}",
         f"@multail = internal unnamed_addr constant [1024 x i8] {_bytes_const(_TAIL.reshape(-1))}",
-        "define internal i64 @mul_latency(i32 %b32) nounwind readnone {",
+        "define internal i64 @mul_latency(i32 %b32) nounwind readnone alwaysinline {",
         "  %b = zext i32 %b32 to i64",
         "  %a0 = add i64 0, " + str(MUL_BASE_CYCLES),  # cycles so far
         "  %o0 = add i64 0, 0",  # the table row: where the previous byte left the counter
