@@ -250,7 +250,7 @@ def run_translated(
             interpret = True  # unless control returns here often (an interrupted polling loop)
             ctx[CTX_MIDBLOCK] += 1
             h = jt.hot[i]
-            if h >= 0:
+            if h > NEVER_TRANSLATE:
                 h += 1
                 jt.hot[i] = h
                 if h >= threshold * MIDBLOCK_FACTOR:
@@ -258,7 +258,7 @@ def run_translated(
                     break
         else:
             h = jt.hot[i]
-            if h >= 0:
+            if h > NEVER_TRANSLATE:
                 h += 1
                 jt.hot[i] = h
                 if h >= threshold:
