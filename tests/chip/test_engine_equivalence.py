@@ -213,3 +213,82 @@ def test_a_region_translated_once_is_reused_by_the_next_core() -> None:
     c = make_soc([*words[:2], A.i("addi", 11, 0, 41), *words[3:]], engine="jit")
     c.run(max_cycles=10_000)
     assert c.translator.stats.regions >= 1
+
+
+# ---------------------------------------------------------------- region structure and tiers
+
+
+def test_many_small_chained_regions_run_as_on_the_interpreter(monkeypatch) -> None:
+    """Regions of at most 8 instructions: control crosses regions all the time (tail calls through
+    the entry table, returns into other regions, arrivals inside translated blocks after interrupts)."""
+    import robosoc.jit.engine as engine
+
+    monkeypatch.setattr(engine, "MAX_REGION_INSTRUCTIONS", 8)
+    monkeypatch.setattr(engine, "_TRANSLATED", {})  # nothing reused from the larger regions of other tests
+    words, _ = irq.build(7003, True, "spec")
+    soc = assert_same(words, "jit", irq.MAX_CYCLES, len(words), mul=True, sram_size=irq.SRAM_SIZE)
+    assert soc.translator.stats.regions >= 5
+    assert all(len(b.insns) <= 8 for t in engine._TRANSLATED[soc.translator._key()] for b in t.region.blocks.values())
+
+
+def indirect_calls(count: int) -> list[int]:
+    """main calls one of two functions through a register (jalr ra, 0(t0)) ``count`` times; each returns with ret."""
+    f1, f2 = 12, 15  # word indices of the functions
+    return [
+        A.i("addi", 10, 0, 0),  # 0: acc
+        A.i("addi", 7, 0, count),  # 1: count
+        A.i("andi", 6, 7, 1),  # 2: loop: pick by parity
+        *A.li(5, SRAM_BASE + 4 * f1),  # 3, 4
+        A.branch("beq", 6, 0, 12),  # 5: even -> f1 (to word 8)
+        *A.li(5, SRAM_BASE + 4 * f2),  # 6, 7
+        A.jalr(1, 5, 0),  # 8: call
+        A.i("addi", 7, 7, -1),  # 9
+        A.branch("bne", 7, 0, -32),  # 10: back to word 2
+        A.jal(0, 4 * (18 - 11)),  # 11: to the exit at word 18
+        A.i("addi", 10, 10, 3),  # 12: f1
+        A.i("xori", 10, 10, 5),  # 13
+        A.jalr(0, 1, 0),  # 14: ret
+        A.i("addi", 10, 10, 7),  # 15: f2
+        A.r("add", 10, 10, 10),  # 16
+        A.jalr(0, 1, 0),  # 17: ret
+        *exit_with(10),  # 18
+    ]
+
+
+def test_indirect_calls_through_a_register_run_as_on_the_interpreter() -> None:
+    words = indirect_calls(60)
+    for engine in ENGINES:
+        assert_same(words, engine, 100_000, len(words))
+
+
+def test_auto_compiles_nothing_when_compiling_is_not_worth_it(monkeypatch) -> None:
+    import robosoc.jit.engine as engine
+
+    monkeypatch.setattr(engine, "AUTO_COMPILE_SHARE", 0.0)
+    monkeypatch.setattr(engine, "_TRANSLATED", {})
+    words, _ = irq.build(7004, True, "spec")
+    soc = assert_same(words, "auto", irq.MAX_CYCLES, len(words), mul=True, sram_size=irq.SRAM_SIZE)
+    assert soc.translator.stats.regions == 0
+
+
+def test_auto_installs_regions_compiled_by_an_earlier_run_at_once(tmp_path, monkeypatch) -> None:
+    import robosoc.jit.compiler as compiler
+    import robosoc.jit.engine as engine
+
+    monkeypatch.setenv("ROBOSOC_CACHE", str(tmp_path))
+    monkeypatch.setattr(engine, "_TRANSLATED", {})
+    monkeypatch.setattr(compiler, "_SHARED", None)
+    words = indirect_calls(2000)
+    # the first run may compile whatever turns hot (as a long run would; short stretches sample often)
+    monkeypatch.setattr(engine, "AUTO_COMPILE_SHARE", 1e9)
+    monkeypatch.setattr(engine, "STRETCHES", {"auto": 50})
+    first = assert_same(words, "auto", 1_000_000, len(words))
+    assert first.translator.stats.regions >= 1
+    # a new process (no regions in memory) that may not compile anything: the cached regions still come in
+    monkeypatch.setattr(engine, "AUTO_COMPILE_SHARE", 0.0)
+    monkeypatch.setattr(engine, "_TRANSLATED", {})
+    monkeypatch.setattr(compiler, "_SHARED", None)
+    second = assert_same(words, "auto", 1_000_000, len(words))
+    assert second.translator.stats.regions >= 1
+    stats = second.translator.compiler.stats
+    assert stats.cache_hits == stats.modules >= 1

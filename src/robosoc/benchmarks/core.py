@@ -130,5 +130,7 @@ def _report_translation(console: Console) -> None:
     per_k = f", {stats.seconds / n * 1000:.3f} s per 1000 guest instructions" if n else ""
     console.print(
         f"translation: {n:,} guest instructions in {stats.modules} modules ({compiled} compiled, "
-        f"{stats.cache_hits} from the disk cache), {stats.seconds:.2f} s{per_k}"
+        f"{stats.cache_hits} from the disk cache), {stats.seconds:.2f} s{per_k} (wall: parse "
+        f"{stats.parse_seconds:.2f}, passes {stats.optimise_seconds:.2f}, code generation {stats.codegen_seconds:.2f}, "
+        f"loading {stats.load_seconds:.2f}; CPU {stats.cpu_seconds:.2f} s)"
     )

@@ -22,7 +22,7 @@ import llvmlite.binding as llvm
 from robosoc.toolchain.cache import cache_root
 
 #: Bumped whenever the pipeline or the IR conventions change, to invalidate old objects.
-PIPELINE_VERSION = 3
+PIPELINE_VERSION = 4
 
 
 @dataclass
@@ -30,7 +30,14 @@ class CompileStats:
     modules: int = 0
     cache_hits: int = 0
     reused: int = 0  # already loaded in this process
-    seconds: float = 0.0
+    seconds: float = 0.0  # wall time of add(): everything below plus loading into the JIT
+    parse_seconds: float = 0.0
+    optimise_seconds: float = 0.0
+    codegen_seconds: float = 0.0
+    load_seconds: float = 0.0  # into the JIT engine (linking)
+    cpu_seconds: float = 0.0  # process time of add()
+    compiled_seconds: float = 0.0  # wall time of the modules compiled (not from the disk cache)
+    compiled_instructions: int = 0  # guest instructions in them
 
 
 class Compiler:
@@ -51,31 +58,35 @@ class Compiler:
         self.env = f"llvm{llvm.llvm_version_info} {target.triple} {cpu} {features} pipeline{PIPELINE_VERSION}"
         self.stats = CompileStats()
         self.loaded: dict[str, int] = {}
+        self.stems: set[str] = set()  # modules loaded into the engine
 
     def key(self, ir_text: str) -> str:
         return hashlib.sha256((self.env + "\n" + ir_text).encode()).hexdigest()
 
     def _optimise(self, module: llvm.ModuleRef) -> None:
         pm = llvm.create_new_module_pass_manager()
+        pm.add_always_inliner_pass()
         pm.add_sroa_pass()
         pm.add_instruction_combine_pass()
         pm.add_simplify_cfg_pass()
-        pm.add_dead_store_elimination_pass()
-        pm.add_instruction_combine_pass()
         pm.run(module, self.pb)
 
     def object_code(self, ir_text: str) -> tuple[bytes, bool]:
         """The native object of an IR module, from the cache when there: (bytes, was cached)."""
-        path = None
-        if self.cache_dir is not None:
-            key = self.key(ir_text)
-            path = self.cache_dir / key[:2] / f"{key}.o"
-            if path.is_file():
-                return path.read_bytes(), True
+        path = self._path(ir_text)
+        if path is not None and path.is_file():
+            return path.read_bytes(), True
+        t0 = time.perf_counter()
         module = llvm.parse_assembly(ir_text)
         module.verify()
+        t1 = time.perf_counter()
         self._optimise(module)
+        t2 = time.perf_counter()
         obj = self.tm.emit_object(module)
+        t3 = time.perf_counter()
+        self.stats.parse_seconds += t1 - t0
+        self.stats.optimise_seconds += t2 - t1
+        self.stats.codegen_seconds += t3 - t2
         if path is not None:
             path.parent.mkdir(parents=True, exist_ok=True)
             fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".tmp")
@@ -84,31 +95,73 @@ class Compiler:
             Path(tmp).replace(path)  # readers see a whole object or none
         return obj, False
 
-    def add(self, ir_template: str, placeholder: str, names: list[str]) -> list[int]:
+    def _stem(self, ir_template: str) -> str:
+        return "r" + self.key(ir_template)[:32]
+
+    def _path(self, ir_text: str) -> Path | None:
+        if self.cache_dir is None:
+            return None
+        key = self.key(ir_text)
+        return self.cache_dir / key[:2] / f"{key}.o"
+
+    def add(self, ir_template: str, placeholder: str, names: list[str], instructions: int = 0) -> list[int]:
         """Compile (or load) a module and return the native address of each function in ``names``.
 
         Functions are named in ``ir_template`` with ``placeholder`` as the stem; the real stem is
         derived from the cache key, so a region translated again (another run, or after
         self-modifying code) reuses the code already loaded.
         """
-        start = time.perf_counter()
-        stem = "r" + self.key(ir_template)[:32]
+        start, cpu = time.perf_counter(), time.process_time()
+        stem = self._stem(ir_template)
         real = [n.replace(placeholder, stem) for n in names]
-        if real[0] not in self.loaded:
+        if stem not in self.stems:
             obj, hit = self.object_code(ir_template.replace(placeholder, stem))
+            t0 = time.perf_counter()
             self.engine.add_object_file(llvm.ObjectFileRef.from_data(obj))
             self.engine.finalize_object()
+            self.stats.load_seconds += time.perf_counter() - t0
             for n in real:
                 address = self.engine.get_function_address(n)
                 if not address:
                     raise RuntimeError(f"translated function {n} not found after loading its object")
                 self.loaded[n] = address
+            self.stems.add(stem)
             self.stats.modules += 1
             self.stats.cache_hits += int(hit)
+            if not hit:
+                self.stats.compiled_seconds += time.perf_counter() - start
+                self.stats.compiled_instructions += instructions
         else:
             self.stats.reused += 1
         self.stats.seconds += time.perf_counter() - start
+        self.stats.cpu_seconds += time.process_time() - cpu
         return [self.loaded[n] for n in real]
+
+
+def _manifest_path(key: str) -> Path:
+    return cache_root() / "jit" / "manifests" / f"{key}.txt"
+
+
+def manifest_key(code: bytes, options: str) -> str:
+    """The key of a program's manifest: its code bytes, build options, LLVM and host (as object keys)."""
+    env = f"llvm{llvm.llvm_version_info} {llvm.get_default_triple()} {llvm.get_host_cpu_name()} {PIPELINE_VERSION}"
+    return hashlib.sha256(env.encode() + options.encode() + code).hexdigest()
+
+
+def read_manifest(key: str) -> set[int]:
+    """The region starts compiled before for this program (their objects are likely in the cache)."""
+    try:
+        return {int(line, 16) for line in _manifest_path(key).read_text().split()}
+    except (OSError, ValueError):
+        return set()
+
+
+def add_to_manifest(key: str, start: int) -> None:
+    """Note a compiled region's start in the program's manifest (one line appended: readers see whole lines)."""
+    path = _manifest_path(key)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with path.open("a") as f:
+        f.write(f"{start:08x}\n")
 
 
 _SHARED: Compiler | None = None

@@ -1,20 +1,22 @@
-"""LLVM IR of one region: one function per block, chained by tail calls.
+"""LLVM IR of one region: one function, its blocks as basic blocks.
 
-Each block function checks that its worst-case cycles end before the next event, counts itself,
-runs its instructions and continues with a tail call: to the next block of the region (a direct
-jump in native code), or through the entry table to whichever region has a block at the target
-(an indirect jump), or returns an X_* code of :mod:`robosoc.kernels.jit_dispatch` to the dispatch
-loop.  Every block function has the signature (all arrays distinct, hence ``noalias``)::
+The region function has the signature (all arrays distinct, hence ``noalias``)::
 
-    i32 @block(i64* ctx, i32* regs, i8* mem, i64* cnt, i64 cycle)
+    i32 @region(i64* ctx, i32* regs, i8* mem, i64* cnt, i64 cycle, i64 limit, i64 block)
 
-so every tail call is a true one (``musttail``).  Guest registers stay in the register array (a
-load at first use in a block, a store per write), the cycle count is an argument, the state and
-counter arrays are reached through ``ctx``.  The IR is written as text (faster to produce than
-llvmlite's builder objects).  Loads outside SRAM, stores outside its data part
-(devices, and the loaded code: self-modifying code) and misaligned accesses leave the region
-before the instruction, for the interpreter.  Costs come from the timing classes of
-:mod:`robosoc.isa.table`; instruction counts are count slots (see the dispatch module).
+and starts with a switch over ``block``, the index of the block to enter: the dispatch loop and
+other regions may enter at any block start (the entry table holds each word's function, count-slot
+base and block index).  Each block checks that its worst-case cycles end before the next event,
+counts itself, runs its instructions and continues with a branch to the next block of the region,
+or through the entry table with a tail call to whichever region has a block at the target (an
+indirect jump; ``musttail``, as every region function has the same signature), or returns an X_*
+code of :mod:`robosoc.kernels.jit_dispatch` to the dispatch loop.  Guest registers stay in the
+register array (a load at first use in a block, a store per write); the cycle count is an SSA value
+(a stack slot SROA promotes); the state and counter arrays are reached through ``ctx``.  The IR is
+written as text (faster to produce than llvmlite's builder objects).  Loads outside SRAM, stores
+outside its data part (devices, and the loaded code: self-modifying code) and misaligned accesses
+leave the region before the instruction, for the interpreter.  Costs come from the timing classes
+of :mod:`robosoc.isa.table`; instruction counts are count slots (see the dispatch module).
 """
 
 from __future__ import annotations
@@ -40,6 +42,7 @@ from robosoc.kernels.jit_dispatch import (
     CTX_CNT,
     CTX_CTR,
     CTX_CYC,
+    CTX_ENTRY_BLK,
     CTX_ENTRY_FN,
     CTX_ENTRY_SLOT,
     CTX_PC,
@@ -103,6 +106,7 @@ _ALU_RR = {"add": "add", "sub": "sub", "xor": "xor", "or": "or", "and": "and"}
 _ALU_RI = {"addi": "add", "xori": "xor", "ori": "or", "andi": "and"}
 _SHIFT_I = {"slli": "shl", "srli": "lshr", "srai": "ashr"}
 _SHIFT_R = {"sll": "shl", "srl": "lshr", "sra": "ashr"}
+_SET = {"slt": "slt", "slti": "slt", "sltu": "ult", "sltiu": "ult"}
 _BRANCH = {"beq": "eq", "bne": "ne", "blt": "slt", "bge": "sge", "bltu": "ult", "bgeu": "uge"}
 _LOADS = {"lb": (8, "sext", 0), "lbu": (8, "zext", 0), "lh": (16, "sext", 1), "lhu": (16, "zext", 1), "lw": (32, "", 3)}
 _STORES = {"sb": (8, 0), "sh": (16, 1), "sw": (32, 3)}
@@ -121,14 +125,15 @@ class Target:
 @dataclass
 class EmittedRegion:
     ir: str
-    block_names: dict[int, str]  # block start pc -> function name (with the region's name placeholder)
+    function: str  # the region function's name (with the region's name placeholder)
+    blocks: dict[int, int]  # block start pc -> block index (the function's ``block`` argument)
     #: count slots: (histogram as (opc index, delta) pairs, next slot or -1); a slot's executions are
     #: also added to its next slot's (the chain of a block's prefixes); index TAKEN_INDEX counts taken branches
     slots: list[tuple[list[tuple[int, int]], int]] = field(default_factory=list)
 
 
-_PARAMS = "i64* noalias %ctx, i32* noalias %regs, i8* noalias %mem, i64* noalias %cnt, i64 %cyc, i64 %limit"
-_FN_TYPE = "i32 (i64*, i32*, i8*, i64*, i64, i64)"
+_PARAMS = "i64* noalias %ctx, i32* noalias %regs, i8* noalias %mem, i64* noalias %cnt, i64 %cyc, i64 %limit, i64 %blk"
+_FN_TYPE = "i32 (i64*, i32*, i8*, i64*, i64, i64, i64)"
 #: count-slot index of the taken-branch counter: past the per-operation counters (see flush_counts)
 TAKEN_INDEX = OPC_SIZE + C_TAKEN
 
@@ -146,14 +151,18 @@ class _Writer:
         self.lines: list[str] = []
         self.n = 0
         self.uses_mul = False
-        self.fn = {pc: f"{name}_{k}" for k, pc in enumerate(region.blocks)}
+        self.index = {pc: k for k, pc in enumerate(region.blocks)}
         # where a return (jalr x0, 0(ra)) may land inside the region: the return sites of its calls,
         # when there are few (else returns go through the entry table)
-        sites = {b.next_pc for b in region.blocks.values() if b.end is End.CALL and b.next_pc in self.fn}
+        sites = {b.next_pc for b in region.blocks.values() if b.end is End.CALL and b.next_pc in self.index}
         self.returns = sorted(sites) if len(sites) <= MAX_SWITCH else []
-        self.regs: dict[int, str] = {}
+        self.regs: dict[int, str] = {}  # register -> its current SSA value in this block
+        self.dirty: dict[int, str] = {}  # registers written since the last store to the array
+        self.pointers: dict[str, str] = {}  # SSA name -> its definition, written in the entry block
         self.cyc = "%cyc"  # SSA value of the cycle count at the last dynamic change
         self.pending = 0  # cycles of the instructions since then
+        self.cur = "entry"  # the basic block being written
+        self.jumps: list[tuple[str, str, str]] = []  # through the entry table: (from label, pc, cycle)
 
     def tmp(self) -> str:
         self.n += 1
@@ -168,25 +177,40 @@ class _Writer:
 
     def put_label(self, name: str) -> None:
         self.lines.append(f"{name}:")
+        self.cur = name
 
     # --- state ------------------------------------------------------------------------------
+    def pointer(self, name: str, definition: str) -> str:
+        """``%name``, defined once in the entry block (addresses that hold for the whole call)."""
+        self.pointers.setdefault(f"%{name}", definition)
+        return f"%{name}"
+
+    def reg_ptr(self, r: int) -> str:
+        p = self.tmp()
+        self.emit(f"{p} = getelementptr i32, i32* %regs, i64 {r}")
+        return p
+
     def reg(self, r: int) -> str:
         if r == 0:
             return "0"
         v = self.regs.get(r)
         if v is None:
-            p, v = self.tmp(), self.tmp()
-            self.emit(f"{p} = getelementptr i32, i32* %regs, i64 {r}")
-            self.emit(f"{v} = load i32, i32* {p}")
+            v = self.tmp()
+            self.emit(f"{v} = load i32, i32* {self.reg_ptr(r)}")
             self.regs[r] = v
         return v
 
     def set_reg(self, rd: int, value: str) -> None:
-        p = self.tmp()
-        self.emit(f"{p} = getelementptr i32, i32* %regs, i64 {rd if rd != 0 else SINK}")
-        self.emit(f"store i32 {value}, i32* {p}")
+        """Write ``rd`` (x0: the interpreter's sink); stored to the array before the next way out."""
+        self.dirty[rd if rd != 0 else SINK] = value
         if rd != 0:
             self.regs[rd] = value
+
+    def flush(self) -> None:
+        """Store the registers written since the last way out (before control can leave this path)."""
+        for r, v in self.dirty.items():
+            self.emit(f"store i32 {v}, i32* {self.reg_ptr(r)}")
+        self.dirty = {}
 
     def cycles(self, extra: int | str = 0) -> str:
         """The cycle count after the instructions so far plus ``extra``, as an SSA value."""
@@ -209,14 +233,12 @@ class _Writer:
         self.emit(f"store i64 {b}, i64* {ptr}")
 
     def ctx_ptr(self, slot: int) -> str:
-        """The address held in ctx[slot] as an i64*."""
-        g, a, p = self.tmp(), self.tmp(), self.tmp()
-        self.emit(f"{g} = getelementptr i64, i64* %ctx, i64 {slot}")
-        self.emit(f"{a} = load i64, i64* {g}")
-        self.emit(f"{p} = inttoptr i64 {a} to i64*")
-        return p
+        """The address held in ctx[slot] as an i64* (loaded once, in the entry block)."""
+        g = self.pointer(f"ctxg{slot}", f"getelementptr i64, i64* %ctx, i64 {slot}")
+        a = self.pointer(f"ctxa{slot}", f"load i64, i64* {g}")
+        return self.pointer(f"ctxp{slot}", f"inttoptr i64 {a} to i64*")
 
-    def field(self, base: str, index: int) -> str:
+    def field(self, base: str, index: int | str) -> str:
         p = self.tmp()
         self.emit(f"{p} = getelementptr i64, i64* {base}, i64 {index}")
         return p
@@ -229,50 +251,69 @@ class _Writer:
     def leave(self, code: int, pc: int | str, slot: int = -1, cyc: str | None = None) -> None:
         """Return ``code`` to the dispatch loop with pc and cycle in ctx (and one count to ``slot``)."""
         cyc = cyc or self.cycles()
-        r = self.tmp()
-        self.emit(f"{r} = tail call i32 @leave(i64* %ctx, i64* %cnt, i64 {cyc}, i64 {pc}, i64 {slot}, i32 {code})")
-        self.emit(f"ret i32 {r}")
+        self.flush()
+        self.emit(f"store i64 {pc}, i64* {self.field('%ctx', CTX_PC)}")
+        self.emit(f"store i64 {cyc}, i64* {self.field('%ctx', CTX_CYC)}")
+        if slot >= 0:
+            self.add_i64(self.field("%cnt", slot), 1)
+        self.emit(f"ret i32 {code}")
 
-    def tail(self, fn: str, cnt: str, cyc: str) -> None:
-        r = self.tmp()
-        self.emit(f"{r} = musttail call i32 {fn}(i64* %ctx, i32* %regs, i8* %mem, i64* {cnt}, i64 {cyc}, i64 %limit)")
-        self.emit(f"ret i32 {r}")
+    def branch(self, pc: int, cyc: str) -> None:
+        """Continue at this region's block at ``pc`` (a branch within the function)."""
+        self.flush()
+        self.emit(f"store i64 {cyc}, i64* %cycp")
+        self.emit(f"br label %blk{self.index[pc]}")
 
     def jump(self, pc: str, cyc: str) -> None:
         """Continue at the dynamic ``pc`` (i64): the region with a block there, else the dispatch loop."""
-        off, i = self.tmp(), self.tmp()
-        self.emit(f"{off} = sub i64 {pc}, {self.t.base}")
-        self.emit(f"{i} = lshr i64 {off}, 2")
-        fe, fa = self.tmp(), self.tmp()
-        self.emit(f"{fe} = getelementptr i64, i64* {self.ctx_ptr(CTX_ENTRY_FN)}, i64 {i}")
-        self.emit(f"{fa} = load i64, i64* {fe}")
-        none, go, out = self.tmp(), self.label("go"), self.label("out")
-        self.emit(f"{none} = icmp eq i64 {fa}, 0")
-        self.emit(f"br i1 {none}, label %{out}, label %{go}")
-        self.put_label(out)
-        self.leave(X_JUMP, pc, cyc=cyc)
-        self.put_label(go)
-        se, sl, ca, so, cn, cp, f = (self.tmp() for _ in range(7))
-        self.emit(f"{se} = getelementptr i64, i64* {self.ctx_ptr(CTX_ENTRY_SLOT)}, i64 {i}")
-        self.emit(f"{sl} = load i64, i64* {se}")
-        self.emit(f"{ca} = load i64, i64* {self.field('%ctx', CTX_CNT)}")
-        self.emit(f"{so} = shl i64 {sl}, 3")
-        self.emit(f"{cn} = add i64 {ca}, {so}")
-        self.emit(f"{cp} = inttoptr i64 {cn} to i64*")
-        self.emit(f"{f} = inttoptr i64 {fa} to {_FN_TYPE}*")
-        self.tail(f, cp, cyc)
+        self.jumps.append((self.cur, pc, cyc))
+        self.flush()
+        self.emit("br label %jump")
+
+    def jump_block(self) -> None:
+        """The function's shared way out through the entry table (``jump``), when a block uses it."""
+        if self.jumps:
+            self.put_label("jump")
+            self.emit(f"%jpc = phi i64 {', '.join(f'[ {pc}, %{lb} ]' for lb, pc, _ in self.jumps)}")
+            self.emit(f"%jcyc = phi i64 {', '.join(f'[ {cyc}, %{lb} ]' for lb, _, cyc in self.jumps)}")
+            off, i = self.tmp(), self.tmp()
+            self.emit(f"{off} = sub i64 %jpc, {self.t.base}")
+            self.emit(f"{i} = lshr i64 {off}, 2")
+            fe, fa = self.tmp(), self.tmp()
+            self.emit(f"{fe} = getelementptr i64, i64* {self.ctx_ptr(CTX_ENTRY_FN)}, i64 {i}")
+            self.emit(f"{fa} = load i64, i64* {fe}")
+            none = self.tmp()
+            self.emit(f"{none} = icmp eq i64 {fa}, 0")
+            self.emit(f"br i1 {none}, label %jx, label %jgo")
+            self.put_label("jx")
+            self.leave(X_JUMP, "%jpc", -1, "%jcyc")
+            self.put_label("jgo")
+            se, sl, be, bl, ca, so, cn, cp, f, r = (self.tmp() for _ in range(10))
+            self.emit(f"{se} = getelementptr i64, i64* {self.ctx_ptr(CTX_ENTRY_SLOT)}, i64 {i}")
+            self.emit(f"{sl} = load i64, i64* {se}")
+            self.emit(f"{be} = getelementptr i64, i64* {self.ctx_ptr(CTX_ENTRY_BLK)}, i64 {i}")
+            self.emit(f"{bl} = load i64, i64* {be}")
+            self.emit(f"{ca} = load i64, i64* {self.field('%ctx', CTX_CNT)}")
+            self.emit(f"{so} = shl i64 {sl}, 3")
+            self.emit(f"{cn} = add i64 {ca}, {so}")
+            self.emit(f"{cp} = inttoptr i64 {cn} to i64*")
+            self.emit(f"{f} = inttoptr i64 {fa} to {_FN_TYPE}*")
+            args = f"i64* %ctx, i32* %regs, i8* %mem, i64* {cp}, i64 %jcyc, i64 %limit, i64 {bl}"
+            self.emit(f"{r} = musttail call i32 {f}({args})")
+            self.emit(f"ret i32 {r}")
 
     def goto(self, pc: int, cyc: str) -> None:
         """Continue at the static ``pc``: this region's block there, or through the entry table."""
         pc &= M32
-        if pc in self.fn:
-            self.tail(f"@{self.fn[pc]}", "%cnt", cyc)
+        if pc in self.index:
+            self.branch(pc, cyc)
         else:
             self.jump(str(pc), cyc)
 
     def cond_exit(self, cond: str, code: int, pc: int, slot: int, stem: str) -> None:
         """Leave to the dispatch loop when ``cond``, else go on in a new label."""
         x, ok = self.label(f"{stem}.x"), self.label(stem)
+        self.flush()
         self.emit(f"br i1 {cond}, label %{x}, label %{ok}")
         self.put_label(x)
         self.leave(code, pc, slot)
@@ -294,16 +335,16 @@ class _Writer:
     def block(self, block: Block) -> None:
         insns = block.insns
         worst = sum(WORST_CYCLES[i.ins.timing] for i in insns[:-1])
-        self.lines.append(f"define i32 @{self.fn[block.start]}({_PARAMS}) nounwind {{")
-        self.put_label("entry")
-        self.regs, self.cyc, self.pending = {}, "%cyc", 0
-        e, ok = self.tmp(), self.tmp()
-        self.emit(f"{e} = add i64 %cyc, {worst}")
+        self.put_label(f"blk{self.index[block.start]}")
+        self.regs, self.cyc, self.pending = {}, self.tmp(), 0
+        self.emit(f"{self.cyc} = load i64, i64* %cycp")
+        e, ok, go, lim = self.tmp(), self.tmp(), self.label("go"), self.label("lim")
+        self.emit(f"{e} = add i64 {self.cyc}, {worst}")
         self.emit(f"{ok} = icmp slt i64 {e}, %limit")
-        self.emit(f"br i1 {ok}, label %go, label %lim")
-        self.put_label("lim")
+        self.emit(f"br i1 {ok}, label %{go}, label %{lim}")
+        self.put_label(lim)
         self.leave(X_LIMIT, block.start)
-        self.put_label("go")
+        self.put_label(go)
         # Each way out counts one slot for the instructions executed: a side exit at instruction j
         # counts the prefix before j (a chain of slots, one per exit point), the block's ends the rest
         # after the last exit point (and the taken branch) chained to that point's prefix.
@@ -327,7 +368,20 @@ class _Writer:
                 self.leave(X_SIDE, block.next_pc)
             case End.BRANCH | End.JUMP | End.CALL | End.JALR:
                 self.control(len(insns) - 1, insns[-1])
-        self.lines.append("}")
+
+    def function(self) -> None:
+        """The region function: the entry switch over the block index, then every block."""
+        for block in self.region.blocks.values():
+            self.block(block)
+        self.jump_block()
+        body, self.lines = self.lines, [f"define i32 @{self.name}({_PARAMS}) nounwind {{", "entry:"]
+        self.emit("%cycp = alloca i64")
+        self.emit("store i64 %cyc, i64* %cycp")
+        for name, definition in self.pointers.items():
+            self.emit(f"{name} = {definition}")
+        cases = " ".join(f"i64 {k}, label %blk{k}" for k in range(1, len(self.index)))
+        self.emit(f"switch i64 %blk, label %blk0 [ {cases} ]")
+        self.lines += [*body, "}"]
 
     # --- instructions -------------------------------------------------------------------------
     def control(self, j: int, insn: Insn) -> None:
@@ -336,11 +390,13 @@ class _Writer:
         if name in _BRANCH:
             a, b, cond = self.reg(insn.rs1), self.reg(insn.rs2), self.tmp()
             self.emit(f"{cond} = icmp {_BRANCH[name]} i32 {a}, {b}")
-            self.emit(f"br i1 {cond}, label %taken, label %fall")
-            self.put_label("taken")
+            self.flush()
+            taken, fall = self.label("taken"), self.label("fall")
+            self.emit(f"br i1 {cond}, label %{taken}, label %{fall}")
+            self.put_label(taken)
             self.count_end(taken=True)
             self.goto(pc + insn.imm, self.cycles(BRANCH_TAKEN_CYCLES))
-            self.put_label("fall")
+            self.put_label(fall)
             self.count_end()
             self.goto(pc + 4, self.cycles(BRANCH_NOT_TAKEN_CYCLES))
         elif name == "jal":
@@ -362,12 +418,15 @@ class _Writer:
             self.count_end()
             cyc = self.cycles(JUMP_CYCLES)
             targets = self.returns if (insn.rd, insn.rs1, insn.imm) == (0, 1, 0) else []
-            cases = " ".join(f"i32 {_i32(t)}, label %in{k}" for k, t in enumerate(targets))
-            self.emit(f"switch i32 {tgt}, label %other [ {cases} ]")
-            for k, t in enumerate(targets):
-                self.put_label(f"in{k}")
-                self.tail(f"@{self.fn[t]}", "%cnt", cyc)
-            self.put_label("other")
+            labels = [self.label("ret") for _ in targets]
+            other = self.label("other")
+            cases = " ".join(f"i32 {_i32(t)}, label %{lb}" for t, lb in zip(targets, labels, strict=True))
+            self.flush()
+            self.emit(f"switch i32 {tgt}, label %{other} [ {cases} ]")
+            for t, lb in zip(targets, labels, strict=True):
+                self.put_label(lb)
+                self.branch(t, cyc)
+            self.put_label(other)
             z = self.tmp()
             self.emit(f"{z} = zext i32 {tgt} to i64")
             self.jump(z, cyc)
@@ -495,82 +554,52 @@ class _Writer:
         self.emit(f"store i64 {self.cyc}, i64* {self.field(st, S_MUL_END)}")  # the controller's erratum window
 
 
-#: leave(ctx, cnt, cycle, pc, slot, code): back to the dispatch loop with pc and cycle in ctx, one
-#: count to ``slot`` (none when negative); out of line, as ways out are many and cold.
-_LEAVE_IR = f"""
-define internal i32 @leave(i64* %ctx, i64* %cnt, i64 %cyc, i64 %pc, i64 %slot, i32 %code) noinline nounwind cold {{
-  %p = getelementptr i64, i64* %ctx, i64 {CTX_PC}
-  store i64 %pc, i64* %p
-  %c = getelementptr i64, i64* %ctx, i64 {CTX_CYC}
-  store i64 %cyc, i64* %c
-  %has = icmp sge i64 %slot, 0
-  br i1 %has, label %count, label %done
-count:
-  %sp = getelementptr i64, i64* %cnt, i64 %slot
-  %n0 = load i64, i64* %sp
-  %n1 = add i64 %n0, 1
-  store i64 %n1, i64* %sp
-  br label %done
-done:
-  ret i32 %code
-}}
-"""
+def _mul_latency_ir() -> str:
+    """mul_latency(i32 rs2) -> i64: three byte-table lookups as kernels.core.mul_latency does, then the tail."""
+    lines = [
+        f"@mulchunk = internal unnamed_addr constant [8192 x i8] {_bytes_const(_MUL_CHUNK.reshape(-1))}",
+        f"@multail = internal unnamed_addr constant [1024 x i8] {_bytes_const(_TAIL.reshape(-1))}",
+        "define internal i64 @mul_latency(i32 %b32) nounwind readnone alwaysinline {",
+        "  %b = zext i32 %b32 to i64",
+        "  %a0 = add i64 0, " + str(MUL_BASE_CYCLES),  # cycles so far
+        "  %o0 = add i64 0, 0",  # the table row: where the previous byte left the counter
+    ]
+    for k in range(3):  # byte k of rs2 (11 bits: the table looks 3 bits ahead), from row o{k}
+        lines += [
+            f"  %h{k} = lshr i64 %b, {8 * k}",
+            f"  %x{k} = and i64 %h{k}, 2047",
+            f"  %r{k} = shl i64 %o{k}, 11",
+            f"  %w{k} = or i64 %r{k}, %x{k}",
+            f"  %g{k} = getelementptr [8192 x i8], [8192 x i8]* @mulchunk, i64 0, i64 %w{k}",
+            f"  %eb{k} = load i8, i8* %g{k}",
+            f"  %e{k} = zext i8 %eb{k} to i64",
+            f"  %s{k} = lshr i64 %e{k}, 4",
+            f"  %a{k + 1} = add i64 %a{k}, %s{k}",
+            f"  %o{k + 1} = and i64 %e{k}, 15",
+        ]
+    lines += [
+        "  %top = lshr i64 %b, 24",
+        "  %r3 = shl i64 %o3, 8",
+        "  %w3 = or i64 %r3, %top",
+        "  %g3 = getelementptr [1024 x i8], [1024 x i8]* @multail, i64 0, i64 %w3",
+        "  %tb = load i8, i8* %g3",
+        "  %t = zext i8 %tb to i64",
+        "  %lat = add i64 %a3, %t",
+        "  ret i64 %lat",
+        "}",
+    ]
+    return "\n".join(lines)
 
-_SET = {"slt": "slt", "slti": "slt", "sltu": "ult", "sltiu": "ult"}
 
-
-#: mul_latency(i32 rs2) -> i64: three byte-table lookups as kernels.core.mul_latency does, then the tail
-_MUL_LATENCY_IR = f"""
-@mulchunk = internal unnamed_addr constant [8192 x i8] {_bytes_const(_MUL_CHUNK.reshape(-1))}
-@multail = internal unnamed_addr constant [1024 x i8] {_bytes_const(_TAIL.reshape(-1))}
-define internal i64 @mul_latency(i32 %b32) nounwind readnone {{
-  %b = zext i32 %b32 to i64
-  %w0 = and i64 %b, 2047
-  %g0 = getelementptr [8192 x i8], [8192 x i8]* @mulchunk, i64 0, i64 %w0
-  %e0b = load i8, i8* %g0
-  %e0 = zext i8 %e0b to i64
-  %s0 = lshr i64 %e0, 4
-  %o0 = and i64 %e0, 15
-  %h1 = lshr i64 %b, 8
-  %w1a = and i64 %h1, 2047
-  %o0s = shl i64 %o0, 11
-  %w1 = or i64 %o0s, %w1a
-  %g1 = getelementptr [8192 x i8], [8192 x i8]* @mulchunk, i64 0, i64 %w1
-  %e1b = load i8, i8* %g1
-  %e1 = zext i8 %e1b to i64
-  %s1 = lshr i64 %e1, 4
-  %o1 = and i64 %e1, 15
-  %h2 = lshr i64 %b, 16
-  %w2a = and i64 %h2, 2047
-  %o1s = shl i64 %o1, 11
-  %w2 = or i64 %o1s, %w2a
-  %g2 = getelementptr [8192 x i8], [8192 x i8]* @mulchunk, i64 0, i64 %w2
-  %e2b = load i8, i8* %g2
-  %e2 = zext i8 %e2b to i64
-  %s2 = lshr i64 %e2, 4
-  %o2 = and i64 %e2, 15
-  %top = lshr i64 %b, 24
-  %o2s = shl i64 %o2, 8
-  %w3 = or i64 %o2s, %top
-  %g3 = getelementptr [1024 x i8], [1024 x i8]* @multail, i64 0, i64 %w3
-  %tb = load i8, i8* %g3
-  %t = zext i8 %tb to i64
-  %a1 = add i64 %t, %s0
-  %a2 = add i64 %a1, %s1
-  %a3 = add i64 %a2, %s2
-  %lat = add i64 %a3, {MUL_BASE_CYCLES}
-  ret i64 %lat
-}}
-"""
+_MUL_LATENCY_IR = _mul_latency_ir()
 
 
 def emit_region(target: Target, region: Region, name: str = NAME_PLACEHOLDER) -> EmittedRegion:
-    """The IR module of ``region``: one function per block, named ``{name}_{k}``.
+    """The IR module of ``region``: one function named ``name``, its blocks numbered in address order.
 
     Count slots are numbered from 0: the dispatch loop passes the region's first slot as ``cnt``.
     """
     w = _Writer(target, region, name)
-    for block in region.blocks.values():
-        w.block(block)
-    text = "\n".join([_LEAVE_IR, _MUL_LATENCY_IR if w.uses_mul else "", *w.lines, ""])
-    return EmittedRegion(ir=text, block_names=dict(w.fn), slots=w.slots)
+    w.function()
+    text = "\n".join([_MUL_LATENCY_IR if w.uses_mul else "", *w.lines, ""])
+    return EmittedRegion(ir=text, function=name, blocks=dict(w.index), slots=w.slots)

@@ -2,20 +2,22 @@
 
 ``TranslatingCore(state).step_until(until)`` runs like ``run_cores(state.arrays(), [tile], until)``
 and leaves the same RUN_* status; in between it translates the regions that turn hot (``jit``: at
-their first arrival; ``auto``: after :data:`AUTO_THRESHOLD` arrivals).  Counts, cycles, outputs
-and errors are those of the interpreter (docs/translation.md).
+their first arrival; ``auto``: after :data:`AUTO_THRESHOLD` arrivals, and only while compiling stays
+a small share of the run, see :data:`AUTO_COMPILE_SHARE`).  Counts, cycles, outputs and errors are
+those of the interpreter (docs/translation.md).
 """
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
 
-from robosoc.jit.compiler import Compiler, shared_compiler
+from robosoc.jit.compiler import Compiler, add_to_manifest, manifest_key, read_manifest, shared_compiler
 from robosoc.jit.emit_ir import NAME_PLACEHOLDER, EmittedRegion, Target, emit_region
-from robosoc.jit.regions import CodeView, End, Region, discover
+from robosoc.jit.regions import MAX_REGION_INSTRUCTIONS, CodeView, End, Region, discover
 from robosoc.kernels.core_layout import ERRATA_RTL, S_CODE_SIZE, S_ERRATA, S_MEM_BASE, S_MEM_SIZE, S_MUL, S_PC, S_RUN
 from robosoc.kernels.jit_dispatch import (
     CTX_FLUSHES,
@@ -35,7 +37,20 @@ if TYPE_CHECKING:
 #: the program spends its time.
 AUTO_THRESHOLD = 3
 AUTO_STRETCH = 20_000
+#: ``auto`` compiles a region (not in the object cache) only if the compile time spent so far plus
+#: its estimate stays within this share of the time the core has run: whatever the program, auto
+#: then takes at most (1 + share) x the time of the engine without translation, and less as soon
+#: as the translated code runs (ski rental).  A region whose object is cached is installed at once.
+AUTO_COMPILE_SHARE = 0.25
+#: The estimate of a region's compile time before any was measured in this process (measured on
+#: the test programs: about 0.25 ms per guest instruction and 2 ms per module, CPU time).
+ESTIMATED_SECONDS_PER_INSTRUCTION = 0.3e-3
+ESTIMATED_SECONDS_PER_MODULE = 3e-3
+#: Regions of ``auto`` are smaller (a hot loop and what it calls, rather than whole functions): the
+#: cost of each decision stays small.
+AUTO_MAX_REGION_INSTRUCTIONS = 100
 THRESHOLDS = {"jit": 1, "auto": AUTO_THRESHOLD}
+NEVER_ASK = 1 << 40  # a threshold no word reaches
 STRETCHES = {"jit": 0, "auto": AUTO_STRETCH}
 M32 = 0xFFFFFFFF
 
@@ -46,7 +61,7 @@ class _Translated:
 
     region: Region
     emitted: EmittedRegion
-    addresses: list[int]  # of the block functions, in block order
+    address: int  # of the region function (0: nothing translated)
     pcs: np.ndarray  # word indices of the translated instructions
     words: np.ndarray  # their contents when translated
 
@@ -66,6 +81,9 @@ class TranslationStats:
     instructions: int = 0  # guest instructions translated
     flushes: int = 0  # times self-modifying code made the core forget its translations
     reused: int = 0  # regions this process had translated already (same words)
+    deferred: int = 0  # auto: hot regions left to the interpreter for now (compiling would cost too much yet)
+    run_seconds: float = 0.0  # host time in the dispatch loop
+    translate_seconds: float = 0.0  # host time finding, writing and compiling regions (deferrals included)
 
 
 class TranslatingCore:
@@ -78,11 +96,20 @@ class TranslatingCore:
         self.tile = tile
         self.mode = mode
         self.threshold = THRESHOLDS[mode]
-        self.compiler = compiler or shared_compiler()
+        self._compiler = compiler
         self.stats = TranslationStats()
         self._tiles = np.array([tile], dtype=np.int64)
+        self._backoff: dict[int, int] = {}  # auto: word -> deferrals of the region starting there
+        self._sizes: dict[int, int] = {}  # auto: pc -> instructions of the region found there
         self._code_size = -1
         self._jt: JitArrays | None = None
+
+    @property
+    def compiler(self) -> Compiler:
+        """The compiler (created at the first translation: LLVM's set-up is not paid by cold code)."""
+        if self._compiler is None:
+            self._compiler = shared_compiler()
+        return self._compiler
 
     # --- tables -------------------------------------------------------------------------------
     def forget(self) -> None:
@@ -103,6 +130,7 @@ class TranslatingCore:
             self._jt = JitArrays(
                 entry_fn=np.zeros(words, dtype=np.int64),
                 entry_slot=np.zeros(words, dtype=np.int64),
+                entry_blk=np.zeros(words, dtype=np.int64),
                 hot=hot,
                 tmap=np.zeros(words, dtype=np.uint8),
                 tpcs=np.zeros(0, dtype=np.int64),
@@ -121,7 +149,15 @@ class TranslatingCore:
             self._nslots = 0
             self._flushes_seen = 0
             self._install_known()
+            self._known_starts = read_manifest(self._manifest_key()) if self.mode == "auto" else set()
+            self._cached_starts = frozenset(self._known_starts)  # compiled by an earlier run: installed at once
         return self._jt
+
+    def _manifest_key(self) -> str:
+        """The loaded code and build options: the key of the list of regions compiled for them before."""
+        st = self.state.st[self.tile]
+        code = self.state.m8[self.tile, : int(st[S_CODE_SIZE])].tobytes()
+        return manifest_key(code, f"{self._key()!r} {self.mode}")
 
     def _target(self) -> Target:
         st = self.state.st[self.tile]
@@ -157,28 +193,71 @@ class TranslatingCore:
         return self._target(), int(self.state.st[self.tile, S_MUL]) != 0
 
     def translate(self, pc: int) -> Region:
-        """Translate the region starting at ``pc`` and enter its blocks in the tables."""
+        """Translate the region starting at ``pc`` and enter its blocks in the tables.
+
+        With ``auto``, a region that would have to be compiled while compiling is not yet worth it
+        is left to the interpreter: its word is sampled again after twice as many arrivals.
+        """
+        start = time.perf_counter()
+        try:
+            return self._translate(pc)
+        finally:
+            self.stats.translate_seconds += time.perf_counter() - start
+
+    def _budget(self) -> float:
+        """auto: seconds of compiling still allowed (AUTO_COMPILE_SHARE of the run so far, less what was spent)."""
+        return AUTO_COMPILE_SHARE * self.stats.run_seconds - self.stats.translate_seconds
+
+    def _estimate(self, instructions: int) -> float:
+        """Seconds to compile a region of ``instructions`` (from what compiling took so far in this process)."""
+        cs = self.compiler.stats
+        per_insn = ESTIMATED_SECONDS_PER_INSTRUCTION
+        if cs.compiled_instructions:  # the measured figure includes the per-module costs: an upper estimate
+            per_insn = cs.compiled_seconds / cs.compiled_instructions
+        return ESTIMATED_SECONDS_PER_MODULE + per_insn * instructions
+
+    def _defer(self, pc: int) -> None:
+        i = (pc - self._target().base) >> 2
+        n = self._backoff.get(i, 0) + 1
+        self._backoff[i] = n
+        self._tables().hot[i] = -min(self.threshold << n, 1 << 28)  # counts up to the threshold again
+        self.stats.deferred += 1
+
+    def _translate(self, pc: int) -> Region:
         jt = self._tables()
+        rent = self.mode == "auto" and pc not in self._known_starts  # compiled only when worth it
+        if rent and self._estimate(self._sizes.get(pc, 0)) > self._budget():
+            self._defer(pc)  # (not even a region of the size found here before) could be compiled yet
+            return Region(pc, {})
         if jt.ctx[CTX_FLUSHES] != self._flushes_seen:  # self-modifying code: the loop forgot everything
             self.stats.flushes += int(jt.ctx[CTX_FLUSHES]) - self._flushes_seen
             self._flushes_seen = int(jt.ctx[CTX_FLUSHES])
             self._install_known()
+            self._sizes.clear()
             if jt.entry_fn[(pc - self._target().base) >> 2] != 0:
                 return Region(pc, {})
         target, has_mul = self._key()
         base = target.base
         view = self._view()
         m32 = self.state.m32[self.tile]
-        region = discover(view, pc, translated=lambda a: jt.entry_fn[(a - base) >> 2] != 0)
+        cap = AUTO_MAX_REGION_INSTRUCTIONS if self.mode == "auto" else MAX_REGION_INSTRUCTIONS
+        region = discover(view, pc, cap, translated=lambda a: jt.entry_fn[(a - base) >> 2] != 0)
+        if rent:
+            self._sizes[pc] = region.instructions
+            if self._estimate(region.instructions) > self._budget():
+                self._defer(pc)
+                return Region(pc, {})
         if region.blocks:
             emitted = emit_region(target, region)
-            names = list(emitted.block_names.values())
-            addresses = self.compiler.add(emitted.ir, NAME_PLACEHOLDER, names)
+            address = self.compiler.add(emitted.ir, NAME_PLACEHOLDER, [emitted.function], region.instructions)[0]
+            if pc not in self._known_starts and self.compiler.cache_dir is not None:
+                self._known_starts.add(pc)
+                add_to_manifest(self._manifest_key(), pc)
             pcs = np.array(sorted((p - base) >> 2 for p in region.words()), dtype=np.int64)
         else:
-            emitted, addresses = EmittedRegion(ir="", block_names={}), []
+            emitted, address = EmittedRegion(ir="", function="", blocks={}), 0
             pcs = np.array([(pc - base) >> 2], dtype=np.int64)
-        done = _Translated(region, emitted, addresses, pcs, m32[pcs].copy())
+        done = _Translated(region, emitted, address, pcs, m32[pcs].copy())
         _TRANSLATED.setdefault((target, has_mul), []).append(done)
         self._install(done)
         self.stats.regions += 1
@@ -196,11 +275,12 @@ class TranslatingCore:
         slot_base = self._nslots
         self._add_slots(done.emitted.slots, slot_base)
         jt = self._jt
-        for start, address in zip(done.emitted.block_names, done.addresses, strict=True):
+        for start, k in done.emitted.blocks.items():
             i = (start - base) >> 2
             if jt.entry_fn[i] == 0:
-                jt.entry_fn[i] = address
+                jt.entry_fn[i] = done.address
                 jt.entry_slot[i] = slot_base
+                jt.entry_blk[i] = k
         jt.tmap[done.pcs] = 1
         n = int(jt.ctx[CTX_WORDS])
         self._jt = jt = jt._replace(
@@ -240,7 +320,19 @@ class TranslatingCore:
         arrays = self.state.arrays()
         st = self.state.st[self.tile]
         while True:
-            run_translated(arrays, self._tiles, until, self._tables(), self.threshold, STRETCHES[self.mode])
+            start = time.perf_counter()
+            jt = self._tables()
+            threshold = self.threshold
+            if (
+                self.mode == "auto"
+                and not self._cached_starts
+                and self._budget() < self._estimate(AUTO_MAX_REGION_INSTRUCTIONS)
+            ):
+                threshold = (
+                    NEVER_ASK  # not every region could be compiled yet: the loop need not ask (it still samples)
+                )
+            run_translated(arrays, self._tiles, until, jt, threshold, STRETCHES[self.mode])
+            self.stats.run_seconds += time.perf_counter() - start
             status = int(st[S_RUN])
             if status != RUN_TRANSLATE:
                 return status

@@ -70,12 +70,16 @@ CTX_CNT = 10
 CTX_ST = 11
 CTX_CTR = 12
 CTX_WORDS = 13  # entries of tpcs/twords that hold translated words (0 after forgetting them)
+CTX_ENTRY_BLK = 14
+CTX_MIDBLOCK = 15  # interpreter steps at translated words that start no block (statistics)
 CTX_SIZE = 16
 
 # dispatcher results beyond the interpreter's RUN_* codes
 RUN_TRANSLATE = 100  # the pc in st[S_PC] turned hot: translate a region there and call again
 
-NEVER_TRANSLATE = -(1 << 30)  # hot counter of a word no region can start at
+NEVER_TRANSLATE = -(1 << 30)
+#: arrivals inside a translated block (threshold times this) before a region starts there too
+MIDBLOCK_FACTOR = 8  # hot counter of a word no region can start at
 
 _STORE_OPCODE = 0x23
 _SYSTEM_OPCODE = 0x73
@@ -87,17 +91,18 @@ M32 = 0xFFFFFFFF
 class JitArrays(NamedTuple):
     """The translator's tables, one entry per word of the loaded code plus one (the word after it).
 
-    ``entry_fn`` native address of the translated block starting at the word (0: none),
-    ``entry_slot`` its region's first count slot, ``hot`` arrivals at a word without an entry (NEVER_TRANSLATE:
-    none can start there), ``tmap`` 1 for words some region translated, ``tpcs``/``twords`` those words' indices and
-    contents when translated, ``cnt`` executions per count
-    slot, ``slot_ptr``/``slot_kc``/``slot_delta`` each slot's histogram (CSR), ``slot_next`` the slot whose
-    count a slot's executions are also added to (-1: none; always an earlier slot), ``ctx`` the region
-    call's in/out slots.
+    ``entry_fn`` native address of the region function with a block starting at the word (0: none),
+    ``entry_slot`` its region's first count slot, ``entry_blk`` the block's index in it, ``hot``
+    arrivals at a word without an entry (NEVER_TRANSLATE: none can start there), ``tmap`` 1 for
+    words some region translated, ``tpcs``/``twords`` those words' indices and contents when
+    translated, ``cnt`` executions per count slot, ``slot_ptr``/``slot_kc``/``slot_delta`` each
+    slot's histogram (CSR), ``slot_next`` the slot whose count a slot's executions are also added
+    to (-1: none; always an earlier slot), ``ctx`` the region call's in/out slots.
     """
 
     entry_fn: np.ndarray
     entry_slot: np.ndarray
+    entry_blk: np.ndarray
     hot: np.ndarray
     tmap: np.ndarray
     tpcs: np.ndarray
@@ -111,17 +116,17 @@ class JitArrays(NamedTuple):
 
 
 @intrinsic
-def call_region(typingctx, fn, ctx, regs, mem, cnt, cyc, limit):  # type: ignore[no-untyped-def]
-    """Call the translated block at native address ``fn`` (array addresses, cycle, limit); its X_* code."""
-    sig = types.int32(types.int64, *([types.int64] * 6))
+def call_region(typingctx, fn, ctx, regs, mem, cnt, cyc, limit, blk):  # type: ignore[no-untyped-def]
+    """Call the region function at native address ``fn`` (array addresses, cycle, limit, block); its X_* code."""
+    sig = types.int32(types.int64, *([types.int64] * 7))
 
     def codegen(context, builder, signature, args):  # type: ignore[no-untyped-def]
         i64 = ir.IntType(64)
         ptrs = [i64.as_pointer(), ir.IntType(32).as_pointer(), ir.IntType(8).as_pointer(), i64.as_pointer()]
-        fnty = ir.FunctionType(ir.IntType(32), [*ptrs, i64, i64])
+        fnty = ir.FunctionType(ir.IntType(32), [*ptrs, i64, i64, i64])
         f = builder.inttoptr(args[0], fnty.as_pointer())
         call_args = [builder.inttoptr(a, t) for a, t in zip(args[1:5], ptrs, strict=True)]
-        return builder.call(f, [*call_args, args[5], args[6]])
+        return builder.call(f, [*call_args, *args[5:8]])
 
     return sig, codegen
 
@@ -152,6 +157,7 @@ def flush_counts(jt: JitArrays, opc_t: np.ndarray, ctr_t: np.ndarray) -> None:
 def _forget_translations(jt: JitArrays) -> None:
     jt.entry_fn[:] = 0
     jt.entry_slot[:] = 0
+    jt.entry_blk[:] = 0
     jt.hot[:] = 0
     jt.tmap[:] = 0
     jt.ctx[CTX_WORDS] = 0
@@ -204,6 +210,7 @@ def run_translated(
     p_ctr = np.int64(ctr[t].ctypes.data)
     ctx[CTX_ENTRY_FN] = np.int64(jt.entry_fn.ctypes.data)
     ctx[CTX_ENTRY_SLOT] = np.int64(jt.entry_slot.ctypes.data)
+    ctx[CTX_ENTRY_BLK] = np.int64(jt.entry_blk.ctypes.data)
     ctx[CTX_CNT] = p_cnt
     ctx[CTX_ST] = p_st
     ctx[CTX_CTR] = p_ctr
@@ -231,7 +238,7 @@ def run_translated(
         interpret = False
         fn = jt.entry_fn[i]
         if fn != 0:
-            x = call_region(fn, p_ctx, p_regs, p_mem, p_cnt + 8 * jt.entry_slot[i], cyc, next_event)
+            x = call_region(fn, p_ctx, p_regs, p_mem, p_cnt + 8 * jt.entry_slot[i], cyc, next_event, jt.entry_blk[i])
             ctx[CTX_CALLS] += 1
             pc = ctx[CTX_PC]
             cyc = ctx[CTX_CYC]
@@ -239,9 +246,19 @@ def run_translated(
                 interpret = True
                 if x == X_LIMIT:
                     ctx[CTX_LIMITS] += 1
+        elif jt.tmap[i] != 0:  # inside a translated block (after an event): step to the next block start,
+            interpret = True  # unless control returns here often (an interrupted polling loop)
+            ctx[CTX_MIDBLOCK] += 1
+            h = jt.hot[i]
+            if h > NEVER_TRANSLATE:
+                h += 1
+                jt.hot[i] = h
+                if h >= threshold * MIDBLOCK_FACTOR:
+                    status = RUN_TRANSLATE
+                    break
         else:
             h = jt.hot[i]
-            if h >= 0:
+            if h > NEVER_TRANSLATE:
                 h += 1
                 jt.hot[i] = h
                 if h >= threshold:
