@@ -18,6 +18,7 @@ from robosoc.kernels.core_layout import (
     OPC_SIZE,
     OUT_CAPACITY,
     PIPELINE_FILL,
+    PROF_OFF_MASK,
     S_CODE_SIZE,
     S_CYCLE,
     S_ERRATA,
@@ -32,6 +33,8 @@ from robosoc.kernels.core_layout import (
     S_MUL,
     S_MULHSU_PC,
     S_PC,
+    S_PROF_BASE,
+    S_PROF_MASK,
     S_T1_CTC,
     ST_SIZE,
 )
@@ -58,6 +61,8 @@ class CoreState:
     m32: np.ndarray
     dec: np.ndarray
     out: np.ndarray
+    prof: np.ndarray
+    pext: np.ndarray
 
     @classmethod
     def new(
@@ -93,6 +98,7 @@ class CoreState:
         st[:, S_IRQMUL_PC] = -1
         st[:, S_T1_CTC] = 0xFFFF
         st[:, S_ERRATA] = errata
+        st[:, S_PROF_MASK] = PROF_OFF_MASK
         state = cls(
             st=st,
             ctr=np.zeros((tiles, CTR_SIZE), dtype=np.int64),
@@ -103,6 +109,8 @@ class CoreState:
             m32=m8.view(np.int32),
             dec=np.zeros((tiles, 2), dtype=np.int32),
             out=np.zeros((tiles, OUT_CAPACITY), dtype=np.uint8),
+            prof=np.zeros((tiles, PROF_OFF_MASK + 1), dtype=np.int64),
+            pext=np.zeros((tiles, PROF_OFF_MASK + 1), dtype=np.int64),
         )
         state.set_code_size(sram_size if code_size is None else code_size)
         return state
@@ -129,6 +137,32 @@ class CoreState:
             end = 2 * (int(self.st[t, S_CODE_SIZE]) // 4)
             self.dec[t, :] = 0
             self.dec[t, end] = OP_FETCH_FAULT
+        if self.profiling and self.profile_stride != self.dec.shape[1] // 2:
+            self.enable_profile(self.prof.shape[1] // self.profile_stride)  # a larger program: start afresh
+
+    # --- the exact profile (robosoc.chip.exact_profile reads it) -------------------------------------
+    @property
+    def profiling(self) -> bool:
+        return bool(self.st[0, S_PROF_MASK] != PROF_OFF_MASK)
+
+    @property
+    def profile_stride(self) -> int:
+        """Columns of one task bank of ``prof``: one per word of the largest loaded code, plus its sentinel."""
+        return self.dec.shape[1] // 2
+
+    def enable_profile(self, banks: int = 1) -> None:
+        """Count every instruction's executions and extra cycles per word of code, in ``banks`` banks
+        (one per task id; the running task's is chosen by ``S_PROF_BASE``, bank 0 from here on).
+
+        Counting starts from zero: enable it before the run for a profile whose totals are the run's.
+        """
+        if banks < 1:
+            raise ValueError(f"banks: at least 1, got {banks}")
+        columns = banks * self.profile_stride
+        self.prof = np.zeros((self.tiles, columns), dtype=np.int64)
+        self.pext = np.zeros((self.tiles, columns), dtype=np.int64)
+        self.st[:, S_PROF_MASK] = -1  # every bit: the column is the word index itself
+        self.st[:, S_PROF_BASE] = 0
 
     def set_breakpoint(self, addr: int, on: bool, tile: int = 0) -> None:
         """Mark (or unmark) the instruction at ``addr``: the core stops before it (RUN_BREAK).
@@ -159,7 +193,10 @@ class CoreState:
 
     def arrays(self) -> CoreArrays:
         """The arrays as the numba kernels take them (a named bundle, no copies)."""
-        return CoreArrays(self.st, self.ctr, self.opc, self.regs, self.m8, self.m16, self.m32, self.dec, self.out)
+        return CoreArrays(
+            self.st, self.ctr, self.opc, self.regs, self.m8, self.m16, self.m32, self.dec, self.out,
+            self.prof, self.pext,
+        )  # fmt: skip
 
     @property
     def tiles(self) -> int:

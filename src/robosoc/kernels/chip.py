@@ -48,6 +48,7 @@ from robosoc.kernels.core_layout import (
     S_MEM_SIZE,
     S_OUT_LEN,
     S_PC,
+    S_PROF_BASE,
     S_RUN,
 )
 from robosoc.kernels.dev_irq import (
@@ -315,6 +316,7 @@ def ni_access(t, core, book, noc):
         account(t, core, book, end)
         record(book.rec, gst, R_TASK, t, end, v, cst[t, K_TASK], pc, cst[t, K_SLEEP_CYCLES], 0)
         cst[t, K_TASK] = v
+        st[t, S_PROF_BASE] = v * (core.prof.shape[1] // NTASKS)  # the task's profile bank (0: not profiling)
         return True
     elif off == ni.SLEEP:
         st[t, S_CYCLE] = end

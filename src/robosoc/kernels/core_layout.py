@@ -51,6 +51,9 @@ S_T1_OCR = 39
 S_UART_DIV = 40
 S_T1_HIST = 41  # 41..43: TIMER1 value | flag << 16 | OCR << 17 in cycles S_T1_REF-3 .. S_T1_REF-1
 S_CODE_SIZE = 44  # bytes from S_MEM_BASE the predecode table covers (the rest of SRAM is data only)
+# the exact profile (CoreArrays.prof/pext): executions of word i are counted in prof[t, PROF_BASE + (i & PROF_MASK)]
+S_PROF_BASE = 45  # first column of the running task's bank (task x stride; 0 when not profiling)
+S_PROF_MASK = 46  # -1 (every bit) when profiling, PROF_OFF_MASK when not (two scratch columns)
 ST_SIZE = 48
 
 # run status
@@ -126,6 +129,8 @@ C_MMIO = 5  # loads and stores that went to device registers
 C_IRQ_LOST = 6  # RTL erratum: interrupts whose vector a taken jump in the shadow of a multiply dropped
 CTR_SIZE = 8
 OPC_SIZE = 512  # per-operation counters, two banks each (operation numbers are bytes)
+
+PROF_OFF_MASK = 1  # S_PROF_MASK of a core that is not profiled: its prof/pext rows have two columns
 
 NEVER = 1 << 62  # a cycle that never comes (event times, wake-ups)
 
