@@ -34,8 +34,10 @@ from typing import Any
 import numpy as np
 
 from robosoc.analysis.energy import INSTRUCTION_CLASSES, STALL_KINDS, EnergyModel
+from robosoc.chip.core_state import CoreState
 from robosoc.chip.elf import Program
 from robosoc.chip.mpsoc import MPSoC
+from robosoc.chip.single import SingleCoreSoC
 from robosoc.isa.table import CLASS_NAMES, FIXED_EXTRA_CYCLES, STALL_KIND, lookup
 from robosoc.kernels.core_layout import PIPELINE_FILL
 
@@ -169,8 +171,7 @@ class _CodeTable:
     dyn_kind: np.ndarray
 
 
-def _code_table(chip: MPSoC, t: int, program: Program | None, words: np.ndarray) -> _CodeTable:
-    base = chip.cores.base
+def _code_table(cores: CoreState, t: int, program: Program | None, words: np.ndarray) -> _CodeTable:
     names: dict[str, int] = {}
     n = len(words)
     function = np.full(n, -1, dtype=np.int64)
@@ -179,8 +180,8 @@ def _code_table(chip: MPSoC, t: int, program: Program | None, words: np.ndarray)
     fixed_kind = np.full(n, -1, dtype=np.int64)
     dyn_kind = np.full(n, -1, dtype=np.int64)
     for j, w in enumerate(words):
-        pc = base + 4 * int(w)
-        ins = lookup(int(chip.cores.m32[t, int(w)]) & 0xFFFFFFFF)
+        pc = cores.base + 4 * int(w)
+        ins = lookup(int(cores.m32[t, int(w)]) & 0xFFFFFFFF)
         if ins is None or ins.unsupported:
             continue  # an illegal or unimplemented instruction stops the core: no cycle, not counted
         sym = program.symbol_at(pc) if program is not None else None
@@ -194,14 +195,52 @@ def _code_table(chip: MPSoC, t: int, program: Program | None, words: np.ndarray)
     return _CodeTable(list(names), function, cls, fixed, fixed_kind, dyn_kind)
 
 
+def tile_rows(
+    cores: CoreState,
+    t: int,
+    xy: tuple[int, int],
+    program: Program | None,
+    counters: Mapping[int, Mapping[str, int]],
+    model: EnergyModel,
+    task_names: Mapping[int, str],
+) -> list[ProfileRow]:
+    """The rows of core ``t`` (shown as tile ``xy``) of a profiled run: its functions per task bank,
+    and per task the rows that are not functions, from ``counters`` (task -> its counters, as
+    :meth:`MPSoC.task_counters` gives them).
+
+    Raises:
+        RuntimeError: profiling was not enabled.
+    """
+    if not cores.profiling:
+        raise RuntimeError("profiling is off: enable it before the run")
+    stride = cores.profile_stride
+    banks = cores.prof[t].reshape(-1, stride)
+    extras = cores.pext[t].reshape(-1, stride)
+    words = np.nonzero(banks.any(axis=0))[0]
+    table = _code_table(cores, t, program, words)
+    rows: list[ProfileRow] = []
+    for task in sorted(set(counters) | set(np.nonzero(banks.any(axis=1))[0].tolist())):
+        name = task_names.get(task, f"task {task}")
+        rows += _task_rows(xy, task, name, banks[task, words], extras[task, words], table, model)
+        c = counters.get(task, {})
+        for row, counter in OTHER_ROWS.items():
+            value = c.get(counter, 0) if counter is not None else 0
+            if row == RESET_ROW and task == 0:
+                value = PIPELINE_FILL  # a core starts in task 0 (TASK_ID reads 0 after reset)
+            if value:
+                counts = {counter: value} if counter is not None else {}
+                rows.append(ProfileRow(xy, task, name, row, value, 0, counts, _energy(model, counts)))
+    return rows
+
+
 def chip_profile(
     chip: MPSoC,
     tiles: Sequence[tuple[int, int]],
     model: EnergyModel,
     task_names: Mapping[tuple[tuple[int, int], int], str] | None = None,
 ) -> FunctionProfile:
-    """The profile of ``tiles`` of a chip run with profiling on (accounting finished: the per-task
-    counters are read for the rows that are not functions), plus the NoC's row.
+    """The profile of ``tiles`` of a chip run with profiling on (:meth:`MPSoC.enable_profile`), plus
+    the NoC's row.  Finishes the chip's accounting (the per-task counters give the other rows).
 
     Raises:
         RuntimeError: profiling was not enabled.
@@ -209,28 +248,20 @@ def chip_profile(
     names = dict(task_names or {})
     chip.finish_accounting()
     rows: list[ProfileRow] = []
-    stride = chip.cores.profile_stride
     for xy in tiles:
         t = chip.config.tile_index(xy)
-        banks = chip.cores.prof[t].reshape(-1, stride)
-        extras = chip.cores.pext[t].reshape(-1, stride)
-        words = np.nonzero(banks.any(axis=0))[0]
-        table = _code_table(chip, t, chip.programs.get(t), words)
-        counters = chip.task_counters(xy)
-        for task in sorted(set(counters) | set(np.nonzero(banks.any(axis=1))[0].tolist())):
-            name = names.get((xy, task), f"task {task}")
-            rows += _task_rows(xy, task, name, banks[task, words], extras[task, words], table, model)
-            c = counters.get(task, {})
-            for row, counter in OTHER_ROWS.items():
-                value = c.get(counter, 0) if counter is not None else 0
-                if row == RESET_ROW and task == 0:
-                    value = PIPELINE_FILL  # the tile starts in task 0 (TASK_ID reads 0 after reset)
-                if value:
-                    counts = {counter: value} if counter is not None else {}
-                    rows.append(ProfileRow(xy, task, name, row, value, 0, counts, _energy(model, counts)))
+        mine = {task: name for (where, task), name in names.items() if where == xy}
+        rows += tile_rows(chip.cores, t, xy, chip.programs.get(t), chip.task_counters(xy), model, mine)
     noc = math.fsum(model.noc_pj(chip.noc_counters()).values())
     rows.append(ProfileRow(None, None, "", NOC_ROW, 0, 0, {}, noc))
     return FunctionProfile(rows, chip.clock_ns)
+
+
+def core_profile(soc: SingleCoreSoC, model: EnergyModel, task_name: str = "program") -> FunctionProfile:
+    """The profile of a single core run with profiling on (:meth:`SingleCoreSoC.enable_profile`),
+    as tile (0, 0), task 0."""
+    rows = tile_rows(soc.state, 0, (0, 0), soc.program, {0: soc.counters()}, model, {0: task_name})
+    return FunctionProfile(rows, model.clock_ns)
 
 
 def _task_rows(
@@ -316,6 +347,8 @@ __all__ = [
     "FunctionProfile",
     "ProfileRow",
     "chip_profile",
+    "core_profile",
     "profile_totals",
     "summary_mismatches",
+    "tile_rows",
 ]

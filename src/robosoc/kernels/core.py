@@ -322,8 +322,8 @@ def run_cores(core: CoreArrays, tiles: np.ndarray, until: int) -> None:
     so that consecutive instructions never wait on the same counter); ``dec`` is the predecode
     table (int32, two per word of loaded code).  The three arrays the loop touches on every
     instruction (registers, predecode, counters) are taken as row views once per tile; the others
-    are indexed in two dimensions, because every view costs reference counting on entry and exit,
-    which dominates the short time slices of a busy many-core chip.
+    (the profile's ``prof`` too) are indexed in two dimensions, because every view costs reference
+    counting on entry and exit, which dominates the short time slices of a busy many-core chip.
 
     ``prof[t, S_PROF_BASE + (i & S_PROF_MASK)]`` counts executions of word i in the running task's
     bank (profiling off: the mask is 1 and the base 0, two scratch columns); ``pext`` at the same
@@ -336,7 +336,6 @@ def run_cores(core: CoreArrays, tiles: np.ndarray, until: int) -> None:
         opc_t = opc[t]
         regs_t = regs[t]
         dec_t = dec[t]
-        prof_t = prof[t]
         pbase = np.uint64(st[t, S_PROF_BASE])
         pmask = np.uint64(st[t, S_PROF_MASK])
         base = st[t, S_MEM_BASE]
@@ -381,7 +380,7 @@ def run_cores(core: CoreArrays, tiles: np.ndarray, until: int) -> None:
             kc = (op << U1) | (i & U1)
             opc_t[kc] += 1  # two banks by word parity: no store-to-load chain
             pk = pbase + (i & pmask)
-            prof_t[pk] += 1
+            prof[t, pk] += 1
 
             if op == ADDI:
                 regs_t[rd] = regs_t[rs1] + imm
@@ -557,7 +556,7 @@ def run_cores(core: CoreArrays, tiles: np.ndarray, until: int) -> None:
                         if n > 0:
                             cyc += JUMP_CYCLES * n
                             opc_t[kc] += n
-                            prof_t[pk] += n
+                            prof[t, pk] += n
                     elif imm == -4 and dec_t[(i << U1) - U2] == NOP_ROW and dec_t[(i << U1) - U1] == 0:
                         period = JUMP_CYCLES + SINGLE_CYCLES
                         n = (next_event - (cyc + JUMP_CYCLES)) // period
@@ -565,8 +564,8 @@ def run_cores(core: CoreArrays, tiles: np.ndarray, until: int) -> None:
                             cyc += period * n
                             opc_t[kc] += n
                             opc_t[(np.uint64(ADDI) << U1) | ((i - U1) & U1)] += n
-                            prof_t[pk] += n
-                            prof_t[pbase + ((i - U1) & pmask)] += n
+                            prof[t, pk] += n
+                            prof[t, pbase + ((i - U1) & pmask)] += n
                 pc = target
                 cyc += JUMP_CYCLES
             elif op == LBU or op == LB or op == LHU or op == LH:
@@ -656,7 +655,7 @@ def run_cores(core: CoreArrays, tiles: np.ndarray, until: int) -> None:
                 pc += 4
             elif op == 0:
                 opc_t[kc] -= 1
-                prof_t[pk] -= 1
+                prof[t, pk] -= 1
                 decode_word(m32[t, i], dec_t, i)
             elif op >= FIRST_SYSTEM and op < ILLEGAL:
                 # SYSTEM opcode: trap.  EPC = trap + 8; the instruction at trap + 8 executes first.
@@ -670,7 +669,7 @@ def run_cores(core: CoreArrays, tiles: np.ndarray, until: int) -> None:
                 break
             elif op == BREAK:
                 opc_t[kc] -= 1  # not executed: a debugger stops the core before it
-                prof_t[pk] -= 1
+                prof[t, pk] -= 1
                 status = RUN_BREAK
                 break
             elif op & UNSUPPORTED_BIT:

@@ -182,7 +182,7 @@ def run_translated(
     own speed, after which the translated words are compared with what was translated (a store the
     interpreter made into them forgets every translation).
     """
-    st, ctr, opc, regs, m8, _m16, m32, _dec, _out, _prof, _pext = core
+    st, ctr, opc, regs, m8, _m16, m32, _dec, _out = core
     t = tiles[0]
     st_t = st[t]
     regs_t = regs[t]
