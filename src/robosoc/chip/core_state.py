@@ -35,6 +35,7 @@ from robosoc.kernels.core_layout import (
     S_PC,
     S_PROF_BASE,
     S_PROF_MASK,
+    S_PROF_STRIDE,
     S_T1_CTC,
     ST_SIZE,
 )
@@ -61,8 +62,6 @@ class CoreState:
     m32: np.ndarray
     dec: np.ndarray
     out: np.ndarray
-    prof: np.ndarray
-    pext: np.ndarray
 
     @classmethod
     def new(
@@ -99,18 +98,17 @@ class CoreState:
         st[:, S_T1_CTC] = 0xFFFF
         st[:, S_ERRATA] = errata
         st[:, S_PROF_MASK] = PROF_OFF_MASK
+        st[:, S_PROF_BASE] = OPC_SIZE
         state = cls(
             st=st,
             ctr=np.zeros((tiles, CTR_SIZE), dtype=np.int64),
-            opc=np.zeros((tiles, OPC_SIZE), dtype=np.int64),
+            opc=np.zeros((tiles, OPC_SIZE + 4 * PROF_OFF_MASK), dtype=np.int64),  # + the profile's scratch
             regs=np.zeros((tiles, 33), dtype=np.int32),
             m8=m8,
             m16=m8.view(np.uint16),
             m32=m8.view(np.int32),
             dec=np.zeros((tiles, 2), dtype=np.int32),
             out=np.zeros((tiles, OUT_CAPACITY), dtype=np.uint8),
-            prof=np.zeros((tiles, PROF_OFF_MASK + 1), dtype=np.int64),
-            pext=np.zeros((tiles, PROF_OFF_MASK + 1), dtype=np.int64),
         )
         state.set_code_size(sram_size if code_size is None else code_size)
         return state
@@ -138,12 +136,24 @@ class CoreState:
             self.dec[t, :] = 0
             self.dec[t, end] = OP_FETCH_FAULT
         if self.profiling and self.profile_stride != self.dec.shape[1] // 2:
-            self.enable_profile(self.prof.shape[1] // self.profile_stride)  # a larger program: start afresh
+            self.enable_profile(self.prof.shape[1] // int(self.st[0, S_PROF_STRIDE]))  # a larger program: afresh
 
-    # --- the exact profile (robosoc.chip.exact_profile reads it) -------------------------------------
+    # --- the exact profile (robosoc.analysis.function_profile reads it) -------------------------------
     @property
     def profiling(self) -> bool:
         return bool(self.st[0, S_PROF_MASK] != PROF_OFF_MASK)
+
+    @property
+    def prof(self) -> np.ndarray:
+        """Executions per tile (rows) and task bank x word of code (columns): a view of the ``opc`` rows."""
+        half = (self.opc.shape[1] - OPC_SIZE) // 2
+        return self.opc[:, OPC_SIZE : OPC_SIZE + half]
+
+    @property
+    def pext(self) -> np.ndarray:
+        """Dynamic extra cycles (taken branches, multiplier steps), laid out as :attr:`prof`."""
+        half = (self.opc.shape[1] - OPC_SIZE) // 2
+        return self.opc[:, OPC_SIZE + half :]
 
     @property
     def profile_stride(self) -> int:
@@ -154,15 +164,18 @@ class CoreState:
         """Count every instruction's executions and extra cycles per word of code, in ``banks`` banks
         (one per task id; the running task's is chosen by ``S_PROF_BASE``, bank 0 from here on).
 
-        Counting starts from zero: enable it before the run for a profile whose totals are the run's.
+        The counts extend the ``opc`` rows (a new array: take :meth:`arrays` again).  Counting starts
+        from zero: enable it before the run for a profile whose totals are the run's.
         """
         if banks < 1:
             raise ValueError(f"banks: at least 1, got {banks}")
-        columns = banks * self.profile_stride
-        self.prof = np.zeros((self.tiles, columns), dtype=np.int64)
-        self.pext = np.zeros((self.tiles, columns), dtype=np.int64)
+        stride = self.profile_stride
+        opc = np.zeros((self.tiles, OPC_SIZE + 2 * banks * stride), dtype=np.int64)
+        opc[:, :OPC_SIZE] = self.opc[:, :OPC_SIZE]
+        self.opc = opc
         self.st[:, S_PROF_MASK] = -1  # every bit: the column is the word index itself
-        self.st[:, S_PROF_BASE] = 0
+        self.st[:, S_PROF_STRIDE] = stride
+        self.st[:, S_PROF_BASE] = OPC_SIZE
 
     def set_breakpoint(self, addr: int, on: bool, tile: int = 0) -> None:
         """Mark (or unmark) the instruction at ``addr``: the core stops before it (RUN_BREAK).
@@ -194,8 +207,7 @@ class CoreState:
     def arrays(self) -> CoreArrays:
         """The arrays as the numba kernels take them (a named bundle, no copies)."""
         return CoreArrays(
-            self.st, self.ctr, self.opc, self.regs, self.m8, self.m16, self.m32, self.dec, self.out,
-            self.prof, self.pext,
+            self.st, self.ctr, self.opc, self.regs, self.m8, self.m16, self.m32, self.dec, self.out
         )  # fmt: skip
 
     @property

@@ -460,7 +460,7 @@ class MPSoC:
         self.cores.enable_profile(kc.NTASKS)
         stride = self.cores.profile_stride
         for t in range(self.config.n_tiles):
-            self.cores.st[t, S_PROF_BASE] = int(self.cst[t, kc.K_TASK]) * stride
+            self.cores.st[t, S_PROF_BASE] += int(self.cst[t, kc.K_TASK]) * stride
 
     def task_profile(self, xy: tuple[int, int], task: int) -> tuple[np.ndarray, np.ndarray]:
         """Executions and dynamic extra cycles per word of tile ``xy``'s code while ``task`` ran

@@ -49,6 +49,7 @@ from robosoc.kernels.core_layout import (
     S_OUT_LEN,
     S_PC,
     S_PROF_BASE,
+    S_PROF_STRIDE,
     S_RUN,
 )
 from robosoc.kernels.dev_irq import (
@@ -316,7 +317,7 @@ def ni_access(t, core, book, noc):
         account(t, core, book, end)
         record(book.rec, gst, R_TASK, t, end, v, cst[t, K_TASK], pc, cst[t, K_SLEEP_CYCLES], 0)
         cst[t, K_TASK] = v
-        st[t, S_PROF_BASE] = v * (core.prof.shape[1] // NTASKS)  # the task's profile bank (0: not profiling)
+        st[t, S_PROF_BASE] = OPC_SIZE + v * st[t, S_PROF_STRIDE]  # the task's profile bank (kernels/core.py)
         return True
     elif off == ni.SLEEP:
         st[t, S_CYCLE] = end

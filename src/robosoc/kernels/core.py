@@ -60,6 +60,7 @@ from robosoc.kernels.core_layout import (
     ERR_STORE_UNMAPPED,
     ERR_UNSUPPORTED,
     ERRATA_RTL,
+    OPC_SIZE,
     OUT_CAPACITY,
     RUN_BREAK,
     RUN_CHUNK,
@@ -236,17 +237,17 @@ def fetch_error(target: int, base: int, code: int, size: int) -> int:
 @njit(cache=True, inline="always")
 def branch(
     taken: bool, pc: int, imm: int, cyc: int, n_taken: int, base: int, code: int, size: int,
-    pext: np.ndarray, t: int, pk: np.uint64,
+    opc_t: np.ndarray, px: np.uint64,
 ) -> tuple[int, int, int, int, int]:  # fmt: skip
-    """A conditional branch: (pc, cyc, taken count, err, err_addr) after it (a taken one books its
-    extra cycles in ``pext[t, pk]``, the profile's column of the branch)."""
+    """A conditional branch: (pc, cyc, taken count, err, err_addr) after it (a taken one adds its
+    extra cycles to ``opc_t[px]``, the profile's extra-cycle column of the branch)."""
     if not taken:
         return pc + 4, cyc + BRANCH_NOT_TAKEN_CYCLES, n_taken, 0, 0
     target = (pc + imm) & M32
     err = fetch_error(target, base, code, size)
     if err != 0:
         return pc, cyc, n_taken, err, target
-    pext[t, pk] += BRANCH_TAKEN_CYCLES - BRANCH_NOT_TAKEN_CYCLES
+    opc_t[px] += BRANCH_TAKEN_CYCLES - BRANCH_NOT_TAKEN_CYCLES
     return target, cyc + BRANCH_TAKEN_CYCLES, n_taken + 1, 0, 0
 
 
@@ -288,10 +289,8 @@ class CoreArrays(NamedTuple):
 
     ``st`` state (layout: core_layout.S_*), ``ctr`` event counters (C_*), ``opc`` instructions per
     operation in two banks, ``regs`` x0..x31 and a sink, ``m8``/``m16``/``m32`` three views of the
-    SRAM bytes, ``dec`` the predecode rows of the loaded code, ``out`` the output buffer, ``prof``
-    and ``pext`` the exact profile: executions and dynamic extra cycles (taken branches, multiplier
-    steps) per word of code and task bank (two scratch columns when the core is not profiled;
-    :mod:`robosoc.chip.exact_profile`).
+    SRAM bytes, ``dec`` the predecode rows of the loaded code, ``out`` the output buffer.  Beyond
+    its OPC_SIZE per-operation counters an ``opc`` row holds the exact profile (see ``run_cores``).
     """
 
     st: np.ndarray
@@ -303,8 +302,6 @@ class CoreArrays(NamedTuple):
     m32: np.ndarray
     dec: np.ndarray
     out: np.ndarray
-    prof: np.ndarray
-    pext: np.ndarray
 
 
 @njit(cache=True, inline="always")
@@ -322,15 +319,19 @@ def run_cores(core: CoreArrays, tiles: np.ndarray, until: int) -> None:
     so that consecutive instructions never wait on the same counter); ``dec`` is the predecode
     table (int32, two per word of loaded code).  The three arrays the loop touches on every
     instruction (registers, predecode, counters) are taken as row views once per tile; the others
-    (the profile's ``prof`` too) are indexed in two dimensions, because every view costs reference
-    counting on entry and exit, which dominates the short time slices of a busy many-core chip.
+    are indexed in two dimensions, because every view costs reference counting on entry and exit,
+    which dominates the short time slices of a busy many-core chip.
 
-    ``prof[t, S_PROF_BASE + (i & S_PROF_MASK)]`` counts executions of word i in the running task's
-    bank (profiling off: the mask is 1 and the base 0, two scratch columns); ``pext`` at the same
-    column adds the dynamic extra cycles of taken branches and multiplies.  Like ``opc``, an
-    instruction the chip loop performs (RUN_NI) is counted here, when the core stops before it.
+    The exact profile lives in the ``opc`` row after its OPC_SIZE counters, so that it costs no
+    array of its own: ``opc[t, S_PROF_BASE + (i & S_PROF_MASK)]`` counts executions of word i in
+    the running task's bank, and the column W further on (W = half the row beyond OPC_SIZE) the
+    dynamic extra cycles of taken branches and multiplies there.  Not profiling, the mask is 1 and
+    the base OPC_SIZE: two scratch columns of each (``robosoc.chip.core_state.CoreState.enable_profile``).
+    Like the per-operation counts, an instruction the chip loop performs (RUN_NI) is counted here,
+    when the core stops before it.
     """
-    st, ctr, opc, regs, m8, m16, m32, dec, out, prof, pext = core
+    st, ctr, opc, regs, m8, m16, m32, dec, out = core
+    pxo = np.uint64((opc.shape[1] - OPC_SIZE) >> 1)  # from a word's execution column to its extra-cycle one
     for k in range(tiles.shape[0]):
         t = tiles[k]
         opc_t = opc[t]
@@ -380,7 +381,7 @@ def run_cores(core: CoreArrays, tiles: np.ndarray, until: int) -> None:
             kc = (op << U1) | (i & U1)
             opc_t[kc] += 1  # two banks by word parity: no store-to-load chain
             pk = pbase + (i & pmask)
-            prof[t, pk] += 1
+            opc_t[pk] += 1  # the profile (see above)
 
             if op == ADDI:
                 regs_t[rd] = regs_t[rs1] + imm
@@ -431,37 +432,37 @@ def run_cores(core: CoreArrays, tiles: np.ndarray, until: int) -> None:
                 pc += 4
             elif op == BNE:
                 pc, cyc, n_taken, err, err_addr = branch(
-                    regs_t[rs1] != regs_t[rs2], pc, imm, cyc, n_taken, base, code, size, pext, t, pk
+                    regs_t[rs1] != regs_t[rs2], pc, imm, cyc, n_taken, base, code, size, opc_t, pk + pxo
                 )
                 if err != 0:
                     break
             elif op == BEQ:
                 pc, cyc, n_taken, err, err_addr = branch(
-                    regs_t[rs1] == regs_t[rs2], pc, imm, cyc, n_taken, base, code, size, pext, t, pk
+                    regs_t[rs1] == regs_t[rs2], pc, imm, cyc, n_taken, base, code, size, opc_t, pk + pxo
                 )
                 if err != 0:
                     break
             elif op == BLT:
                 pc, cyc, n_taken, err, err_addr = branch(
-                    regs_t[rs1] < regs_t[rs2], pc, imm, cyc, n_taken, base, code, size, pext, t, pk
+                    regs_t[rs1] < regs_t[rs2], pc, imm, cyc, n_taken, base, code, size, opc_t, pk + pxo
                 )
                 if err != 0:
                     break
             elif op == BGE:
                 pc, cyc, n_taken, err, err_addr = branch(
-                    regs_t[rs1] >= regs_t[rs2], pc, imm, cyc, n_taken, base, code, size, pext, t, pk
+                    regs_t[rs1] >= regs_t[rs2], pc, imm, cyc, n_taken, base, code, size, opc_t, pk + pxo
                 )
                 if err != 0:
                     break
             elif op == BLTU:
                 pc, cyc, n_taken, err, err_addr = branch(
-                    (regs_t[rs1] & M32) < (regs_t[rs2] & M32), pc, imm, cyc, n_taken, base, code, size, pext, t, pk
+                    (regs_t[rs1] & M32) < (regs_t[rs2] & M32), pc, imm, cyc, n_taken, base, code, size, opc_t, pk + pxo
                 )
                 if err != 0:
                     break
             elif op == BGEU:
                 pc, cyc, n_taken, err, err_addr = branch(
-                    (regs_t[rs1] & M32) >= (regs_t[rs2] & M32), pc, imm, cyc, n_taken, base, code, size, pext, t, pk
+                    (regs_t[rs1] & M32) >= (regs_t[rs2] & M32), pc, imm, cyc, n_taken, base, code, size, opc_t, pk + pxo
                 )
                 if err != 0:
                     break
@@ -556,7 +557,7 @@ def run_cores(core: CoreArrays, tiles: np.ndarray, until: int) -> None:
                         if n > 0:
                             cyc += JUMP_CYCLES * n
                             opc_t[kc] += n
-                            prof[t, pk] += n
+                            opc_t[pk] += n
                     elif imm == -4 and dec_t[(i << U1) - U2] == NOP_ROW and dec_t[(i << U1) - U1] == 0:
                         period = JUMP_CYCLES + SINGLE_CYCLES
                         n = (next_event - (cyc + JUMP_CYCLES)) // period
@@ -564,8 +565,8 @@ def run_cores(core: CoreArrays, tiles: np.ndarray, until: int) -> None:
                             cyc += period * n
                             opc_t[kc] += n
                             opc_t[(np.uint64(ADDI) << U1) | ((i - U1) & U1)] += n
-                            prof[t, pk] += n
-                            prof[t, pbase + ((i - U1) & pmask)] += n
+                            opc_t[pk] += n
+                            opc_t[pbase + ((i - U1) & pmask)] += n
                 pc = target
                 cyc += JUMP_CYCLES
             elif op == LBU or op == LB or op == LHU or op == LH:
@@ -646,7 +647,7 @@ def run_cores(core: CoreArrays, tiles: np.ndarray, until: int) -> None:
                         st[t, S_MULHSU_PC] = pc
                 lat = mul_latency(b & M32)
                 n_mulstall += lat - 1
-                pext[t, pk] += lat - 1
+                opc_t[pk + pxo] += lat - 1
                 cyc += lat
                 pc += 4
                 st[t, S_MUL_END] = cyc  # the interrupt controller's erratum window needs it
@@ -655,7 +656,7 @@ def run_cores(core: CoreArrays, tiles: np.ndarray, until: int) -> None:
                 pc += 4
             elif op == 0:
                 opc_t[kc] -= 1
-                prof[t, pk] -= 1
+                opc_t[pk] -= 1
                 decode_word(m32[t, i], dec_t, i)
             elif op >= FIRST_SYSTEM and op < ILLEGAL:
                 # SYSTEM opcode: trap.  EPC = trap + 8; the instruction at trap + 8 executes first.
@@ -669,7 +670,7 @@ def run_cores(core: CoreArrays, tiles: np.ndarray, until: int) -> None:
                 break
             elif op == BREAK:
                 opc_t[kc] -= 1  # not executed: a debugger stops the core before it
-                prof[t, pk] -= 1
+                opc_t[pk] -= 1
                 status = RUN_BREAK
                 break
             elif op & UNSUPPORTED_BIT:
