@@ -18,7 +18,6 @@ from robosoc.kernels.core_layout import (
     OPC_SIZE,
     OUT_CAPACITY,
     PIPELINE_FILL,
-    PROF_OFF_MASK,
     S_CODE_SIZE,
     S_CYCLE,
     S_ERRATA,
@@ -34,7 +33,6 @@ from robosoc.kernels.core_layout import (
     S_MULHSU_PC,
     S_PC,
     S_PROF_BASE,
-    S_PROF_MASK,
     S_PROF_STRIDE,
     S_T1_CTC,
     ST_SIZE,
@@ -97,12 +95,10 @@ class CoreState:
         st[:, S_IRQMUL_PC] = -1
         st[:, S_T1_CTC] = 0xFFFF
         st[:, S_ERRATA] = errata
-        st[:, S_PROF_MASK] = PROF_OFF_MASK
-        st[:, S_PROF_BASE] = OPC_SIZE
         state = cls(
             st=st,
             ctr=np.zeros((tiles, CTR_SIZE), dtype=np.int64),
-            opc=np.zeros((tiles, OPC_SIZE + 4 * PROF_OFF_MASK), dtype=np.int64),  # + the profile's scratch
+            opc=np.zeros((tiles, OPC_SIZE), dtype=np.int64),
             regs=np.zeros((tiles, 33), dtype=np.int32),
             m8=m8,
             m16=m8.view(np.uint16),
@@ -135,13 +131,15 @@ class CoreState:
             end = 2 * (int(self.st[t, S_CODE_SIZE]) // 4)
             self.dec[t, :] = 0
             self.dec[t, end] = OP_FETCH_FAULT
-        if self.profiling and self.profile_stride != self.dec.shape[1] // 2:
-            self.enable_profile(self.prof.shape[1] // int(self.st[0, S_PROF_STRIDE]))  # a larger program: afresh
+        if self.profiling and self.profile_stride != self.dec.shape[1] // 2:  # another program: afresh
+            banks = self.prof.shape[1] // self.profile_stride
+            self.st[:, S_PROF_STRIDE] = 0
+            self.enable_profile(banks)
 
     # --- the exact profile (robosoc.analysis.function_profile reads it) -------------------------------
     @property
     def profiling(self) -> bool:
-        return bool(self.st[0, S_PROF_MASK] != PROF_OFF_MASK)
+        return bool(self.st[0, S_PROF_STRIDE] != 0)
 
     @property
     def prof(self) -> np.ndarray:
@@ -157,8 +155,9 @@ class CoreState:
 
     @property
     def profile_stride(self) -> int:
-        """Columns of one task bank of ``prof``: one per word of the largest loaded code, plus its sentinel."""
-        return self.dec.shape[1] // 2
+        """Columns of one task bank of ``prof``: one per word of the largest loaded code, plus its
+        sentinel (while profiling, as it was when profiling was enabled)."""
+        return int(self.st[0, S_PROF_STRIDE]) or self.dec.shape[1] // 2
 
     def enable_profile(self, banks: int = 1) -> None:
         """Count every instruction's executions and extra cycles per word of code, in ``banks`` banks
@@ -173,7 +172,6 @@ class CoreState:
         opc = np.zeros((self.tiles, OPC_SIZE + 2 * banks * stride), dtype=np.int64)
         opc[:, :OPC_SIZE] = self.opc[:, :OPC_SIZE]
         self.opc = opc
-        self.st[:, S_PROF_MASK] = -1  # every bit: the column is the word index itself
         self.st[:, S_PROF_STRIDE] = stride
         self.st[:, S_PROF_BASE] = OPC_SIZE
 

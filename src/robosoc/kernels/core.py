@@ -87,7 +87,7 @@ from robosoc.kernels.core_layout import (
     S_OUT_LEN,
     S_PC,
     S_PROF_BASE,
-    S_PROF_MASK,
+    S_PROF_STRIDE,
     S_RUN,
 )
 from robosoc.kernels.dev_irq import irq_event, trap
@@ -237,17 +237,18 @@ def fetch_error(target: int, base: int, code: int, size: int) -> int:
 @njit(cache=True, inline="always")
 def branch(
     taken: bool, pc: int, imm: int, cyc: int, n_taken: int, base: int, code: int, size: int,
-    opc_t: np.ndarray, px: np.uint64,
+    prof: bool, opc_t: np.ndarray, px: np.uint64,
 ) -> tuple[int, int, int, int, int]:  # fmt: skip
     """A conditional branch: (pc, cyc, taken count, err, err_addr) after it (a taken one adds its
-    extra cycles to ``opc_t[px]``, the profile's extra-cycle column of the branch)."""
+    extra cycles to ``opc_t[px]``, the profile's extra-cycle column of the branch, when ``prof``)."""
     if not taken:
         return pc + 4, cyc + BRANCH_NOT_TAKEN_CYCLES, n_taken, 0, 0
     target = (pc + imm) & M32
     err = fetch_error(target, base, code, size)
     if err != 0:
         return pc, cyc, n_taken, err, target
-    opc_t[px] += BRANCH_TAKEN_CYCLES - BRANCH_NOT_TAKEN_CYCLES
+    if prof:
+        opc_t[px] += BRANCH_TAKEN_CYCLES - BRANCH_NOT_TAKEN_CYCLES
     return target, cyc + BRANCH_TAKEN_CYCLES, n_taken + 1, 0, 0
 
 
@@ -322,23 +323,23 @@ def run_cores(core: CoreArrays, tiles: np.ndarray, until: int) -> None:
     are indexed in two dimensions, because every view costs reference counting on entry and exit,
     which dominates the short time slices of a busy many-core chip.
 
-    The exact profile lives in the ``opc`` row after its OPC_SIZE counters, so that it costs no
-    array of its own: ``opc[t, S_PROF_BASE + (i & S_PROF_MASK)]`` counts executions of word i in
-    the running task's bank, and the column W further on (W = half the row beyond OPC_SIZE) the
-    dynamic extra cycles of taken branches and multiplies there.  Not profiling, the mask is 1 and
-    the base OPC_SIZE: two scratch columns of each (``robosoc.chip.core_state.CoreState.enable_profile``).
-    Like the per-operation counts, an instruction the chip loop performs (RUN_NI) is counted here,
-    when the core stops before it.
+    The exact profile (``S_PROF_STRIDE`` != 0, :meth:`robosoc.chip.core_state.CoreState.enable_profile`)
+    lives in the ``opc`` row after its OPC_SIZE counters, so that it costs no array (no view, no
+    reference count) of its own: ``opc[t, S_PROF_BASE + i]`` counts executions of word i in the
+    running task's bank, and the column W further on (W = half the row beyond OPC_SIZE) the dynamic
+    extra cycles of taken branches and multiplies there.  Not profiling, one loop-invariant branch
+    per instruction skips it.  Like the per-operation counts, an instruction the chip loop performs
+    (RUN_NI) is counted here, when the core stops before it.
     """
     st, ctr, opc, regs, m8, m16, m32, dec, out = core
-    pxo = np.uint64((opc.shape[1] - OPC_SIZE) >> 1)  # from a word's execution column to its extra-cycle one
+    pxo = np.uint64((opc.shape[1] - OPC_SIZE) >> 1)  # from a word's execution column to its extra cycles
     for k in range(tiles.shape[0]):
         t = tiles[k]
         opc_t = opc[t]
         regs_t = regs[t]
         dec_t = dec[t]
+        prof = st[t, S_PROF_STRIDE] != 0  # invariant: a well-predicted branch costs less than counting
         pbase = np.uint64(st[t, S_PROF_BASE])
-        pmask = np.uint64(st[t, S_PROF_MASK])
         base = st[t, S_MEM_BASE]
         size = st[t, S_MEM_SIZE]
         code = st[t, S_CODE_SIZE]
@@ -380,8 +381,9 @@ def run_cores(core: CoreArrays, tiles: np.ndarray, until: int) -> None:
             op, rd, rs1, rs2, imm = fields(dec_t, i)
             kc = (op << U1) | (i & U1)
             opc_t[kc] += 1  # two banks by word parity: no store-to-load chain
-            pk = pbase + (i & pmask)
-            opc_t[pk] += 1  # the profile (see above)
+            pk = pbase + i
+            if prof:
+                opc_t[pk] += 1  # the exact profile (see above)
 
             if op == ADDI:
                 regs_t[rd] = regs_t[rs1] + imm
@@ -432,38 +434,40 @@ def run_cores(core: CoreArrays, tiles: np.ndarray, until: int) -> None:
                 pc += 4
             elif op == BNE:
                 pc, cyc, n_taken, err, err_addr = branch(
-                    regs_t[rs1] != regs_t[rs2], pc, imm, cyc, n_taken, base, code, size, opc_t, pk + pxo
+                    regs_t[rs1] != regs_t[rs2], pc, imm, cyc, n_taken, base, code, size, prof, opc_t, pk + pxo
                 )
                 if err != 0:
                     break
             elif op == BEQ:
                 pc, cyc, n_taken, err, err_addr = branch(
-                    regs_t[rs1] == regs_t[rs2], pc, imm, cyc, n_taken, base, code, size, opc_t, pk + pxo
+                    regs_t[rs1] == regs_t[rs2], pc, imm, cyc, n_taken, base, code, size, prof, opc_t, pk + pxo
                 )
                 if err != 0:
                     break
             elif op == BLT:
                 pc, cyc, n_taken, err, err_addr = branch(
-                    regs_t[rs1] < regs_t[rs2], pc, imm, cyc, n_taken, base, code, size, opc_t, pk + pxo
+                    regs_t[rs1] < regs_t[rs2], pc, imm, cyc, n_taken, base, code, size, prof, opc_t, pk + pxo
                 )
                 if err != 0:
                     break
             elif op == BGE:
                 pc, cyc, n_taken, err, err_addr = branch(
-                    regs_t[rs1] >= regs_t[rs2], pc, imm, cyc, n_taken, base, code, size, opc_t, pk + pxo
+                    regs_t[rs1] >= regs_t[rs2], pc, imm, cyc, n_taken, base, code, size, prof, opc_t, pk + pxo
                 )
                 if err != 0:
                     break
             elif op == BLTU:
                 pc, cyc, n_taken, err, err_addr = branch(
-                    (regs_t[rs1] & M32) < (regs_t[rs2] & M32), pc, imm, cyc, n_taken, base, code, size, opc_t, pk + pxo
-                )
+                    (regs_t[rs1] & M32) < (regs_t[rs2] & M32), pc, imm, cyc, n_taken, base, code, size,
+                    prof, opc_t, pk + pxo,
+                )  # fmt: skip
                 if err != 0:
                     break
             elif op == BGEU:
                 pc, cyc, n_taken, err, err_addr = branch(
-                    (regs_t[rs1] & M32) >= (regs_t[rs2] & M32), pc, imm, cyc, n_taken, base, code, size, opc_t, pk + pxo
-                )
+                    (regs_t[rs1] & M32) >= (regs_t[rs2] & M32), pc, imm, cyc, n_taken, base, code, size,
+                    prof, opc_t, pk + pxo,
+                )  # fmt: skip
                 if err != 0:
                     break
             elif op == SLLI:
@@ -557,7 +561,8 @@ def run_cores(core: CoreArrays, tiles: np.ndarray, until: int) -> None:
                         if n > 0:
                             cyc += JUMP_CYCLES * n
                             opc_t[kc] += n
-                            opc_t[pk] += n
+                            if prof:
+                                opc_t[pk] += n
                     elif imm == -4 and dec_t[(i << U1) - U2] == NOP_ROW and dec_t[(i << U1) - U1] == 0:
                         period = JUMP_CYCLES + SINGLE_CYCLES
                         n = (next_event - (cyc + JUMP_CYCLES)) // period
@@ -565,8 +570,9 @@ def run_cores(core: CoreArrays, tiles: np.ndarray, until: int) -> None:
                             cyc += period * n
                             opc_t[kc] += n
                             opc_t[(np.uint64(ADDI) << U1) | ((i - U1) & U1)] += n
-                            opc_t[pk] += n
-                            opc_t[pbase + ((i - U1) & pmask)] += n
+                            if prof:
+                                opc_t[pk] += n
+                                opc_t[pk - U1] += n
                 pc = target
                 cyc += JUMP_CYCLES
             elif op == LBU or op == LB or op == LHU or op == LH:
@@ -647,7 +653,8 @@ def run_cores(core: CoreArrays, tiles: np.ndarray, until: int) -> None:
                         st[t, S_MULHSU_PC] = pc
                 lat = mul_latency(b & M32)
                 n_mulstall += lat - 1
-                opc_t[pk + pxo] += lat - 1
+                if prof:
+                    opc_t[pk + pxo] += lat - 1
                 cyc += lat
                 pc += 4
                 st[t, S_MUL_END] = cyc  # the interrupt controller's erratum window needs it
@@ -656,7 +663,8 @@ def run_cores(core: CoreArrays, tiles: np.ndarray, until: int) -> None:
                 pc += 4
             elif op == 0:
                 opc_t[kc] -= 1
-                opc_t[pk] -= 1
+                if prof:
+                    opc_t[pk] -= 1
                 decode_word(m32[t, i], dec_t, i)
             elif op >= FIRST_SYSTEM and op < ILLEGAL:
                 # SYSTEM opcode: trap.  EPC = trap + 8; the instruction at trap + 8 executes first.
@@ -670,7 +678,8 @@ def run_cores(core: CoreArrays, tiles: np.ndarray, until: int) -> None:
                 break
             elif op == BREAK:
                 opc_t[kc] -= 1  # not executed: a debugger stops the core before it
-                opc_t[pk] -= 1
+                if prof:
+                    opc_t[pk] -= 1
                 status = RUN_BREAK
                 break
             elif op & UNSUPPORTED_BIT:

@@ -52,10 +52,9 @@ S_UART_DIV = 40
 S_T1_HIST = 41  # 41..43: TIMER1 value | flag << 16 | OCR << 17 in cycles S_T1_REF-3 .. S_T1_REF-1
 S_CODE_SIZE = 44  # bytes from S_MEM_BASE the predecode table covers (the rest of SRAM is data only)
 # the exact profile, in the opc row after its counters (kernels/core.py run_cores): executions of word i
-# in opc[t, S_PROF_BASE + (i & S_PROF_MASK)], its extra cycles half the rest of the row further on
+# in opc[t, S_PROF_BASE + i], its extra cycles half the rest of the row further on
 S_PROF_BASE = 45  # column of the running task's bank: OPC_SIZE + task x S_PROF_STRIDE
-S_PROF_MASK = 46  # -1 (every bit) when profiling, PROF_OFF_MASK when not (two scratch columns)
-S_PROF_STRIDE = 47  # columns of a task's bank (words of code + 1); 0 when not profiling
+S_PROF_STRIDE = 46  # columns of a task's bank (words of code + 1); 0: not profiling
 ST_SIZE = 48
 
 # run status
@@ -131,8 +130,6 @@ C_MMIO = 5  # loads and stores that went to device registers
 C_IRQ_LOST = 6  # RTL erratum: interrupts whose vector a taken jump in the shadow of a multiply dropped
 CTR_SIZE = 8
 OPC_SIZE = 512  # per-operation counters, two banks each (operation numbers are bytes)
-
-PROF_OFF_MASK = 1  # S_PROF_MASK of a core that is not profiled: two scratch columns for each count
 
 NEVER = 1 << 62  # a cycle that never comes (event times, wake-ups)
 
