@@ -214,7 +214,7 @@ def tile_rows(
     if not cores.profiling:
         raise RuntimeError("profiling is off: enable it before the run")
     stride = cores.profile_stride
-    banks = cores.prof[t].reshape(-1, stride)
+    banks = cores.executions(t)
     extras = cores.pext[t].reshape(-1, stride)
     words = np.nonzero(banks.any(axis=0))[0]
     table = _code_table(cores, t, program, words)

@@ -131,7 +131,7 @@ class CoreState:
             end = 2 * (int(self.st[t, S_CODE_SIZE]) // 4)
             self.dec[t, :] = 0
             self.dec[t, end] = OP_FETCH_FAULT
-        if self.profiling and self.profile_stride != self.dec.shape[1] // 2:  # another program: afresh
+        if self.profiling and self.profile_stride != self.dec.shape[1] // 2 + 1:  # another program: afresh
             banks = self.prof.shape[1] // self.profile_stride
             self.st[:, S_PROF_STRIDE] = 0
             self.enable_profile(banks)
@@ -143,9 +143,14 @@ class CoreState:
 
     @property
     def prof(self) -> np.ndarray:
-        """Executions per tile (rows) and task bank x word of code (columns): a view of the ``opc`` rows."""
+        """The profile's flow counts per tile (rows) and task bank x word of code (columns): a view of
+        the ``opc`` rows (the running sum over a bank is the executions, :meth:`executions`)."""
         half = (self.opc.shape[1] - OPC_SIZE) // 2
         return self.opc[:, OPC_SIZE : OPC_SIZE + half]
+
+    def executions(self, tile: int = 0) -> np.ndarray:
+        """Executions of each word of code per task bank of a tile, shape (banks, stride)."""
+        return np.cumsum(self.prof[tile].reshape(-1, self.profile_stride), axis=1)
 
     @property
     def pext(self) -> np.ndarray:
@@ -155,9 +160,10 @@ class CoreState:
 
     @property
     def profile_stride(self) -> int:
-        """Columns of one task bank of ``prof``: one per word of the largest loaded code, plus its
-        sentinel (while profiling, as it was when profiling was enabled)."""
-        return int(self.st[0, S_PROF_STRIDE]) or self.dec.shape[1] // 2
+        """Columns of one task bank of ``prof``: one per word of the largest loaded code, its sentinel
+        and one more (a trap in the last word moves the flow two words on); while profiling, as it
+        was when profiling was enabled."""
+        return int(self.st[0, S_PROF_STRIDE]) or self.dec.shape[1] // 2 + 1
 
     def enable_profile(self, banks: int = 1) -> None:
         """Count every instruction's executions and extra cycles per word of code, in ``banks`` banks

@@ -462,16 +462,6 @@ class MPSoC:
         for t in range(self.config.n_tiles):
             self.cores.st[t, S_PROF_BASE] += int(self.cst[t, kc.K_TASK]) * stride
 
-    def task_profile(self, xy: tuple[int, int], task: int) -> tuple[np.ndarray, np.ndarray]:
-        """Executions and dynamic extra cycles per word of tile ``xy``'s code while ``task`` ran
-        (views; word i is the instruction at SRAM base + 4 i)."""
-        if not self.cores.profiling:
-            raise RuntimeError("profiling is off: call enable_profile() before the run")
-        t = self.config.tile_index(xy)
-        stride = self.cores.profile_stride
-        cols = slice(task * stride, (task + 1) * stride)
-        return self.cores.prof[t, cols], self.cores.pext[t, cols]
-
     def noc_counters(self) -> dict[str, int]:
         """Router activity for the energy model (buffer-active and idle port cycles, flit hops) and
         ``rtl_lost_headers``: headers that found no room downstream in their crossing cycle, which

@@ -265,6 +265,10 @@ def ni_access(t, core, book, noc):
         return False
     opc[t, (op << U1) | (i & U1)] += 1
     ctr[t, C_MMIO] += 1
+    if st[t, S_PROF_STRIDE] != 0:  # the profile's flow (kernels/core.py): word i runs here, the core goes on after it
+        pb = np.uint64(st[t, S_PROF_BASE]) + i
+        opc[t, pb] += 1
+        opc[t, pb + U1] -= 1
     width = cfg[nk.C_WIDTH]
     if op == LW:
         x = s - 1  # registered read: the value of the cycle before the load

@@ -235,12 +235,19 @@ def fetch_error(target: int, base: int, code: int, size: int) -> int:
 
 
 @njit(cache=True, inline="always")
+def flow_jump(opc_t: np.ndarray, pb: np.uint64, pc: int, target: int, base: int) -> None:
+    """The profile's flow counts (see ``run_cores``) of a transfer from the instruction at ``pc`` to ``target``."""
+    opc_t[pb + (np.uint64(target - base) >> U2)] += 1
+    opc_t[pb + (np.uint64(pc - base) >> U2) + U1] -= 1
+
+
+@njit(cache=True, inline="always")
 def branch(
     taken: bool, pc: int, imm: int, cyc: int, n_taken: int, base: int, code: int, size: int,
-    prof: bool, opc_t: np.ndarray, px: np.uint64,
+    prof: bool, opc_t: np.ndarray, pb: np.uint64, pxo: np.uint64,
 ) -> tuple[int, int, int, int, int]:  # fmt: skip
-    """A conditional branch: (pc, cyc, taken count, err, err_addr) after it (a taken one adds its
-    extra cycles to ``opc_t[px]``, the profile's extra-cycle column of the branch, when ``prof``)."""
+    """A conditional branch: (pc, cyc, taken count, err, err_addr) after it (with ``prof``, a taken
+    one books its jump and extra cycles in the profile, columns from ``pb``: see ``run_cores``)."""
     if not taken:
         return pc + 4, cyc + BRANCH_NOT_TAKEN_CYCLES, n_taken, 0, 0
     target = (pc + imm) & M32
@@ -248,7 +255,8 @@ def branch(
     if err != 0:
         return pc, cyc, n_taken, err, target
     if prof:
-        opc_t[px] += BRANCH_TAKEN_CYCLES - BRANCH_NOT_TAKEN_CYCLES
+        flow_jump(opc_t, pb, pc, target, base)
+        opc_t[pb + pxo + (np.uint64(pc - base) >> U2)] += BRANCH_TAKEN_CYCLES - BRANCH_NOT_TAKEN_CYCLES
     return target, cyc + BRANCH_TAKEN_CYCLES, n_taken + 1, 0, 0
 
 
@@ -325,11 +333,14 @@ def run_cores(core: CoreArrays, tiles: np.ndarray, until: int) -> None:
 
     The exact profile (``S_PROF_STRIDE`` != 0, :meth:`robosoc.chip.core_state.CoreState.enable_profile`)
     lives in the ``opc`` row after its OPC_SIZE counters, so that it costs no array (no view, no
-    reference count) of its own: ``opc[t, S_PROF_BASE + i]`` counts executions of word i in the
-    running task's bank, and the column W further on (W = half the row beyond OPC_SIZE) the dynamic
-    extra cycles of taken branches and multiplies there.  Not profiling, one loop-invariant branch
-    per instruction skips it.  Like the per-operation counts, an instruction the chip loop performs
-    (RUN_NI) is counted here, when the core stops before it.
+    reference count) of its own.  It counts the flow of control, not each instruction: column
+    ``S_PROF_BASE + i`` (the running task's bank) gains one each time execution arrives at word i
+    other than from word i - 1 (entry to this function, a taken branch or jump, an interrupt or trap
+    entry) and loses one each time it leaves word i - 1 other than to word i (a taken branch or jump,
+    a redirection, a stop before word i), so the executions of word i are the running sum of the
+    bank up to i.  The column W further on (W = half the row beyond OPC_SIZE) adds the dynamic extra
+    cycles of taken branches and multiplies.  Sequential instructions cost nothing; not profiling,
+    a jump costs one loop-invariant, well-predicted branch more.
     """
     st, ctr, opc, regs, m8, m16, m32, dec, out = core
     pxo = np.uint64((opc.shape[1] - OPC_SIZE) >> 1)  # from a word's execution column to its extra cycles
@@ -338,7 +349,7 @@ def run_cores(core: CoreArrays, tiles: np.ndarray, until: int) -> None:
         opc_t = opc[t]
         regs_t = regs[t]
         dec_t = dec[t]
-        prof = st[t, S_PROF_STRIDE] != 0  # invariant: a well-predicted branch costs less than counting
+        prof = st[t, S_PROF_STRIDE] != 0
         pbase = np.uint64(st[t, S_PROF_BASE])
         base = st[t, S_MEM_BASE]
         size = st[t, S_MEM_SIZE]
@@ -358,15 +369,21 @@ def run_cores(core: CoreArrays, tiles: np.ndarray, until: int) -> None:
         err = 0
         err_addr = 0
         next_event = min(st[t, S_IRQ_CHECK], stop)
+        if prof:
+            opc_t[pbase + (np.uint64(pc - base) >> U2)] += 1  # the flow arrives here
 
         while True:
             if cyc >= next_event:
                 if cyc >= st[t, S_IRQ_CHECK]:
+                    was = pc
                     pc, cyc = irq_event(st[t], ctr[t], pc, cyc)
                     err = fetch_error(pc, base, code, size)
                     if err != 0:  # IRQ_VECTOR outside the loaded code
                         err_addr = pc
                         break
+                    if prof and pc != was:  # an entry: the flow leaves `was` unexecuted
+                        opc_t[pbase + (np.uint64(was - base) >> U2)] -= 1
+                        opc_t[pbase + (np.uint64(pc - base) >> U2)] += 1
                 if cyc >= stop:
                     status = RUN_MAX_CYCLES if (budget >= 0 and cyc >= budget) else RUN_CHUNK
                     break
@@ -381,9 +398,6 @@ def run_cores(core: CoreArrays, tiles: np.ndarray, until: int) -> None:
             op, rd, rs1, rs2, imm = fields(dec_t, i)
             kc = (op << U1) | (i & U1)
             opc_t[kc] += 1  # two banks by word parity: no store-to-load chain
-            pk = pbase + i
-            if prof:
-                opc_t[pk] += 1  # the exact profile (see above)
 
             if op == ADDI:
                 regs_t[rd] = regs_t[rs1] + imm
@@ -434,39 +448,39 @@ def run_cores(core: CoreArrays, tiles: np.ndarray, until: int) -> None:
                 pc += 4
             elif op == BNE:
                 pc, cyc, n_taken, err, err_addr = branch(
-                    regs_t[rs1] != regs_t[rs2], pc, imm, cyc, n_taken, base, code, size, prof, opc_t, pk + pxo
+                    regs_t[rs1] != regs_t[rs2], pc, imm, cyc, n_taken, base, code, size, prof, opc_t, pbase, pxo
                 )
                 if err != 0:
                     break
             elif op == BEQ:
                 pc, cyc, n_taken, err, err_addr = branch(
-                    regs_t[rs1] == regs_t[rs2], pc, imm, cyc, n_taken, base, code, size, prof, opc_t, pk + pxo
+                    regs_t[rs1] == regs_t[rs2], pc, imm, cyc, n_taken, base, code, size, prof, opc_t, pbase, pxo
                 )
                 if err != 0:
                     break
             elif op == BLT:
                 pc, cyc, n_taken, err, err_addr = branch(
-                    regs_t[rs1] < regs_t[rs2], pc, imm, cyc, n_taken, base, code, size, prof, opc_t, pk + pxo
+                    regs_t[rs1] < regs_t[rs2], pc, imm, cyc, n_taken, base, code, size, prof, opc_t, pbase, pxo
                 )
                 if err != 0:
                     break
             elif op == BGE:
                 pc, cyc, n_taken, err, err_addr = branch(
-                    regs_t[rs1] >= regs_t[rs2], pc, imm, cyc, n_taken, base, code, size, prof, opc_t, pk + pxo
+                    regs_t[rs1] >= regs_t[rs2], pc, imm, cyc, n_taken, base, code, size, prof, opc_t, pbase, pxo
                 )
                 if err != 0:
                     break
             elif op == BLTU:
                 pc, cyc, n_taken, err, err_addr = branch(
                     (regs_t[rs1] & M32) < (regs_t[rs2] & M32), pc, imm, cyc, n_taken, base, code, size,
-                    prof, opc_t, pk + pxo,
+                    prof, opc_t, pbase, pxo,
                 )  # fmt: skip
                 if err != 0:
                     break
             elif op == BGEU:
                 pc, cyc, n_taken, err, err_addr = branch(
                     (regs_t[rs1] & M32) >= (regs_t[rs2] & M32), pc, imm, cyc, n_taken, base, code, size,
-                    prof, opc_t, pk + pxo,
+                    prof, opc_t, pbase, pxo,
                 )  # fmt: skip
                 if err != 0:
                     break
@@ -561,8 +575,9 @@ def run_cores(core: CoreArrays, tiles: np.ndarray, until: int) -> None:
                         if n > 0:
                             cyc += JUMP_CYCLES * n
                             opc_t[kc] += n
-                            if prof:
-                                opc_t[pk] += n
+                            if prof:  # n more arrivals at the jump, n more departures after it
+                                opc_t[pbase + i] += n
+                                opc_t[pbase + i + U1] -= n
                     elif imm == -4 and dec_t[(i << U1) - U2] == NOP_ROW and dec_t[(i << U1) - U1] == 0:
                         period = JUMP_CYCLES + SINGLE_CYCLES
                         n = (next_event - (cyc + JUMP_CYCLES)) // period
@@ -570,9 +585,11 @@ def run_cores(core: CoreArrays, tiles: np.ndarray, until: int) -> None:
                             cyc += period * n
                             opc_t[kc] += n
                             opc_t[(np.uint64(ADDI) << U1) | ((i - U1) & U1)] += n
-                            if prof:
-                                opc_t[pk] += n
-                                opc_t[pk - U1] += n
+                            if prof:  # n more arrivals at the nop, n more departures after the jump
+                                opc_t[pbase + i - U1] += n
+                                opc_t[pbase + i + U1] -= n
+                if prof:
+                    flow_jump(opc_t, pbase, pc, target, base)
                 pc = target
                 cyc += JUMP_CYCLES
             elif op == LBU or op == LB or op == LHU or op == LH:
@@ -654,7 +671,7 @@ def run_cores(core: CoreArrays, tiles: np.ndarray, until: int) -> None:
                 lat = mul_latency(b & M32)
                 n_mulstall += lat - 1
                 if prof:
-                    opc_t[pk + pxo] += lat - 1
+                    opc_t[pbase + pxo + i] += lat - 1
                 cyc += lat
                 pc += 4
                 st[t, S_MUL_END] = cyc  # the interrupt controller's erratum window needs it
@@ -663,13 +680,13 @@ def run_cores(core: CoreArrays, tiles: np.ndarray, until: int) -> None:
                 pc += 4
             elif op == 0:
                 opc_t[kc] -= 1
-                if prof:
-                    opc_t[pk] -= 1
                 decode_word(m32[t, i], dec_t, i)
             elif op >= FIRST_SYSTEM and op < ILLEGAL:
                 # SYSTEM opcode: trap.  EPC = trap + 8; the instruction at trap + 8 executes first.
                 cyc += TRAP_CYCLES
                 trap(st[t], pc, cyc)
+                if prof:
+                    flow_jump(opc_t, pbase, pc, pc + 8, base)
                 pc += 8
                 next_event = cyc + 1
             elif op == FETCH_FAULT:
@@ -678,8 +695,6 @@ def run_cores(core: CoreArrays, tiles: np.ndarray, until: int) -> None:
                 break
             elif op == BREAK:
                 opc_t[kc] -= 1  # not executed: a debugger stops the core before it
-                if prof:
-                    opc_t[pk] -= 1
                 status = RUN_BREAK
                 break
             elif op & UNSUPPORTED_BIT:
@@ -697,6 +712,10 @@ def run_cores(core: CoreArrays, tiles: np.ndarray, until: int) -> None:
             wi = (pc - base) >> 2
             st[t, S_ERR_INSN] = m32[t, wi] & M32 if 0 <= wi < size >> 2 else 0
 
+        if prof:  # the flow stops before pc (guarded: an error may leave pc outside the code)
+            w = np.uint64(pc - base) >> U2
+            if w < np.uint64(st[t, S_PROF_STRIDE]):
+                opc_t[pbase + w] -= 1
         st[t, S_PC] = pc & M32
         st[t, S_CYCLE] = cyc
         st[t, S_RUN] = status
