@@ -210,9 +210,7 @@ class CoreState:
 
     def arrays(self) -> CoreArrays:
         """The arrays as the numba kernels take them (a named bundle, no copies)."""
-        return CoreArrays(
-            self.st, self.ctr, self.opc, self.regs, self.m8, self.m16, self.m32, self.dec, self.out
-        )  # fmt: skip
+        return CoreArrays(self.st, self.ctr, self.opc, self.regs, self.m8, self.m16, self.m32, self.dec, self.out)
 
     @property
     def tiles(self) -> int:
