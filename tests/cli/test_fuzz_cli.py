@@ -182,6 +182,9 @@ OPTIONS: dict[tuple[str, str], Spec] = {
     ("report", "RUN_DIR"): Spec("in_dir"),
     ("report", "--out"): Spec("out_file"),
     ("report", "--mcap"): Spec("flag"),
+    ("profile", "RUN_DIR"): Spec("in_dir"),
+    ("profile", "--top"): Spec("int", 1, 1000),
+    ("fly", "--profile"): Spec("flag"),
     ("table", "--iterations"): Spec("int", 1, 10_000),
     ("table", "--release"): Spec("choice", choices=("event", "periodic", "both")),
     ("table", "--closed-loop"): Spec("flag"),
@@ -243,6 +246,14 @@ def base_command(command: str, option: str, elves: dict[str, Path], tmp: Path) -
         run.mkdir(exist_ok=True)
         (run / "flight.csv").write_text(",".join(ROW_FIELDS) + "\n" + ",".join(["0.0"] * len(ROW_FIELDS)) + "\n")
         return ["report", str(run)]
+    if command == "profile":
+        if option == "RUN_DIR":
+            return ["profile"]
+        run = tmp / "run"  # a bad value let through would fly these 0.01 s again
+        run.mkdir(exist_ok=True)
+        (run / "scenario.toml").write_text("duration_s = 0.01\n")
+        (run / "summary.json").write_text("{}\n")
+        return ["profile", str(run)]
     if command == "sweep":
         sweep = tmp / "ok-sweep.toml"
         sweep.write_text("[base]\nduration_s = 0.01\n[grid]\nduration_s = [0.01]\n")

@@ -5,8 +5,10 @@ anywhere: the page opens without a network.  It shows what the folder holds (see
 :mod:`robosoc.analysis.run_folder`): trajectory and setpoints, estimated against true attitude,
 motor PWM (``flight.csv``); per-task response-time histograms and energy per task split into its
 parts (``jobs.csv``); energy by tile and any other breakdown of ``summary.json``'s ``energy``
-(by instruction class, ``classes_uj``, when present); the key figures of ``summary.json`` and the
-scenario (``scenario.toml``).  A missing file leaves its section out with a line saying so.
+(by instruction class, ``classes_uj``, when present); where cycles and energy go per firmware
+function, task and tile (``profile.json``, when the run was profiled: docs/profile.md); the key
+figures of ``summary.json`` and the scenario (``scenario.toml``).  A missing file leaves its
+section out with a line saying so.
 
 A short script at the end of the page marks each plot that the browser laid out with a non-empty
 size (``data-rendered``) and counts them on ``<body>``; the tests read that back from headless
@@ -241,6 +243,62 @@ def _energy_breakdowns(summary: dict) -> list[str]:
     return out
 
 
+# --- the per-function profile (profile.json) ----------------------------------------------------
+
+PROFILE_TOP = 8
+"""Functions shown per task in the profile's plot and table."""
+
+
+def _profile_tasks(profile: dict) -> dict[tuple[str, int], list[dict]]:
+    """The rows of each (tile, task) with at least one instruction, largest cycles first."""
+    out: dict[tuple[str, int], list[dict]] = {}
+    for r in profile["rows"]:
+        if r["tile"] and r["task"] is not None:
+            out.setdefault((str(r["tile"]), int(r["task"])), []).append(r)
+    for key, rows in list(out.items()):
+        if not any(r["instructions"] for r in rows):
+            del out[key]
+        else:
+            rows.sort(key=lambda r: (-r["cycles"], str(r["function"])))
+    return dict(sorted(out.items()))
+
+
+def _profile_plot(tasks: dict[tuple[str, int], list[dict]]) -> str:
+    keys = list(tasks)
+
+    def draw(*axes) -> None:
+        for ax, key in zip(axes, keys, strict=True):
+            rows = [r for r in tasks[key] if r["instructions"]][:PROFILE_TOP][::-1]
+            ax.barh([str(r["function"]) for r in rows], [r["cycles"] for r in rows])
+            ax.set_title(f"tile {key[0]}, {rows[0]['task_name'] if rows else ''} (task {key[1]})", fontsize=9)
+            ax.grid(alpha=0.3, axis="x")
+        axes[-1].set_xlabel("cycles")
+
+    size = (9, 0.35 * sum(min(PROFILE_TOP, len(v)) for v in tasks.values()) + 0.9 * len(keys))
+    return _figure(
+        "profile",
+        f"Cycles of the {PROFILE_TOP} costliest functions of each task (exact counts, profile.json)",
+        _svg(draw, "profile", size, len(keys), sharex=False),
+    )
+
+
+def _profile_table(tasks: dict[tuple[str, int], list[dict]]) -> str:
+    head = "<tr><th>tile</th><th>task</th><th>function</th><th>cycles</th><th>% of task</th>"
+    head += "<th>instructions</th><th>energy nJ</th></tr>"
+    body = []
+    for (tile, task), rows in tasks.items():
+        total = sum(r["cycles"] for r in rows) or 1
+        for r in rows[:PROFILE_TOP]:
+            cells = [tile, f"{r['task_name']} ({task})", str(r["function"])]
+            numbers = [f"{r['cycles']:,}", f"{100 * r['cycles'] / total:.1f}", f"{r['instructions']:,}",
+                       f"{r['energy_nj']:,.1f}"]  # fmt: skip
+            body.append(
+                "<tr>" + "".join(f"<td>{html.escape(c)}</td>" for c in cells)
+                + "".join(f"<td class='num'>{n}</td>" for n in numbers) + "</tr>"
+            )  # fmt: skip
+    return f"<table>{head}{''.join(body)}</table>"
+
+
 # --- tables -------------------------------------------------------------------------------------
 
 
@@ -303,6 +361,11 @@ def _section(run: RunFolder, level: int) -> str:
             body.append("<p class='note'>No chip clock in summary.json: response times in cycles.</p>")
     else:
         body.append("<p>No job records (jobs.csv): a host-controller flight, or the chip ran no job.</p>")
+    if run.profile is not None:
+        tasks = _profile_tasks(run.profile)
+        if tasks:
+            body.append(f"<{h}>Where cycles and energy go, per function (profile.json)</{h}>")
+            body += [_profile_plot(tasks), _profile_table(tasks)]
     if run.summary is not None:
         energy = _energy_breakdowns(run.summary)
         if energy:

@@ -28,6 +28,7 @@ SCENARIO_TOML = "scenario.toml"
 FLIGHT_MCAP = "flight.mcap"
 CHIP_TRACE_JSON = "chip-trace.json"
 REPORT_HTML = "report.html"
+PROFILE_JSON = "profile.json"  # written by robosoc profile / fly --profile (analysis/function_profile.py)
 VEHICLE_FOLDER = re.compile(r"vehicle-(\d+)")
 
 _TEXT_JOB_FIELDS = ("task", "tile")
@@ -46,6 +47,7 @@ class RunFolder:
     jobs: dict[str, np.ndarray] | None = None
     summary: dict | None = None
     scenario_text: str | None = None
+    profile: dict | None = None
     vehicles: list[RunFolder] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
 
@@ -118,6 +120,22 @@ def _read_summary(path: Path) -> dict:
     return data
 
 
+def _read_profile(path: Path, notes: list[str]) -> dict | None:
+    """``profile.json`` if it is one (rows with tile, task, function, cycles, instructions, energy),
+    else None with a note: the profile is an extra, a bad one does not stop the report."""
+    try:
+        data = _read_summary(path)
+    except RunFolderError as exc:
+        notes.append(f"{PROFILE_JSON}: skipped: {exc}")
+        return None
+    rows = data.get("rows")
+    keys = ("tile", "task", "task_name", "function", "cycles", "instructions", "energy_nj")
+    if not isinstance(rows, list) or not all(isinstance(r, dict) and all(k in r for k in keys) for r in rows):
+        notes.append(f"{PROFILE_JSON}: skipped: not a robosoc profile (rows with {', '.join(keys)})")
+        return None
+    return data
+
+
 def read_run_folder(path: Path) -> RunFolder:
     """Everything a run folder holds.
 
@@ -139,6 +157,8 @@ def read_run_folder(path: Path) -> RunFolder:
             run.summary = _read_summary(path / SUMMARY_JSON)
         if (path / SCENARIO_TOML).is_file():
             run.scenario_text = (path / SCENARIO_TOML).read_text(encoding="utf-8")
+        if (path / PROFILE_JSON).is_file():
+            run.profile = _read_profile(path / PROFILE_JSON, run.notes)
     except UnicodeDecodeError as exc:
         raise RunFolderError(f"{path}: a run file is not UTF-8 text: {exc}") from None
     except OSError as exc:
@@ -167,6 +187,7 @@ __all__ = [
     "FLIGHT_CSV",
     "FLIGHT_MCAP",
     "JOBS_CSV",
+    "PROFILE_JSON",
     "REPORT_HTML",
     "SCENARIO_TOML",
     "SUMMARY_JSON",

@@ -10,13 +10,16 @@ key names, NaN written as ``null``)::
                 "step_rise_s": [{"axis", "time_s", "rise_s"}], "attitude_estimate_rms_deg",
                 "height_estimate_rms_m"},
      "tasks": {"estimator": {...}, "pid": {...}} | null, "deadline_misses": 0 | null,
-     "energy": {"total_uj", "tiles_uj": {"x,y": ...}, "noc_uj"} | null}
+     "energy": {"total_uj", "tiles_uj": {"x,y": ...}, "noc_uj"} | null,
+     "cycles": {"chip", "tiles": {"x,y": ...}} | null}
 
 ``complete`` is false for a flight that was interrupted or crashed: the figures are those of the
 rows flown so far, and ``"stopped"`` says why.  The flight figures are
 :func:`robosoc.control.flight.flight_metrics` of the rows; the task figures are
 :func:`robosoc.cosim.replay.task_summary` of the job records (the same records ``jobs.csv`` holds);
-the estimate figures are NaN (null) while the controller's estimate is not visible in the rows.
+``cycles`` holds the chip's last cycle and each application tile's core cycles (what its energy
+and a profile's rows add up to, docs/profile.md); the estimate figures are NaN (null) while the
+controller's estimate is not visible in the rows.
 A run of several vehicles has one such object per vehicle and a top-level one
 (:func:`fleet_summary`) with the shared fields and ``"vehicles": [...]``.
 """
@@ -59,6 +62,7 @@ __all__ = [
     "SCHEMA",
     "TASK_KEYS",
     "chip_figures",
+    "cycle_figures",
     "energy_figures",
     "firmware_figures",
     "fleet_summary",
@@ -120,6 +124,11 @@ def energy_figures(result: ReplayResult) -> dict[str, Any]:
     return {"total_uj": sum(tiles.values()) + noc, "tiles_uj": tiles, "noc_uj": noc}
 
 
+def cycle_figures(result: ReplayResult) -> dict[str, Any]:
+    """The ``cycles`` object: the chip's cycle at the end and each tile's core cycles."""
+    return {"chip": result.cycles, "tiles": {f"{x},{y}": c["cycles"] for (x, y), c in result.counters.items()}}
+
+
 def vehicle_summary(
     scenario: ScenarioConfig,
     rows: np.ndarray,
@@ -150,6 +159,7 @@ def vehicle_summary(
         "tasks": task_figures(result) if result is not None else None,
         "deadline_misses": result.deadline_misses if result is not None else None,
         "energy": energy_figures(result) if result is not None else None,
+        "cycles": cycle_figures(result) if result is not None else None,
     }
     return _with_reason(summary, stopped)
 

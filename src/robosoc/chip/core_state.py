@@ -32,6 +32,8 @@ from robosoc.kernels.core_layout import (
     S_MUL,
     S_MULHSU_PC,
     S_PC,
+    S_PROF_BASE,
+    S_PROF_STRIDE,
     S_T1_CTC,
     ST_SIZE,
 )
@@ -129,6 +131,55 @@ class CoreState:
             end = 2 * (int(self.st[t, S_CODE_SIZE]) // 4)
             self.dec[t, :] = 0
             self.dec[t, end] = OP_FETCH_FAULT
+        if self.profiling and self.profile_stride != self.dec.shape[1] // 2 + 1:  # another program: afresh
+            banks = self.prof.shape[1] // self.profile_stride
+            self.st[:, S_PROF_STRIDE] = 0
+            self.enable_profile(banks)
+
+    # --- the exact profile (robosoc.analysis.function_profile reads it) -------------------------------
+    @property
+    def profiling(self) -> bool:
+        return bool(self.st[0, S_PROF_STRIDE] != 0)
+
+    @property
+    def prof(self) -> np.ndarray:
+        """The profile's flow counts per tile (rows) and task bank x word of code (columns): a view of
+        the ``opc`` rows (the running sum over a bank is the executions, :meth:`executions`)."""
+        half = (self.opc.shape[1] - OPC_SIZE) // 2
+        return self.opc[:, OPC_SIZE : OPC_SIZE + half]
+
+    def executions(self, tile: int = 0) -> np.ndarray:
+        """Executions of each word of code per task bank of a tile, shape (banks, stride)."""
+        return np.cumsum(self.prof[tile].reshape(-1, self.profile_stride), axis=1)
+
+    @property
+    def pext(self) -> np.ndarray:
+        """Dynamic extra cycles (taken branches, multiplier steps), laid out as :attr:`prof`."""
+        half = (self.opc.shape[1] - OPC_SIZE) // 2
+        return self.opc[:, OPC_SIZE + half :]
+
+    @property
+    def profile_stride(self) -> int:
+        """Columns of one task bank of ``prof``: one per word of the largest loaded code, its sentinel
+        and one more (a trap in the last word moves the flow two words on); while profiling, as it
+        was when profiling was enabled."""
+        return int(self.st[0, S_PROF_STRIDE]) or self.dec.shape[1] // 2 + 1
+
+    def enable_profile(self, banks: int = 1) -> None:
+        """Count every instruction's executions and extra cycles per word of code, in ``banks`` banks
+        (one per task id; the running task's is chosen by ``S_PROF_BASE``, bank 0 from here on).
+
+        The counts extend the ``opc`` rows (a new array: take :meth:`arrays` again).  Counting starts
+        from zero: enable it before the run for a profile whose totals are the run's.
+        """
+        if banks < 1:
+            raise ValueError(f"banks: at least 1, got {banks}")
+        stride = self.profile_stride
+        opc = np.zeros((self.tiles, OPC_SIZE + 2 * banks * stride), dtype=np.int64)
+        opc[:, :OPC_SIZE] = self.opc[:, :OPC_SIZE]
+        self.opc = opc
+        self.st[:, S_PROF_STRIDE] = stride
+        self.st[:, S_PROF_BASE] = OPC_SIZE
 
     def set_breakpoint(self, addr: int, on: bool, tile: int = 0) -> None:
         """Mark (or unmark) the instruction at ``addr``: the core stops before it (RUN_BREAK).

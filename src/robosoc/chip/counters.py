@@ -18,7 +18,16 @@ from robosoc.isa.table import (
     STALL_KIND,
     Timing,
 )
-from robosoc.kernels.core_layout import C_ENTRY_STALL, C_IRQ, C_IRQ_LOST, C_MMIO, C_MUL_STALL, C_TAKEN, C_TRAP
+from robosoc.kernels.core_layout import (
+    C_ENTRY_STALL,
+    C_IRQ,
+    C_IRQ_LOST,
+    C_MMIO,
+    C_MUL_STALL,
+    C_TAKEN,
+    C_TRAP,
+    OPC_SIZE,
+)
 
 # per operation number (row position + 1): class index, and fixed stall cycles per stall kind
 _NOPS = len(INSTRUCTIONS) + 3
@@ -32,8 +41,9 @@ for _k, _ins in enumerate(INSTRUCTIONS):
 
 
 def op_totals(opc: np.ndarray) -> np.ndarray:
-    """Instructions per operation number (the kernel counts in two banks per operation)."""
-    return opc[0::2] + opc[1::2]
+    """Instructions per operation number (the kernel counts in two banks per operation; a core's
+    ``opc`` row goes on with the exact profile, not read here)."""
+    return opc[0:OPC_SIZE:2] + opc[1:OPC_SIZE:2]
 
 
 def per_operation(opc: np.ndarray) -> dict[str, int]:

@@ -44,6 +44,7 @@ from robosoc.kernels.core_layout import (
     S_MEM_SIZE,
     S_NI,
     S_PC,
+    S_PROF_BASE,
     S_RUN,
 )
 
@@ -452,6 +453,14 @@ class MPSoC:
             c["dma_cycle"] = int(row[kc.A_DMA])
             out[task] = c
         return out
+
+    def enable_profile(self) -> None:
+        """Count every instruction per tile, task and word of code from here on (the exact profile,
+        :mod:`robosoc.analysis.function_profile`; load the programs first, enable it before the run)."""
+        self.cores.enable_profile(kc.NTASKS)
+        stride = self.cores.profile_stride
+        for t in range(self.config.n_tiles):
+            self.cores.st[t, S_PROF_BASE] += int(self.cst[t, kc.K_TASK]) * stride
 
     def noc_counters(self) -> dict[str, int]:
         """Router activity for the energy model (buffer-active and idle port cycles, flit hops) and

@@ -245,6 +245,13 @@ class SingleCoreSoC:
         self.program = program
         self.forget_translations()
 
+    def enable_profile(self) -> None:
+        """Count every instruction's executions and extra cycles per word of code from here on (the
+        exact profile, :func:`robosoc.analysis.function_profile.core_profile`; load the program
+        first).  Translated code does not count: the core runs on the interpreter from here on."""
+        self.translator = None
+        self.state.enable_profile()
+
     def forget_translations(self) -> None:
         """Drop translated code: needed after writing the core's memory from outside (``state.write``)."""
         if self.translator is not None:

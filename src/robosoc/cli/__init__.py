@@ -4,7 +4,7 @@ The rules every command follows (option checks, files, exit codes, errors) and t
 implement them are described in docs/cli.md.
 """
 
-from robosoc.cli import bench, cc, exit_codes, firmware, fly, report, run, scenario, serve, sweep, table  # noqa: F401  (modules register their commands)
+from robosoc.cli import bench, cc, exit_codes, firmware, fly, profile, report, run, scenario, serve, sweep, table  # noqa: F401  (modules register their commands)
 from robosoc.cli.app import app
 
 

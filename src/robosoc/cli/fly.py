@@ -81,6 +81,14 @@ def fly_command(
     arith: Arith = None,
     mul: Mul = None,
     foxglove: Foxglove = None,
+    profile: Annotated[
+        bool,
+        typer.Option(
+            "--profile",
+            help="Count every instruction: cycles, instructions and energy per firmware function, tile and task "
+            "(profile.json, profile.csv; docs/profile.md).",
+        ),
+    ] = False,
     # --- decoupled mode (robosoc.cli.fly_decoupled, docs/decoupled.md) ---
     decoupled: Annotated[
         bool,
@@ -120,6 +128,8 @@ def fly_command(
             raise options.fail("--video", "not with --decoupled (the physics runs in another process)")
         if foxglove is not None:
             raise options.fail("--foxglove", "not with --decoupled (the physics runs in another process)")
+        if profile:
+            raise options.fail("--profile", "not with --decoupled (profile its run folder with robosoc profile)")
         controller = "chip"
         link = link_options.link_config(pace, hold, faults, resend, peer_timeout)
     # --- end of the decoupled mode's checks ---
@@ -151,6 +161,8 @@ def fly_command(
         changes[next(iter(fw_changes))] = ("firmware", firmware)
     config = options.override(config, changes, files_used)
     if config.controller == "host":
+        if profile:
+            raise options.fail("--profile", "only with the chip controller (the host controller has no firmware)")
         for option in fw_changes:
             raise options.fail(option, "only with the chip controller (the host controller has no firmware)")
     sources.extend((option, (field,)) for option, (field, _) in changes.items() if field != "firmware")
@@ -197,7 +209,7 @@ def fly_command(
 
     video_state = _VideoState(console, video) if video is not None else None
     live = _start_live(console, foxglove)  # --foxglove (docs/results-logs.md)
-    progress = _FlightProgress(console, config.duration_s, config.sensors.rate_hz)
+    progress = FlightProgress(console, config.duration_s, config.sensors.rate_hz)
 
     def on_sample(world, k: int) -> None:
         progress.sample(k)
@@ -206,8 +218,9 @@ def fly_command(
 
     try:
         flight = fly_scenario(
-            config, out, on_sample=on_sample, on_status=progress.status, on_row=_live_rows(live), plot=True
-        )
+            config, out, on_sample=on_sample, on_status=progress.status, on_row=_live_rows(live), plot=True,
+            profile=profile,
+        )  # fmt: skip
     except KeyboardInterrupt:
         progress.stop()
         note(
@@ -225,14 +238,21 @@ def fly_command(
         if live is not None:
             live.close()
     print_summary(console, flight.summary)
+    if profile:
+        from robosoc.cli.profile import print_profile
+
+        for i, result in enumerate(flight.results):
+            if result is not None and result.profile is not None:
+                print_profile(console, result.profile, title=f"vehicle {i + 1}, " if len(flight.results) > 1 else "")
     if out is not None:
         plain(console, f"run folder: {out} (scenario.toml, flight.csv, summary.json, flight.png, flight.mcap, "
-              + ("jobs.csv, chip-trace.json, " if config.controller == "chip" else "") + "report.html)")  # fmt: skip
+              + ("jobs.csv, chip-trace.json, " if config.controller == "chip" else "")
+              + ("profile.json, profile.csv, " if profile else "") + "report.html)")  # fmt: skip
     if video_state is not None and video_state.sink is not None and video_state.sink.frames:
         plain(console, f"video: {video_state.sink.path} ({video_state.sink.frames} frames at {VIDEO_FPS:g} fps)")
 
 
-class _FlightProgress:
+class FlightProgress:
     """A progress bar of simulated seconds and the real-time factor, started at the first sample
     (so that building and compiling are not counted)."""
 

@@ -96,7 +96,7 @@ class ScenarioFlight:
     out: Path | None
 
 
-def _controllers(scenario: ScenarioConfig, on_status: Callable[[str], None]) -> list[LockstepController]:
+def _controllers(scenario: ScenarioConfig, on_status: Callable[[str], None], profile: bool) -> list[LockstepController]:
     canonical = vehicle_preset(scenario.vehicle)  # the control parameters do not depend on name or spawn
     if scenario.controller == "host":
         return [
@@ -108,7 +108,7 @@ def _controllers(scenario: ScenarioConfig, on_status: Callable[[str], None]) -> 
 
     prepare_chip(scenario.chip, lambda: flight_app.build(scenario.firmware, canonical, scenario), on_status)
     fw, chip = scenario.firmware, scenario.chip
-    return [ChipController(scenario, canonical, fw, chip=chip) for _ in range(scenario.vehicles)]
+    return [ChipController(scenario, canonical, fw, chip=chip, profile=profile) for _ in range(scenario.vehicles)]
 
 
 def _min_separation(rows: list[np.ndarray]) -> float:
@@ -131,6 +131,7 @@ def fly_scenario(
     on_row: Callable[[int, np.ndarray], None] | None = None,
     plot: bool = True,
     logs: bool = True,
+    profile: bool = False,
 ) -> ScenarioFlight:
     """Fly ``scenario`` (with ``seed`` in place of its own, if given) and write the run folder ``out``.
 
@@ -145,6 +146,9 @@ def fly_scenario(
         plot: also write ``flight.png`` per vehicle.
         logs: also write ``flight.mcap``, ``chip-trace.json`` (chip) and ``report.html`` per vehicle
             (:func:`robosoc.analysis.run_logs.write_run_logs`; docs/results-logs.md).
+        profile: count every instruction per firmware function, tile and task (chip controller) and
+            write ``profile.json`` and ``profile.csv`` per vehicle (docs/profile.md); the results'
+            ``profile`` holds it.
 
     Raises:
         KeyboardInterrupt, or whatever stopped the flight (a firmware fault: ChipError, CoreError),
@@ -155,7 +159,7 @@ def fly_scenario(
     say = on_status or (lambda _text: None)
     vehicles = fleet_vehicles(scenario)
     count = len(vehicles)
-    controllers = _controllers(scenario, say)
+    controllers = _controllers(scenario, say, profile)
     folders = [vehicle_folder(out, i, count) for i in range(count)] if out is not None else []
     csv_logs: list[CsvFlightLog] = []
     if out is not None:
@@ -228,6 +232,8 @@ def _conclude(
         folder = folders[i]
         if result is not None:
             write_jobs_csv(result.jobs, folder / "jobs.csv")
+            if result.profile is not None:
+                result.profile.write(folder)  # before the report, which shows it
         write_summary(summary, folder / "summary.json")
         if plot and len(rows[i]):
             from robosoc.control.flight_plot import plot_flight

@@ -102,6 +102,7 @@ class ChipController:
         chip: the chip (default: the seed's 2×2 for the mapping).
         energy: the energy model for the job records (default: the packaged coefficients).
         first_cycle: the cycle of simulated time 0 (the firmware boots before it).
+        profile: count every instruction per function, tile and task (``result.profile``).
 
     Raises:
         ValueError: the mapping does not fit the chip; a controller parameter does not fit Q16.16.
@@ -117,8 +118,10 @@ class ChipController:
         chip: ChipConfig | None = None,
         energy: EnergyModel | None = None,
         first_cycle: int = DEFAULT_FIRST_CYCLE,
+        profile: bool = False,
     ) -> None:
         self.scenario = scenario
+        self.profile = profile
         self.vehicle = vehicle
         self.fw = fw or FirmwareConfig()
         self.chip = chip
@@ -138,6 +141,7 @@ class ChipController:
             chip=self.chip,
             energy=self.energy,
             first_cycle=self.first_cycle,
+            profile=self.profile,
         )
         self.result = None
         self._period_end = self.first_cycle

@@ -39,6 +39,7 @@ from pathlib import Path
 import numpy as np
 
 from robosoc.analysis.energy import EnergyModel
+from robosoc.analysis.function_profile import FunctionProfile, chip_profile
 from robosoc.chip.elf import load_elf
 from robosoc.chip.mpsoc import MPSoC
 from robosoc.config.chip import ChipConfig
@@ -116,6 +117,8 @@ class ReplayResult:
     dropped: list[str] = field(default_factory=list)
     #: the estimator's state at the close of each sample period in which no estimator job was mid-way
     estimates: list[flight_app.ChipEstimate] = field(default_factory=list)
+    #: the exact per-function profile (a run made with ``profile=True``)
+    profile: FunctionProfile | None = None
 
     def jobs_of(self, task: str) -> list[JobRecord]:
         return [j for j in self.jobs if j.task == task]
@@ -199,6 +202,7 @@ class FirmwareRun:
         chip: ChipConfig | None = None,
         energy: EnergyModel | None = None,
         first_cycle: int = DEFAULT_FIRST_CYCLE,
+        profile: bool = False,
     ) -> None:
         self.fw = fw or FirmwareConfig()
         self.chip_config = chip or self.fw.seed_chip()
@@ -212,6 +216,8 @@ class FirmwareRun:
         self.tiles = flight_app.app_tiles(self.fw)
         for xy in self.tiles:
             self.chip.load(xy, program)
+        if profile:
+            self.chip.enable_profile()  # exact counts per function: function_profile() reads them
         self.names = {(xy, tid): name for xy in self.tiles for name, tid in flight_app.task_ids(self.fw, xy).items()}
         self.samples: list[SampleInput] = []
         self._sample_cycles: list[int] = []  # of the samples, for finding a job's period
@@ -286,6 +292,18 @@ class FirmwareRun:
                 self._logged.append((xy, r, _period_of(self._sample_cycles, r.release)))
             self._seen[xy] = count
 
+    def function_profile(self) -> FunctionProfile:
+        """The exact profile so far: cycles, instructions and energy per function, tile and task.
+
+        Raises:
+            RuntimeError: the run was made without ``profile=True``.
+        """
+        names = dict(self.names)
+        for xy in self.tiles:
+            names.setdefault((xy, images.KERNEL_TASK_ID), "kernel")
+            names.setdefault((xy, images.IDLE_TASK_ID), "idle")
+        return chip_profile(self.chip, self.tiles, self.model, names)
+
     def result(self) -> ReplayResult:
         """Job records with their energy, the PWM commands, and the run's totals."""
         seconds = time.perf_counter() - self._start
@@ -323,7 +341,7 @@ class FirmwareRun:
             firmware=self.fw, clock_ns=chip_.clock_ns, samples=list(samples), commands=list(self.commands),
             jobs=jobs, kernel_stats={xy: images.read_stats(chip_, xy) for xy in self.tiles}, counters=counters,
             task_energy_pj=task_energy, energy_pj=total, cycles=chip_.cycle, host_seconds=seconds,
-            estimates=list(self.estimates),
+            estimates=list(self.estimates), profile=self.function_profile() if chip_.cores.profiling else None,
         )  # fmt: skip
 
 
@@ -337,6 +355,7 @@ def replay(
     energy: EnergyModel | None = None,
     first_cycle: int = DEFAULT_FIRST_CYCLE,
     on_sample: Callable[[int, int], None] | None = None,
+    profile: bool = False,
 ) -> ReplayResult:
     """Run the firmware on the chip against the sensor samples of ``rows`` (a flight's rows).
 
@@ -348,12 +367,15 @@ def replay(
         energy: the energy model (default: the packaged coefficients).
         first_cycle: cycle of the first sample's injection.
         on_sample: called with (samples done, samples in all) as the replay goes (progress bars).
+        profile: count every instruction per function, tile and task (:attr:`ReplayResult.profile`).
 
     Raises:
         ValueError: the mapping does not fit the chip, or the rows are not a flight.
         robosoc.chip.mpsoc.ChipError / CoreError: the firmware faulted (names tile, pc, symbol).
     """
-    run = FirmwareRun(fw, vehicle=vehicle, scenario=scenario, chip=chip, energy=energy, first_cycle=first_cycle)
+    run = FirmwareRun(
+        fw, vehicle=vehicle, scenario=scenario, chip=chip, energy=energy, first_cycle=first_cycle, profile=profile
+    )
     samples = samples_from_rows(rows, run.clock_ns, first_cycle)
     period = samples[1].cycle - samples[0].cycle if len(samples) > 1 else round(10e6 / run.clock_ns)
     for k, sample in enumerate(samples):

@@ -48,6 +48,8 @@ from robosoc.kernels.core_layout import (
     S_MEM_SIZE,
     S_OUT_LEN,
     S_PC,
+    S_PROF_BASE,
+    S_PROF_STRIDE,
     S_RUN,
 )
 from robosoc.kernels.dev_irq import (
@@ -263,6 +265,10 @@ def ni_access(t, core, book, noc):
         return False
     opc[t, (op << U1) | (i & U1)] += 1
     ctr[t, C_MMIO] += 1
+    if st[t, S_PROF_STRIDE] != 0:  # the profile's flow (kernels/core.py): word i runs here, the core goes on after it
+        pb = np.uint64(st[t, S_PROF_BASE]) + i
+        opc[t, pb] += 1
+        opc[t, pb + U1] -= 1
     width = cfg[nk.C_WIDTH]
     if op == LW:
         x = s - 1  # registered read: the value of the cycle before the load
@@ -315,6 +321,7 @@ def ni_access(t, core, book, noc):
         account(t, core, book, end)
         record(book.rec, gst, R_TASK, t, end, v, cst[t, K_TASK], pc, cst[t, K_SLEEP_CYCLES], 0)
         cst[t, K_TASK] = v
+        st[t, S_PROF_BASE] = OPC_SIZE + v * st[t, S_PROF_STRIDE]  # the task's profile bank (kernels/core.py)
         return True
     elif off == ni.SLEEP:
         st[t, S_CYCLE] = end

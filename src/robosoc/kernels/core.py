@@ -60,6 +60,7 @@ from robosoc.kernels.core_layout import (
     ERR_STORE_UNMAPPED,
     ERR_UNSUPPORTED,
     ERRATA_RTL,
+    OPC_SIZE,
     OUT_CAPACITY,
     RUN_BREAK,
     RUN_CHUNK,
@@ -85,6 +86,8 @@ from robosoc.kernels.core_layout import (
     S_MULHSU_PC,
     S_OUT_LEN,
     S_PC,
+    S_PROF_BASE,
+    S_PROF_STRIDE,
     S_RUN,
 )
 from robosoc.kernels.dev_irq import irq_event, trap
@@ -232,16 +235,48 @@ def fetch_error(target: int, base: int, code: int, size: int) -> int:
 
 
 @njit(cache=True, inline="always")
+def flow(st: np.ndarray, t: int, opc_t: np.ndarray, word: np.uint64, n: int) -> None:
+    """Add ``n`` to the profile's flow count of ``word`` (see ``run_cores``; nothing when not profiling).
+
+    The profile's state is read from ``st`` where it is needed rather than held in the loop: the
+    interpreter's hot path keeps its registers.
+    """
+    if st[t, S_PROF_STRIDE] != 0:
+        opc_t[np.uint64(st[t, S_PROF_BASE]) + word] += n
+
+
+@njit(cache=True, inline="always")
+def flow_jump(st: np.ndarray, t: int, opc_t: np.ndarray, pc: int, target: int, base: int) -> None:
+    """The profile's flow counts of a transfer from the instruction at ``pc`` to ``target``."""
+    if st[t, S_PROF_STRIDE] != 0:
+        pb = np.uint64(st[t, S_PROF_BASE])
+        opc_t[pb + (np.uint64(target - base) >> U2)] += 1
+        opc_t[pb + (np.uint64(pc - base) >> U2) + U1] -= 1
+
+
+@njit(cache=True, inline="always")
+def flow_extra(st: np.ndarray, t: int, opc_t: np.ndarray, word: np.uint64, cycles: int) -> None:
+    """Dynamic extra cycles of ``word`` (taken branch, multiply) in the profile's second half."""
+    if st[t, S_PROF_STRIDE] != 0:
+        half = np.uint64((opc_t.shape[0] - OPC_SIZE) >> 1)
+        opc_t[np.uint64(st[t, S_PROF_BASE]) + half + word] += cycles
+
+
+@njit(cache=True, inline="always")
 def branch(
-    taken: bool, pc: int, imm: int, cyc: int, n_taken: int, base: int, code: int, size: int
-) -> tuple[int, int, int, int, int]:
-    """A conditional branch: (pc, cyc, taken count, err, err_addr) after it."""
+    taken: bool, pc: int, imm: int, cyc: int, n_taken: int, base: int, code: int, size: int,
+    st: np.ndarray, t: int, opc_t: np.ndarray,
+) -> tuple[int, int, int, int, int]:  # fmt: skip
+    """A conditional branch: (pc, cyc, taken count, err, err_addr) after it (a taken one books its
+    jump and extra cycles in the profile of core ``t``, if it is profiled: see ``run_cores``)."""
     if not taken:
         return pc + 4, cyc + BRANCH_NOT_TAKEN_CYCLES, n_taken, 0, 0
     target = (pc + imm) & M32
     err = fetch_error(target, base, code, size)
     if err != 0:
         return pc, cyc, n_taken, err, target
+    flow_jump(st, t, opc_t, pc, target, base)
+    flow_extra(st, t, opc_t, np.uint64(pc - base) >> U2, BRANCH_TAKEN_CYCLES - BRANCH_NOT_TAKEN_CYCLES)
     return target, cyc + BRANCH_TAKEN_CYCLES, n_taken + 1, 0, 0
 
 
@@ -283,7 +318,8 @@ class CoreArrays(NamedTuple):
 
     ``st`` state (layout: core_layout.S_*), ``ctr`` event counters (C_*), ``opc`` instructions per
     operation in two banks, ``regs`` x0..x31 and a sink, ``m8``/``m16``/``m32`` three views of the
-    SRAM bytes, ``dec`` the predecode rows of the loaded code, ``out`` the output buffer.
+    SRAM bytes, ``dec`` the predecode rows of the loaded code, ``out`` the output buffer.  Beyond
+    its OPC_SIZE per-operation counters an ``opc`` row holds the exact profile (see ``run_cores``).
     """
 
     st: np.ndarray
@@ -314,6 +350,17 @@ def run_cores(core: CoreArrays, tiles: np.ndarray, until: int) -> None:
     instruction (registers, predecode, counters) are taken as row views once per tile; the others
     are indexed in two dimensions, because every view costs reference counting on entry and exit,
     which dominates the short time slices of a busy many-core chip.
+
+    The exact profile (``S_PROF_STRIDE`` != 0, :meth:`robosoc.chip.core_state.CoreState.enable_profile`)
+    lives in the ``opc`` row after its OPC_SIZE counters, so that it costs no array (no view, no
+    reference count) of its own.  It counts the flow of control, not each instruction: column
+    ``S_PROF_BASE + i`` (the running task's bank) gains one each time execution arrives at word i
+    other than from word i - 1 (entry to this function, a taken branch or jump, an interrupt or trap
+    entry) and loses one each time it leaves word i - 1 other than to word i (a taken branch or jump,
+    a redirection, a stop before word i), so the executions of word i are the running sum of the
+    bank up to i.  The column W further on (W = half the row beyond OPC_SIZE) adds the dynamic extra
+    cycles of taken branches and multiplies.  Sequential instructions cost nothing; not profiling, a
+    jump costs a load and a well-predicted branch more.
     """
     st, ctr, opc, regs, m8, m16, m32, dec, out = core
     for k in range(tiles.shape[0]):
@@ -339,15 +386,20 @@ def run_cores(core: CoreArrays, tiles: np.ndarray, until: int) -> None:
         err = 0
         err_addr = 0
         next_event = min(st[t, S_IRQ_CHECK], stop)
+        flow(st, t, opc_t, np.uint64(pc - base) >> U2, 1)  # the flow arrives here
 
         while True:
             if cyc >= next_event:
                 if cyc >= st[t, S_IRQ_CHECK]:
+                    was = pc
                     pc, cyc = irq_event(st[t], ctr[t], pc, cyc)
                     err = fetch_error(pc, base, code, size)
                     if err != 0:  # IRQ_VECTOR outside the loaded code
                         err_addr = pc
                         break
+                    if pc != was:  # an entry: the flow leaves `was` unexecuted
+                        flow(st, t, opc_t, np.uint64(was - base) >> U2, -1)
+                        flow(st, t, opc_t, np.uint64(pc - base) >> U2, 1)
                 if cyc >= stop:
                     status = RUN_MAX_CYCLES if (budget >= 0 and cyc >= budget) else RUN_CHUNK
                     break
@@ -412,38 +464,40 @@ def run_cores(core: CoreArrays, tiles: np.ndarray, until: int) -> None:
                 pc += 4
             elif op == BNE:
                 pc, cyc, n_taken, err, err_addr = branch(
-                    regs_t[rs1] != regs_t[rs2], pc, imm, cyc, n_taken, base, code, size
+                    regs_t[rs1] != regs_t[rs2], pc, imm, cyc, n_taken, base, code, size, st, t, opc_t
                 )
                 if err != 0:
                     break
             elif op == BEQ:
                 pc, cyc, n_taken, err, err_addr = branch(
-                    regs_t[rs1] == regs_t[rs2], pc, imm, cyc, n_taken, base, code, size
+                    regs_t[rs1] == regs_t[rs2], pc, imm, cyc, n_taken, base, code, size, st, t, opc_t
                 )
                 if err != 0:
                     break
             elif op == BLT:
                 pc, cyc, n_taken, err, err_addr = branch(
-                    regs_t[rs1] < regs_t[rs2], pc, imm, cyc, n_taken, base, code, size
+                    regs_t[rs1] < regs_t[rs2], pc, imm, cyc, n_taken, base, code, size, st, t, opc_t
                 )
                 if err != 0:
                     break
             elif op == BGE:
                 pc, cyc, n_taken, err, err_addr = branch(
-                    regs_t[rs1] >= regs_t[rs2], pc, imm, cyc, n_taken, base, code, size
+                    regs_t[rs1] >= regs_t[rs2], pc, imm, cyc, n_taken, base, code, size, st, t, opc_t
                 )
                 if err != 0:
                     break
             elif op == BLTU:
                 pc, cyc, n_taken, err, err_addr = branch(
-                    (regs_t[rs1] & M32) < (regs_t[rs2] & M32), pc, imm, cyc, n_taken, base, code, size
-                )
+                    (regs_t[rs1] & M32) < (regs_t[rs2] & M32), pc, imm, cyc, n_taken, base, code, size,
+                    st, t, opc_t,
+                )  # fmt: skip
                 if err != 0:
                     break
             elif op == BGEU:
                 pc, cyc, n_taken, err, err_addr = branch(
-                    (regs_t[rs1] & M32) >= (regs_t[rs2] & M32), pc, imm, cyc, n_taken, base, code, size
-                )
+                    (regs_t[rs1] & M32) >= (regs_t[rs2] & M32), pc, imm, cyc, n_taken, base, code, size,
+                    st, t, opc_t,
+                )  # fmt: skip
                 if err != 0:
                     break
             elif op == SLLI:
@@ -537,6 +591,8 @@ def run_cores(core: CoreArrays, tiles: np.ndarray, until: int) -> None:
                         if n > 0:
                             cyc += JUMP_CYCLES * n
                             opc_t[kc] += n
+                            flow(st, t, opc_t, i, n)  # n more arrivals at the jump, departures after it
+                            flow(st, t, opc_t, i + U1, -n)
                     elif imm == -4 and dec_t[(i << U1) - U2] == NOP_ROW and dec_t[(i << U1) - U1] == 0:
                         period = JUMP_CYCLES + SINGLE_CYCLES
                         n = (next_event - (cyc + JUMP_CYCLES)) // period
@@ -544,6 +600,9 @@ def run_cores(core: CoreArrays, tiles: np.ndarray, until: int) -> None:
                             cyc += period * n
                             opc_t[kc] += n
                             opc_t[(np.uint64(ADDI) << U1) | ((i - U1) & U1)] += n
+                            flow(st, t, opc_t, i - U1, n)  # n more arrivals at the nop, departures after the jump
+                            flow(st, t, opc_t, i + U1, -n)
+                flow_jump(st, t, opc_t, pc, target, base)
                 pc = target
                 cyc += JUMP_CYCLES
             elif op == LBU or op == LB or op == LHU or op == LH:
@@ -624,6 +683,7 @@ def run_cores(core: CoreArrays, tiles: np.ndarray, until: int) -> None:
                         st[t, S_MULHSU_PC] = pc
                 lat = mul_latency(b & M32)
                 n_mulstall += lat - 1
+                flow_extra(st, t, opc_t, i, lat - 1)
                 cyc += lat
                 pc += 4
                 st[t, S_MUL_END] = cyc  # the interrupt controller's erratum window needs it
@@ -637,6 +697,7 @@ def run_cores(core: CoreArrays, tiles: np.ndarray, until: int) -> None:
                 # SYSTEM opcode: trap.  EPC = trap + 8; the instruction at trap + 8 executes first.
                 cyc += TRAP_CYCLES
                 trap(st[t], pc, cyc)
+                flow_jump(st, t, opc_t, pc, pc + 8, base)
                 pc += 8
                 next_event = cyc + 1
             elif op == FETCH_FAULT:
@@ -662,6 +723,9 @@ def run_cores(core: CoreArrays, tiles: np.ndarray, until: int) -> None:
             wi = (pc - base) >> 2
             st[t, S_ERR_INSN] = m32[t, wi] & M32 if 0 <= wi < size >> 2 else 0
 
+        w = np.uint64(pc - base) >> U2  # the flow stops before pc (if profiled, and pc is in the code)
+        if w < np.uint64(st[t, S_PROF_STRIDE]):
+            opc_t[np.uint64(st[t, S_PROF_BASE]) + w] -= 1
         st[t, S_PC] = pc & M32
         st[t, S_CYCLE] = cyc
         st[t, S_RUN] = status

@@ -51,6 +51,10 @@ S_T1_OCR = 39
 S_UART_DIV = 40
 S_T1_HIST = 41  # 41..43: TIMER1 value | flag << 16 | OCR << 17 in cycles S_T1_REF-3 .. S_T1_REF-1
 S_CODE_SIZE = 44  # bytes from S_MEM_BASE the predecode table covers (the rest of SRAM is data only)
+# the exact profile, in the opc row after its counters (kernels/core.py run_cores): the flow count of
+# word i in opc[t, S_PROF_BASE + i], its extra cycles half the rest of the row further on
+S_PROF_BASE = 45  # column of the running task's bank: OPC_SIZE + task x S_PROF_STRIDE
+S_PROF_STRIDE = 46  # columns of a task's bank (words of code + 2); 0: not profiling
 ST_SIZE = 48
 
 # run status

@@ -1,0 +1,221 @@
+"""The exact profile: its totals are the run's, a tiny program's counts are the hand-derived ones,
+tasks get their own functions, and counting changes nothing of the run."""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+import re
+from pathlib import Path
+
+import pytest
+
+from headless_chromium import BROWSER, load
+from robosoc.analysis.energy import INSTRUCTION_CLASSES, STALL_KINDS, EnergyModel
+from robosoc.analysis.function_profile import (
+    COUNT_NAMES,
+    CSV_FIELDS,
+    NOC_ROW,
+    RESET_ROW,
+    core_profile,
+    profile_totals,
+    summary_mismatches,
+)
+from robosoc.analysis.report import write_report
+from robosoc.chip.elf import load_elf
+from robosoc.chip.single import SingleCoreSoC
+from robosoc.config.firmware import FirmwareConfig
+from robosoc.config.scenario import FlightPlan, ScenarioConfig
+from robosoc.config.vehicle import vehicle_preset
+from robosoc.control.flight import fly
+from robosoc.control.host import HostController
+from robosoc.cosim.replay import replay
+from robosoc.kernels.core_layout import PIPELINE_FILL
+from robosoc.toolchain import build_elf
+
+MODEL = EnergyModel.load()
+
+
+@pytest.fixture(scope="module")
+def replays() -> tuple:
+    """The fixed-point firmware (multiplier: mul stalls too) replayed for a short flight (calibration,
+    then the EKF from take-off at 0.3 s), with and without the profile."""
+    scenario = ScenarioConfig(duration_s=0.8, flight=FlightPlan(takeoff_s=0.3, steps=()))
+    vehicle = vehicle_preset(scenario.vehicle)
+    rows = fly(scenario, vehicle, HostController.for_scenario(scenario, vehicle), 1)
+    return tuple(replay(rows, scenario=scenario, vehicle=vehicle, profile=p) for p in (True, False))
+
+
+def _pj(counts: dict[str, int]) -> float:
+    """Energy by the coefficients, written out here: Σ instructions × class pJ + stall cycles × kind pJ."""
+    return math.fsum(counts.get(k, 0) * MODEL.instruction[k].pj for k in INSTRUCTION_CLASSES) + math.fsum(
+        counts.get(k, 0) * MODEL.stall[k].pj for k in STALL_KINDS
+    )
+
+
+def test_replay_profile_totals_equal_the_run_totals(replays) -> None:
+    result, _ = replays
+    totals = profile_totals(result.profile)
+    assert set(totals) == {*result.counters, None}
+    for xy, counters in result.counters.items():
+        got = totals[xy]
+        assert got["cycles"] == counters["cycles"] > 0
+        assert got["instructions"] == counters["instructions"] > 0
+        for name in COUNT_NAMES:  # instructions per class and cycles per stall kind, exactly
+            assert got["counts"][name] == counters[name], (xy, name)
+        assert got["energy_pj"] == pytest.approx(result.energy_pj[f"tile {xy}"], rel=1e-12)
+        assert got["energy_pj"] == pytest.approx(_pj(counters), rel=1e-12)
+    assert totals[None]["energy_pj"] == pytest.approx(result.energy_pj["noc"], rel=1e-12)
+    # and per task: each task's rows add up to its own counters
+    for (xy, task), pj in result.task_energy_pj.items():
+        mine = [r for r in result.profile.rows if r.tile == xy and r.task == task]
+        assert math.fsum(r.energy_pj for r in mine) == pytest.approx(pj, rel=1e-12)
+
+
+def test_rows_are_consistent_and_other_rows_hold_no_instructions(replays) -> None:
+    result, _ = replays
+    for r in result.profile.rows:
+        if r.function in (RESET_ROW, NOC_ROW):  # the pipeline fill costs no energy; the routers no core cycle
+            assert r.counts == {} and r.instructions == 0
+            assert r.energy_pj == 0 if r.function == RESET_ROW else r.energy_pj > 0 and r.cycles == 0
+            continue
+        assert r.cycles == r.instructions + sum(r.counts.get(k, 0) for k in STALL_KINDS), r
+        assert r.instructions == sum(r.counts.get(k, 0) for k in INSTRUCTION_CLASSES), r
+        assert r.energy_pj == pytest.approx(_pj(r.counts), rel=1e-12)
+        if r.function.startswith("("):
+            assert r.instructions == 0, r
+    resets = [r for r in result.profile.rows if r.function == RESET_ROW]
+    assert [(r.task, r.cycles) for r in resets] == [(0, PIPELINE_FILL)] * len(result.counters)
+
+
+def test_each_task_shows_its_own_functions(replays) -> None:
+    result, _ = replays
+    fw = FirmwareConfig()
+    ekf, pid = tuple(fw.ekf_tile), tuple(fw.pid_tile)
+
+    def functions(tile, task_name):
+        return {r.function for r in result.profile.rows if r.tile == tile and r.task_name == task_name}
+
+    estimator, controller = functions(ekf, "estimator"), functions(pid, "pid")
+    assert {"ekf_predict", "ekf_update"} <= estimator, sorted(estimator)
+    assert "pid_step" in controller and "pid_step" not in estimator
+    assert not {f for f in controller if f.startswith("ekf_")}
+    kernel = functions(ekf, "kernel")
+    assert "_irq_entry" in kernel and not {"ekf_predict", "ekf_update"} & kernel  # (it initialises the EKF at boot)
+    idle = [r for r in result.profile.rows if r.tile == ekf and r.task_name == "idle"]
+    assert max(idle, key=lambda r: r.cycles).function == "(sleep)"
+
+
+def test_profiling_changes_nothing_of_the_run(replays) -> None:
+    profiled, plain = replays
+    assert plain.profile is None
+    assert profiled.cycles == plain.cycles
+    assert profiled.counters == plain.counters
+    assert [(c.seq, c.pwm, c.cycle) for c in profiled.commands] == [(c.seq, c.pwm, c.cycle) for c in plain.commands]
+    assert [(j.task, j.release_cycle, j.completion_cycle) for j in profiled.jobs] == [
+        (j.task, j.release_cycle, j.completion_cycle) for j in plain.jobs
+    ]
+
+
+ASM = """
+    .text
+    .globl main
+    .type main, @function
+main:
+    addi sp, sp, -16
+    sw ra, 12(sp)
+    li t1, {n}
+1:  jal ra, spin
+    addi t1, t1, -1
+    bnez t1, 1b
+    lw ra, 12(sp)
+    addi sp, sp, 16
+    li a0, 0
+    ret
+    .size main, .-main
+
+    .globl spin
+    .type spin, @function
+spin:
+    li t0, {k}
+2:  addi t0, t0, -1
+    bnez t0, 2b
+    ret
+    .size spin, .-spin
+"""
+
+
+def test_a_tiny_program_gives_the_hand_derived_counts(tmp_path: Path) -> None:
+    n, k = 7, 50
+    src = tmp_path / "spin.S"
+    src.write_text(ASM.format(n=n, k=k))
+    soc = SingleCoreSoC()
+    soc.load(load_elf(build_elf([src], mul=True, opt="-O1")))
+    soc.enable_profile()
+    result = soc.run()
+    rows = {r.function: r for r in core_profile(soc, MODEL).rows}
+    # spin, per call: li (1) + k addi (1) + k bnez (taken 3, the last 1) + ret (3)
+    spin = rows["spin"]
+    assert spin.instructions == n * (2 * k + 2)
+    assert spin.cycles == n * (1 + k + 3 * (k - 1) + 1 + 3)
+    assert spin.counts["add"] == n * (k + 1) and spin.counts["branch"] == n * k and spin.counts["jump"] == n
+    assert spin.counts["branch_cycle"] == n * (2 * (k - 1) + 2)  # taken branches and the ret
+    # main: prologue addi, sw, li; n × (jal, addi, bnez); epilogue lw, addi, li, ret
+    main = rows["main"]
+    assert main.instructions == 3 * n + 7
+    assert main.cycles == (1 + 3 + 1) + n * (3 + 1) + 3 * (n - 1) + 1 + (3 + 1 + 1 + 3)
+    assert main.counts["memory"] == 2 and main.counts["memory_cycle"] == 4
+    # the whole program, start-up code included, adds up to the run's counters
+    total = profile_totals(core_profile(soc, MODEL))[(0, 0)]
+    assert total["cycles"] == result.cycles
+    assert total["instructions"] == result.instructions
+    assert total["energy_pj"] == pytest.approx(_pj(result.counters), rel=1e-12)
+
+
+def test_files_round_trip_and_summary_check(replays, tmp_path: Path) -> None:
+    result, _ = replays
+    profile = result.profile
+    json_path, csv_path = profile.write(tmp_path)
+    data = json.loads(json_path.read_text())
+    with csv_path.open(newline="") as handle:
+        table = list(csv.DictReader(handle))
+    assert tuple(table[0]) == CSV_FIELDS
+    assert len(table) == len(data["rows"]) == len(profile.rows)
+    for tile, cycles in data["totals"]["cycles"].items():
+        assert sum(int(r["cycles"]) for r in table if r["tile"] == tile) == cycles
+    assert not list(tmp_path.glob("*.tmp"))
+    summary = {
+        "cycles": {"tiles": {f"{x},{y}": c["cycles"] for (x, y), c in result.counters.items()}},
+        "energy": {
+            "tiles_uj": {f"{x},{y}": result.energy_pj[f"tile {(x, y)}"] / 1e6 for (x, y) in result.counters},
+            "noc_uj": result.energy_pj["noc"] / 1e6,
+            "total_uj": sum(result.energy_pj.values()) / 1e6,
+        },
+    }
+    assert summary_mismatches(profile, summary) == []
+    tile = next(iter(summary["cycles"]["tiles"]))
+    summary["cycles"]["tiles"][tile] += 1
+    summary["energy"]["noc_uj"] *= 1.001
+    found = summary_mismatches(profile, summary)
+    assert len(found) == 2 and found[0].startswith(f"tile {tile}:") and found[1].startswith("noc_uj")
+
+
+def test_the_report_shows_the_profile_and_renders(replays, chip_run: Path, tmp_path: Path) -> None:
+    replays[0].profile.write(chip_run)
+    text = write_report(chip_run).read_text()
+    assert re.findall(r'<figure class="plot" data-plot="([^"]+)"', text).count("profile") == 1
+    for name in ("estimator", "pid"):  # the table names each task's costliest function
+        rows = [r for r in replays[0].profile.rows if r.task_name == name]
+        assert f"<td>{max(rows, key=lambda r: r.cycles).function}</td>" in text
+    if BROWSER is None:
+        pytest.skip("chromium is not installed (.ci/run installs it)")
+    page = load(chip_run / "report.html", tmp_path)
+    assert page.console == []
+    assert page.body_attribute("data-rendered") == page.body_attribute("data-plots")
+
+
+def test_a_bad_profile_json_is_noted_not_fatal(chip_run: Path) -> None:
+    (chip_run / "profile.json").write_text('{"rows": [{"tile": "0,1"}]}')
+    text = write_report(chip_run).read_text()
+    assert 'data-plot="profile"' not in text and "profile.json: skipped: not a robosoc profile" in text
