@@ -51,6 +51,9 @@ S_T1_OCR = 39
 S_UART_DIV = 40
 S_T1_HIST = 41  # 41..43: TIMER1 value | flag << 16 | OCR << 17 in cycles S_T1_REF-3 .. S_T1_REF-1
 S_CODE_SIZE = 44  # bytes from S_MEM_BASE the predecode table covers (the rest of SRAM is data only)
+# MPSoC tiles (S_NI = 1): how far the chip loop vouches for the packet line (kernels/chip.py, "long quanta")
+S_EXT_FINAL = 45  # IRQ_CAUSE reads of device cycles >= this stop the core (RUN_NI): the line may still rise
+S_MASK_LOCK = 46  # 1: a store setting IRQ_MASK bit 1 (the packet line) stops the core (RUN_NI)
 ST_SIZE = 48
 
 # run status
