@@ -105,7 +105,8 @@ G_BREAK_TILE = 11  # the tile that stopped at a breakpoint (CHIP_BREAK)
 G_REC_COUNT = 12  # rows used in rec (the timeline recorder; the host drains it)
 G_REC_LOST = 13  # events that found rec full
 G_NO_LONG = 14  # 1: the next quantum may not be long (a core waits to set IRQ_MASK bit 1)
-GST_SIZE = 15
+G_LONG_OFF = 15  # 1: no long quanta at all (a debugger holds a tile: nobody may run far ahead of it)
+GST_SIZE = 16
 
 # timeline events (rec rows: kind, tile, cycle, then five values; cosim/chip_timeline.py reads them)
 R_TASK = 1  # a TASK_ID store took effect in `cycle`: new id, old id, pc, sleep cycles so far
@@ -553,7 +554,7 @@ def run_chip(core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int) -> 
             wake = NEVER  # the earliest wake-up of a sleeping core
             wake_later = NEVER  # the earliest one after T
             # a long quantum needs every core that runs in it deaf to the packet line (IRQ_MASK bit 1 clear)
-            long_ok = look_single > look_idle and gst[G_NO_LONG] == 0
+            long_ok = look_single > look_idle and gst[G_NO_LONG] == 0 and gst[G_LONG_OFF] == 0
             for t in range(n):
                 state = cst[t, K_STATE]
                 if state == K_RUN:
