@@ -9,6 +9,7 @@ handler, sleeps while waiting) exercises idle and busy network phases, back-pres
 interrupts and sleep.
 """
 
+from collections.abc import Sequence
 from pathlib import Path
 
 import pytest
@@ -163,3 +164,81 @@ def test_where_the_host_stops_the_chip_changes_nothing():
     assert sum(len(r) for r in one_call[0].values()) == 2 * len(samples)
     assert one_call == run(range(100_000, end + 100_000, 100_000))
     assert one_call == run([s.cycle for s in samples] + [end])
+
+
+# --- long quanta: cores deaf to the packet line run far ahead of each other ---------------------
+MIXED = Path(__file__).parent / "programs" / "mixed.c"
+MIXED_ROUNDS = 2
+
+
+def run_mixed(config: ChipConfig, lockstep: bool, seed: int, late: int, steps: Sequence[int] = ()):
+    """mixed.c with I/O packets injected into every core tile; ``steps``: advance in these calls first."""
+    program = load_elf(build_elf([MIXED], mul=True, defines={"ROUNDS": MIXED_ROUNDS, "SEED": seed, "LATE": late}))
+    chip = MPSoC(config, lockstep=lockstep)
+    chip.load_all(program)
+    tiles = chip.core_tiles()
+    for k, at in enumerate(range(400, 12_000, 1100)):
+        chip.inject(tiles[(k * 5) % len(tiles)], [0xFFFF, *range(k + 1)], at_cycle=at)
+    for c in steps:
+        chip.step(c)
+    result = chip.run(max_cycles=20_000_000)
+    tiles = {xy: chip.counters(xy) for xy in chip.core_tiles()}
+    tasks = {xy: chip.task_counters(xy) for xy in chip.core_tiles()}
+    return result.output, result.cycles, tiles, tasks, chip.noc_counters()
+
+
+@pytest.mark.parametrize(
+    "config,seed,late",
+    [
+        (ChipConfig(), 1, 1),
+        (ChipConfig(), 3, 9),
+        (ChipConfig(width=3, height=2), 2, 1),
+        (ChipConfig(width=3, height=2, noc=NocConfig(buffer_depth=2)), 3, 2),
+        (ChipConfig(width=3, height=3, noc=PER_OUTPUT), 1, 2),
+        (ChipConfig(width=4, height=2, noc=NocConfig(buffer_depth=2, arbiter="per-output")), 2, 1),
+    ],
+    ids=["2x2", "2x2-no-late", "3x2", "3x2-shallow", "per-output-3x3", "per-output-4x2-shallow"],
+)
+def test_long_quanta_give_the_lockstep_results(config: ChipConfig, seed: int, late: int):
+    # pollers that read NI_STATUS and IRQ_CAUSE, tick-driven sleepers the packets cannot wake and
+    # tiles that unmask the packet line half-way, with I/O packets arriving throughout: the long
+    # quanta of the deaf cores must give exactly the cycles, counters and outputs of lockstep
+    fast = run_mixed(config, False, seed, late)
+    slow = run_mixed(config, True, seed, late)
+    output, _, tiles, _, _ = fast
+    n_cores = len(tiles)
+    roles = set()
+    for xy, text in output.items():
+        line = text.decode()
+        assert f" got {MIXED_ROUNDS * (n_cores - 1)} " in line, (xy, line)
+        roles.add(line.split(" role ")[1][0])
+    assert len(roles) >= 2  # at least two of the three roles on every mesh
+    assert fast == slow
+
+
+def test_long_quanta_do_not_depend_on_where_the_host_stops_the_chip():
+    config = ChipConfig(width=3, height=2)
+    one_call = run_mixed(config, False, 2, 1)
+    assert one_call == run_mixed(config, False, 2, 1, steps=range(997, 400_000, 997 * 7))
+
+
+def test_deaf_busy_cores_run_in_long_quanta_with_the_lockstep_results():
+    # the matrix workload on every core of a 3x3 mesh: no core listens to the packet line, so the
+    # chip needs a handful of quanta instead of one per 17 cycles, with the same counters
+    from robosoc.firmware import FIRMWARE_DIR
+
+    program = load_elf(build_elf([FIRMWARE_DIR / "bench" / "matrix_bench.c"], mul=True,
+                             defines={"BENCH_ITERATIONS": 100000, "BENCH_QUIET": None}))  # fmt: skip
+    cycles = 60_000
+
+    def one(lockstep: bool):
+        chip = MPSoC(ChipConfig(width=3, height=3), lockstep=lockstep)
+        chip.load_all(program)
+        chip.step(cycles)
+        return {xy: (chip.counters(xy), chip.tile_cycle(xy), chip.pc(xy)) for xy in chip.core_tiles()}, int(
+            chip.gst[kc.G_QUANTA]
+        )
+
+    (fast, quanta), (slow, _) = one(False), one(True)
+    assert fast == slow
+    assert quanta <= 2  # one quantum of kc.SINGLE_QUANTUM cycles at most would do

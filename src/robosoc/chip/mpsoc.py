@@ -391,6 +391,14 @@ class MPSoC:
         """
         self.cores.set_breakpoint(addr, on, tile=self.config.tile_index(xy))
 
+    def allow_long_quanta(self, on: bool) -> None:
+        """Let cores deaf to the packet line run in long quanta (the default; ``docs/noc.md``).
+
+        A debugger turns them off: a tile halted at a breakpoint inside a long quantum would leave
+        the others far ahead of it, their output already printed.
+        """
+        self.gst[kc.G_LONG_OFF] = 0 if on else 1
+
     def break_tile(self) -> tuple[int, int]:
         """The tile that stopped at a breakpoint (after ``step`` returned CHIP_BREAK)."""
         return self.config.tile_xy(int(self.gst[kc.G_BREAK_TILE]))

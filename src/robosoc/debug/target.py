@@ -305,6 +305,7 @@ class ChipTarget(Target):
         super().__init__(chip.cores, chip.config.tile_index(xy))
         self.chip = chip
         self.xy = xy
+        chip.allow_long_quanta(False)  # the other tiles stay within a short quantum of the halted one
         self._saved: np.ndarray | None = None  # predecode rows while a step has marked every word
         self._step_word = -1
         self._step_cycle = 0

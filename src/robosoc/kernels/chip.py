@@ -35,15 +35,17 @@ from robosoc.kernels.core_layout import (
     NEVER,
     OPC_SIZE,
     RUN_BREAK,
-    RUN_CHUNK,
     RUN_ERROR,
     RUN_EXIT,
     RUN_NI,
     RUN_OUTPUT,
     S_CODE_SIZE,
     S_CYCLE,
+    S_EXT_FINAL,
     S_EXT_RISE,
     S_IRQ_CHECK,
+    S_IRQ_MASK,
+    S_MASK_LOCK,
     S_MEM_BASE,
     S_MEM_SIZE,
     S_OUT_LEN,
@@ -53,7 +55,9 @@ from robosoc.kernels.core_layout import (
     S_RUN,
 )
 from robosoc.kernels.dev_irq import (
+    CAUSE_PACKET,
     ENTRY_DELAY,
+    IRQ_MASK,
     cause_enabled,
     earliest_entry,
     first_cause,
@@ -102,7 +106,9 @@ G_SUSPEND_FLAGS = 10  # 1: that quantum is active (NoC first), 2: quiet
 G_BREAK_TILE = 11  # the tile that stopped at a breakpoint (CHIP_BREAK)
 G_REC_COUNT = 12  # rows used in rec (the timeline recorder; the host drains it)
 G_REC_LOST = 13  # events that found rec full
-GST_SIZE = 14
+G_NO_LONG = 14  # 1: the next quantum may not be long (a core waits to set IRQ_MASK bit 1)
+G_LONG_OFF = 15  # 1: no long quanta at all (a debugger holds a tile: nobody may run far ahead of it)
+GST_SIZE = 16
 
 # timeline events (rec rows: kind, tile, cycle, then five values; cosim/chip_timeline.py reads them)
 R_TASK = 1  # a TASK_ID store took effect in `cycle`: new id, old id, pc, sleep cycles so far
@@ -396,6 +402,15 @@ def ni_access(t, core, book, noc):
 
 
 @njit(cache=True)
+def _stop_address(t, core):
+    """The address of the load or store tile t stopped before (RUN_NI)."""
+    st, regs, dec = core.st, core.regs, core.dec
+    i = np.uint64(st[t, S_PC] - st[t, S_MEM_BASE]) >> U2
+    _, _, rs1, _, imm = fields(dec[t], i)
+    return (regs[t, rs1] + imm) & 0xFFFFFFFC
+
+
+@njit(cache=True)
 def _wake(t, st, cst, w):
     """A sleeping core resumes in cycle w."""
     cst[t, K_STATE] = K_RUN
@@ -494,7 +509,13 @@ def _take_deliveries(st, book, noc):
         cst[d, K_RX_LEN] = ev[r, nk.EV_LEN]
         record(book.rec, gst, R_DELIVER, d, rise, ev[r, nk.EV_FIRST], ev[r, nk.EV_LEN], ev[r, nk.EV_FLITS + 2],
                ev[r, nk.EV_FLITS + 3], ev[r, nk.EV_FLITS + 5])  # fmt: skip
-        irq_external_rise(st[d], rise)
+        if (st[d, S_IRQ_MASK] & CAUSE_PACKET) != 0:
+            irq_external_rise(st[d], rise)
+        else:
+            # the line feeds the controller only through IRQ_MASK bit 1: with it clear only IRQ_CAUSE
+            # reads see it (and those wait for S_EXT_FINAL), so a core that ran ahead of the rise in a
+            # long quantum is told without rewinding its controller into its past
+            st[d, S_EXT_RISE] = rise
         if cst[d, K_STATE] == K_SLEEP:
             cst[d, K_WAKE] = wake_time(st[d], cst[d, K_SLEEP_FROM])
     glob[nk.G_NEV] = 0
@@ -509,7 +530,9 @@ def run_chip(core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int) -> 
     n = cst.shape[0]
     look_idle = gst[G_LOOK_IDLE]
     look_active = gst[G_LOOK_ACTIVE]
-    run = np.empty(n, dtype=np.int64)
+    run = np.empty(n, dtype=np.int64)  # the awake cores, in tile order (the order of equal-cycle stops)
+    runx = np.empty(n, dtype=np.int64)  # those of them that run (not those waiting to report an error)
+    look_single = gst[G_LOOK_SINGLE]
     xcap = xout.shape[1]
     T = gst[G_TIME]
     status = CHIP_UNTIL
@@ -520,6 +543,7 @@ def run_chip(core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int) -> 
             H = gst[G_SUSPEND_H]
             active = (gst[G_SUSPEND_FLAGS] & 1) != 0
             quiet = (gst[G_SUSPEND_FLAGS] & 2) != 0
+            long_q = (gst[G_SUSPEND_FLAGS] & 4) != 0
             gst[G_SUSPEND_H] = 0
             k = 0
             for t in range(n):
@@ -527,6 +551,7 @@ def run_chip(core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int) -> 
                     run[k] = t
                     k += 1
             lo = hi = 0  # run[lo:hi] run next: nobody, every core is where it stopped
+            bulk = False
         else:
             if io_out.shape[0] - gst[G_IO_COUNT] < n:
                 status = CHIP_IO_FULL
@@ -535,16 +560,22 @@ def run_chip(core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int) -> 
             nsleep = 0
             wake = NEVER  # the earliest wake-up of a sleeping core
             wake_later = NEVER  # the earliest one after T
+            # a long quantum needs every core that runs in it deaf to the packet line (IRQ_MASK bit 1 clear)
+            long_ok = look_single > look_idle and gst[G_NO_LONG] == 0 and gst[G_LONG_OFF] == 0
             for t in range(n):
                 state = cst[t, K_STATE]
                 if state == K_RUN:
                     nrun += 1
+                    if (st[t, S_IRQ_MASK] & CAUSE_PACKET) != 0:
+                        long_ok = False
                 elif state == K_SLEEP:
                     nsleep += 1
                     w = cst[t, K_WAKE]
                     wake = min(wake, w)
                     if w > T:
                         wake_later = min(wake_later, w)
+                    elif (st[t, S_IRQ_MASK] & CAUSE_PACKET) != 0:
+                        long_ok = False
             # the NoC's next activity; a quiet NoC stays quiet until a core sends or receives
             nxt = NEVER if quiet else _noc_next(noc, cst)
             quiet = nxt >= NEVER
@@ -559,14 +590,19 @@ def run_chip(core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int) -> 
                 break
             # --- the quantum -------------------------------------------------------------------
             active = nxt <= T
+            long_q = False
             if active:
                 H = T + look_active
             elif nrun >= 2:
-                H = T + look_idle
-                if nxt < H:
-                    H = nxt
+                if long_ok:
+                    H = min(nxt, T + look_single)
+                    long_q = True
+                else:
+                    H = T + look_idle
+                    if nxt < H:
+                        H = nxt
             elif nrun == 1:
-                H = min(nxt, T + gst[G_LOOK_SINGLE])
+                H = min(nxt, T + look_single)
             else:
                 H = nxt  # nobody runs: jump to the next NoC activity or wake-up
             if wake < H:
@@ -578,7 +614,11 @@ def run_chip(core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int) -> 
                         if cst[t, K_STATE] == K_SLEEP and cst[t, K_WAKE] <= T:
                             waking += 1
                     if nrun + waking >= 2:
-                        H = min(H, T + look_idle)
+                        if long_ok:
+                            H = min(H, T + look_single)
+                            long_q = True
+                        else:
+                            H = min(H, T + look_idle)
             if wake_later < H:
                 # a core due to wake later starts with a later quantum: woken inside this one it could
                 # run ahead of a packet another core sends it before its wake-up
@@ -586,6 +626,7 @@ def run_chip(core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int) -> 
             if until < H:
                 H = until
             gst[G_QUANTA] += 1
+            gst[G_NO_LONG] = 0
             if active:
                 _noc_advance(noc, cst, H)
                 if glob[nk.G_STATUS] != nk.STATUS_OK:
@@ -597,13 +638,24 @@ def run_chip(core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int) -> 
             for t in range(n):
                 if cst[t, K_STATE] == K_SLEEP and cst[t, K_WAKE] < H:
                     _wake_if_due(t, st, cst, H)
-            # the awake cores run to H (below); NI accesses are performed here, then the core goes on
+            # the awake cores run to H (below); NI accesses are performed here, then the core goes on.
+            # How far each may read the packet line: in a long quantum no packet can arrive before
+            # T + look_idle (the network is idle at T and every send cuts H to s + look_idle), in a
+            # short one none before H that is not already delivered.
+            final = T + look_idle if long_q else H
             k = 0
+            kx = 0
             for t in range(n):
                 if cst[t, K_STATE] == K_RUN:
                     run[k] = t
                     k += 1
-            lo, hi = 0, k
+                    st[t, S_EXT_FINAL] = final
+                    st[t, S_MASK_LOCK] = 1 if long_q else 0
+                    if st[t, S_RUN] != RUN_ERROR:  # a core that failed ahead of H waits to report it
+                        runx[kx] = t
+                        kx += 1
+            lo, hi = 0, kx
+            bulk = True  # runx[lo:hi] first
         # Stopped cores are handled in global cycle order, so that an NI access sees the network
         # exactly as it is in its cycle: in an idle quantum the NoC is brought up to the access
         # first, with every packet sent before it by any core (a send cannot reach another tile
@@ -613,13 +665,17 @@ def run_chip(core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int) -> 
         suspended = False
         while True:
             if hi > lo:
-                run_cores(core, run[lo:hi], H)  # the awake cores to H, then each stopped one on
+                # the awake cores to H, then each stopped one on
+                run_cores(core, runx[lo:hi] if bulk else run[lo:hi], H)
                 hi = lo
+                bulk = False
             t = np.int64(-1)  # not the literal -1: numba would compile ni_access and its callees for it too
             rt = 0  # t is run[rt]
             for r in range(k):
                 u = run[r]
-                if cst[u, K_STATE] != K_RUN or (st[u, S_RUN] == RUN_CHUNK and st[u, S_CYCLE] >= H):
+                # a stop at or after H waits for a later quantum (a long quantum cut short leaves cores
+                # ahead of H); only an exit is taken at once (the core must not run again)
+                if cst[u, K_STATE] != K_RUN or (st[u, S_CYCLE] >= H and st[u, S_RUN] != RUN_EXIT):
                     continue
                 if t < 0 or st[u, S_CYCLE] < st[t, S_CYCLE]:
                     t = u
@@ -637,6 +693,20 @@ def run_chip(core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int) -> 
                         break
                     if glob[nk.G_NEV] != 0:
                         _take_deliveries(st, book, noc)
+                a = _stop_address(t, core)
+                if a < ni.NI_BASE or a >= ni.NI_END:
+                    # not an NI register: the packet line (long quanta, see S_EXT_FINAL and S_MASK_LOCK)
+                    if a == IRQ_MASK:
+                        # setting bit 1 would let packets that cores already past s0 may still send
+                        # change t: end the quantum before the store, the next one is not long
+                        H = s0
+                        gst[G_NO_LONG] = 1
+                        continue
+                    # an IRQ_CAUSE read: every stop before s0 is done, so no packet reaches t before
+                    # s0 + look_idle (and t does not run past H)
+                    st[t, S_EXT_FINAL] = s0 + look_idle
+                    lo, hi = rt, rt + 1
+                    continue
                 if not ni_access(t, core, book, noc):
                     failed = t
                     break
@@ -666,7 +736,7 @@ def run_chip(core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int) -> 
                 # a debugger's breakpoint: hand the chip to the host in the middle of the quantum;
                 # the next call continues it exactly (the host clears the stop to go on)
                 gst[G_SUSPEND_H] = H
-                gst[G_SUSPEND_FLAGS] = (1 if active else 0) | (2 if quiet else 0)
+                gst[G_SUSPEND_FLAGS] = (1 if active else 0) | (2 if quiet else 0) | (4 if long_q else 0)
                 gst[G_BREAK_TILE] = t
                 suspended = True
                 break

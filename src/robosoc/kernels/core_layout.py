@@ -55,7 +55,10 @@ S_CODE_SIZE = 44  # bytes from S_MEM_BASE the predecode table covers (the rest o
 # word i in opc[t, S_PROF_BASE + i], its extra cycles half the rest of the row further on
 S_PROF_BASE = 45  # column of the running task's bank: OPC_SIZE + task x S_PROF_STRIDE
 S_PROF_STRIDE = 46  # columns of a task's bank (words of code + 2); 0: not profiling
-ST_SIZE = 48
+# MPSoC tiles (S_NI = 1): how far the chip loop vouches for the packet line (kernels/chip.py, "long quanta")
+S_EXT_FINAL = 47  # IRQ_CAUSE reads of device cycles >= this stop the core (RUN_NI): the line may still rise
+S_MASK_LOCK = 48  # 1: a store setting IRQ_MASK bit 1 (the packet line) stops the core (RUN_NI)
+ST_SIZE = 50
 
 # run status
 RUN_CHUNK = 0  # returned at the end of a time slice: call again

@@ -16,8 +16,24 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from robosoc.kernels.core_layout import DEV_NI, DEV_UNMAPPED, DEV_WRITTEN, S_NI
-from robosoc.kernels.dev_irq import irq_input_changed, irq_load, irq_scan, irq_store
+from robosoc.kernels.core_layout import (
+    DEV_NI,
+    DEV_UNMAPPED,
+    DEV_WRITTEN,
+    S_EXT_FINAL,
+    S_IRQ_MASK,
+    S_MASK_LOCK,
+    S_NI,
+)
+from robosoc.kernels.dev_irq import (
+    CAUSE_PACKET,
+    IRQ_CAUSE,
+    IRQ_MASK,
+    irq_input_changed,
+    irq_load,
+    irq_scan,
+    irq_store,
+)
 from robosoc.kernels.dev_output import output_load, output_store
 from robosoc.kernels.dev_timer import timer_load, timer_store
 from robosoc.kernels.ni_registers import NI_BASE, NI_END
@@ -36,12 +52,16 @@ def mmio_load(st: np.ndarray, addr: int, c: int) -> tuple[int, int]:
     """Read a device register with a load that starts in instruction cycle ``c``.
 
     Returns (value, LD_OK), (0, LD_UNMAPPED), or (0, LD_NI) for a network-interface register,
-    which the chip loop reads itself in global time order.
+    which the chip loop reads itself in global time order, and on an MPSoC tile for an IRQ_CAUSE
+    read of a device cycle the chip loop does not yet vouch for (``S_EXT_FINAL``): the core
+    stops before it and reads it again once the chip has caught up.
     """
     a = addr & 0xFFFFFFFC
     x = c - 1
     if NI_BASE <= a < NI_END:
         return 0, LD_NI if st[S_NI] != 0 else LD_UNMAPPED
+    if a == IRQ_CAUSE and st[S_NI] != 0 and x >= st[S_EXT_FINAL]:
+        return 0, LD_NI
     v, ok = timer_load(st, a, x)
     if not ok:
         v, ok = irq_load(st, a, x)
@@ -52,11 +72,17 @@ def mmio_load(st: np.ndarray, addr: int, c: int) -> tuple[int, int]:
 
 @njit(cache=True)
 def mmio_store(st: np.ndarray, out: np.ndarray, addr: int, value: int, s: int) -> int:
-    """Write a device register with a store starting in instruction cycle ``s``.  A DEV_* code."""
+    """Write a device register with a store starting in instruction cycle ``s``.  A DEV_* code.
+
+    DEV_NI: a network-interface register, or on an MPSoC tile under ``S_MASK_LOCK`` a store that
+    would set IRQ_MASK bit 1 (the packet line): the core stops before it (see kernels/chip.py).
+    """
     a = addr & 0xFFFFFFFC
     v = value & 0xFFFFFFFF
     if NI_BASE <= a < NI_END:
         return DEV_NI if st[S_NI] != 0 else DEV_UNMAPPED
+    if a == IRQ_MASK and st[S_MASK_LOCK] != 0 and (v & ~st[S_IRQ_MASK] & CAUSE_PACKET) != 0:
+        return DEV_NI
     if TIMER_BLOCK <= a < TIMER_BLOCK_END:
         irq_scan(st, s)  # every writable timer register can move the timer line
         r = timer_store(st, a, v, s)
