@@ -121,6 +121,7 @@ OPTIONS: dict[tuple[str, str], Spec] = {
     ("serve physics", "--seconds"): Spec("float", 0.01, 3600.0),  # the hidden alias of --duration
     ("serve physics", "--seed"): Spec("int", 0, 2**63 - 1),
     ("serve physics", "--scenario"): Spec("in_file"),
+    ("serve physics", "SCENARIO"): Spec("in_file"),
     ("serve physics", "--vehicle"): Spec("choice", choices=("default", "laser")),
     ("serve physics", "--out"): Spec("out_dir"),
     ("serve physics", "--no-out"): Spec("flag"),
@@ -135,6 +136,7 @@ OPTIONS: dict[tuple[str, str], Spec] = {
     ("serve chip", "--seconds"): Spec("float", 0.01, 3600.0),  # the hidden alias of --duration
     ("serve chip", "--seed"): Spec("int", 0, 2**63 - 1),
     ("serve chip", "--scenario"): Spec("in_file"),
+    ("serve chip", "SCENARIO"): Spec("in_file"),
     ("serve chip", "--vehicle"): Spec("choice", choices=("default", "laser")),
     ("serve chip", "--arith"): Spec("choice", choices=("float", "fixed")),
     ("serve chip", "--mul"): Spec("flag"),
