@@ -121,7 +121,7 @@ def fly_command(
         controller = "chip"
         link = link_options.link_config(pace, hold, faults, resend, peer_timeout)
     # --- end of the decoupled mode's checks ---
-    options.exclusive(scenario=scenario is not None, scenario_file=scenario_file is not None)
+    options.exclusive(scenario=scenario is not None, SCENARIO=scenario_file is not None)
     options.exclusive(duration=duration is not None, seconds=seconds is not None)
     options.exclusive(out=out is not None, no_out=no_out)
     path = scenario if scenario is not None else scenario_file
