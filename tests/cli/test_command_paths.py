@@ -376,3 +376,94 @@ def test_bench_fly_whole_milliseconds() -> None:
     result = invoke("bench", "fly", "--duration", "0.0105")
     assert result.exit_code == exit_codes.USAGE
     assert result.stderr == "robosoc bench fly: --duration: must be a whole number of ms, got 0.0105\n"
+
+
+def _summary_rows(summary: dict) -> tuple[dict[str, list[str]], list[str]]:
+    import io
+
+    from rich.console import Console
+
+    from robosoc.cli.fly import print_summary
+
+    buffer = io.StringIO()
+    print_summary(Console(file=buffer, width=200), summary)
+    lines = buffer.getvalue().splitlines()
+    rows = {}
+    for line in lines:
+        cells = re.split("[│┃]", line)
+        if len(cells) > 1:
+            name, *values = (cell.strip() for cell in cells)
+            rows[name] = values
+    return rows, lines
+
+
+def test_flight_summary_table_of_two_vehicles() -> None:
+    """Figures scaled to the units the table names (cm, deg, ms, us, nJ, mJ); n/a for missing or NaN."""
+    steps = [{"axis": "roll", "time_s": 0.5, "rise_s": 0.123}, {"axis": "yaw", "time_s": 1.0, "rise_s": 0.2}]
+    first = {
+        "flight": {
+            "hover_rms_m": 0.0123,
+            "hover_max_m": 0.05,
+            "overshoot_m": float("nan"),
+            "tracking_rms_deg": {"roll": 1.234, "pitch": None, "yaw": 0.5},
+            "step_rise_s": steps,
+            "attitude_estimate_rms_deg": 0.25,
+            "height_estimate_rms_m": 0.001,
+        },
+        "tasks": {
+            "ekf": {
+                "jobs": 100,
+                "response_us_mean": 12.34,
+                "response_us_max": 20.0,
+                "exec_cycles_mean": 1500.4,
+                "energy_nj_mean": 33.35,
+            }
+        },
+        "deadline_misses": 0,
+        "energy": {"total_uj": 1234.0},
+    }
+    second = {"flight": {"step_rise_s": [{"axis": "roll", "time_s": 0.5, "rise_s": None}]}, "tasks": {},
+              "deadline_misses": 2, "energy": None}  # fmt: skip
+    summary = {"vehicles": [first, second], "simulated_s": 1.0, "host_s": 2.04, "real_time_factor": 0.49,
+               "complete": False, "stopped": "interrupted", "min_separation_m": 1.5}  # fmt: skip
+    rows, lines = _summary_rows(summary)
+    assert lines[0].strip() == "flight summary"
+    assert rows["figure"] == ["vehicle 1", "vehicle 2"]
+    assert rows["hover height error RMS"] == ["1.23 cm", "n/a"]
+    assert rows["hover height error max"] == ["5.00 cm", "n/a"]
+    assert rows["overshoot"] == ["n/a", "n/a"]
+    assert rows["roll tracking RMS"] == ["1.23 deg", "n/a"]
+    assert rows["pitch tracking RMS"] == ["n/a", "n/a"]
+    assert rows["yaw tracking RMS"] == ["0.50 deg", "n/a"]
+    assert rows["roll step at 0.5 s: 90 % after"] == ["123 ms", "n/a"]
+    assert not any(name.startswith("yaw step") for name in rows)  # at the end of the flight: not flown
+    assert rows["attitude estimate RMS"] == ["0.25 deg", "n/a"]
+    assert rows["height estimate RMS"] == ["0.10 cm", "n/a"]
+    assert rows["ekf jobs"] == ["100", "n/a"]
+    assert rows["ekf response mean / max"] == ["12.3 / 20.0 us", "n/a / n/a us"]
+    assert rows["ekf cycles per job (mean)"] == ["1500", "n/a"]
+    assert rows["ekf energy per job (mean)"] == ["33.4 nJ", "n/a"]
+    assert rows["deadline misses"] == ["0", "2"]
+    assert rows["chip energy"] == ["1.23 mJ", "n/a"]
+    assert lines[-1] == (
+        "real-time factor 0.49 (1 s simulated in 2.0 s); closest approach 1.50 m (incomplete: interrupted)"
+    )
+
+
+def test_flight_summary_of_one_vehicle_without_tasks() -> None:
+    summary = {"flight": {"hover_rms_m": 0.02}, "simulated_s": 0.5, "host_s": 0.25, "real_time_factor": 2.0}
+    rows, lines = _summary_rows(summary)
+    assert rows["figure"] == ["value"] and rows["hover height error RMS"] == ["2.00 cm"]
+    assert "deadline misses" not in rows and "chip energy" not in rows
+    assert lines[-1] == "real-time factor 2.00 (0.5 s simulated in 0.2 s)"
+
+
+def test_bench_fly_flies_the_builds_chosen() -> None:
+    """--no-mul: the two builds without the multiplier and no host reference; --arith float --mul: one."""
+    result = invoke("bench", "fly", "--duration", "0.01", "--no-mul")
+    assert result.exit_code == 0, result.output
+    flown = sorted(line.split()[1] for line in result.stdout.splitlines() if line.startswith("chip "))
+    assert flown == ["fixed-no-mul", "float-no-mul"]
+    assert not any(line.startswith("host") for line in result.stdout.splitlines())
+    one = invoke("bench", "fly", "--duration", "0.01", "--arith", "float", "--mul")
+    assert [line.split()[1] for line in one.stdout.splitlines() if line.startswith("chip ")] == ["float+mul"]

@@ -411,3 +411,126 @@ def test_bad_dask_addresses(text: str, reason: str) -> None:
 def test_cli_errors_are_usage_errors_by_default() -> None:
     assert CliError("x").code == exit_codes.USAGE
     assert options.fail("--a", "b").message == "--a: b"
+
+
+# --- link_options.py and link_report.py: the decoupled mode's options and endings ------------------------
+
+
+def test_link_options_name_the_option() -> None:
+    from robosoc.cli import link_options
+    from robosoc.cosim.link import Address
+
+    peer = link_options.address_option(any_port=False)
+    bind = link_options.address_option(any_port=True)
+    assert peer(_ctx(), _param("--peer"), "127.0.0.1:9") == Address("127.0.0.1", 9)
+    assert bind(_ctx(), _param("--bind"), "127.0.0.1:0") == Address("127.0.0.1", 0)
+    assert peer(_ctx(), _param("--peer"), None) is None
+    assert peer(_ctx(resilient=True), _param("--peer"), "nonsense") is None
+    with pytest.raises(CliError) as caught:
+        peer(_ctx(), _param("--peer"), "127.0.0.1:0")
+    assert caught.value.message == "--peer: the port must be between 1 and 65535, got '127.0.0.1:0'"
+    faults = link_options._faults(_ctx(), _param("--faults"), "loss=0.25")
+    assert faults is not None and faults.as_dict()["loss"] == 0.25
+    assert link_options._faults(_ctx(), _param("--faults"), None) is None
+    assert link_options._faults(_ctx(resilient=True), _param("--faults"), "loss=9") is None
+    with pytest.raises(CliError, match=r"^--faults: "):
+        link_options._faults(_ctx(), _param("--faults"), "loss=2")
+    config = link_options.link_config("fast", "linear", faults, 3, 0.5, 9.0)
+    assert (config.pace, config.hold, config.resend, config.peer_timeout_s, config.connect_timeout_s) == (
+        "fast",
+        "linear",
+        3,
+        0.5,
+        9.0,
+    )
+    assert config.faults == faults and link_options.link_config().faults.any is False
+    for kwargs, message in (
+        ({"peer_timeout": 0.01}, "--peer-timeout: must be between 0.05 and 3600 s, got 0.01"),
+        ({"connect_timeout": 4000.0}, "--connect-timeout: must be between 0.05 and 3600 s, got 4000.0"),
+        ({"pace": "slow"}, "--pace: must be one of realtime, fast, got 'slow'"),
+        ({"resend": 99}, "--resend: must be between 0 and 8, got 99"),
+    ):
+        with pytest.raises(CliError) as caught:
+            link_options.link_config(**kwargs)
+        assert caught.value.message == message
+
+
+def test_end_of_side_exit_codes() -> None:
+    from robosoc.cli.link_report import end_of_side
+    from robosoc.cosim.decoupled_physics import Ended
+
+    assert end_of_side(Ended.DONE, "", "out") is None
+    for ended, code in (
+        (Ended.INTERRUPTED, exit_codes.INTERRUPTED),
+        (Ended.PEER_LOST, exit_codes.PEER_LOST),
+        (Ended.PEER_ENDED, exit_codes.PEER_LOST),
+        (Ended.MISMATCH, exit_codes.USAGE),
+    ):
+        with pytest.raises(CliError) as caught:
+            end_of_side(ended, "the chip went quiet", "runs/x")
+        assert caught.value.code == code
+        first = "interrupted" if ended == Ended.INTERRUPTED else "the chip went quiet"
+        assert caught.value.message == f"{first}; what was done is in runs/x"
+        with pytest.raises(CliError) as caught:
+            end_of_side(ended, "the chip went quiet", "")
+        assert caught.value.message == first
+
+
+def test_link_counts_table() -> None:
+    from robosoc.cli.link_report import print_link_counts
+    from robosoc.cosim.link_counters import COUNTER_NAMES
+
+    buffer = io.StringIO()
+    out = Console(file=buffer, width=200)
+    counts = dict(zip(COUNTER_NAMES, range(1, len(COUNTER_NAMES) + 1), strict=True))
+    print_link_counts(
+        out,
+        {
+            "to chip": {"sent": 9, "injected": {"lost": 2, "garbage": 1}},
+            "from chip": counts,
+        },
+    )
+    lines = buffer.getvalue().splitlines()
+    assert lines[0].strip() == "datagrams"
+    assert lines[1].split() == ["direction", *COUNTER_NAMES, "injected", "(lost/dupl/reor/trun/garb)"]
+    assert lines[2].split() == ["to", "chip", "9", *["-"] * (len(COUNTER_NAMES) - 1), "2/0/0/0/1"]
+    assert lines[3].split() == ["from", "chip", *[str(v) for v in counts.values()], "-"]
+
+
+# --- closed pipes: rich's exit 1 and Python's final flush -----------------------------------------------
+
+
+def test_a_closed_pipe_under_rich_is_141_and_stdout_goes_quiet(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    import os
+    import sys
+
+    first = (tmp_path / "stdout.txt").open("w")
+    monkeypatch.setattr(sys, "stdout", first)
+    assert errors._stdout_identity() == (os.fstat(first.fileno()).st_dev, os.fstat(first.fileno()).st_ino)
+    null = open(os.devnull, "w")  # noqa: SIM115  (closed at the end)
+
+    def rich_exit() -> object:  # what rich does on a closed pipe: stdout to /dev/null, exit 1
+        sys.stdout = null
+        raise SystemExit(1)
+
+    assert errors.run_guarded(rich_exit) == exit_codes.BROKEN_PIPE
+    monkeypatch.setattr(sys, "stdout", first)
+    assert errors.run_guarded(lambda: (_ for _ in ()).throw(SystemExit(1))) == exit_codes.INTERNAL_ERROR
+    assert errors._rich_closed_pipe(None) is False
+    # a closed pipe seen by Python: stdout's descriptor now writes nowhere
+    assert errors.run_guarded(lambda: (_ for _ in ()).throw(BrokenPipeError())) == exit_codes.BROKEN_PIPE
+    os.write(first.fileno(), b"lost\n")
+    assert (tmp_path / "stdout.txt").read_text() == ""
+    second = (tmp_path / "second.txt").open("w")
+    monkeypatch.setattr(sys, "stdout", second)
+    out = console._Console(file=io.StringIO())
+    with pytest.raises(BrokenPipeError):
+        out.on_broken_pipe()
+    assert out.quiet
+    os.write(second.fileno(), b"lost\n")
+    assert (tmp_path / "second.txt").read_text() == ""
+    monkeypatch.setattr(sys, "stdout", io.StringIO())  # no descriptor at all: nothing to silence, no error
+    assert errors._stdout_identity() is None
+    errors._silence_stdout()
+    for handle in (first, second, null):
+        handle.close()
