@@ -467,3 +467,58 @@ def test_bench_fly_flies_the_builds_chosen() -> None:
     assert not any(line.startswith("host") for line in result.stdout.splitlines())
     one = invoke("bench", "fly", "--duration", "0.01", "--arith", "float", "--mul")
     assert [line.split()[1] for line in one.stdout.splitlines() if line.startswith("chip ")] == ["float+mul"]
+
+
+def test_replay_report_prints_and_writes_the_replay_figures(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """firmware replay's report: the figures of the replay (the library's result) on stdout and in summary.json."""
+    import csv
+
+    from robosoc.cli.firmware import _report
+    from robosoc.config.firmware import FirmwareConfig
+    from robosoc.cosim.replay import built_in_rows, replay
+
+    result = replay(built_in_rows(0.05, 2), FirmwareConfig())
+    _report(result, None)
+    quiet = capsys.readouterr().out
+    assert not (tmp_path / "summary.json").exists() and "wrote" not in quiet
+    _report(result, tmp_path)
+    out = capsys.readouterr().out.splitlines()
+    seconds = result.cycles * result.clock_ns * 1e-9
+    assert out[0] == (
+        f"fixed+mul: {len(result.samples)} samples, {len(result.commands)} PWM commands, "
+        f"{result.deadline_misses} deadline misses, {result.cycles} cycles ({seconds:.2f} s simulated in "
+        f"{result.host_seconds:.1f} s)"
+    )
+    record = json.loads((tmp_path / "summary.json").read_text())
+    assert record["firmware"] == "fixed+mul" and record["samples"] == len(result.samples) == 5
+    assert (record["commands"], record["cycles"], record["clock_ns"]) == (
+        len(result.commands),
+        result.cycles,
+        result.clock_ns,
+    )
+    assert record["energy_pj"] == pytest.approx(result.energy_pj)
+    for name in ("estimator", "pid"):
+        jobs = [j for j in result.jobs if j.task == name]
+        figures = record["tasks"][name]
+        assert figures["jobs"] == len(jobs) == 5
+        assert figures["exec_cycles_max"] == max(j.exec_cycles for j in jobs)
+        line = next(line for line in out if line.startswith(f"  {name:<9} "))
+        assert line.startswith(f"  {name:<9} {len(jobs)} jobs: exec mean {figures['exec_cycles_mean']:.0f} max ")
+        assert f"response mean {figures['response_us_mean']:.1f} max {figures['response_us_max']:.1f} us" in line
+        assert f"energy {figures['energy_nj_mean']:.1f} nJ/job (kernel {figures['kernel_energy_share']:.1%})" in line
+        assert line.endswith(f"misses {figures['deadline_misses']}")
+    with (tmp_path / "jobs.csv").open() as stream:
+        assert len(list(csv.DictReader(stream))) == len(result.jobs)
+    assert out[-1] == f"wrote {tmp_path / 'jobs.csv'} and {tmp_path / 'summary.json'}"
+
+
+def test_firmware_build_reads_the_config_file_then_the_options(tmp_path: Path) -> None:
+    config = tmp_path / "fw.toml"
+    config.write_text('arith = "float"\n')
+    result = invoke("firmware", "build", "--config", config)
+    assert result.exit_code == 0, result.output
+    assert result.stdout.startswith("float+mul: ")
+    copy = tmp_path / "copy.elf"
+    result = invoke("firmware", "build", "--config", config, "--arith", "fixed", "-o", copy)
+    assert result.exit_code == 0, result.output
+    assert result.stdout == f"fixed+mul: {copy}\n" and copy.read_bytes()[:4] == b"\x7fELF"

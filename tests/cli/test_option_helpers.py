@@ -381,6 +381,7 @@ def test_exit_status_of_run() -> None:
         ("ws://h:65535", "ws://h:65535"),
         ("wss://h:80", "wss://h:80"),
         ("inproc://h:9", "inproc://h:9"),
+        ("tcp://[::1]:8786", "tcp://[::1]:8786"),  # the port after the last colon
     ],
 )
 def test_dask_addresses(text: str, address: str) -> None:
@@ -514,6 +515,7 @@ def test_a_closed_pipe_under_rich_is_141_and_stdout_goes_quiet(tmp_path: Path, m
         raise SystemExit(1)
 
     assert errors.run_guarded(rich_exit) == exit_codes.BROKEN_PIPE
+    assert errors._rich_closed_pipe(None) is False  # stdout is /dev/null now, but nothing says it changed
     monkeypatch.setattr(sys, "stdout", first)
     assert errors.run_guarded(lambda: (_ for _ in ()).throw(SystemExit(1))) == exit_codes.INTERNAL_ERROR
     assert errors._rich_closed_pipe(None) is False
@@ -534,3 +536,13 @@ def test_a_closed_pipe_under_rich_is_141_and_stdout_goes_quiet(tmp_path: Path, m
     errors._silence_stdout()
     for handle in (first, second, null):
         handle.close()
+
+
+def test_consoles_on_a_terminal_wrap_at_its_width_but_not_below_min_width(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv("TTY_COMPATIBLE", "1")  # rich: treat the output as a terminal
+    monkeypatch.setenv("COLUMNS", "60")
+    wide = console.make_console(min_width=100)
+    assert wide.is_terminal and wide.width == 100 and not wide.soft_wrap
+    narrow = console.make_console(min_width=40)
+    assert narrow.is_terminal and narrow.width == 60
+    assert console.make_console(stderr=True, min_width=100).stderr
