@@ -522,3 +522,20 @@ def test_firmware_build_reads_the_config_file_then_the_options(tmp_path: Path) -
     result = invoke("firmware", "build", "--config", config, "--arith", "fixed", "-o", copy)
     assert result.exit_code == 0, result.output
     assert result.stdout == f"fixed+mul: {copy}\n" and copy.read_bytes()[:4] == b"\x7fELF"
+
+
+@pytest.mark.parametrize("side", ["physics", "chip"])
+def test_serve_names_its_out_and_scenario_options(side: str, tmp_path: Path) -> None:
+    scenario = tmp_path / "s.toml"
+    scenario.write_text("seed = 3\n")
+    a_file = tmp_path / "a-file"
+    a_file.write_text("x\n")
+    for args, message in (
+        (["--out", a_file], f"--out: {a_file}: is a file, expected a folder"),
+        (["--scenario", scenario, "--out", scenario], f"--out: {scenario}: is a file, expected a folder"),
+        (["--scenario", tmp_path / "none.toml"], f"--scenario: {tmp_path / 'none.toml'}: file not found"),
+        (["--seconds", "0.0105", "--no-out"], "--seconds: must be a whole number of 1 ms physics steps, got 0.0105"),
+    ):
+        result = invoke("serve", side, *args)
+        assert result.exit_code == exit_codes.USAGE, result.output
+        assert result.stderr.splitlines()[0] == f"robosoc serve {side}: {message}"

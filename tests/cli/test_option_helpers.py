@@ -546,3 +546,10 @@ def test_consoles_on_a_terminal_wrap_at_its_width_but_not_below_min_width(monkey
     narrow = console.make_console(min_width=40)
     assert narrow.is_terminal and narrow.width == 60
     assert console.make_console(stderr=True, min_width=100).stderr
+
+
+def test_os_error_reasons_and_articles() -> None:
+    assert files._reason(OSError(13, "Permission denied")) == "permission denied"
+    assert files._reason(OSError("no strerror here")) == "no strerror here"
+    assert files._article("ELF file") == "an ELF file" and files._article("TOML file") == "a TOML file"
+    assert files._article("x-ray") == "a x-ray"
