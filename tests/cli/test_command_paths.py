@@ -535,6 +535,10 @@ def test_serve_names_its_out_and_scenario_options(side: str, tmp_path: Path) -> 
         (["--scenario", scenario, "--out", scenario], f"--out: {scenario}: is a file, expected a folder"),
         (["--scenario", tmp_path / "none.toml"], f"--scenario: {tmp_path / 'none.toml'}: file not found"),
         (["--seconds", "0.0105", "--no-out"], "--seconds: must be a whole number of 1 ms physics steps, got 0.0105"),
+        (
+            ["--scenario", scenario, "--seconds", "0.0105", "--no-out"],
+            f"--seconds: must be a whole number of 1 ms physics steps, got 0.0105 (with {scenario})",
+        ),
     ):
         result = invoke("serve", side, *args)
         assert result.exit_code == exit_codes.USAGE, result.output
