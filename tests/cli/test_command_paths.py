@@ -543,3 +543,10 @@ def test_serve_names_its_out_and_scenario_options(side: str, tmp_path: Path) -> 
         result = invoke("serve", side, *args)
         assert result.exit_code == exit_codes.USAGE, result.output
         assert result.stderr.splitlines()[0] == f"robosoc serve {side}: {message}"
+
+
+def test_gdb_tile_errors_name_the_option(hello: Path) -> None:
+    """A --tile that is not X,Y is refused naming --tile (it used to print only the reason)."""
+    result = invoke("run", hello, "--mesh", "2x2", "--gdb", "0", "--tile", "a,b")
+    assert result.exit_code == exit_codes.USAGE
+    assert result.stderr == "robosoc run: --tile: expected X,Y such as 1,1, got 'a,b'\n"

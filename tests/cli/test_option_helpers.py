@@ -172,6 +172,8 @@ def test_choice_pattern_and_ranges() -> None:
     with pytest.raises(CliError) as caught:
         name(_ctx(), _param("--d"), "AB\nC")  # the whole text must match, newlines included
     assert caught.value.message == "--d: expected capitals, got 'AB\\nC'"
+    define = options.pattern(r"[A-Z]+(=.*)?", "NAME or NAME=VALUE")
+    assert define(_ctx(), _param("-D"), "A=1\n2") == "A=1\n2"  # a value may span lines
     half_open = options.float_range(0.0, 1.0, lo_open=True, unit="s")
     assert half_open(_ctx(), _param("--t"), 1.0) == 1.0
     with pytest.raises(CliError, match=r"^--t: must be in \(0, 1\] s, got 0"):
