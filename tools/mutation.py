@@ -6,6 +6,7 @@ Usage::
     python tools/mutation.py --list              # the layers, their sources and test subsets
     python tools/mutation.py --score LAYER       # re-read the score of a finished run
     python tools/mutation.py --survivors LAYER   # after adding tests: check the survivors (and unchecked) again
+    python tools/mutation.py cli --only options files   # only these modules of the layer (run and score)
 
 The layers and their test subsets live in ``pyproject.toml`` under ``[tool.robosoc-mutation.layers]``;
 the mutmut settings shared by every layer under ``[tool.mutmut]``.  For each layer the script copies
@@ -26,6 +27,7 @@ a diff).
 from __future__ import annotations
 
 import argparse
+import fnmatch
 import json
 import os
 import shutil
@@ -76,11 +78,19 @@ def prepare(spec: dict[str, Any], workdir: Path, resume: bool) -> None:
     (workdir / "pyproject.toml").write_text(head + sep + settings + rest)
 
 
-def score(workdir: Path) -> tuple[Counter[str], list[str]]:
+def _patterns(layer: str, spec: dict[str, Any], modules: list[str]) -> list[str]:
+    """mutmut's mutant-name globs for ``modules`` of the layer (``options`` -> ``robosoc.cli.options.*``)."""
+    package = spec["mutate"][0].removeprefix("src/").rsplit("/", 1)[0].replace("/", ".")
+    return [f"{package}.{module}.*" for module in modules]
+
+
+def score(workdir: Path, patterns: list[str] | None = None) -> tuple[Counter[str], list[str]]:
     counts: Counter[str] = Counter()
     survivors = []
     for meta in sorted((workdir / "mutants").rglob("*.meta")):
         for name, code in json.loads(meta.read_text())["exit_code_by_key"].items():
+            if patterns and not any(fnmatch.fnmatch(name, p) for p in patterns):
+                continue
             status = "killed" if code in KILLED | CRASHED else STATUS.get(code, "suspicious")
             counts[status] += 1
             counts["of which crashed"] += code in CRASHED
@@ -89,21 +99,23 @@ def score(workdir: Path) -> tuple[Counter[str], list[str]]:
     return counts, survivors
 
 
-def report(layer: str, workdir: Path) -> float:
-    counts, survivors = score(workdir)
+def report(layer: str, workdir: Path, patterns: list[str] | None = None) -> float:
+    counts, survivors = score(workdir, patterns)
     total = sum(counts.values()) - counts["skipped"] - counts["of which crashed"]
     value = 100.0 * counts["killed"] / total if total else float("nan")
     detail = ", ".join(f"{k} {v}" for k, v in sorted(counts.items()))
+    if patterns:
+        layer += " (" + ", ".join(p.rsplit(".", 2)[-2] for p in patterns) + ")"
     print(f"\n{layer}: mutation score {value:.1f} % ({counts['killed']} of {total} killed; {detail})")
     for line in survivors:
         print("   ", line)
     return value
 
 
-def run(layer: str, spec: dict[str, Any], workdir: Path, resume: bool, survivors: bool) -> int:
-    names: list[str] = []
+def run(layer: str, spec: dict[str, Any], workdir: Path, resume: bool, survivors: bool, patterns: list[str]) -> int:
+    names: list[str] = list(patterns)
     if survivors:
-        names = [line.split()[-1] for line in score(workdir)[1]]
+        names = [line.split()[-1] for line in score(workdir, patterns)[1]]
         if not names:
             print(f"[{layer}] no survivors to check again")
             return 0
@@ -117,7 +129,9 @@ def run(layer: str, spec: dict[str, Any], workdir: Path, resume: bool, survivors
     jobs = os.environ.get("ROBOSOC_MUTATION_JOBS", "1")
     mutmut = shutil.which("mutmut") or f"{sys.executable} -m mutmut"
     cmd = ["nice", "-n", "10", *mutmut.split(), "run", "--max-children", jobs, *names]
-    shown = " ".join(cmd[: len(cmd) - len(names)]) + (f" <{len(names)} survivors>" if names else "")
+    shown = " ".join(cmd[: len(cmd) - len(names)]) + (
+        f" <{len(names)} survivors>" if survivors else (" " + " ".join(names) if names else "")
+    )
     print(f"[{layer}] in {workdir}: {shown} > mutmut.log", flush=True)
     with open(workdir / "mutmut.log", "w") as log:
         return subprocess.run(cmd, cwd=workdir, env=env, stdout=log, stderr=subprocess.STDOUT, check=False).returncode
@@ -130,6 +144,7 @@ def main() -> int:
     parser.add_argument("--score", action="store_true", help="only report the score of a finished run")
     parser.add_argument("--resume", action="store_true", help="keep the previous run's mutants and results")
     parser.add_argument("--survivors", action="store_true", help="check only the previous run's survivors again")
+    parser.add_argument("--only", nargs="+", default=[], metavar="MODULE", help="only these modules of the layer")
     args = parser.parse_args()
     layers = _layers()
     if args.list or not args.layers:
@@ -144,11 +159,12 @@ def main() -> int:
     for layer in args.layers:
         workdir = base / layer
         if not args.score:
-            code = run(layer, layers[layer], workdir, args.resume, args.survivors)
+            patterns = _patterns(layer, layers[layer], args.only)
+            code = run(layer, layers[layer], workdir, args.resume, args.survivors, patterns)
             if code != 0:
                 print(f"[{layer}] mutmut exited with {code}", file=sys.stderr)
                 status = code
-        report(layer, workdir)
+        report(layer, workdir, _patterns(layer, layers[layer], args.only))
     return status
 
 

@@ -207,14 +207,14 @@ def test_exit_codes_of_the_real_process(elves: dict[str, Path]) -> None:
 @pytest.mark.parametrize(
     ("raised", "code", "text"),
     [
-        (RuntimeError("boom"), exit_codes.INTERNAL_ERROR, "robosoc bench core: internal error: this is a bug"),
-        (KeyboardInterrupt(), exit_codes.INTERRUPTED, "robosoc bench core: interrupted"),
-        (BrokenPipeError(), exit_codes.BROKEN_PIPE, ""),
+        (lambda: RuntimeError("boom"), exit_codes.INTERNAL_ERROR, "robosoc bench core: internal error: this is a bug"),
+        (KeyboardInterrupt, exit_codes.INTERRUPTED, "robosoc bench core: interrupted"),
+        (BrokenPipeError, exit_codes.BROKEN_PIPE, ""),
     ],
 )
 def test_internal_errors_interrupts_and_closed_pipes(monkeypatch, raised, code, text) -> None:
     def bench(**kwargs):
-        raise raised
+        raise raised()  # a fresh exception each run: the command marks the one it saw with its name
 
     monkeypatch.setattr("robosoc.benchmarks.core.run_core_benchmark", bench)
     result = invoke("bench", "core")

@@ -23,6 +23,8 @@ import sys
 import traceback
 from collections.abc import Callable
 
+import click
+
 from robosoc.cli import exit_codes
 
 __all__ = ["CliError", "command_path", "print_error", "run_guarded"]
@@ -71,20 +73,18 @@ def _lower_first(text: str) -> str:
     return text[:1].lower() + text[1:] if text[:2] != text[:2].upper() else text
 
 
-def _click_message(exc: BaseException) -> str:
+def _click_message(exc: click.ClickException) -> str:
     """A click usage error in the ``--option: reason`` style."""
-    param = getattr(exc, "param", None)
-    message = getattr(exc, "message", None) or str(exc)
-    if param is not None and type(exc).__name__ == "MissingParameter":
-        kind = getattr(param, "param_type_name", "parameter")
-        name = (getattr(param, "opts", None) or [param.name])[0]
-        shown = name if kind == "option" else (getattr(param, "metavar", None) or str(param.name).upper())
+    param = getattr(exc, "param", None)  # BadParameter and MissingParameter name one; others do not
+    if param is not None and type(exc).__name__ == "MissingParameter":  # typer's own class or click's
+        kind = param.param_type_name
+        shown = param.opts[0] if kind == "option" else (param.metavar or str(param.name).upper())
         return f"missing {kind} {shown}"
     if param is not None:
-        opts = [o for o in getattr(param, "opts", []) if o.startswith("--")] or list(getattr(param, "opts", []))
-        name = opts[0] if opts and getattr(param, "param_type_name", "") == "option" else (param.name or "").upper()
-        return f"{name}: {_lower_first(message)}"
-    return _lower_first(message)
+        opts = [o for o in param.opts if o.startswith("--")] or list(param.opts)
+        name = opts[0] if opts and param.param_type_name == "option" else (param.name or "").upper()
+        return f"{name}: {_lower_first(exc.message or str(exc))}"
+    return _lower_first(exc.message or str(exc))
 
 
 def _is_click_exception(exc: BaseException) -> bool:
@@ -138,7 +138,7 @@ def run_guarded(main: Callable[[], object], default_command: str = PROGRAM) -> i
             return exit_codes.INTERRUPTED
         if _is_click_exception(exc):
             command = command_path(getattr(exc, "ctx", None)) if getattr(exc, "ctx", None) else default_command
-            print_error(command, _click_message(exc))
+            print_error(command, _click_message(exc))  # type: ignore[arg-type]
             _stderr_write(f"(see '{command} --help')\n")
             return int(getattr(exc, "exit_code", exit_codes.USAGE)) or exit_codes.USAGE
         if isinstance(exc, OSError) and exc.errno == errno.EPIPE:

@@ -71,8 +71,6 @@ def gdb_session(
 
 
 def _parse_tile(text: str) -> tuple[int, int]:
-    try:
-        x, y = (int(v) for v in text.split(","))
-    except ValueError as exc:
-        raise typer.BadParameter(f"expected X,Y such as 1,0, got {text!r}", param_hint="--tile") from exc
-    return x, y
+    from robosoc.cli.options import parse_tile
+
+    return parse_tile("--tile", text)

@@ -124,9 +124,12 @@ def given(ctx: typer.Context, name: str) -> bool:
 
 
 def exclusive(**options: bool) -> None:
-    """Refuse two or more of ``options`` (option name -> whether it was given) at once."""
+    """Refuse two or more of ``options`` (option name -> whether it was given) at once.
+
+    A name in capitals is an argument's metavar (``LOG``) and is printed as it is.
+    """
     names = [name.replace("_", "-") for name, on in options.items() if on]
-    names = [n if n.startswith("--") else f"--{n}" for n in names]
+    names = [n if n.startswith("--") or n.isupper() else f"--{n}" for n in names]
     if len(names) > 1:
         raise fail(names[0], f"cannot be combined with {' or '.join(names[1:])}")
 

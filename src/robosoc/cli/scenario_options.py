@@ -56,7 +56,7 @@ Vehicle = Annotated[
 def scenario_source(option: Path | None, argument: Path | None) -> tuple[Path | None, str | None]:
     """The scenario file given as SCENARIO or as ``--scenario`` (not both), and the label its errors
     carry (None: the file name alone)."""
-    options.exclusive(scenario=option is not None, scenario_file=argument is not None)
+    options.exclusive(scenario=option is not None, SCENARIO=argument is not None)
     return (option, "--scenario") if option is not None else (argument, None)
 
 
