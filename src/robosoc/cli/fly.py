@@ -140,17 +140,17 @@ def fly_command(
     sources: list[tuple[str, tuple[str, ...]]] = [(str(path), named)] if path is not None else []
     files_used = [str(path)] if path is not None else []
 
+    duration_option, duration_s = length if length is not None else ("--duration", None)
     changes: dict[str, tuple[str, Any]] = {}
     for option, field, value in (
         ("--controller", "controller", controller),
+        (duration_option, "duration_s", duration_s),
         ("--seed", "seed", seed),
         ("--vehicle", "vehicle", vehicle),
         ("--vehicles", "vehicles", vehicles),
     ):
         if value is not None:
             changes[option] = (field, value)
-    if length is not None:
-        changes[length[0]] = ("duration_s", length[1])
     fw_changes: dict[str, tuple[str, Any]] = {}
     if arith is not None:
         fw_changes["--arith"] = ("arith", arith)

@@ -81,7 +81,7 @@ def resolve_scenario(
         changes["--seed"] = ("seed", seed)
     config = options.override(config, changes, [str(path)] if path is not None else ())
     if round(config.duration_s * config.sensors.rate_hz) < 1:
-        where = length[0] if length is not None else f"{path}: duration_s"
+        where = length[0] if length is not None else f"{label + ': ' if label else ''}{path}: duration_s"
         raise options.fail(where, f"a flight lasts at least one sensor period, got {config.duration_s:g} s")
     return config, vehicle_preset(config.vehicle), path
 
