@@ -12,6 +12,7 @@
  *   2 late: polls for its first LATE rounds, then sets IRQ_MASK bit 1 and receives in its handler
  *     (the store that sets the bit must not run inside a long quantum).
  */
+#include "core_peers.h"
 #include "hf_noc.h"
 #include "hf_print.h"
 
@@ -65,18 +66,8 @@ static int polled(uint32_t k)
 int main(void)
 {
     uint32_t me = hf_tile();
-    uint32_t mesh = HF_REG32(HF_NI_MESH);
-    uint32_t io = hf_io_tile();
     uint32_t peers[256];
-    uint32_t np = 0;
-    for (uint32_t y = 0; y < (mesh >> 8); y++) {
-        for (uint32_t x = 0; x < (mesh & 0xffu); x++) {
-            uint32_t a = (x << 4) | y;
-            if (a != io && a != me) {
-                peers[np++] = a;
-            }
-        }
-    }
+    uint32_t np = core_peers(peers);
     uint32_t seed = me * 2654435761u + (uint32_t)SEED * 40503u + 1u;
     uint32_t role = (me * 7u + (uint32_t)SEED) % 3u;
     if (role == 1) {

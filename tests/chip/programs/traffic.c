@@ -4,6 +4,7 @@
  * received and the cycle it finished.  Used to check that the quantum scheme of the chip
  * simulator gives exactly the results of lockstep simulation under contention.
  */
+#include "core_peers.h"
 #include "hf_noc.h"
 #include "hf_print.h"
 
@@ -28,18 +29,8 @@ void irq_handler(uint32_t cause)
 int main(void)
 {
     uint32_t me = hf_tile();
-    uint32_t mesh = HF_REG32(HF_NI_MESH);
-    uint32_t io = hf_io_tile();
     uint32_t peers[256];
-    uint32_t np = 0;
-    for (uint32_t y = 0; y < (mesh >> 8); y++) {
-        for (uint32_t x = 0; x < (mesh & 0xffu); x++) {
-            uint32_t a = (x << 4) | y;
-            if (a != io && a != me) {
-                peers[np++] = a;
-            }
-        }
-    }
+    uint32_t np = core_peers(peers);
     hf_irq_mask(HF_IRQ_NI);
     hf_irq_enable();
     uint32_t seed = me * 2654435761u + 1u;
