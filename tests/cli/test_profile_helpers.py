@@ -1,4 +1,5 @@
-"""``print_profile``: the table ``robosoc profile`` and ``fly --profile`` print, from a hand-built profile.
+"""``robosoc profile``'s helpers: the table it and ``fly --profile`` print, from a hand-built profile,
+and the reading of a run's ``summary.json``.
 
 The expected lines are written from the profile's numbers by hand (shares of the task's cycles,
 the rows past ``top`` summed into one "(k more)" row, energy in nJ per row and uJ per tile).
@@ -7,11 +8,14 @@ the rows past ``top`` summed into one "(k more)" row, energy in nJ per row and u
 from __future__ import annotations
 
 import io
+from pathlib import Path
 
+import pytest
 from rich.console import Console
 
 from robosoc.analysis.function_profile import FunctionProfile, ProfileRow
-from robosoc.cli.profile import print_profile
+from robosoc.cli.errors import CliError
+from robosoc.cli.profile import _read_summary, print_profile
 
 
 def _row(tile, task, name, function, cycles, instructions, energy_pj) -> ProfileRow:
@@ -73,3 +77,20 @@ def test_without_noc_rows_there_is_no_noc_line() -> None:
     lines = _printed(1, profile=profile)
     assert not any(line.startswith("NoC") for line in lines)
     assert "(3 more) 4,000 40.0 1,900 900.0" in lines
+
+
+def test_summary_json_is_read_or_refused_by_name(tmp_path: Path) -> None:
+    path = tmp_path / "summary.json"
+    path.write_text('{"cycles": {"tiles": {"0,0": 5}}}')
+    assert _read_summary(path) == {"cycles": {"tiles": {"0,0": 5}}}
+    path.write_bytes(b'{"name": "caf\xe9"}')
+    with pytest.raises(CliError) as caught:
+        _read_summary(path)
+    assert caught.value.message == f"{path}: not UTF-8 text (byte 0xe9 at offset 13): expected a JSON file"
+    path.write_text("[1, 2]")
+    with pytest.raises(CliError) as caught:
+        _read_summary(path)
+    assert caught.value.message == f"{path}: expected a JSON object (a run's summary.json)"
+    path.write_text("{oops")
+    with pytest.raises(CliError, match=rf"^{path}: not JSON: "):
+        _read_summary(path)
