@@ -444,9 +444,7 @@ class MPSoC:
 
     def finish_accounting(self) -> None:
         """Attribute everything not yet attributed to the tasks running now."""
-        for t in range(self.config.n_tiles):
-            if self.cst[t, kc.K_STATE] not in (kc.K_OFF, kc.K_IO):
-                kc.account(t, self.cores.arrays(), self.book(), int(self.cores.st[t, S_CYCLE]))
+        kc.account_all(self.cores.arrays(), self.book())
 
     def task_counters(self, xy: tuple[int, int]) -> dict[int, dict[str, int]]:
         """Counters per task id of one tile (task 0 is the kernel/idle), for tasks that ran."""

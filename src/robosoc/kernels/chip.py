@@ -214,6 +214,19 @@ def account(t, core, book, now):
 
 
 @njit(cache=True)
+def account_all(core, book):
+    """:func:`account` for every tile with a core (not off, not the I/O tile), up to its present cycle.
+
+    One call from the host for the whole chip: a call per tile costs more in argument unboxing
+    (about 0.15 ms for the arrays of the chip) than the accounting itself.
+    """
+    cst, st = book.cst, core.st
+    for t in range(cst.shape[0]):
+        if cst[t, K_STATE] != K_OFF and cst[t, K_STATE] != K_IO:
+            account(t, core, book, st[t, S_CYCLE])
+
+
+@njit(cache=True)
 def wake_time(st_t: np.ndarray, x: int) -> int:
     """The cycle a core asleep since instruction cycle ``x`` resumes (NEVER if nothing is due).
 
@@ -802,4 +815,4 @@ def run_chip(core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int) -> 
     return status
 
 
-__all__ = ["ChipBook", "account", "ni_access", "record", "run_chip", "wake_time"]
+__all__ = ["ChipBook", "account", "account_all", "ni_access", "record", "run_chip", "wake_time"]
