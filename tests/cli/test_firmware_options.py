@@ -46,13 +46,3 @@ def test_a_bad_file_is_named_by_its_option(tmp_path: Path) -> None:
     with pytest.raises(CliError) as caught:
         _firmware(_ctx(False), bad, None, None)
     assert caught.value.message.startswith(f"--config: {bad}: period_ticks: ")
-
-
-def test_decoupled_summary_numbers() -> None:
-    from robosoc.cli.fly_decoupled import _number
-
-    assert _number(0.0234, 100, "cm") == "2.34 cm"
-    assert _number(-1.5, 1, "deg") == "-1.50 deg"
-    assert _number(None, 100, "cm") == "n/a"
-    assert _number(float("nan"), 100, "cm") == "n/a"
-    assert _number(float("inf"), 1, "deg") == "n/a"

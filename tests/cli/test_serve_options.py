@@ -1,4 +1,5 @@
-"""``robosoc serve``'s option rules, called as library functions (no process, no socket).
+"""``robosoc serve``'s option rules and ``fly --decoupled``'s summary numbers, called as library
+functions (no process, no socket).
 
 Expectations from docs/cli.md: SCENARIO or its hidden alias ``--scenario`` (not both),
 ``--duration`` or its alias ``--seconds`` (not both), overrides named by the option as typed, a
@@ -83,3 +84,13 @@ def test_out_folder_default_and_rules(scenario: Path, tmp_path: Path, monkeypatc
         _out(tmp_path / "x", True, "physics", "hop", 11, scenario)
     with pytest.raises(CliError, match=r"^--out: "):
         _out(scenario, False, "physics", "hop", 11, scenario)  # the input file itself
+
+
+def test_decoupled_summary_numbers() -> None:
+    from robosoc.cli.fly_decoupled import _number
+
+    assert _number(0.0234, 100, "cm") == "2.34 cm"
+    assert _number(-1.5, 1, "deg") == "-1.50 deg"
+    assert _number(None, 100, "cm") == "n/a"
+    assert _number(float("nan"), 100, "cm") == "n/a"
+    assert _number(float("inf"), 1, "deg") == "n/a"
