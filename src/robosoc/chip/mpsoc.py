@@ -135,6 +135,9 @@ class MPSoC:
         self.cst[self.io, kc.K_STATE] = kc.K_IO
         self.powered = powered
         self.acc = np.zeros((n, kc.NTASKS, kc.ACC_SIZE), dtype=np.int64)
+        # touched here, not at the first accounting: a large zeroed array is mapped lazily (and numpy
+        # asks for huge pages), so its first touch inside a run would cost up to tens of ms there
+        self.acc.fill(0)
         self.snap = np.zeros((n, kc.ACC_SIZE), dtype=np.int64)
         self.gst = np.zeros(kc.GST_SIZE, dtype=np.int64)
         self.gst[kc.G_IO_TILE] = self.io
