@@ -12,9 +12,10 @@ from pathlib import Path
 
 import click
 import pytest
+import typer
 from rich.console import Console
 
-from robosoc.cli import cc, console, errors, exit_codes, files, options, run, sweep
+from robosoc.cli import cc, console, errors, exit_codes, files, gdb_option, options, run, sweep
 from robosoc.cli.errors import CliError
 
 # --- options.py ------------------------------------------------------------------------------------
@@ -555,3 +556,83 @@ def test_os_error_reasons_and_articles() -> None:
     assert files._reason(OSError("no strerror here")) == "no strerror here"
     assert files._article("ELF file") == "an ELF file" and files._article("TOML file") == "a TOML file"
     assert files._article("x-ray") == "a x-ray"
+
+
+# --- gdb_option.py and files.load_program ------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("gdb", "tile", "one_core", "trace", "profile", "message"),
+    [
+        (None, "0,1", False, 0, 0, "--tile X,Y picks the tile to debug: it goes with --gdb PORT"),
+        (1234, "0,1", True, 0, 0, "--tile X,Y needs the MPSoC (--mesh WxH or --chip FILE)"),
+        (1234, None, False, 100, 0, "--gdb cannot be combined with --trace or --profile"),
+        (1234, None, True, 0, 10, "--gdb cannot be combined with --trace or --profile"),
+    ],
+)
+def test_gdb_option_combinations_that_cannot_work_are_usage_errors(
+    gdb: int | None, tile: str | None, one_core: bool, trace: int, profile: int, message: str,
+    capsys: pytest.CaptureFixture[str],
+) -> None:  # fmt: skip
+    with pytest.raises(typer.Exit) as caught:
+        gdb_option.check_gdb_options(gdb, tile, one_core, trace, profile)
+    assert caught.value.exit_code == exit_codes.USAGE
+    assert capsys.readouterr().err == f"robosoc run: {message}\n"
+
+
+@pytest.mark.parametrize(("gdb", "tile", "one_core"), [(None, None, True), (1234, None, True), (0, "1,0", False)])
+def test_gdb_option_combinations_that_work_pass(gdb: int | None, tile: str | None, one_core: bool) -> None:
+    gdb_option.check_gdb_options(gdb, tile, one_core, 0, 0)
+
+
+@pytest.fixture(scope="module")
+def small_elf(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    from robosoc.toolchain import build_elf
+
+    src = tmp_path_factory.mktemp("prog") / "tiny.c"
+    src.write_text("int main(void) { return 7; }\n")
+    return build_elf([src], mul=True)
+
+
+def test_load_program_places_segments_in_the_regions_or_names_the_one_that_does_not_fit(small_elf: Path) -> None:
+    from robosoc.chip.core_state import SRAM_BASE
+    from robosoc.chip.elf import Region
+
+    program = files.load_program(small_elf)  # no regions: any address
+    first = min(addr for addr, _ in program.segments)
+    assert first == SRAM_BASE and program.entry == SRAM_BASE
+    assert files.load_program(small_elf, None, [Region(SRAM_BASE, 1 << 20, "sram")]).entry == program.entry
+    tiny = [Region(SRAM_BASE, 16, "sram")]  # 16 bytes: the code does not fit
+    with pytest.raises(CliError) as caught:
+        files.load_program(small_elf, None, tiny)
+    assert caught.value.message.startswith(f"{small_elf}: segment 0 at 0x{SRAM_BASE:08x}-")
+    assert caught.value.message.endswith(
+        f"is outside the allowed memory (sram 0x{SRAM_BASE:08x}-0x{SRAM_BASE + 15:08x})"
+    )
+    with pytest.raises(CliError) as caught:
+        files.load_program(small_elf, "--program", tiny)
+    assert caught.value.message.startswith(f"--program: {small_elf}: segment 0 ")
+
+
+def test_load_program_errors_name_the_file(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    text = tmp_path / "notes.txt"
+    text.write_text("not an executable\n")
+    with pytest.raises(CliError, match=rf"^{text}: "):
+        files.load_program(text)
+    with pytest.raises(CliError) as caught:
+        files.load_program(tmp_path / "none.elf", "--program")
+    assert caught.value.message == f"--program: {tmp_path / 'none.elf'}: file not found"
+    with pytest.raises(CliError) as caught:
+        files.load_program(tmp_path, None)
+    assert caught.value.message == f"{tmp_path}: is a folder, expected an ELF file"
+
+    def parser_trips(path: object, regions: object = None) -> None:
+        raise IndexError("index out of range")
+
+    monkeypatch.setattr("robosoc.chip.elf.load_elf", parser_trips)
+    with pytest.raises(CliError) as caught:
+        files.load_program(text, "--program")
+    assert caught.value.message == f"--program: {text}: malformed ELF file (IndexError: index out of range)"
+    with pytest.raises(CliError) as caught:
+        files.load_program(text)
+    assert caught.value.message == f"{text}: malformed ELF file (IndexError: index out of range)"

@@ -135,6 +135,9 @@ class MPSoC:
         self.cst[self.io, kc.K_STATE] = kc.K_IO
         self.powered = powered
         self.acc = np.zeros((n, kc.NTASKS, kc.ACC_SIZE), dtype=np.int64)
+        # touched here, not at the first accounting: a large zeroed array is mapped lazily (and numpy
+        # asks for huge pages), so its first touch inside a run would cost up to tens of ms there
+        self.acc.fill(0)
         self.snap = np.zeros((n, kc.ACC_SIZE), dtype=np.int64)
         self.gst = np.zeros(kc.GST_SIZE, dtype=np.int64)
         self.gst[kc.G_IO_TILE] = self.io
@@ -444,9 +447,7 @@ class MPSoC:
 
     def finish_accounting(self) -> None:
         """Attribute everything not yet attributed to the tasks running now."""
-        for t in range(self.config.n_tiles):
-            if self.cst[t, kc.K_STATE] not in (kc.K_OFF, kc.K_IO):
-                kc.account(t, self.cores.arrays(), self.book(), int(self.cores.st[t, S_CYCLE]))
+        kc.account_all(self.cores.arrays(), self.book())
 
     def task_counters(self, xy: tuple[int, int]) -> dict[int, dict[str, int]]:
         """Counters per task id of one tile (task 0 is the kernel/idle), for tasks that ran."""

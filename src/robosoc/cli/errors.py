@@ -82,9 +82,9 @@ def _click_message(exc: click.ClickException) -> str:
         return f"missing {kind} {shown}"
     if param is not None:
         opts = [o for o in param.opts if o.startswith("--")] or list(param.opts)
-        name = opts[0] if opts and param.param_type_name == "option" else (param.name or "").upper()
-        return f"{name}: {_lower_first(exc.message or str(exc))}"
-    return _lower_first(exc.message or str(exc))
+        name = opts[0] if opts and param.param_type_name == "option" else param.human_readable_name
+        return f"{name}: {_lower_first(exc.message)}"
+    return _lower_first(exc.message)
 
 
 def _is_click_exception(exc: BaseException) -> bool:
