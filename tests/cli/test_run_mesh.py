@@ -83,3 +83,35 @@ def test_powered_off_tile_and_bad_mesh(elf: Path, tmp_path: Path):
     assert result.exit_code == 4 and "1,1" not in stats["tiles"]
     bad = CliRunner().invoke(app, ["run", str(elf), "--mesh", "2by2"])
     assert bad.exit_code == 2 and "WxH" in bad.output
+
+
+def test_each_tile_and_task_gets_its_energy_and_a_summary_line(elf: Path, tmp_path: Path):
+    from robosoc.analysis.energy import EnergyModel
+
+    model = EnergyModel.load()
+    result, stats = run(elf, tmp_path)
+    for name, tile in stats["tiles"].items():
+        c = tile["counters"]
+        assert tile["state"] == "exited" and tile["errata"] == {"irq_during_mul": 0, "mulhsu": 0}
+        assert tile["energy_nj"] == pytest.approx(model.total_nj(c))
+        for task in tile["tasks"].values():
+            assert task["energy_nj"] == pytest.approx(model.total_nj(task["counters"]))
+        assert sum(t["energy_nj"] for t in tile["tasks"].values()) == pytest.approx(tile["energy_nj"])
+        x, y = name.split(",")
+        code = stats["exit_codes"][name]
+        line = (
+            f"robosoc: tile ({x}, {y}): exited with exit code {code}, {c['cycles']} cycles, "
+            f"{c['instructions']} instructions, CPI {c['cycles'] / c['instructions']:.3f}, "
+            f"sleep {c['sleep_cycle']}, energy {tile['energy_nj']:.3f} nJ"
+        )
+        assert line + "\n" in result.stderr
+    assert stats["exit_codes"]["1,0"] == 4 and stats["error"] is None
+
+
+def test_a_cycle_budget_stops_the_mesh_and_keeps_the_stats(elf: Path, tmp_path: Path):
+    result, stats = run(elf, tmp_path, "--max-cycles", "1000")  # the run needs about 1500
+    assert result.exit_code == 3  # exit_codes.SIMULATOR_STOP
+    assert stats["cycles"] == 1000
+    assert stats["error"].startswith("cycle budget of 1000 cycles exhausted; still running: ")
+    assert f"robosoc run: {stats['error']}" in result.stderr
+    assert stats["tiles"]["1,0"]["state"] == "running" and "1,0" not in stats["exit_codes"]
