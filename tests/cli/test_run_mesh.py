@@ -115,3 +115,29 @@ def test_a_cycle_budget_stops_the_mesh_and_keeps_the_stats(elf: Path, tmp_path: 
     assert stats["error"].startswith("cycle budget of 1000 cycles exhausted; still running: ")
     assert f"robosoc run: {stats['error']}" in result.stderr
     assert stats["tiles"]["1,0"]["state"] == "running" and "1,0" not in stats["exit_codes"]
+
+
+def test_the_chip_line_adds_the_noc_and_goes_to_stderr(elf: Path, tmp_path: Path):
+    result, stats = run(elf, tmp_path)
+    noc = stats["noc"]
+    assert noc["energy_nj"] == pytest.approx(sum(noc["energy_pj"].values()) / 1000)
+    line = (
+        f"robosoc: NoC 8 packets, {noc['counters']['flit_hops']} flit-hops, energy {noc['energy_nj']:.3f} nJ; "
+        f"chip {stats['cycles']} cycles, energy {stats['energy_nj']:.3f} nJ\n"
+    )
+    assert line in result.stderr and "robosoc" not in result.stdout
+    assert "headers found no room" not in result.stderr  # none lost on this run
+
+
+def test_ctrl_c_during_a_mesh_run_keeps_the_stats(elf: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch):
+    from robosoc.chip.mpsoc import MPSoC
+
+    def interrupted(self, *args, **kwargs):
+        self.step(500)  # some of the run, then Ctrl-C
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(MPSoC, "run", interrupted)
+    result, stats = run(elf, tmp_path)
+    assert result.exit_code == 130  # exit_codes.INTERRUPTED
+    assert stats["error"] == "interrupted" and stats["cycles"] == 500 and stats["exit_codes"] == {}
+    assert "robosoc run: interrupted\n" in result.stderr
