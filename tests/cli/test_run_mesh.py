@@ -48,9 +48,8 @@ def elf(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 def run(elf: Path, tmp_path: Path, *extra: str):
     stats = tmp_path / "stats.json"
-    result = CliRunner().invoke(
-        app, ["run", str(elf), "--mesh", "2x2", "--stats", str(stats), "--exit-code", "program", *extra]
-    )
+    mesh = [] if "--mesh" in extra or "--off" in extra else ["--mesh", "2x2"]
+    result = CliRunner().invoke(app, ["run", str(elf), *mesh, "--stats", str(stats), "--exit-code", "program", *extra])
     return result, json.loads(stats.read_text())
 
 
@@ -141,3 +140,33 @@ def test_ctrl_c_during_a_mesh_run_keeps_the_stats(elf: Path, tmp_path: Path, mon
     assert result.exit_code == 130  # exit_codes.INTERRUPTED
     assert stats["error"] == "interrupted" and stats["cycles"] == 500 and stats["exit_codes"] == {}
     assert "robosoc run: interrupted\n" in result.stderr
+
+
+MULTIPLY = (
+    '#include "hf_print.h"\nint main(void) { volatile unsigned a = 7, b = 6; hf_printf("%u\\n", a * b); return 5; }\n'
+)
+
+
+@pytest.fixture(scope="module")
+def multiply(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    src = tmp_path_factory.mktemp("mul") / "multiply.c"
+    src.write_text(MULTIPLY)
+    return build_elf([src], mul=True)
+
+
+def test_mesh_size_multiplier_and_sram_reach_every_tile(multiply: Path, tmp_path: Path):
+    result, stats = run(multiply, tmp_path, "--mesh", "3x2")
+    assert stats["mesh"] == [3, 2] and len(stats["tiles"]) == 5  # six tiles, one of them the I/O tile
+    assert result.stdout.count("] 42\n") == 5
+    no_mul, stats = run(multiply, tmp_path, "--mesh", "3x2", "--no-mul")
+    assert no_mul.exit_code == 3 and "multiply instruction on a core without the multiplier" in stats["error"]
+    small, stats = run(multiply, tmp_path, "--mesh", "3x2", "--sram-size", "4096")
+    assert small.exit_code == 3 and "store to unmapped address 0x40000ffc" not in stats["error"]
+    assert "store to unmapped address 0x401ffffc" in stats["error"]  # the stack of a 2 MiB build: past 4 KiB
+
+
+def test_off_without_mesh_is_the_default_2x2_and_mesh_errors_name_the_option(multiply: Path, tmp_path: Path):
+    _, stats = run(multiply, tmp_path, "--off", "1,0")
+    assert stats["mesh"] == [2, 2] and set(stats["tiles"]) == {"0,1", "1,1"}
+    bad = CliRunner().invoke(app, ["run", str(multiply), "--mesh", "2by2"])
+    assert bad.exit_code == 2 and "robosoc run: --mesh: " in bad.stderr
