@@ -170,3 +170,22 @@ def test_off_without_mesh_is_the_default_2x2_and_mesh_errors_name_the_option(mul
     assert stats["mesh"] == [2, 2] and set(stats["tiles"]) == {"0,1", "1,1"}
     bad = CliRunner().invoke(app, ["run", str(multiply), "--mesh", "2by2"])
     assert bad.exit_code == 2 and "robosoc run: --mesh: " in bad.stderr
+
+
+def test_a_program_that_does_not_fit_the_tiles_sram_is_refused_before_running(tmp_path: Path):
+    src = tmp_path / "big.c"
+    src.write_text("volatile char big[8192] = {1};\nint main(void) { return big[0]; }\n")
+    big = build_elf([src], mul=True)
+    for programs in ([big], [big, big, big]):  # one for every tile, or one per tile
+        result = CliRunner().invoke(app, ["run", *map(str, programs), "--mesh", "2x2", "--sram-size", "4096"])
+        assert result.exit_code == 2, result.output
+        assert f"robosoc run: {big}: segment " in result.stderr
+        assert "is outside the allowed memory (" in result.stderr
+
+
+def test_stats_may_not_overwrite_the_program(multiply: Path, tmp_path: Path):
+    copy = tmp_path / "m.elf"
+    copy.write_bytes(multiply.read_bytes())
+    result = CliRunner().invoke(app, ["run", str(copy), "--mesh", "2x2", "--stats", str(copy)])
+    assert result.exit_code == 2 and "robosoc run: --stats: " in result.stderr
+    assert copy.read_bytes() == multiply.read_bytes()
