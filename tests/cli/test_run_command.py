@@ -149,3 +149,12 @@ def test_every_engine_gives_the_same_run(elf: Path, tmp_path: Path, engine: str)
 def test_engine_is_refused_where_it_does_not_run(elf: Path):
     result = CliRunner().invoke(app, ["run", str(elf), "--engine", "jit", "--mesh", "2x2"])
     assert result.exit_code == 2 and "--engine" in result.stderr
+
+
+def test_one_core_refuses_a_program_too_big_for_its_sram_size(tmp_path: Path):
+    src = tmp_path / "big.c"
+    src.write_text("volatile char big[8192] = {1};\nint main(void) { return big[0]; }\n")
+    big = build_elf([src], mul=True)
+    result = CliRunner().invoke(app, ["run", str(big), "--sram-size", "4096"])
+    assert result.exit_code == 2 and f"robosoc run: {big}: segment " in result.stderr
+    assert CliRunner().invoke(app, ["run", str(big), "--sram-size", "65536"]).exit_code == 4  # returns 1
