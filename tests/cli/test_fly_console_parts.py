@@ -164,3 +164,34 @@ def test_samples_drive_a_bar_of_simulated_seconds_that_replaces_the_spinner(monk
     assert shown.startswith("flight") and "1.00/2 s" in shown and "1.00x real time" in shown
     progress.stop()
     assert progress.progress is None and not bar.live.is_started
+
+
+def test_the_live_server_option(monkeypatch: pytest.MonkeyPatch) -> None:
+    from robosoc.analysis import foxglove_live
+    from robosoc.cli.errors import CliError
+    from robosoc.cli.fly import _start_live
+
+    console = _console()
+    assert _start_live(console, None) is None
+
+    class Busy:
+        def __init__(self, port: int) -> None:
+            raise foxglove_live.LiveFlightError(f"port {port} is in use")
+
+    monkeypatch.setattr(foxglove_live, "LiveFlight", Busy)
+    with pytest.raises(CliError) as caught:
+        _start_live(console, 8765)
+    assert caught.value.message == "--foxglove: port 8765 is in use"
+
+    class Served:
+        url = "ws://127.0.0.1:8765"
+
+        def __init__(self, port: int) -> None:
+            self.port = port
+
+    monkeypatch.setattr(foxglove_live, "LiveFlight", Served)
+    live = _start_live(console, 8765)
+    assert isinstance(live, Served) and live.port == 8765
+    assert console.export_text().endswith(
+        "foxglove: ws://127.0.0.1:8765 (Foxglove: Open connection, Foxglove WebSocket)\n"
+    )
