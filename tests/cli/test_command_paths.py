@@ -89,6 +89,21 @@ def test_run_trace_stops_at_the_cycle_budget(hello: Path) -> None:
     assert [int(line.split()[0]) for line in traced] == [3, 4]  # the instruction ending at cycle 5 is the last
 
 
+def test_run_trace_of_one_instruction_and_none_by_default(hello: Path) -> None:
+    one = invoke("run", hello, "--trace", "1")
+    lines = one.stderr.splitlines()
+    assert lines[0].split()[:4] == ["cycle", "pc", "word", "instruction"]
+    assert int(lines[1].split()[0]) == 3 and not re.match(r"\s*\d+\s+[0-9a-f]{8}\s", lines[2])
+    plain = invoke("run", hello)
+    assert plain.stderr.startswith("robosoc: ") and plain.stderr.count("\n") == 1  # the summary line alone
+
+
+def test_run_profile_of_every_cycle(hello: Path, tmp_path: Path) -> None:
+    stats = tmp_path / "p1.json"
+    assert invoke("run", hello, "--profile", "1", "--stats", stats).exit_code == exit_codes.PROGRAM_FAILED
+    assert sum(json.loads(stats.read_text())["profile"].values()) == pytest.approx(1.0)
+
+
 def test_run_profile_shares_go_to_stderr_and_stats(hello: Path, tmp_path: Path) -> None:
     stats = tmp_path / "p.json"
     result = invoke("run", hello, "--profile", "20", "--stats", stats, "--errata", "rtl", "--no-mul")

@@ -135,3 +135,63 @@ def test_a_renderer_that_cannot_start_closes_the_sink_and_says_why(fakes, tmp_pa
     assert sink.closed and sink.frames == [] and state.sink is None
     state.frame(WORLD, 4, 100.0)  # later frames: nothing, no second note
     assert console.export_text() == "no video: the context could not be made\n"
+
+
+def test_samples_drive_a_bar_of_simulated_seconds_that_replaces_the_spinner(monkeypatch: pytest.MonkeyPatch) -> None:
+    from robosoc.cli import fly
+
+    readings = [100.0, 100.0, 100.1, 101.0]  # the bar's start, then the three samples below
+
+    def clock() -> float:
+        return readings.pop(0) if len(readings) > 1 else readings[0]
+
+    monkeypatch.setattr(fly.time, "perf_counter", clock)
+    console = _console()
+    progress = FlightProgress(console, 2.0, 100.0)
+    progress.status("compiling ...")
+    spinner = progress.spinner
+    progress.sample(0)
+    assert progress.spinner is None and not spinner.live.is_started
+    bar = progress.progress
+    assert bar is not None and bar.console is console and bar.live.transient
+    (task,) = bar.tasks
+    assert (task.total, task.completed, task.fields) == (200, 1, {"sim": "0.01/2 s", "rtf": ""})
+    progress.sample(9)  # 0.1 s simulated in 0.1 s: too early for a real-time factor
+    assert (task.completed, task.fields["sim"], task.fields["rtf"]) == (10, "0.10/2 s", "")
+    progress.sample(99)  # 1 s simulated in 1 s
+    assert (task.completed, task.fields["sim"], task.fields["rtf"]) == (100, "1.00/2 s", "1.00x real time")
+    shown = _rendered(bar)
+    assert shown.startswith("flight") and "1.00/2 s" in shown and "1.00x real time" in shown
+    progress.stop()
+    assert progress.progress is None and not bar.live.is_started
+
+
+def test_the_live_server_option(monkeypatch: pytest.MonkeyPatch) -> None:
+    from robosoc.analysis import foxglove_live
+    from robosoc.cli.errors import CliError
+    from robosoc.cli.fly import _start_live
+
+    console = _console()
+    assert _start_live(console, None) is None
+
+    class Busy:
+        def __init__(self, port: int) -> None:
+            raise foxglove_live.LiveFlightError(f"port {port} is in use")
+
+    monkeypatch.setattr(foxglove_live, "LiveFlight", Busy)
+    with pytest.raises(CliError) as caught:
+        _start_live(console, 8765)
+    assert caught.value.message == "--foxglove: port 8765 is in use"
+
+    class Served:
+        url = "ws://127.0.0.1:8765"
+
+        def __init__(self, port: int) -> None:
+            self.port = port
+
+    monkeypatch.setattr(foxglove_live, "LiveFlight", Served)
+    live = _start_live(console, 8765)
+    assert isinstance(live, Served) and live.port == 8765
+    assert console.export_text().endswith(
+        "foxglove: ws://127.0.0.1:8765 (Foxglove: Open connection, Foxglove WebSocket)\n"
+    )

@@ -422,6 +422,7 @@ def test_cli_errors_are_usage_errors_by_default() -> None:
 
 def test_link_options_name_the_option() -> None:
     from robosoc.cli import link_options
+    from robosoc.config.link import LinkConfig
     from robosoc.cosim.link import Address
 
     peer = link_options.address_option(any_port=False)
@@ -448,6 +449,7 @@ def test_link_options_name_the_option() -> None:
         9.0,
     )
     assert config.faults == faults and link_options.link_config().faults.any is False
+    assert link_options.link_config() == LinkConfig()  # the defaults are the configuration's own
     for kwargs, message in (
         ({"peer_timeout": 0.01}, "--peer-timeout: must be between 0.05 and 3600 s, got 0.01"),
         ({"connect_timeout": 4000.0}, "--connect-timeout: must be between 0.05 and 3600 s, got 4000.0"),

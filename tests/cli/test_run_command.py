@@ -149,3 +149,40 @@ def test_every_engine_gives_the_same_run(elf: Path, tmp_path: Path, engine: str)
 def test_engine_is_refused_where_it_does_not_run(elf: Path):
     result = CliRunner().invoke(app, ["run", str(elf), "--engine", "jit", "--mesh", "2x2"])
     assert result.exit_code == 2 and "--engine" in result.stderr
+
+
+def test_one_core_refuses_a_program_too_big_for_its_sram_size(tmp_path: Path):
+    src = tmp_path / "big.c"
+    src.write_text("volatile char big[8192] = {1};\nint main(void) { return big[0]; }\n")
+    big = build_elf([src], mul=True)
+    result = CliRunner().invoke(app, ["run", str(big), "--sram-size", "4096"])
+    assert result.exit_code == 2 and f"robosoc run: {big}: segment " in result.stderr
+    assert CliRunner().invoke(app, ["run", str(big), "--sram-size", "65536"]).exit_code == 4  # returns 1
+
+
+def test_the_summary_line_reads_like_the_stats(elf: Path, tmp_path: Path):
+    import re
+
+    stats = tmp_path / "s.json"
+    result = CliRunner().invoke(app, ["run", str(elf), "--stats", str(stats)])
+    record = json.loads(stats.read_text())
+    c = record["counters"]
+    line = result.stderr.splitlines()[0]
+    expected = (
+        rf"robosoc: {c['cycles']} cycles, {c['instructions']} instructions, CPI {c['cycles'] / c['instructions']:.3f}, "
+        rf"energy {record['energy_nj']:.3f} nJ, host (\d+) MIPS; exit code 42"
+    )
+    match = re.fullmatch(expected, line)
+    assert match is not None, line
+    assert int(match.group(1)) < 100_000  # instructions per host microsecond, not per second
+    assert record["energy_model"] == EnergyModel.load().path
+
+
+def test_an_exit_code_that_reads_as_zero_is_noted_on_stderr(tmp_path: Path):
+    src = tmp_path / "wide.c"
+    src.write_text("int main(void) { return 512; }\n")
+    wide = build_elf([src], mul=True)
+    result = CliRunner().invoke(app, ["run", str(wide), "--exit-code", "program"])
+    assert result.exit_code == 0  # 512 modulo 256
+    note = "robosoc run: the program's exit code 512 (0x00000200) reads as 0 modulo 256; use --exit-code status\n"
+    assert result.stderr.endswith(note) and "modulo" not in result.stdout

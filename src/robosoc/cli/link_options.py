@@ -121,14 +121,14 @@ Bind = Annotated[
 
 
 def link_config(
-    pace: str = "realtime",
-    hold: str = "zoh",
+    pace: str = LinkConfig.pace,
+    hold: str = LinkConfig.hold,
     faults: LinkFaults | None = None,
-    resend: int = 2,
-    peer_timeout: float = 5.0,
-    connect_timeout: float = 300.0,
+    resend: int = LinkConfig.resend,
+    peer_timeout: float = LinkConfig.peer_timeout_s,
+    connect_timeout: float = LinkConfig.connect_timeout_s,
 ) -> LinkConfig:
-    """The link configuration of the options (errors name the option)."""
+    """The link configuration of the options (errors name the option; the defaults are LinkConfig's)."""
     try:
         return LinkConfig(
             pace=pace,

@@ -189,8 +189,8 @@ def _run_single(
     errata: str,
     exit_mode: str,
     inputs: list[Path],
-    gdb: int | None = None,
-    engine: str = "interp",
+    gdb: int | None,
+    engine: str,
 ) -> None:
     from robosoc.chip.single import RtlErratum, SingleCoreSoC
 
