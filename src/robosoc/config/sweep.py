@@ -181,10 +181,11 @@ def sweep_from_mapping(data: dict[str, Any], where: str, folder: Path, default_n
     changes = data.get("base", {})
     if not isinstance(changes, dict):
         raise ConfigError(where, "base", f"expected a table of scenario fields, got {changes!r}")
-    for key in flatten(changes):
+    flat_changes = flatten(changes)  # quoted dotted keys ("chip.width" = 4) as nested tables
+    for key in flat_changes:
         check_field(key, where, f"base.{key}")
-    base = from_mapping(ScenarioConfig, changes, f"{where}: [base]", base=base)
-    base_data.update(flatten(changes))
+    base = from_mapping(ScenarioConfig, nest(flat_changes), f"{where}: [base]", base=base)
+    base_data.update(flat_changes)
 
     grid_table = data.get("grid", {})
     if not isinstance(grid_table, dict):
