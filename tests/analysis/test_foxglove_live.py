@@ -120,3 +120,37 @@ def test_fly_foxglove_serves_the_flight_and_writes_its_logs(tmp_path: Path) -> N
         assert fly.wait(timeout=120) == 0, rest
     for name in ("flight.csv", "flight.mcap", "report.html"):
         assert (tmp_path / "run" / name).is_file(), name
+
+
+class _Clock:
+    """A monotonic clock that only moves when the code under test sleeps."""
+
+    def __init__(self) -> None:
+        self.now = 1000.0
+        self.slept: list[float] = []
+
+    def monotonic(self) -> float:
+        return self.now
+
+    def sleep(self, seconds: float) -> None:
+        self.slept.append(seconds)
+        self.now += seconds
+
+
+@pytest.mark.parametrize(("pace", "slept"), [(1.0, 1.0), (2.0, 0.5), (0.5, 2.0), (0.0, 0.0)])
+def test_publishing_is_held_back_to_the_pace(monkeypatch, host_flight: np.ndarray, pace: float, slept: float) -> None:
+    """Rows 1 s apart in simulated time take 1/pace s of wall time; the first row is not held back."""
+    import robosoc.analysis.foxglove_live as live_module
+
+    clock = _Clock()
+    monkeypatch.setattr(live_module.time, "monotonic", clock.monotonic)
+    monkeypatch.setattr(live_module.time, "sleep", clock.sleep)
+    t = host_flight[:, ROW_FIELDS.index("t")]
+    first = host_flight[0]
+    later = host_flight[int(np.argmin(np.abs(t - (t[0] + 1.0))))].copy()
+    later[ROW_FIELDS.index("t")] = first[ROW_FIELDS.index("t")] + 1.0
+    with LiveFlight(0, pace=pace) as live:
+        live.publish(first)
+        assert clock.slept == []
+        live.publish(later)
+        assert sum(clock.slept) == pytest.approx(slept, abs=1e-9)

@@ -219,3 +219,25 @@ def test_a_bad_profile_json_is_noted_not_fatal(chip_run: Path) -> None:
     (chip_run / "profile.json").write_text('{"rows": [{"tile": "0,1"}]}')
     text = write_report(chip_run).read_text()
     assert 'data-plot="profile"' not in text and "profile.json: skipped: not a robosoc profile" in text
+
+
+def test_top_ranks_one_task_on_one_tile_by_cycles_then_energy_then_name() -> None:
+    from robosoc.analysis.function_profile import FunctionProfile, ProfileRow
+
+    def row(tile, task, name, cycles, pj):
+        return ProfileRow(tile, task, f"task{task}", name, cycles, cycles // 2, {}, pj)
+
+    rows = [
+        row((0, 1), 1, "a", 100, 5.0),
+        row((0, 1), 1, "b", 300, 1.0),
+        row((0, 1), 1, "c", 100, 9.0),
+        row((0, 1), 1, "d", 100, 9.0),
+        row((0, 1), 2, "other-task", 999, 0.0),
+        row((1, 0), 1, "other-tile", 999, 0.0),
+        row(None, None, "noc", 0, 3.0),
+    ]
+    profile = FunctionProfile(rows, 4.0)
+    assert [r.function for r in profile.top((0, 1), 1)] == ["b", "c", "d", "a"]
+    assert [r.function for r in profile.top((0, 1), 1, n=2)] == ["b", "c"]
+    assert profile.top((1, 1), 1) == []
+    assert profile.tiles() == [(0, 1), (1, 0)]

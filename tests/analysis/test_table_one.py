@@ -5,6 +5,7 @@ import io
 import json
 import math
 
+import numpy as np
 import pytest
 
 from robosoc.analysis import table_one
@@ -143,3 +144,42 @@ def test_json_and_csv_round_trip(small_table: table_one.TableResult) -> None:
         assert float(row["energy_nj"]) == pytest.approx(total, rel=1e-12)
     text = "\n".join(table_one.format_table(small_table))
     assert "Table I" in text and "[87,500.0]" in text  # the seed's EKF response for fixed+mul, in us
+
+
+def _without_host_time(result: table_one.TableResult) -> dict:
+    data = table_one.to_json(result)
+    for run in data["runs"]:
+        run.pop("host_seconds")
+    data.pop("spec")
+    return data
+
+
+def test_builds_measured_in_worker_processes_equal_those_measured_in_turn() -> None:
+    seen: list[tuple[str, int, int]] = []
+    spec = dict(iterations=2, releases=("event",))
+    parallel = table_one.measure_table(TableSpec(**spec, workers=2), lambda *a: seen.append(a))
+    serial = table_one.measure_table(TableSpec(**spec, workers=1))
+    assert json.dumps(_without_host_time(parallel)) == json.dumps(_without_host_time(serial))
+    assert [r.build for r in parallel.runs] == ["float+mul", "float-no-mul", "fixed+mul", "fixed-no-mul"]
+    # every build reports its progress from its worker, and ends reported whole
+    finals = [a for a in seen if a[1:] == (1, 1)]
+    assert finals[-4:] == [(f"{b} event", 1, 1) for b in ("float+mul", "float-no-mul", "fixed+mul", "fixed-no-mul")]
+    assert {key for key, _, _ in seen} >= {f"{b} event" for b in ("float+mul", "fixed-no-mul")}
+    assert parallel.run("fixed+mul", "event") is parallel.runs[2]
+    assert parallel.run("fixed+mul", "periodic") is None and parallel.run("fixed", "event") is None
+
+
+def test_default_workers_are_the_cores_up_to_the_four_builds(monkeypatch) -> None:
+    for cores, workers in ((None, 1), (1, 1), (2, 2), (4, 4), (64, 4)):
+        monkeypatch.setattr(table_one.os, "cpu_count", lambda c=cores: c)
+        assert table_one.default_workers() == workers
+
+
+def test_first_armed_is_the_take_off_sample() -> None:
+    from robosoc.control.flight import ROW_FIELDS
+
+    rows = np.zeros((6, len(ROW_FIELDS)))
+    assert table_one.first_armed(rows) == 6
+    rows[3:, ROW_FIELDS.index("armed")] = 1.0
+    rows[1, ROW_FIELDS.index("armed")] = 0.5  # not above one half
+    assert table_one.first_armed(rows) == 3
