@@ -78,3 +78,14 @@ def test_golden_replay_is_the_host_controller_on_the_packets_values() -> None:
     est = rows[:, [ROW_FIELDS.index(c) for c in ("est_qw", "est_qx", "est_qy", "est_qz")]]
     assert quaternion_error(gold.quaternion, est).max_deg < 0.05
     assert np.all(gold.pwm == 0)  # disarmed: motors off
+
+
+def test_pwm_agreement_counts_samples_within_one_count_and_is_empty_without_commands() -> None:
+    golden = np.array([[100, 100, 100, 100], [200, 200, 200, 200], [300, 300, 300, 300]], dtype=np.int64)
+    chip = {0: (101, 99, 100, 100), 1: (202, 200, 200, 200), 2: (300, 300, 300, 300), 7: (0, 0, 0, 0)}
+    agreement = PwmAgreement.of(chip, golden, [0, 1, 2])
+    assert agreement == PwmAgreement(3, 2 / 3, 2, 4 / 12)  # sample 1 is two counts off
+    empty = PwmAgreement.of({}, golden, [0, 1])
+    assert (empty.samples, empty.max_diff) == (0, 0)
+    assert math.isnan(empty.within_one) and math.isnan(empty.mean_abs_diff)
+    assert PwmAgreement.of(chip, golden, []).samples == 0

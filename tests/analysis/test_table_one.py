@@ -4,6 +4,7 @@ import csv
 import io
 import json
 import math
+from dataclasses import replace as dataclass_replace
 
 import numpy as np
 import pytest
@@ -183,3 +184,198 @@ def test_first_armed_is_the_take_off_sample() -> None:
     rows[3:, ROW_FIELDS.index("armed")] = 1.0
     rows[1, ROW_FIELDS.index("armed")] = 0.5  # not above one half
     assert table_one.first_armed(rows) == 3
+
+
+def _summarise_case(armed_from: int):
+    """Eight samples 1000 cycles apart (at 4 ns), armed from ``armed_from``; measured over 4 iterations."""
+    from robosoc.analysis.accuracy import GoldenRun
+    from robosoc.control.flight import ROW_FIELDS
+    from robosoc.cosim.replay import PwmCommand, ReplayResult, SampleInput
+    from robosoc.firmware.flight_app import ChipEstimate
+
+    n = 8
+    rows = np.zeros((n, len(ROW_FIELDS)))
+    rows[armed_from:, ROW_FIELDS.index("armed")] = 1.0
+    rows[:, ROW_FIELDS.index("qw")] = 1.0  # truth: level all along
+    golden_q = np.tile([0.0, 1.0, 0.0, 0.0], (n, 1))  # outside the window: far from everything
+    golden_q[2:6] = [1.0, 0.0, 0.0, 0.0]
+    golden_q[2] = [0.0, 0.0, 0.0, 1.0]
+    golden = GoldenRun(golden_q, np.zeros(n), np.zeros(n), np.zeros((n, 4), dtype=np.int64), np.ones(n, bool))
+    samples = [SampleInput(k, k * 0.01, 1000 * k + 100, b"") for k in range(n)]
+    pwm = {1: (9, 9, 9, 9), 2: (1, 1, 1, 1), 3: (5, 0, 0, 0), 5: (0, 0, 0, 0), 6: (9, 9, 9, 9)}
+    delay = {1: 10, 2: 250, 3: 500, 5: 750, 6: 99_000}  # cycles from the sample to its command
+    commands = [PwmCommand(k, pwm[k], samples[k].cycle + delay[k]) for k in pwm]
+    est = [_job(k, (1.0, 1.0, 1.0, 1.0), 100, 200) for k in range(6)]
+    jobs = [
+        JobRecord("estimator", (0, 1), k, samples[k + 1].cycle, samples[k + 1].cycle + 1, samples[k + 1].cycle + 300 + k,
+                  300, True, 10, dict(zip(ENERGY_PARTS, (1.0, 2.0, 3.0, 4.0), strict=True)), False)
+        for k in (5, 1, 3, 2, 0, 4, 6)  # out of order; release of k at sample k + 1
+    ] + [dataclass_replace(est[0], release_cycle=samples[3].cycle, completion_cycle=samples[3].cycle + 200)]  # fmt: skip
+    estimates = [ChipEstimate(k, k, q, 0.0, 0.0) for k, q in ((1, (0, 1, 0, 0)), (2, (1, 0, 0, 0)), (3, (0.6, 0.8, 0, 0)),
+                                                   (5, (1, 0, 0, 0)), (7, (0, 1, 0, 0)))]  # fmt: skip
+    fw = table_one.build_config("fixed", True, "periodic")
+    result = ReplayResult(fw, 4.0, samples, commands, jobs, {}, {}, {}, {}, 9100, 1.25, estimates=estimates)
+    return table_one.summarise(result, rows, golden, 4, "replay")
+
+
+def test_summarise_measures_the_window_after_take_off_by_hand() -> None:
+    run = _summarise_case(armed_from=2)
+    assert (run.build, run.release, run.source) == ("fixed+mul", "periodic", "replay")
+    assert (run.samples, run.first_sample, run.host_seconds) == (4, 2, 1.25)
+    # commands of samples 2, 3 and 5 (sample 4 has none): 250, 500, 750 cycles of 4 ns
+    assert run.latency_us_mean == pytest.approx(2.0) and run.latency_us_max == pytest.approx(3.0)
+    assert run.samples_without_command == 1
+    # estimator jobs released from the window's first sample on (k = 1.. at samples 2..), the first four
+    est = run.tasks["estimator"]
+    assert (est.task, est.build, est.release, est.jobs) == ("estimator", "fixed+mul", "periodic", 4)
+    assert est.response_us_max == pytest.approx((300 + 4) * 4 / 1000)  # jobs k = 1..4
+    assert est.response_us_mean == pytest.approx((300 + 2.5) * 4 / 1000)
+    assert run.tasks["pid"].jobs == 1 and run.tasks["pid"].task == "pid"
+    # estimates at samples 2, 3, 5: (1,0,0,0), (0.6,0.8,0,0), (1,0,0,0)
+    assert sorted(run.estimates) == [2, 3, 5]
+    truth = run.estimator_vs_truth
+    assert truth.samples == 3 and truth.mean_component == pytest.approx(1.2 / 12) and truth.max_component == 0.8
+    assert run.estimator_vs_golden.mean_component == pytest.approx((2 + 1.2) / 12)  # golden at 2 is (0,0,0,1)
+    assert run.golden_vs_truth.samples == 4 and run.golden_vs_truth.mean_component == pytest.approx(2 / 16)
+    assert run.estimator_vs_golden.mean_percent == pytest.approx(100 * 3.2 / 12)
+    # PWM of samples 2, 3, 5 against the golden zeros
+    assert (run.pwm.samples, run.pwm.within_one, run.pwm.max_diff) == (3, pytest.approx(2 / 3), 5)
+    assert run.pwm.mean_abs_diff == pytest.approx(9 / 12)
+
+
+def test_summarise_of_a_flight_that_never_took_off_is_empty_not_a_crash() -> None:
+    run = _summarise_case(armed_from=8)
+    assert (run.samples, run.first_sample, run.samples_without_command) == (8 - 8, 8, 0)
+    assert math.isnan(run.latency_us_mean) and math.isnan(run.latency_us_max)
+    assert run.tasks["estimator"].jobs == 0 and run.estimator_vs_truth.samples == 0
+    assert run.pwm.samples == 0
+
+
+class _Queue:
+    def __init__(self) -> None:
+        self.items: list[tuple[str, int, int]] = []
+
+    def put(self, item: tuple[str, int, int]) -> None:
+        self.items.append(item)
+
+
+def test_a_replayed_build_reports_every_sample_or_every_tenth_to_its_worker_queue(monkeypatch) -> None:
+    from robosoc.analysis.accuracy import golden_replay
+    from robosoc.cosim.replay import built_in_rows
+
+    spec = TableSpec(iterations=3, releases=("periodic",), workers=1)
+    scenario = spec.scenario()
+    rows = built_in_rows(scenario.duration_s, spec.seed)
+    golden = golden_replay(rows, scenario)
+    total = len(rows)
+    assert total == 303  # 3 s of calibration and the 3 measured samples at 100 Hz
+    fw = table_one.build_config("fixed", True, "periodic")
+    seen: list[tuple[str, int, int]] = []
+    run = table_one.measure_build(fw, spec, rows, golden, lambda *a: seen.append(a))
+    assert seen == [("fixed+mul periodic", k, total) for k in range(1, total + 1)]
+    assert (run.source, run.samples, run.release) == ("replay", 3, "periodic")
+
+    queue = _Queue()
+    monkeypatch.setattr(table_one, "_progress", queue)
+    again = table_one.measure_build(fw, spec, rows, golden)
+    assert queue.items == [("fixed+mul periodic", k, total) for k in (*range(10, total, 10), total)]
+    assert again.tasks["pid"].response_us_mean == run.tasks["pid"].response_us_mean
+
+
+def test_a_closed_loop_build_flies_the_spec_scenario_and_reports_each_sample() -> None:
+    spec = TableSpec(iterations=2, closed_loop=True, seed=3, workers=1)
+    seen: list[tuple[str, int, int]] = []
+    run = table_one.measure_build(
+        table_one.build_config("fixed", True, "event"), spec, None, None, lambda *a: seen.append(a)
+    )
+    total = round(spec.scenario().duration_s * 100)
+    assert total == 302
+    assert seen == [("fixed+mul event", k, total) for k in range(1, total + 1)]
+    assert (run.source, run.build, run.samples) == ("closed-loop", "fixed+mul", 2)
+    assert run.first_sample == 300  # take-off at 3 s
+    assert run.tasks["estimator"].jobs == 2 and run.pwm.samples == 2
+
+
+def test_an_ordering_of_equal_figures_does_not_hold_and_one_of_a_missing_figure_is_open() -> None:
+    runs = [
+        _run("fixed+mul", {"estimator": 2.0, "pid": math.nan}, {"estimator": 5.0, "pid": 1.0}),
+        _run("fixed-no-mul", {"estimator": 2.0, "pid": 3.0}, {"estimator": 6.0, "pid": 2.0}),
+    ]
+    runs[1] = dataclass_replace(runs[1], release="periodic")
+    runs.append(dataclass_replace(runs[1], release="event"))
+    checks = check_orderings(runs)
+    assert {c.release for c in checks} == {"event", "periodic"}
+    key = {(c.task, c.metric, c.name, c.lower, c.higher, c.release): c for c in checks}
+    name = next(n for n, lo, hi in table_one.ORDERINGS if (lo, hi) == ("fixed+mul", "fixed-no-mul"))
+    assert key[("estimator", "response", name, "fixed+mul", "fixed-no-mul", "event")].holds is False  # 2 vs 2
+    assert key[("estimator", "energy", name, "fixed+mul", "fixed-no-mul", "event")].holds is True
+    assert key[("pid", "response", name, "fixed+mul", "fixed-no-mul", "event")].holds is None  # NaN
+    assert key[("pid", "energy", name, "fixed+mul", "fixed-no-mul", "periodic")].holds is None  # not measured
+
+
+def _with_estimates(run: BuildRun, release: str, source: str, estimates: dict[int, tuple]) -> BuildRun:
+    return dataclass_replace(run, release=release, source=source, estimates=estimates)
+
+
+def test_fixed_builds_are_compared_with_their_float_twin_on_the_samples_both_estimated() -> None:
+    base = _run("x", {"estimator": 1.0, "pid": 1.0}, {"estimator": 1.0, "pid": 1.0})
+    level, tilted = (1.0, 0.0, 0.0, 0.0), (0.6, 0.8, 0.0, 0.0)
+    runs = [
+        # a fixed build without its twin in its release mode comes first: the others are still compared
+        _with_estimates(dataclass_replace(base, build="fixed+mul"), "periodic", "replay", {1: level}),
+        _with_estimates(dataclass_replace(base, build="float+mul"), "event", "replay", {1: level, 2: level, 3: level}),
+        _with_estimates(dataclass_replace(base, build="float-no-mul"), "event", "replay", {1: tilted, 2: tilted}),
+        _with_estimates(dataclass_replace(base, build="fixed+mul"), "event", "replay", {1: tilted, 2: level, 9: level}),
+        _with_estimates(dataclass_replace(base, build="fixed-no-mul"), "event", "replay", {2: tilted, 3: level}),
+        _with_estimates(dataclass_replace(base, build="fixed-no-mul"), "closed", "closed-loop", {2: level}),
+    ]
+    runs.append(_with_estimates(dataclass_replace(base, build="float-no-mul"), "closed", "closed-loop", {2: tilted}))
+    out = table_one.fixed_against_float(runs)
+    assert set(out) == {("event", True), ("event", False)}
+    # fixed+mul against float+mul on samples 1, 2: one tilted against level (|0.4|+|0.8|), one equal
+    assert out[("event", True)].samples == 2
+    assert out[("event", True)].mean_component == pytest.approx(1.2 / 8)
+    # fixed-no-mul against float-no-mul on sample 2 only: equal
+    assert out[("event", False)].samples == 1 and out[("event", False)].mean_component == 0.0
+
+
+def test_the_table_runs_builds_in_workers_only_when_there_are_several_of_each(monkeypatch) -> None:
+    calls: list[str] = []
+    rows_seen: list[tuple] = []
+
+    def fake_build(fw, spec, rows, golden, on_progress=None):
+        calls.append("here")
+        rows_seen.append((rows, golden))
+        return _run(fw.label, {"estimator": 1.0, "pid": 1.0}, {"estimator": 1.0, "pid": 1.0})
+
+    def fake_workers(configs, spec, rows, golden, on_progress):
+        calls.append(f"workers {len(configs)}")
+        return [fake_build(fw, spec, rows, golden) for fw in configs]
+
+    def fake_rows(seconds, seed):
+        return ("rows", seconds, seed)
+
+    def fake_golden(rows, scenario):
+        return ("golden", rows, scenario.duration_s)
+
+    from robosoc.analysis import accuracy
+    from robosoc.cosim import replay
+
+    monkeypatch.setattr(table_one, "measure_build", fake_build)
+    monkeypatch.setattr(table_one, "_in_workers", fake_workers)
+    monkeypatch.setattr(table_one, "golden_replay", fake_golden)
+    monkeypatch.setattr(replay, "built_in_rows", fake_rows)
+    monkeypatch.setattr(accuracy, "golden_replay", fake_golden)
+
+    table_one.measure_table(TableSpec(iterations=1, workers=1, seed=7))
+    assert calls == ["here"] * 4
+    seconds = TableSpec(iterations=1).scenario().duration_s
+    assert rows_seen[0] == (("rows", seconds, 7), ("golden", ("rows", seconds, 7), seconds))
+    calls.clear()
+    table_one.measure_table(TableSpec(iterations=1, workers=2))
+    assert calls == ["workers 4"] + ["here"] * 4
+    calls.clear()
+    rows_seen.clear()
+    table_one.measure_table(TableSpec(iterations=1, workers=2, closed_loop=True))
+    assert calls == ["workers 4"] + ["here"] * 4
+    assert rows_seen[0] == (None, None)  # each build flies its own flight
