@@ -205,14 +205,17 @@ def _summarise_case(armed_from: int):
     pwm = {1: (9, 9, 9, 9), 2: (1, 1, 1, 1), 3: (5, 0, 0, 0), 5: (0, 0, 0, 0), 6: (9, 9, 9, 9)}
     delay = {1: 10, 2: 250, 3: 500, 5: 750, 6: 99_000}  # cycles from the sample to its command
     commands = [PwmCommand(k, pwm[k], samples[k].cycle + delay[k]) for k in pwm]
-    est = [_job(k, (1.0, 1.0, 1.0, 1.0), 100, 200) for k in range(6)]
-    jobs = [
-        JobRecord("estimator", (0, 1), k, samples[k + 1].cycle, samples[k + 1].cycle + 1, samples[k + 1].cycle + 300 + k,
-                  300, True, 10, dict(zip(ENERGY_PARTS, (1.0, 2.0, 3.0, 4.0), strict=True)), False)
-        for k in (5, 1, 3, 2, 0, 4, 6)  # out of order; release of k at sample k + 1
-    ] + [dataclass_replace(est[0], release_cycle=samples[3].cycle, completion_cycle=samples[3].cycle + 200)]  # fmt: skip
-    estimates = [ChipEstimate(k, k, q, 0.0, 0.0) for k, q in ((1, (0, 1, 0, 0)), (2, (1, 0, 0, 0)), (3, (0.6, 0.8, 0, 0)),
-                                                   (5, (1, 0, 0, 0)), (7, (0, 1, 0, 0)))]  # fmt: skip
+    parts = dict(zip(ENERGY_PARTS, (1.0, 2.0, 3.0, 4.0), strict=True))
+    jobs = []
+    for k in (5, 1, 3, 2, 0, 4, 6):  # out of order; estimator job k released at sample k + 1
+        release = samples[k + 1].cycle
+        jobs.append(
+            JobRecord("estimator", (0, 1), k, release, release + 1, release + 300 + k, 300, True, 10, parts, False)
+        )
+    pid = _job(0, (1.0, 1.0, 1.0, 1.0), 100, 200)
+    jobs.append(dataclass_replace(pid, release_cycle=samples[3].cycle, completion_cycle=samples[3].cycle + 200))
+    quaternions = {1: (0, 1, 0, 0), 2: (1, 0, 0, 0), 3: (0.6, 0.8, 0, 0), 5: (1, 0, 0, 0), 7: (0, 1, 0, 0)}
+    estimates = [ChipEstimate(k, k, q, 0.0, 0.0) for k, q in quaternions.items()]
     fw = table_one.build_config("fixed", True, "periodic")
     result = ReplayResult(fw, 4.0, samples, commands, jobs, {}, {}, {}, {}, 9100, 1.25, estimates=estimates)
     return table_one.summarise(result, rows, golden, 4, "replay")
