@@ -18,6 +18,11 @@ numba compiles each kernel once per layer directory and not per mutant.  The rep
 never modified.  Each run starts from fresh mutants (``--resume`` keeps the previous ``mutants/``, and
 mutmut then checks again only what changed); mutmut's output goes to ``<layer dir>/mutmut.log``.
 
+mutmut maps a function to the tests that called it during its stats run, so a function a shared
+(module- or session-scoped) fixture calls would be mapped to the first test using the fixture only;
+the copy's ``tests/conftest.py`` gets the hooks of ``tools/mutation_fixture_map.py``, which map it
+to every test sharing that fixture.
+
 Score = killed / (mutants - skipped): mutants no selected test reaches ("no tests") and survivors
 both count against it.  A mutant whose test process dies of a signal (SIGABRT, SIGSEGV) counts as
 killed and is shown as "of which crashed".  The survivors are listed (``mutmut show NAME`` in the layer directory shows
@@ -65,6 +70,9 @@ def prepare(spec: dict[str, Any], workdir: Path, resume: bool) -> None:
         if target.exists():
             shutil.rmtree(target)
         shutil.copytree(ROOT / name, target, ignore=shutil.ignore_patterns("__pycache__", "*.pyc"))
+    # map what shared fixtures call to every test sharing them (see tools/mutation_fixture_map.py)
+    conftest = workdir / "tests" / "conftest.py"
+    conftest.write_text(conftest.read_text() + "\n\n" + (ROOT / "tools" / "mutation_fixture_map.py").read_text())
     text = (ROOT / "pyproject.toml").read_text()
     head, sep, rest = text.partition("[tool.mutmut]\n")
     if not sep:
