@@ -89,3 +89,52 @@ def test_pwm_agreement_counts_samples_within_one_count_and_is_empty_without_comm
     assert (empty.samples, empty.max_diff) == (0, 0)
     assert math.isnan(empty.within_one) and math.isnan(empty.mean_abs_diff)
     assert PwmAgreement.of(chip, golden, []).samples == 0
+
+
+def test_golden_replay_of_a_flight_that_takes_off_follows_the_flight_own_controller() -> None:
+    """A host flight records its controller's estimate and PWM; the golden model, fed the same
+    samples through the chip's Q16.16 packets, stays within the quantisation's effect of them."""
+    from run_folders import host_rows
+
+    rows = host_rows(4.5, seed=2)
+    gold = golden_replay(rows)
+    armed = rows[:, ROW_FIELDS.index("armed")] > 0.5
+    assert armed.any() and not armed.all()
+    assert np.array_equal(gold.armed, armed)
+    est = rows[:, [ROW_FIELDS.index(c) for c in ("est_qw", "est_qx", "est_qy", "est_qz")]]
+    assert quaternion_error(gold.quaternion, est).max_deg < 0.05
+    assert np.abs(gold.height - rows[:, ROW_FIELDS.index("est_height")]).max() < 0.01
+    pwm = rows[:, [ROW_FIELDS.index(f"pwm{i}") for i in range(4)]]
+    assert gold.pwm.dtype == np.int64 and np.abs(gold.pwm - pwm).max() <= 3
+    assert np.all(gold.pwm[~armed] == 0) and np.all(gold.pwm[armed] > 0)
+    # the climb: the estimated vertical velocity is up while the height setpoint rises
+    rising = np.flatnonzero(np.diff(rows[:, ROW_FIELDS.index("sp_height")]) > 0)
+    assert len(rising) > 10 and np.median(gold.vertical_velocity[rising[5:]]) > 0.05
+    # one row alone takes the controller's own sample period
+    one = golden_replay(rows[:1])
+    assert np.array_equal(one.quaternion[0], gold.quaternion[0]) and one.height[0] == gold.height[0]
+
+
+def test_quaternion_error_edge_cases() -> None:
+    empty = quaternion_error(np.zeros((0, 4)), np.zeros((0, 4)))
+    assert empty.samples == 0
+    assert all(math.isnan(v) for v in (empty.mean_component, empty.max_component, empty.mean_deg, empty.max_deg))
+    for a, b in (
+        (np.zeros((2, 3)), np.zeros((2, 3))),
+        (np.zeros((2, 4)), np.zeros((3, 4))),
+        (np.zeros(4), np.zeros(4)),
+    ):
+        with pytest.raises(ValueError, match="quaternion series"):
+            quaternion_error(a, b)
+    rng = np.random.default_rng(4)
+    q = rng.normal(size=(200, 4))
+    q /= np.linalg.norm(q, axis=1, keepdims=True)
+    same = quaternion_error(q, q)
+    assert same.max_deg == 0.0 and same.max_component == 0.0  # no NaN from rounding past 1
+    flipped = quaternion_error(-q, q)  # the same rotations
+    assert flipped.max_component == 0.0 and flipped.max_deg == 0.0
+    # a 90° turn about x against level, with a scaled (unnormalised) reference
+    turn = quaternion_error(
+        np.array([[math.cos(math.pi / 4), math.sin(math.pi / 4), 0, 0]]), np.array([[2.0, 0, 0, 0]])
+    )
+    assert turn.mean_deg == pytest.approx(90.0)

@@ -382,3 +382,155 @@ def test_the_table_runs_builds_in_workers_only_when_there_are_several_of_each(mo
     table_one.measure_table(TableSpec(iterations=1, workers=2, closed_loop=True))
     assert calls == ["workers 4"] + ["here"] * 4
     assert rows_seen[0] == (None, None)  # each build flies its own flight
+
+
+def _full_run(build: str, release: str, base: float) -> BuildRun:
+    """A run whose every figure differs (so a figure printed in the wrong place shows)."""
+    tasks = {
+        task: table_one.TaskRow(task, build, release, int(base) + k, base + 0.11 + k, base + 0.22 + k, base + 0.33 + k,
+                                10.0, 20, base + 0.44 + k, base + 0.55 + k, base + 0.66 + k, base + 0.77 + k,
+                                base + 0.88 + k, k + 2)
+        for k, task in enumerate(("estimator", "pid"))
+    }  # fmt: skip
+    err = QuaternionError(5, 0.0012345, 0.01, 0.12345, 0.5)
+    truth = QuaternionError(5, 0.02, 0.05, 1.5, 3.25)
+    return BuildRun(build, release, "replay", 7, 300, tasks, base + 0.99, base + 5.0, 3, err, truth,
+                    QuaternionError(5, 0.0044, 0.01, 0.25, 0.75), PwmAgreement(5, 0.9, 2, 0.3), 1.0)  # fmt: skip
+
+
+def test_table_text_puts_every_figure_in_its_row_and_column() -> None:
+    runs = [_full_run("float+mul", "periodic", 1000.0), _full_run("fixed-no-mul", "periodic", 3.0)]
+    orderings = [
+        table_one.OrderingCheck("pid", "energy", "fixed < float (with multiplier)", "fixed+mul", "float+mul",
+                                "periodic", True, None),
+        table_one.OrderingCheck("estimator", "response", "multiplier < none (fixed)", "fixed+mul", "fixed-no-mul",
+                                "periodic", False, True),
+        table_one.OrderingCheck("estimator", "energy", "x", "a", "b", "event", True, False),  # another release
+    ]  # fmt: skip
+    fixed_vs_float = {
+        ("periodic", False): QuaternionError(4, 0.001, 0.002, 0.1, 0.2),
+        ("event", True): QuaternionError(4, 0.5, 0.5, 5.0, 5.0),
+    }
+    result = table_one.TableResult(TableSpec(releases=("event", "periodic")), runs, orderings, fixed_vs_float)
+    lines = table_one.format_table(result)
+    # the table's rows: a 30-character label, then four right-aligned 24-character cells
+    rows = [
+        ("", ["float+mul", "float-no-mul", "fixed+mul", "fixed-no-mul"]),
+        ("EKF jobs", ["1,000", "-", "-", "3"]),
+        ("EKF response mean (us)", ["1,000.1 [107,010.0]", "- [196,500.0]", "- [87,500.0]", "3.1 [173,000.0]"]),
+        ("EKF response max (us)", ["1,000.2", "-", "-", "3.2"]),
+        ("EKF execution mean (us)", ["1,000.3", "-", "-", "3.3"]),
+        ("EKF energy per job (nJ)", ["1,000.9 [7,252.7]", "- [13,761.6]", "- [6,460.3]", "3.9 [11,776.9]"]),
+        ("EKF   task (nJ)", ["1,000.4", "-", "-", "3.4"]),
+        ("EKF   kernel (nJ)", ["1,000.5", "-", "-", "3.5"]),
+        ("EKF   NoC (nJ)", ["1,000.7", "-", "-", "3.7"]),
+        ("EKF   idle (nJ)", ["1,000.8", "-", "-", "3.8"]),
+        ("EKF deadline misses", ["2", "-", "-", "2"]),
+        ("PID jobs", ["1,001", "-", "-", "4"]),
+        ("PID response mean (us)", ["1,001.1 [25,500.0]", "- [34,000.0]", "- [20,000.0]", "4.1 [27,000.0]"]),
+        ("PID response max (us)", ["1,001.2", "-", "-", "4.2"]),
+        ("PID execution mean (us)", ["1,001.3", "-", "-", "4.3"]),
+        ("PID energy per job (nJ)", ["1,001.9 [1,781.1]", "- [2,517.4]", "- [1,480.0]", "4.9 [1,776.7]"]),
+        ("PID   task (nJ)", ["1,001.4", "-", "-", "4.4"]),
+        ("PID   kernel (nJ)", ["1,001.5", "-", "-", "4.5"]),
+        ("PID   NoC (nJ)", ["1,001.7", "-", "-", "4.7"]),
+        ("PID   idle (nJ)", ["1,001.8", "-", "-", "4.8"]),
+        ("PID deadline misses", ["3", "-", "-", "3"]),
+        ("sample -> PWM mean (us)", ["1,001.0", "-", "-", "4.0"]),
+        ("samples without a command", ["3", "-", "-", "3"]),
+    ]
+    assert (
+        lines[0] == "Table I — periodic release, replay, 7 samples from take-off per build (seed's figure in brackets)"
+    )
+    for line, (label, cells) in zip(lines[1:], rows, strict=False):
+        assert len(line) == 30 + 4 * 24, line
+        assert line[:30].rstrip() == label and line[len(label) : 30].strip() == "", line
+        for k, cell in enumerate(cells):
+            text = line[30 + 24 * k : 54 + 24 * k]
+            assert text.strip() == cell and not text.endswith(" "), (line, k)
+    assert lines[1 + len(rows) :] == [
+        "orderings (lower is better; seed: holds in the seed's Table I; ours: holds here):",
+        "  PID energy   fixed < float (with multiplier)              seed yes  ours -",
+        "  EKF response multiplier < none (fixed)                    seed NO   ours yes",
+        "accuracy (mean error per quaternion component in %, the seed's terms; mean / max angle):",
+        "  float+mul     EKF vs float64 golden 0.1234 % (0.1235° / 0.5000°); vs truth 2.000 % (1.500° / 3.250°);"
+        " PWM within 1 count of golden 90.0 % (max diff 2)",
+        "  fixed-no-mul  EKF vs float64 golden 0.1234 % (0.1235° / 0.5000°); vs truth 2.000 % (1.500° / 3.250°);"
+        " PWM within 1 count of golden 90.0 % (max diff 2)",
+        "  golden        float64 EKF vs truth 0.440 % (0.250° / 0.750°); seed: EKF vs truth 0.44 %",
+        "  fixed vs float (no multiplier): 0.1000 % (0.1000° / 0.2000°); seed: 0.19 %",
+        "",
+    ]  # the event release has no run: no section
+
+
+def test_the_release_modes_of_a_table_are_distinct() -> None:
+    with pytest.raises(ValueError, match="releases"):
+        TableSpec(releases=("event", "event"))
+
+
+def test_no_jobs_gives_a_row_named_for_its_task_and_build_with_nan_figures() -> None:
+    row = task_row([], "estimator", "float-no-mul", "periodic", 4.0)
+    assert (row.task, row.build, row.release, row.jobs, row.exec_cycles_max, row.deadline_misses) == (
+        "estimator",
+        "float-no-mul",
+        "periodic",
+        0,
+        0,
+        0,
+    )
+    floats = ("response_us_mean", "response_us_max", "exec_us_mean", "exec_cycles_mean", "energy_nj_task",
+              "energy_nj_kernel", "energy_nj_noc", "energy_nj_idle", "energy_nj")  # fmt: skip
+    assert all(math.isnan(getattr(row, name)) for name in floats)
+    full = task_row([_job(0, (1.0, 2.0, 3.0, 4.0), 10, 20)], "pid", "fixed+mul", "event", 4.0)
+    assert (full.task, full.build, full.release) == ("pid", "fixed+mul", "event")
+
+
+def test_spec_bounds_are_inclusive() -> None:
+    for ok in ({"iterations": 1}, {"iterations": 10_000}, {"workers": 1}, {"workers": 64}):
+        TableSpec(**ok)
+    for bad, message in (
+        ({"iterations": 10_001}, "iterations: must be between 1 and 10000, got 10001"),
+        ({"workers": 65}, "workers: must be between 1 and 64, got 65"),
+        ({"releases": ("often",)}, "releases: each must be one of event, periodic, got ('often',)"),
+        ({"releases": ()}, "releases: each must be one of event, periodic, got ()"),
+    ):
+        with pytest.raises(ValueError) as info:
+            TableSpec(**bad)
+        assert str(info.value) == message
+
+
+def test_table_json_holds_each_run_with_the_seed_figures_and_null_for_nan() -> None:
+    run = _full_run("fixed+mul", "event", 5.0)
+    run = dataclass_replace(run, latency_us_max=math.nan, estimates={3: (1.0, 0.0, 0.0, 0.0)})
+    orderings = [table_one.OrderingCheck("pid", "energy", "n", "fixed+mul", "float+mul", "event", True, None)]
+    err = QuaternionError(4, 0.001, 0.002, 0.1, 0.2)
+    spec = TableSpec(iterations=7, releases=("event",), workers=1)
+    data = table_one.to_json(table_one.TableResult(spec, [run], orderings, {("event", True): err}))
+    assert json.loads(json.dumps(data, allow_nan=False)) == data  # plain JSON, no NaN
+    assert data["schema"] == 1 and data["clock_ns"] == 4.0
+    assert data["spec"] == {"iterations": 7, "releases": ["event"], "closed_loop": False, "seed": 1, "workers": 1}
+    (got,) = data["runs"]
+    assert "estimates" not in got
+    assert got["latency_us_max"] is None and got["latency_us_mean"] == 5.99
+    assert got["estimator_vs_golden"]["mean_percent"] == pytest.approx(0.12345)
+    assert got["estimator_vs_truth"]["mean_percent"] == pytest.approx(2.0)
+    pid = got["tasks"]["pid"]
+    assert pid["seed_response_ms"] == SEED_TABLE_I[("pid", "fixed+mul")].response_ms == 20.0
+    assert pid["seed_energy_nj"] == SEED_TABLE_I[("pid", "fixed+mul")].energy_nj
+    assert pid["response_us_mean"] == 6.11 and pid["deadline_misses"] == 3
+    assert data["orderings"] == [
+        {"task": "pid", "metric": "energy", "name": "n", "lower": "fixed+mul", "higher": "float+mul",
+         "release": "event", "seed_holds": True, "holds": None}
+    ]  # fmt: skip
+    assert data["fixed_vs_float"] == [
+        {"release": "event", "multiplier": True, "samples": 4, "mean_component": 0.001, "max_component": 0.002,
+         "mean_deg": 0.1, "max_deg": 0.2, "mean_percent": pytest.approx(0.1)}
+    ]  # fmt: skip
+    seed = data["seed"]
+    assert seed["mean_error_fixed_float"] == table_one.SEED_MEAN_ERROR_FIXED_FLOAT
+    assert seed["mean_error_truth"] == table_one.SEED_MEAN_ERROR_TRUTH
+    assert len(seed["table_i"]) == 8
+    entries = {(e["task"], e["build"]): e for e in seed["table_i"]}
+    assert set(entries) == set(SEED_TABLE_I)
+    assert entries[("pid", "fixed+mul")]["response_ms"] == 20.0
+    assert entries[("estimator", "float+mul")]["energy_nj"] == SEED_TABLE_I[("estimator", "float+mul")].energy_nj

@@ -118,6 +118,8 @@ class TableSpec:
             raise ValueError(f"iterations: must be between 1 and 10000, got {self.iterations}")
         if not self.releases or any(r not in RELEASE_CHOICES for r in self.releases):
             raise ValueError(f"releases: each must be one of {', '.join(RELEASE_CHOICES)}, got {self.releases}")
+        if len(set(self.releases)) != len(self.releases):
+            raise ValueError(f"releases: each at most once, got {self.releases}")
         if not 1 <= self.workers <= 64:
             raise ValueError(f"workers: must be between 1 and 64, got {self.workers}")
 
