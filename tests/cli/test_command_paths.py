@@ -150,7 +150,6 @@ def test_run_on_a_chip_file_prefixes_each_tile_line(hello: Path, tmp_path: Path)
         (["--mesh", "2x2"], "--mesh: cannot be combined with --chip"),
         (["--profile", "10"], "--profile: works on one core (without --mesh/--chip/--off)"),
         (["--trace", "10"], "--trace: works on one core (without --mesh/--chip/--off)"),
-        (["--engine", "jit"], "--engine: jit runs one core without --gdb (the MPSoC and GDB use the interpreter)"),
         (
             ["PROGRAM", "PROGRAM", "PROGRAM"],
             "3 programs for 2 core tiles [(1, 0), (2, 0)]: give one program, or one per tile",
@@ -166,13 +165,24 @@ def test_run_refuses_what_the_chip_cannot_take(hello: Path, tmp_path: Path, extr
     assert result.stderr.splitlines() == [f"robosoc run: {message.format(chip=chip)}"]
 
 
-def test_run_several_programs_need_the_mpsoc_and_engines_need_one_core(hello: Path) -> None:
+def test_the_chip_file_engine_runs_the_mesh_and_the_option_overrides_it(hello: Path, tmp_path: Path) -> None:
+    chip = tmp_path / "chip.toml"
+    chip.write_text('width = 3\nheight = 1\nengine = "jit"\n')
+    runs = [invoke("run", hello, "--chip", chip), invoke("run", hello, "--chip", chip, "--engine", "interp")]
+    assert (runs[0].exit_code, runs[0].stdout) == (runs[1].exit_code, runs[1].stdout) and runs[0].stdout
+    chip.write_text('width = 3\nheight = 1\nengine = "fast"\n')
+    result = invoke("run", hello, "--chip", chip)
+    assert result.exit_code == exit_codes.USAGE
+    assert "engine: must be one of 'interp', 'jit', 'auto', got 'fast'" in result.stderr and str(chip) in result.stderr
+
+
+def test_run_several_programs_need_the_mpsoc_and_engines_run_without_gdb(hello: Path) -> None:
     result = invoke("run", hello, hello)
     assert result.exit_code == exit_codes.USAGE
     assert result.stderr.splitlines() == ["robosoc run: several programs need --mesh WxH or --chip FILE"]
     result = invoke("run", hello, "--engine", "auto", "--gdb", "0")
     assert result.exit_code == exit_codes.USAGE
-    assert "robosoc run: --engine: auto runs one core without --gdb" in result.stderr
+    assert "robosoc run: --engine: auto runs without --gdb (the debugger uses the interpreter)" in result.stderr
     result = invoke("run", hello, "--off", "1,1", "--trace", "1")
     assert result.exit_code == exit_codes.USAGE and "robosoc run: --trace: works on one core" in result.stderr
     result = invoke("run", hello, "--off", "1,0", "--off", "0,1", "--off", "1,1")

@@ -86,6 +86,7 @@ OPTIONS: dict[tuple[str, str], Spec] = {
     ("cc", "--no-runtime"): Spec("flag"),
     ("fly", "--controller"): Spec("choice", choices=("host", "chip")),
     ("fly", "--arith"): Spec("choice", choices=("float", "fixed")),
+    ("fly", "--engine"): Spec("choice", choices=("interp", "jit", "auto")),
     ("fly", "--mul"): Spec("flag"),
     ("fly", "SCENARIO"): Spec("in_file"),
     ("fly", "--duration"): Spec("float", 0.01, 3600.0),  # at least one sensor period of 10 ms
@@ -151,6 +152,7 @@ OPTIONS: dict[tuple[str, str], Spec] = {
     ("bench core", "--runs"): Spec("int", 1, 1000),
     ("bench core", "--mul"): Spec("flag"),
     ("bench core", "--engine"): Spec("choice", choices=("interp", "jit", "auto")),
+    ("bench chip", "--engine"): Spec("choice", choices=("interp", "jit", "auto")),
     ("bench core", "--compare"): Spec("flag"),
     ("bench physics", "--seconds"): Spec("float", 0.001, 3600.0),
     ("bench physics", "--runs"): Spec("int", 1, 1000),

@@ -146,9 +146,21 @@ def test_every_engine_gives_the_same_run(elf: Path, tmp_path: Path, engine: str)
     assert records[engine]["energy_nj"] == records["interp"]["energy_nj"]
 
 
+def test_every_engine_gives_the_same_mesh_run(elf: Path, tmp_path: Path):
+    records, outputs = {}, {}
+    for name in ("interp", "jit"):
+        stats = tmp_path / f"{name}.json"
+        result = CliRunner().invoke(app, ["run", str(elf), "--mesh", "2x2", "--stats", str(stats), "--engine", name])
+        outputs[name] = (result.exit_code, result.stdout)
+        records[name] = json.loads(stats.read_text())
+    assert outputs["jit"] == outputs["interp"] and "product 7006652" in outputs["interp"][1]
+    assert records["jit"] == records["interp"]
+
+
 def test_engine_is_refused_where_it_does_not_run(elf: Path):
-    result = CliRunner().invoke(app, ["run", str(elf), "--engine", "jit", "--mesh", "2x2"])
-    assert result.exit_code == 2 and "--engine" in result.stderr
+    result = CliRunner().invoke(app, ["run", str(elf), "--engine", "jit", "--gdb", "0"])
+    assert result.exit_code == 2
+    assert "--engine: jit runs without --gdb (the debugger uses the interpreter)" in result.stderr
 
 
 def test_one_core_refuses_a_program_too_big_for_its_sram_size(tmp_path: Path):

@@ -49,11 +49,11 @@ def refusal(tmp_path: Path, text: str) -> tuple[str, str]:
             "[grid]\nchip = [1]\n",
             "grid.chip: 'chip' is a table; vary one of its fields (width, height, io_tile, powered_off, "
             "tile.multiplier, tile.sram_bytes, tile.clock_period_ns, tiles, noc.buffer_depth, noc.flit_bits, "
-            "noc.max_packet_flits, noc.routing_latency, noc.arbiter, errata)",
+            "noc.max_packet_flits, noc.routing_latency, noc.arbiter, errata, engine)",
         ),
         (
             '[grid]\n"chip.bogus" = [1]\n',
-            "grid.chip.bogus: 'chip.bogus' is not a scenario field (chip has: errata, height, io_tile, noc, "
+            "grid.chip.bogus: 'chip.bogus' is not a scenario field (chip has: engine, errata, height, io_tile, noc, "
             "powered_off, tile, tiles, width)",
         ),
         (
@@ -65,7 +65,7 @@ def refusal(tmp_path: Path, text: str) -> tuple[str, str]:
         ("points = [{}]\n", "points[0]: an empty point: name at least one field"),
         (
             '[[points]]\nduration_s = 2.0\n[[points]]\n"chip.bogus" = 1\n',
-            "points[1].chip.bogus: 'chip.bogus' is not a scenario field (chip has: errata, height, io_tile, noc, "
+            "points[1].chip.bogus: 'chip.bogus' is not a scenario field (chip has: engine, errata, height, io_tile, noc, "
             "powered_off, tile, tiles, width)",
         ),
         ("seeds = 1\n", "seeds: expected a non-empty list of seeds (integers), got 1"),

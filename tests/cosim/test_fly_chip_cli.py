@@ -101,3 +101,26 @@ def test_bench_fly_prints_its_last_line() -> None:
     last = result.output.strip().splitlines()[-1]
     assert re.fullmatch(r"fly: [0-9]+\.[0-9]{2}× real time", last), last
     assert "chip fixed+mul" in result.output and "float" not in result.output
+
+
+def test_fly_gives_the_same_flight_with_every_engine(tmp_path: Path) -> None:
+    """The engine is a matter of host speed only: flight, jobs and figures are bit-identical."""
+    folders = {}
+    for engine in ("interp", "jit", "auto"):
+        out = tmp_path / engine
+        result = runner.invoke(app, ["fly", "--duration", "0.3", "--seed", "2", "--engine", engine, "--out", str(out)])
+        assert result.exit_code == 0, result.output
+        folders[engine] = out
+    for engine in ("jit", "auto"):
+        for name in ("flight.csv", "jobs.csv"):
+            assert (folders[engine] / name).read_bytes() == (folders["interp"] / name).read_bytes(), (engine, name)
+        summaries = [json.loads((folders[e] / "summary.json").read_text()) for e in (engine, "interp")]
+        for summary in summaries:
+            summary.pop("host_s")
+            summary.pop("real_time_factor")
+        assert summaries[0] == summaries[1]
+        scenario = tomllib.loads((folders[engine] / "scenario.toml").read_text())
+        assert scenario["chip"]["engine"] == engine  # the run folder records it
+    host = runner.invoke(app, ["fly", "--controller", "host", "--engine", "jit", "--no-out"])
+    assert host.exit_code == 2
+    assert "--engine: only with the chip controller (the host controller runs no code)" in host.output

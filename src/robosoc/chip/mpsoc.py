@@ -29,9 +29,11 @@ from robosoc.chip.single import (
     errata_report,
     exit_word,
 )
+from robosoc.chip.translation import ChipTranslation
 from robosoc.config.chip import MIN_PACKET_FLITS, ChipConfig
 from robosoc.isa.disasm import disassemble
 from robosoc.isa.table import MEMORY_CYCLES
+from robosoc.jit import ENGINES
 from robosoc.kernels import chip as kc
 from robosoc.kernels import noc as nk
 from robosoc.kernels.core_layout import (
@@ -98,14 +100,22 @@ class ChipResult:
 class MPSoC:
     """A mesh of tiles built from a :class:`ChipConfig`."""
 
-    def __init__(self, config: ChipConfig, lockstep: bool = False) -> None:
+    def __init__(self, config: ChipConfig, lockstep: bool = False, engine: str | None = None) -> None:
         """Build the chip.
 
         Args:
             config: the validated platform configuration.
             lockstep: advance everything one cycle at a time instead of in quanta (slow; the
                 results must be identical, which the tests use to check the quantum scheme).
+            engine: "interp" (every core on the interpreter), "jit" (each core translates a region
+                at its first arrival) or "auto" (each core translates the regions that turn hot);
+                every engine gives the same cycles, counters, outputs and errors
+                (docs/translation.md).  Default: the configuration's ``engine``.
         """
+        engine = config.engine if engine is None else engine
+        if engine not in ENGINES:
+            raise ValueError(f"engine: must be one of {', '.join(map(repr, ENGINES))}, got {engine!r}")
+        self.engine = engine
         periods = {config.tile_config(config.tile_xy(t)).clock_period_ns for t in range(config.n_tiles)}
         if len(periods) > 1:
             raise ValueError("tiles: different clock periods per tile are not supported yet (one global clock)")
@@ -159,6 +169,8 @@ class MPSoC:
         self._timeline: list[np.ndarray] = []
         self._timeline_room = 0
         self._timeline_dropped = 0
+        # translated code (engine jit or auto): per tile its translator, created at the first step
+        self._jit = ChipTranslation(n, engine)
 
     # --- the timeline recorder -------------------------------------------------------------
     def record_timeline(self, rows: int = TIMELINE_ROWS, keep: int = TIMELINE_KEEP) -> None:
@@ -218,6 +230,7 @@ class MPSoC:
             self.cores.write(addr, data, tile=t)
         self.cores.st[t, S_PC] = program.entry
         self.programs[t] = program
+        self._jit.forget(t)
         check_pc(self.cores, t, program.symbolize, f"tile {xy}: entry point: ")
         self.cst[t, kc.K_STATE] = kc.K_RUN
 
@@ -297,7 +310,15 @@ class MPSoC:
                 check_pc(
                     self.cores, self.config.tile_index(xy), lambda pc, xy=xy: self.symbolize(xy, pc), f"tile {xy}: "
                 )
-        kc.run_chip(self.cores.arrays(), self.noc, self.book(), until)
+        jit = self._jit
+        jit.prepare(self)
+        while True:
+            start = time.perf_counter()
+            status = kc.run_chip(self.cores.arrays(), self.noc, self.book(), until, *jit.arguments())
+            jit.ran(time.perf_counter() - start)
+            if status != kc.CHIP_TRANSLATE:
+                break
+            jit.translate(int(self.gst[kc.G_BREAK_TILE]))
         self._drain_io()
         self._drain_rec()
         return int(self.gst[kc.G_STATUS])
@@ -393,6 +414,7 @@ class MPSoC:
         Simulated time only moves while the chip runs, so stopping changes no cycle of anything.
         """
         self.cores.set_breakpoint(addr, on, tile=self.config.tile_index(xy))
+        self._jit.stop(self.config.tile_index(xy))  # translated code does not see breakpoints
 
     def allow_long_quanta(self, on: bool) -> None:
         """Let cores deaf to the packet line run in long quanta (the default; ``docs/noc.md``).
@@ -401,6 +423,8 @@ class MPSoC:
         the others far ahead of it, their output already printed.
         """
         self.gst[kc.G_LONG_OFF] = 0 if on else 1
+        if not on:
+            self._jit.stop_all()  # a debugger may write memory and set breakpoints: interpret
 
     def break_tile(self) -> tuple[int, int]:
         """The tile that stopped at a breakpoint (after ``step`` returned CHIP_BREAK)."""
@@ -467,6 +491,7 @@ class MPSoC:
         """Count every instruction per tile, task and word of code from here on (the exact profile,
         :mod:`robosoc.analysis.function_profile`; load the programs first, enable it before the run)."""
         self.cores.enable_profile(kc.NTASKS)
+        self._jit.stop_all()  # translated code does not count per word: the cores interpret from here on
         stride = self.cores.profile_stride
         for t in range(self.config.n_tiles):
             self.cores.st[t, S_PROF_BASE] += int(self.cst[t, kc.K_TASK]) * stride

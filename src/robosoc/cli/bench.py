@@ -134,11 +134,14 @@ def bench_chip(
         ),
     ] = 40,
     noc: Annotated[bool, typer.Option("--noc/--no-noc", help="Also run the NoC-alone benchmark.")] = True,
+    engine: Annotated[
+        str, typer.Option(help="interp, jit or auto (docs/translation.md).", callback=options.choice(*ENGINES))
+    ] = "interp",
 ) -> None:
-    """Whole-MPSoC speed: busy 2x2 and 4x4 meshes, a mostly sleeping 2x2, and the NoC alone."""
+    """Whole-MPSoC speed: busy 2x2, 4x4 and 8x8 meshes, mostly sleeping 2x2 and 16x16, and the NoC alone."""
     from robosoc.benchmarks.chip import run_chip_benchmark
 
-    run_chip_benchmark(runs=runs, cycles=cycles, ticks=ticks, noc=noc, console=make_console())
+    run_chip_benchmark(runs=runs, cycles=cycles, ticks=ticks, noc=noc, console=make_console(), engine=engine)
 
 
 @bench_app.command("fly", epilog=exit_codes.EPILOG)

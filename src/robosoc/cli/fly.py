@@ -14,6 +14,7 @@ import typer
 from robosoc.cli import exit_codes, files, link_options, options
 from robosoc.cli.app import app
 from robosoc.cli.console import make_console, note, plain
+from robosoc.cli.engine_option import Engine
 from robosoc.cli.errors import CliError
 from robosoc.cli.scenario import load_scenario
 from robosoc.cli.scenario_options import (
@@ -81,6 +82,7 @@ def fly_command(
     arith: Arith = None,
     mul: Mul = None,
     foxglove: Foxglove = None,
+    engine: Engine = None,
     profile: Annotated[
         bool,
         typer.Option(
@@ -159,14 +161,20 @@ def fly_command(
     if fw_changes:
         firmware = options.override(config.firmware, fw_changes, files_used)
         changes[next(iter(fw_changes))] = ("firmware", firmware)
+    if engine is not None:
+        changes["--engine"] = ("chip", options.override(config.chip, {"--engine": ("engine", engine)}, files_used))
     config = options.override(config, changes, files_used)
     if config.controller == "host":
         if profile:
             raise options.fail("--profile", "only with the chip controller (the host controller has no firmware)")
         for option in fw_changes:
             raise options.fail(option, "only with the chip controller (the host controller has no firmware)")
-    sources.extend((option, (field,)) for option, (field, _) in changes.items() if field != "firmware")
+        if engine is not None:
+            raise options.fail("--engine", "only with the chip controller (the host controller runs no code)")
+    sources.extend((option, (field,)) for option, (field, _) in changes.items() if field not in ("firmware", "chip"))
     sources.extend((option, (f"firmware.{field}",)) for option, (field, _) in fw_changes.items())
+    if engine is not None:
+        sources.append(("--engine", ("chip.engine",)))
     if round(config.duration_s * config.sensors.rate_hz) < 1:
         where = next((o for o in ("--duration", "--seconds") if o in changes), f"{path}: duration_s")
         raise options.fail(

@@ -12,10 +12,10 @@ import typer
 
 from robosoc.cli import exit_codes, files, options
 from robosoc.cli.app import app
+from robosoc.cli.engine_option import Engine
 from robosoc.cli.errors import CliError
 from robosoc.cli.gdb_option import GDB_HELP, TILE_HELP, check_gdb_options, gdb_session
 from robosoc.config.ranges import MAX_CYCLES
-from robosoc.jit import ENGINES
 
 if TYPE_CHECKING:
     from robosoc.analysis.energy import EnergyModel
@@ -68,15 +68,6 @@ Errata = Annotated[
         "--errata",
         help="spec: RISC-V results, report each HF-RISCV RTL erratum hit; rtl: reproduce the RTL's errata.",
         callback=options.choice(*ERRATA_CHOICES),
-    ),
-]
-Engine = Annotated[
-    str,
-    typer.Option(
-        "--engine",
-        help="interp: the interpreter; jit: translate code to native code at first use; auto: translate the "
-        "code that turns hot.  Same cycles, counters and outputs with each (one core; docs/translation.md).",
-        callback=options.choice(*ENGINES),
     ),
 ]
 ExitCode = Annotated[
@@ -137,7 +128,7 @@ def run(
     profile: Profile = 0,
     errata: Errata = "spec",
     exit_code: ExitCode = exit_codes.EXIT_CODE_STATUS,
-    engine: Engine = "interp",
+    engine: Engine = None,
     gdb: Annotated[int | None, typer.Option("--gdb", help=GDB_HELP, callback=options.int_range(0, 65535, ""))] = None,
     tile: Annotated[str | None, typer.Option("--tile", help=TILE_HELP)] = None,
 ) -> None:
@@ -152,8 +143,8 @@ def run(
     if on_chip and (trace or profile):
         raise options.fail("--trace" if trace else "--profile", "works on one core (without --mesh/--chip/--off)")
     options.exclusive(mesh=mesh is not None, chip=chip is not None)
-    if engine != "interp" and (on_chip or gdb is not None):
-        raise options.fail("--engine", f"{engine} runs one core without --gdb (the MPSoC and GDB use the interpreter)")
+    if engine is not None and engine != "interp" and gdb is not None:
+        raise options.fail("--engine", f"{engine} runs without --gdb (the debugger uses the interpreter)")
     if chip is not None:
         for name, field in (("sram_size", "tile.sram_bytes"), ("mul", "tile.multiplier")):
             if options.given(ctx, name):
@@ -171,10 +162,10 @@ def run(
         inputs.append(chip)
     if on_chip:
         _run_chip(ctx, programs, mul, max_cycles, stats, model, sram_size, mesh, chip, off or [], errata,
-                  exit_code, inputs, gdb=gdb, gdb_tile=tile)  # fmt: skip
+                  exit_code, inputs, gdb=gdb, gdb_tile=tile, engine=engine)  # fmt: skip
     else:
         _run_single(programs[0], mul, max_cycles, stats, model, sram_size, trace, profile, errata, exit_code,
-                    inputs, gdb=gdb, engine=engine)  # fmt: skip
+                    inputs, gdb=gdb, engine=engine or "interp")  # fmt: skip
 
 
 def _run_single(
@@ -316,14 +307,14 @@ def _chip_config(ctx: typer.Context, mul: bool, sram_size: int, mesh: str | None
 def _run_chip(
     ctx: typer.Context, programs: list[Path], mul: bool, max_cycles: int, stats: Path | None, model: EnergyModel,
     sram_size: int, mesh: str | None, chip_file: Path | None, off: list[str], errata: str, exit_mode: str,
-    inputs: list[Path], gdb: int | None = None, gdb_tile: str | None = None,
+    inputs: list[Path], gdb: int | None = None, gdb_tile: str | None = None, engine: str | None = None,
 ) -> None:  # fmt: skip
     from robosoc.chip.mpsoc import MPSoC
     from robosoc.chip.single import RtlErratum
 
     config = _chip_config(ctx, mul, sram_size, mesh, chip_file, off, errata)
     try:
-        chip = MPSoC(config)
+        chip = MPSoC(config, engine=engine)  # None: the chip file's engine
     except ValueError as exc:
         raise CliError(f"{chip_file}: {exc}" if chip_file else str(exc)) from exc
     tiles = chip.core_tiles()

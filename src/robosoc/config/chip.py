@@ -64,6 +64,9 @@ MIN_PACKET_FLITS = 3
 MAX_MESH_SIDE = 16
 #: How the cores treat the HF-RISCV RTL's errata (see ``ChipConfig.errata``).
 ERRATA_CHOICES = ("spec", "rtl")
+ENGINE_CHOICES = ("interp", "jit", "auto")
+"""How the cores execute: the interpreter, or code translated at a region's first arrival or once
+it turns hot (docs/translation.md); every engine gives the same cycles, counters and outputs."""
 
 
 def _check_sram(name: str, value: int) -> None:
@@ -178,6 +181,8 @@ class ChipConfig:
         errata: ``"spec"`` (RISC-V results; each HF-RISCV RTL erratum a program would hit is reported)
             or ``"rtl"`` (reproduce the RTL: MULHSU as MULHU, an interrupt during a multiply as in
             platform.md §3), for every core.
+        engine: how the simulator executes the cores' code (:data:`ENGINE_CHOICES`): a matter of
+            host speed only, never of the results.
     """
 
     width: int = 2
@@ -188,10 +193,13 @@ class ChipConfig:
     tiles: tuple[TileOverride, ...] = ()
     noc: NocConfig = field(default_factory=NocConfig)
     errata: str = "spec"
+    engine: str = "interp"
 
     def __post_init__(self) -> None:
         if self.errata not in ERRATA_CHOICES:
             raise ValueError(f"errata: must be one of {', '.join(map(repr, ERRATA_CHOICES))}, got {self.errata!r}")
+        if self.engine not in ENGINE_CHOICES:
+            raise ValueError(f"engine: must be one of {', '.join(map(repr, ENGINE_CHOICES))}, got {self.engine!r}")
         for name in ("width", "height"):
             value = getattr(self, name)
             if not 1 <= value <= MAX_MESH_SIDE:

@@ -7,4 +7,6 @@ the tables the compiled dispatch loop (:mod:`robosoc.kernels.jit_dispatch`) read
 (:mod:`~robosoc.jit.engine`).
 """
 
-ENGINES = ("interp", "jit", "auto")
+from robosoc.config.chip import ENGINE_CHOICES as ENGINES
+
+__all__ = ["ENGINES"]

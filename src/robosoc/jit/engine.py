@@ -21,11 +21,11 @@ from robosoc.jit.regions import MAX_REGION_INSTRUCTIONS, CodeView, End, Region, 
 from robosoc.kernels.core_layout import ERRATA_RTL, S_CODE_SIZE, S_ERRATA, S_MEM_BASE, S_MEM_SIZE, S_MUL, S_PC, S_RUN
 from robosoc.kernels.jit_dispatch import (
     CTX_FLUSHES,
-    CTX_SIZE,
     CTX_WORDS,
     NEVER_TRANSLATE,
     RUN_TRANSLATE,
     JitArrays,
+    empty_tables,
     run_translated,
 )
 
@@ -89,15 +89,24 @@ class TranslationStats:
 class TranslatingCore:
     """Runs one tile of a :class:`CoreState` with translated regions (engine ``jit`` or ``auto``)."""
 
-    def __init__(self, state: CoreState, tile: int = 0, mode: str = "jit", compiler: Compiler | None = None) -> None:
+    def __init__(
+        self,
+        state: CoreState,
+        tile: int = 0,
+        mode: str = "jit",
+        compiler: Compiler | None = None,
+        stats: TranslationStats | None = None,
+    ) -> None:
+        """``stats``: shared by the translators of one chip (auto's compile budget is the chip's)."""
         if mode not in THRESHOLDS:
             raise ValueError(f"engine: must be one of {', '.join(map(repr, THRESHOLDS))}, got {mode!r}")
         self.state = state
         self.tile = tile
         self.mode = mode
         self.threshold = THRESHOLDS[mode]
+        self.stretch = STRETCHES[mode]
         self._compiler = compiler
-        self.stats = TranslationStats()
+        self.stats = stats if stats is not None else TranslationStats()
         self._tiles = np.array([tile], dtype=np.int64)
         self._backoff: dict[int, int] = {}  # auto: word -> deferrals of the region starting there
         self._sizes: dict[int, int] = {}  # auto: pc -> instructions of the region found there
@@ -124,24 +133,7 @@ class TranslatingCore:
     def _tables(self) -> JitArrays:
         code = int(self.state.st[self.tile, S_CODE_SIZE])
         if self._jt is None or code != self._code_size:
-            words = code // 4 + 1  # the word after the code: its fetch error is the interpreter's
-            hot = np.zeros(words, dtype=np.int32)
-            hot[-1] = NEVER_TRANSLATE
-            self._jt = JitArrays(
-                entry_fn=np.zeros(words, dtype=np.int64),
-                entry_slot=np.zeros(words, dtype=np.int64),
-                entry_blk=np.zeros(words, dtype=np.int64),
-                hot=hot,
-                tmap=np.zeros(words, dtype=np.uint8),
-                tpcs=np.zeros(0, dtype=np.int64),
-                twords=np.zeros(0, dtype=np.int32),
-                cnt=np.zeros(0, dtype=np.int64),
-                slot_ptr=np.zeros(1, dtype=np.int64),
-                slot_next=np.zeros(0, dtype=np.int64),
-                slot_kc=np.zeros(0, dtype=np.int64),
-                slot_delta=np.zeros(0, dtype=np.int64),
-                ctx=np.zeros(CTX_SIZE, dtype=np.int64),
-            )
+            self._jt = empty_tables(code // 4 + 1)  # the word after the code: its fetch error is the interpreter's
             self._code_size = code
             self._slot_hist: list[np.ndarray] = []  # per region: (kc, delta) rows of its slots
             self._slot_len: list[np.ndarray] = []
@@ -315,6 +307,26 @@ class TranslatingCore:
         )
 
     # --- running ------------------------------------------------------------------------------
+    def has_cached_regions(self) -> bool:
+        """auto: whether an earlier run compiled regions of this code (installed at once when hot)."""
+        self._tables()
+        return bool(self._cached_starts)
+
+    def ask_threshold(self, cached: bool | None = None) -> int:
+        """Arrivals at a word before the dispatch loop asks for a translation there.
+
+        ``auto`` does not ask while even a small region could not be compiled within its budget
+        (the loop still samples), unless regions compiled by an earlier run (``cached``; default:
+        this core's) can be installed.
+        """
+        if self.mode != "auto":
+            return self.threshold
+        if cached is None:
+            cached = self.has_cached_regions()
+        if not cached and self._budget() < self._estimate(AUTO_MAX_REGION_INSTRUCTIONS):
+            return NEVER_ASK
+        return self.threshold
+
     def step_until(self, until: int) -> int:
         """Run the tile to cycle ``until`` (or an event); its RUN_* status, as ``run_cores`` leaves it."""
         arrays = self.state.arrays()
@@ -322,16 +334,7 @@ class TranslatingCore:
         while True:
             start = time.perf_counter()
             jt = self._tables()
-            threshold = self.threshold
-            if (
-                self.mode == "auto"
-                and not self._cached_starts
-                and self._budget() < self._estimate(AUTO_MAX_REGION_INSTRUCTIONS)
-            ):
-                threshold = (
-                    NEVER_ASK  # not every region could be compiled yet: the loop need not ask (it still samples)
-                )
-            run_translated(arrays, self._tiles, until, jt, threshold, STRETCHES[self.mode])
+            run_translated(arrays, self._tiles, until, jt, self.ask_threshold(), self.stretch)
             self.stats.run_seconds += time.perf_counter() - start
             status = int(st[S_RUN])
             if status != RUN_TRANSLATE:

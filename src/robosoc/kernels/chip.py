@@ -67,6 +67,7 @@ from robosoc.kernels.dev_irq import (
     irq_scan,
     requests_possible,
 )
+from robosoc.kernels.jit_dispatch import CTX_WORDS, RUN_TRANSLATE, forget_translations, run_translated
 
 # tile states
 K_OFF, K_RUN, K_SLEEP, K_EXITED, K_FAULT, K_IO = 0, 1, 2, 3, 4, 5
@@ -126,6 +127,13 @@ CHIP_ERROR = 3
 CHIP_IO_FULL = 4  # io_out needs draining
 CHIP_STUCK = 5  # nothing can happen any more, but not every core has exited
 CHIP_BREAK = 6  # a core stopped before an instruction a debugger marked (tile in G_BREAK_TILE)
+CHIP_TRANSLATE = 7  # a core's pc turned hot: translate a region there and call again (tile in G_BREAK_TILE)
+
+# the translated-code parameters of run_chip (``jit_params``)
+J_THRESHOLD = 0  # arrivals at a word before the host is asked to translate there
+J_STRETCH = 1  # cycles the interpreter runs between arrivals (auto)
+J_ANY = 2  # 1: some tile runs translated code
+J_SIZE = 3
 
 # network-interface misuse (K_ERR)
 CE_NONE = 0
@@ -536,8 +544,46 @@ def _take_deliveries(st, book, noc):
 
 
 @njit(cache=True)
-def run_chip(core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int) -> int:
-    """Advance the whole chip to cycle ``until`` or an event that needs the host (CHIP_* in gst)."""
+def _run_awake(core, tiles, until, jit_on, jit_tables, jit_params, one, rest):  # type: ignore[no-untyped-def]
+    """Run ``tiles`` to ``until``: each translating tile alone, the interpreted ones together.
+
+    ``run_cores`` has this one call site: inlined, the core interpreter is most of what numba
+    compiles (the translating tiles' dispatch loop is compiled on its own).
+    """
+    k = 0
+    for i in range(tiles.shape[0]):
+        t = tiles[i]
+        if jit_params[J_ANY] != 0 and jit_on[t] != 0:
+            one[0] = t
+            run_translated(core, one, until, jit_tables[t], jit_params[J_THRESHOLD], jit_params[J_STRETCH])
+        else:
+            rest[k] = t
+            k += 1
+    if k > 0:
+        run_cores(core, rest[:k], until)
+
+
+@njit(cache=True)
+def _check_translated(core, t, jt) -> None:  # type: ignore[no-untyped-def]
+    """Forget tile ``t``'s translations if a word they were made from changed (a DMA into code)."""
+    m32 = core.m32
+    for k in range(jt.ctx[CTX_WORDS]):
+        if m32[t, jt.tpcs[k]] != jt.twords[k]:
+            forget_translations(jt)
+            return
+
+
+@njit(cache=True)
+def run_chip(  # type: ignore[no-untyped-def]
+    core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int, jit_on, jit_tables, jit_params
+) -> int:
+    """Advance the whole chip to cycle ``until`` or an event that needs the host (CHIP_* in gst).
+
+    Tiles with ``jit_on[t]`` run translated code from ``jit_tables[t]``
+    (:class:`robosoc.kernels.jit_dispatch.JitArrays`); when one turns hot at a word without a
+    translation the chip stops with CHIP_TRANSLATE, the host translates a region there and calls
+    again, and the quantum goes on exactly where it stopped (as after a breakpoint).
+    """
     st, out = core.st, core.out
     glob = noc.glob
     cst, gst, xout, io_out = book.cst, book.gst, book.xout, book.io_out
@@ -548,6 +594,8 @@ def run_chip(core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int) -> 
     runx = np.empty(n, dtype=np.int64)  # those of them that run (not those waiting to report an error)
     queue = np.empty(n, dtype=np.int64)  # the stopped ones in handling order (kernels/stop_queue.py)
     qcyc = np.empty(n, dtype=np.int64)
+    one = np.empty(1, dtype=np.int64)  # a translating tile (run alone)
+    rest = np.empty(n, dtype=np.int64)  # the interpreted tiles of a run
     look_single = gst[G_LOOK_SINGLE]
     xcap = xout.shape[1]
     T = gst[G_TIME]
@@ -676,7 +724,6 @@ def run_chip(core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int) -> 
         # exactly as it is in its cycle: in an idle quantum the NoC is brought up to the access
         # first, with every packet sent before it by any core (a send cannot reach another tile
         # within the quantum, but it can hold up the sender's own injection, which NI_STATUS shows).
-        # run_cores has this one call site: inlined, the core interpreter is most of what numba compiles
         failed = -1
         suspended = False
         nq = 0  # the stopped cores waiting in the queue (kernels/stop_queue.py), as indices into run
@@ -684,7 +731,7 @@ def run_chip(core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int) -> 
         while True:
             if hi > lo:
                 # the awake cores to H, then each stopped one on
-                run_cores(core, runx[lo:hi] if bulk else run[lo:hi], H)
+                _run_awake(core, runx[lo:hi] if bulk else run[lo:hi], H, jit_on, jit_tables, jit_params, one, rest)
                 if not fill:  # the one core handled last, at its next stop
                     nq = stop_queue.push(queue, qcyc, nq, lo, st[run[lo], S_CYCLE])
                 hi = lo
@@ -737,6 +784,12 @@ def run_chip(core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int) -> 
                 if not ni_access(t, core, book, noc):
                     failed = t
                     break
+                if (
+                    jit_on[t] != 0
+                    and cst[t, K_RECEIVED] != received
+                    and cst[t, K_RECV_ADDR] - st[t, S_MEM_BASE] < st[t, S_CODE_SIZE]
+                ):
+                    _check_translated(core, t, jit_tables[t])  # the packet was copied into code
                 if cst[t, K_SENT] != sent or cst[t, K_RECEIVED] != received:
                     if quiet:
                         glob[nk.G_CYCLE] = s0  # the network was idle up to here
@@ -759,9 +812,10 @@ def run_chip(core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int) -> 
                 cst[t, K_STATE] = K_FAULT
                 failed = t
                 break
-            elif why == RUN_BREAK:
-                # a debugger's breakpoint: hand the chip to the host in the middle of the quantum;
-                # the next call continues it exactly (the host clears the stop to go on)
+            elif why == RUN_BREAK or why == RUN_TRANSLATE:
+                # a debugger's breakpoint, or a hot word to translate: hand the chip to the host in
+                # the middle of the quantum; the next call continues it exactly (the host clears
+                # the stop to go on)
                 gst[G_SUSPEND_H] = H
                 gst[G_SUSPEND_FLAGS] = (1 if active else 0) | (2 if quiet else 0) | (4 if long_q else 0)
                 gst[G_BREAK_TILE] = t
@@ -772,7 +826,7 @@ def run_chip(core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int) -> 
             if st[run[r], S_OUT_LEN] > 0:
                 _keep_output(run[r], st, cst, out, xout)
         if suspended:
-            status = CHIP_BREAK
+            status = CHIP_TRANSLATE if st[gst[G_BREAK_TILE], S_RUN] == RUN_TRANSLATE else CHIP_BREAK
             break
         if glob[nk.G_STATUS] != nk.STATUS_OK:
             status = CHIP_ERROR

@@ -115,6 +115,27 @@ class JitArrays(NamedTuple):
     ctx: np.ndarray
 
 
+def empty_tables(words: int = 1) -> JitArrays:
+    """Tables of ``words`` words with nothing translated (a tile that interprets holds such tables)."""
+    hot = np.zeros(words, dtype=np.int32)
+    hot[-1] = NEVER_TRANSLATE
+    return JitArrays(
+        entry_fn=np.zeros(words, dtype=np.int64),
+        entry_slot=np.zeros(words, dtype=np.int64),
+        entry_blk=np.zeros(words, dtype=np.int64),
+        hot=hot,
+        tmap=np.zeros(words, dtype=np.uint8),
+        tpcs=np.zeros(0, dtype=np.int64),
+        twords=np.zeros(0, dtype=np.int32),
+        cnt=np.zeros(0, dtype=np.int64),
+        slot_ptr=np.zeros(1, dtype=np.int64),
+        slot_next=np.zeros(0, dtype=np.int64),
+        slot_kc=np.zeros(0, dtype=np.int64),
+        slot_delta=np.zeros(0, dtype=np.int64),
+        ctx=np.zeros(CTX_SIZE, dtype=np.int64),
+    )
+
+
 @intrinsic
 def call_region(typingctx, fn, ctx, regs, mem, cnt, cyc, limit, blk):  # type: ignore[no-untyped-def]
     """Call the region function at native address ``fn`` (array addresses, cycle, limit, block); its X_* code."""
@@ -154,7 +175,7 @@ def flush_counts(jt: JitArrays, opc_t: np.ndarray, ctr_t: np.ndarray) -> None:
 
 
 @njit(cache=True)
-def _forget_translations(jt: JitArrays) -> None:
+def forget_translations(jt: JitArrays) -> None:
     jt.entry_fn[:] = 0
     jt.entry_slot[:] = 0
     jt.entry_blk[:] = 0
@@ -274,7 +295,7 @@ def run_translated(
                 status = st_t[S_RUN]
                 for k in range(ctx[CTX_WORDS]):
                     if m32[t, jt.tpcs[k]] != jt.twords[k]:
-                        _forget_translations(jt)
+                        forget_translations(jt)
                         break
                 if status != RUN_CHUNK:
                     flush_counts(jt, opc_t, ctr[t])
@@ -301,7 +322,7 @@ def run_translated(
         cyc = st_t[S_CYCLE]
         status = st_t[S_RUN]
         if smc:
-            _forget_translations(jt)
+            forget_translations(jt)
         if status != RUN_CHUNK:
             flush_counts(jt, opc_t, ctr[t])
             return
@@ -330,6 +351,8 @@ __all__ = [
     "X_LIMIT",
     "X_SIDE",
     "JitArrays",
+    "empty_tables",
     "flush_counts",
+    "forget_translations",
     "run_translated",
 ]

@@ -1,0 +1,113 @@
+"""Translated code on the MPSoC's cores: one translator per tile, and the tables the chip loop reads.
+
+:class:`~robosoc.chip.mpsoc.MPSoC` holds one :class:`ChipTranslation`.  Before each call of
+:func:`robosoc.kernels.chip.run_chip` it makes sure every loaded core tile has its translator
+(:class:`robosoc.jit.engine.TranslatingCore`, engine ``jit`` or ``auto``) and hands the loop each
+tile's tables in a numba typed list; when a tile turns hot at a word without a translation the
+loop stops with CHIP_TRANSLATE, :meth:`ChipTranslation.translate` translates a region there and
+the loop goes on where it stopped.  The translators of one chip share their statistics, so
+``auto``'s compile budget is a share of the chip's run time.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+from numba.typed import List
+
+from robosoc.kernels import chip as kc
+from robosoc.kernels.core_layout import RUN_CHUNK, S_CODE_SIZE, S_PC, S_RUN
+from robosoc.kernels.jit_dispatch import JitArrays, empty_tables
+
+if TYPE_CHECKING:
+    from robosoc.chip.mpsoc import MPSoC
+    from robosoc.jit.engine import TranslatingCore, TranslationStats
+
+
+class ChipTranslation:
+    """Per tile: whether it runs translated code, its translator and its tables (see the module doc)."""
+
+    def __init__(self, tiles: int, engine: str) -> None:
+        self.engine = engine
+        self.on = np.zeros(tiles, dtype=np.int64)
+        self.params = np.zeros(kc.J_SIZE, dtype=np.int64)
+        self._empty = empty_tables()
+        self._tables = List([self._empty] * tiles)
+        self._given: list[JitArrays | None] = [None] * tiles  # what _tables holds per tile, if translated
+        self.translators: list[TranslatingCore | None] = [None] * tiles
+        self._stopped = np.zeros(tiles, dtype=bool)  # tiles that interpret from now on
+        self.stats: TranslationStats | None = None
+
+    def arguments(self) -> tuple[np.ndarray, List, np.ndarray]:
+        """``run_chip``'s jit_on, jit_tables and jit_params."""
+        return self.on, self._tables, self.params
+
+    def prepare(self, chip: MPSoC) -> None:
+        """Before a run: a translator for every loaded core tile, and its current tables."""
+        if self.engine == "interp":
+            return
+        from robosoc.jit.engine import TranslatingCore, TranslationStats
+
+        if self.stats is None:
+            self.stats = TranslationStats()
+        cached = False
+        for t in range(len(self.on)):
+            if self._stopped[t] or t not in chip.programs or int(chip.cores.st[t, S_CODE_SIZE]) == 0:
+                continue
+            translator = self.translators[t]
+            if translator is None:
+                translator = TranslatingCore(chip.cores, tile=t, mode=self.engine, stats=self.stats)
+                self.translators[t] = translator
+                self.on[t] = 1
+            self._give(t)
+            cached = cached or translator.has_cached_regions()
+        live = [tr for tr in self.translators if tr is not None]
+        self.params[kc.J_ANY] = 1 if live else 0
+        if live:
+            self.params[kc.J_THRESHOLD] = live[0].ask_threshold(cached)
+            self.params[kc.J_STRETCH] = live[0].stretch
+
+    def _give(self, t: int) -> None:
+        translator = self.translators[t]
+        assert translator is not None
+        tables = translator.tables()
+        if tables is not self._given[t]:
+            self._tables[t] = tables
+            self._given[t] = tables
+
+    def ran(self, seconds: float) -> None:
+        """The chip loop ran for ``seconds`` of host time."""
+        if self.stats is not None:
+            self.stats.run_seconds += seconds
+
+    def translate(self, t: int) -> None:
+        """After CHIP_TRANSLATE: translate the region at tile ``t``'s pc and let the tile go on."""
+        translator = self.translators[t]
+        assert translator is not None, f"tile {t} asked for a translation without a translator"
+        state = translator.state
+        translator.translate(int(state.st[t, S_PC]))
+        self._give(t)
+        state.st[t, S_RUN] = RUN_CHUNK
+        live = [tr for tr in self.translators if tr is not None]
+        self.params[kc.J_THRESHOLD] = live[0].ask_threshold(any(tr.has_cached_regions() for tr in live))
+
+    def forget(self, t: int) -> None:
+        """Tile ``t``'s code was (re)loaded from outside: its translations no longer hold."""
+        translator = self.translators[t]
+        if translator is not None:
+            translator.forget()
+
+    def stop(self, t: int) -> None:
+        """Tile ``t`` interprets from now on (a breakpoint, a profile)."""
+        self._stopped[t] = True
+        self.on[t] = 0
+        self.translators[t] = None
+        self._tables[t] = self._empty
+        self._given[t] = None
+        if not self.on.any():
+            self.params[kc.J_ANY] = 0
+
+    def stop_all(self) -> None:
+        for t in range(len(self.on)):
+            self.stop(t)

@@ -1,0 +1,24 @@
+"""The ``--engine`` option of ``run``, ``fly`` and ``bench``: how the simulator executes the cores' code."""
+
+from __future__ import annotations
+
+from typing import Annotated
+
+import typer
+
+from robosoc.cli import options
+from robosoc.jit import ENGINES
+
+ENGINE_HELP = (
+    "interp: the interpreter; jit: translate code to native code at first use; auto: translate the code that "
+    "turns hot.  The same cycles, counters and outputs with each (docs/translation.md)."
+)
+
+Engine = Annotated[
+    str | None,
+    typer.Option("--engine", help=ENGINE_HELP + "  [default: interp, or the chip file's]", show_default=False,
+                 callback=options.choice(*ENGINES)),
+]  # fmt: skip
+"""``None``: not given (the chip configuration's engine, ``interp`` by default)."""
+
+__all__ = ["ENGINE_HELP", "Engine"]

@@ -1,0 +1,166 @@
+"""Translated code on the MPSoC's cores gives the interpreter's chip, cycle for cycle.
+
+Every engine must give the same outputs, cycles, per-tile and per-task counters, NoC counters and
+errors (docs/translation.md).  The traffic program of ``test_quanta_vs_lockstep`` exercises idle
+and busy network phases, DMA, receive interrupts and sleep on every tile; hand-made programs
+check a packet copied over translated code, the errors of a network interface misused from
+translated code, and that breakpoints and profiles fall back to the interpreter.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+import rv32_asm as A
+from core_harness import exit_with
+from robosoc.chip.elf import Program, load_elf
+from robosoc.chip.mpsoc import ChipError, MPSoC
+from robosoc.config.chip import ChipConfig, NocConfig
+from robosoc.toolchain import build_elf
+
+TRAFFIC = Path(__file__).parent / "programs" / "traffic.c"
+ENGINES = ["jit", "auto"]
+SRAM = 0x40000000
+NI = 0xE1040000
+T0, T1, T2, RA, A0 = 5, 6, 7, 1, 10
+
+pytestmark = pytest.mark.filterwarnings("ignore::robosoc.chip.single.IrqDuringMulErratum")
+
+
+def outcome(chip: MPSoC, max_cycles: int) -> tuple:
+    try:
+        result = chip.run(max_cycles=max_cycles)
+        ran: tuple = (result.output, result.cycles, result.exit_codes)
+    except ChipError as exc:
+        ran = ("error", str(exc), exc.tile, chip.cycle)
+    tiles = {xy: chip.counters(xy) for xy in chip.core_tiles()}
+    tasks = {xy: chip.task_counters(xy) for xy in chip.core_tiles()}
+    return ran, tiles, tasks, chip.noc_counters()
+
+
+def run_traffic(config: ChipConfig, engine: str, rounds: int) -> tuple[tuple, MPSoC]:
+    program = load_elf(build_elf([TRAFFIC], mul=True, defines={"ROUNDS": rounds}))
+    chip = MPSoC(config, engine=engine)
+    chip.load_all(program)
+    return outcome(chip, 20_000_000), chip
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+@pytest.mark.parametrize(
+    "config",
+    [ChipConfig(), ChipConfig(width=3, height=2, noc=NocConfig(buffer_depth=2, arbiter="per-output"))],
+    ids=["hermes-2x2", "per-output-3x2-shallow"],
+)
+def test_traffic_on_every_tile_runs_as_on_the_interpreter(config: ChipConfig, engine: str) -> None:
+    reference, _ = run_traffic(config, "interp", 4)
+    got, chip = run_traffic(config, engine, 4)
+    assert got == reference
+    assert reference[0][0]  # every tile printed its report
+    if engine == "jit":  # every core translated its code at once
+        stats = chip._jit.stats
+        assert stats is not None and stats.regions + stats.reused > 0
+
+
+def program(words: list[int], data: dict[int, bytes] | None = None) -> Program:
+    segments = [(SRAM, A.words_to_bytes(words)), *(data or {}).items()]
+    return Program(path=Path("<asm>"), entry=SRAM, segments=segments)
+
+
+def flits(*values: int) -> bytes:
+    return b"".join((v & 0xFFFF).to_bytes(2, "little") for v in values)
+
+
+def patcher_and_patched() -> tuple[Program, Program]:
+    """Tile (1, 0) sends tile (0, 1) a packet whose payload is the instruction ``addi a0, a0, 100``;
+    tile (0, 1) calls a subroutine adding 1 five times, receives the packet over the subroutine's
+    first word and calls it once more: a0 = 5 + 100."""
+    new = A.i("addi", A0, A0, 100)
+    packet = SRAM + 0x400
+    send = [
+        *A.li(T0, NI),
+        *A.li(T1, packet),
+        A.store("sw", T1, T0, 0x04),  # SEND_ADDR
+        A.i("addi", T2, 0, 4),
+        A.store("sw", T2, T0, 0x08),  # SEND_SIZE: destination, length, two payload flits
+        A.i("addi", T2, 0, 1),
+        A.store("sw", T2, T0, 0x0C),  # SEND
+        *exit_with(0),
+    ]
+    sender = program(send, {packet: flits(0x01, 2, new & 0xFFFF, new >> 16)})
+    main = [
+        *A.li(T0, NI),  # 0, 1
+        A.i("addi", A0, 0, 0),  # 2
+        *[A.jal(RA, 4 * (22 - k)) for k in range(3, 8)],  # 3..7: five calls of sub (word 22)
+        *A.li(T1, SRAM + 4 * 21),  # 8, 9: the packet's two header flits land on the pad word 21
+        A.store("sw", T1, T0, 0x10),  # 10: RECV_ADDR
+        A.load("lw", T2, T0, 0x00),  # 11: poll NI_STATUS
+        A.i("andi", T2, T2, 2),  # 12
+        A.branch("beq", T2, 0, -8),  # 13
+        A.i("addi", T2, 0, 2),  # 14
+        A.store("sw", T2, T0, 0x0C),  # 15: RECV (the DMA writes words 21 and 22)
+        A.jal(RA, 4 * (22 - 16)),  # 16: sub again, patched
+        *exit_with(A0),  # 17, 18, 19
+        0,  # 20
+        0,  # 21: the pad word the header flits overwrite
+        A.i("addi", A0, A0, 1),  # 22: sub
+        A.jalr(0, RA, 0),  # 23
+    ]
+    assert len(main) == 24
+    return sender, program(main)
+
+
+@pytest.mark.parametrize("engine", ["interp", *ENGINES])
+def test_a_packet_copied_over_translated_code_is_executed(engine: str) -> None:
+    sender, patched = patcher_and_patched()
+    chip = MPSoC(ChipConfig(), engine=engine)
+    chip.load((1, 0), sender)
+    chip.load((0, 1), patched)
+    ran, tiles, tasks, noc = outcome(chip, 200_000)
+    assert ran[2] == {(1, 0): 0, (0, 1): 105}
+    if engine != "interp":
+        chip_i = MPSoC(ChipConfig())
+        chip_i.load((1, 0), sender)
+        chip_i.load((0, 1), patched)
+        assert (ran, tiles, tasks, noc) == outcome(chip_i, 200_000)
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_network_interface_errors_from_translated_code_are_the_interpreters(engine: str) -> None:
+    loop_then_bad_store = [
+        *A.li(T0, NI),
+        A.i("addi", T1, 0, 50),
+        A.i("addi", T1, T1, -1),  # a hot loop first: translated
+        A.branch("bne", T1, 0, -4),
+        A.store("sb", 0, T0, 0x0C),  # a byte store to NI_CMD
+        *exit_with(0),
+    ]
+    results = []
+    for which in ("interp", engine):
+        chip = MPSoC(ChipConfig(), engine=which)
+        chip.load((1, 0), program(loop_then_bad_store))
+        results.append(outcome(chip, 100_000))
+    assert results[0] == results[1]
+    assert results[0][0][0] == "error" and "word loads and stores" in results[0][0][1]
+
+
+def test_breakpoints_and_profiles_put_the_tile_back_on_the_interpreter() -> None:
+    sender, patched = patcher_and_patched()
+    chip = MPSoC(ChipConfig(), engine="jit")
+    chip.load((1, 0), sender)
+    chip.load((0, 1), patched)
+    chip.set_breakpoint((0, 1), SRAM + 4 * 16)
+    chip.step(100_000)
+    assert chip.break_tile() == (0, 1) and chip.pc((0, 1)) == SRAM + 4 * 16
+    assert chip._jit.on.tolist() == [0, 1, 0, 0]  # (1, 0) still translates; (0, 1) interprets
+    chip.set_breakpoint((0, 1), SRAM + 4 * 16, on=False)
+    chip.resume_from_break()
+    chip.enable_profile()
+    assert not chip._jit.on.any()
+    assert chip.run(max_cycles=200_000).exit_codes[(0, 1)] == 105
+
+
+def test_an_unknown_engine_is_refused() -> None:
+    with pytest.raises(ValueError, match="engine: must be one of 'interp', 'jit', 'auto', got 'fast'"):
+        MPSoC(ChipConfig(), engine="fast")
