@@ -53,8 +53,8 @@ def refusal(tmp_path: Path, text: str) -> tuple[str, str]:
         ),
         (
             '[grid]\n"chip.bogus" = [1]\n',
-            "grid.chip.bogus: 'chip.bogus' is not a scenario field (chip has: engine, errata, height, io_tile, noc, "
-            "powered_off, tile, tiles, width)",
+            "grid.chip.bogus: 'chip.bogus' is not a scenario field (chip has: engine, errata, height, io_tile, "
+            "noc, powered_off, tile, tiles, width)",
         ),
         (
             '[grid]\n"duration_s.x" = [1]\n',
@@ -65,8 +65,8 @@ def refusal(tmp_path: Path, text: str) -> tuple[str, str]:
         ("points = [{}]\n", "points[0]: an empty point: name at least one field"),
         (
             '[[points]]\nduration_s = 2.0\n[[points]]\n"chip.bogus" = 1\n',
-            "points[1].chip.bogus: 'chip.bogus' is not a scenario field (chip has: engine, errata, height, io_tile, noc, "
-            "powered_off, tile, tiles, width)",
+            "points[1].chip.bogus: 'chip.bogus' is not a scenario field (chip has: engine, errata, height, io_tile, "
+            "noc, powered_off, tile, tiles, width)",
         ),
         ("seeds = 1\n", "seeds: expected a non-empty list of seeds (integers), got 1"),
         ("seeds = []\n", "seeds: expected a non-empty list of seeds (integers), got []"),
