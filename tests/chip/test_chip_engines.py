@@ -164,3 +164,37 @@ def test_breakpoints_and_profiles_put_the_tile_back_on_the_interpreter() -> None
 def test_an_unknown_engine_is_refused() -> None:
     with pytest.raises(ValueError, match="engine: must be one of 'interp', 'jit', 'auto', got 'fast'"):
         MPSoC(ChipConfig(), engine="fast")
+
+
+def test_auto_translates_the_busy_tiles_only_and_changes_nothing() -> None:
+    """auto looks at each tile every AUTO_LOOK_CYCLES: a tile that computes gets a translator, a
+    tile that waits for packets stays on the interpreter; the chip's state is the interpreter's."""
+    from robosoc.benchmarks.chip import _build
+    from robosoc.chip.translation import AUTO_LOOK_CYCLES
+
+    busy = _build("matrix_bench.c", True, {"BENCH_ITERATIONS": 100000, "BENCH_QUIET": None})
+    waiting = program([*A.li(T0, NI), A.store("sw", 0, T0, 0x24), *exit_with(0)])  # sleeps until a packet
+    warm = MPSoC(ChipConfig(), engine="jit")  # translates the busy code in this process: auto reuses it at once
+    warm.load((1, 0), busy)
+    warm.step(100_000)
+    states = {}
+    for engine in ("interp", "auto"):
+        chip = MPSoC(ChipConfig(), engine=engine)
+        chip.load((1, 0), busy)
+        chip.load((0, 1), busy)
+        chip.load((1, 1), waiting)
+        chip.step(4 * AUTO_LOOK_CYCLES + 12345)
+        states[engine] = (
+            chip.cycle,
+            {xy: chip.counters(xy) for xy in chip.core_tiles()},
+            {xy: chip.task_counters(xy) for xy in chip.core_tiles()},
+            {xy: chip.pc(xy) for xy in chip.core_tiles()},
+            chip.cores.regs.copy().tolist(),
+        )
+        if engine == "auto":
+            translators = {chip.config.tile_xy(t): tr for t, tr in enumerate(chip._jit.translators)}
+            assert translators[(1, 0)] is not None and translators[(0, 1)] is not None
+            assert translators[(1, 1)] is None
+            stats = chip._jit.stats
+            assert stats is not None and stats.reused > 0
+    assert states["auto"] == states["interp"]

@@ -29,7 +29,7 @@ from robosoc.chip.single import (
     errata_report,
     exit_word,
 )
-from robosoc.chip.translation import ChipTranslation
+from robosoc.chip.translation import AUTO_LOOK_CYCLES, ChipTranslation
 from robosoc.config.chip import MIN_PACKET_FLITS, ChipConfig
 from robosoc.isa.disasm import disassemble
 from robosoc.isa.table import MEMORY_CYCLES
@@ -311,14 +311,19 @@ class MPSoC:
                     self.cores, self.config.tile_index(xy), lambda pc, xy=xy: self.symbolize(xy, pc), f"tile {xy}: "
                 )
         jit = self._jit
-        jit.prepare(self)
         while True:
-            start = time.perf_counter()
-            status = kc.run_chip(self.cores.arrays(), self.noc, self.book(), until, *jit.arguments())
-            jit.ran(time.perf_counter() - start)
-            if status != kc.CHIP_TRANSLATE:
+            jit.prepare(self)
+            # auto looks at the tiles that do not translate yet every AUTO_LOOK_CYCLES
+            to = min(until, self.cycle + AUTO_LOOK_CYCLES) if jit.watching() else until
+            while True:
+                start = time.perf_counter()
+                status = kc.run_chip(self.cores.arrays(), self.noc, self.book(), to, *jit.arguments())
+                jit.ran(time.perf_counter() - start)
+                if status != kc.CHIP_TRANSLATE:
+                    break
+                jit.translate(int(self.gst[kc.G_BREAK_TILE]))
+            if status != kc.CHIP_UNTIL or self.cycle >= until:
                 break
-            jit.translate(int(self.gst[kc.G_BREAK_TILE]))
         self._drain_io()
         self._drain_rec()
         return int(self.gst[kc.G_STATUS])

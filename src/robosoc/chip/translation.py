@@ -25,6 +25,17 @@ if TYPE_CHECKING:
     from robosoc.jit.engine import TranslatingCore, TranslationStats
 
 
+#: auto on the chip: a tile gets its translator once, over the chip time since the last run, it was
+#: awake at least this share of the cycles and executed at least AUTO_MIN_INSTRUCTIONS (a mostly
+#: sleeping core runs a few hundred instructions per wake-up: the interpreter does that faster than
+#: a call into translated code, and translating would not pay for itself)
+AUTO_BUSY_SHARE = 0.05
+AUTO_MIN_INSTRUCTIONS = 200_000
+#: auto: chip cycles between looks at the tiles that do not translate yet (a long step is cut into
+#: pieces of this length while there are such tiles: stopping the chip loop anywhere is exact)
+AUTO_LOOK_CYCLES = 1 << 20
+
+
 class ChipTranslation:
     """Per tile: whether it runs translated code, its translator and its tables (see the module doc)."""
 
@@ -38,6 +49,8 @@ class ChipTranslation:
         self.translators: list[TranslatingCore | None] = [None] * tiles
         self._stopped = np.zeros(tiles, dtype=bool)  # tiles that interpret from now on
         self.stats: TranslationStats | None = None
+        self._seen = np.zeros((tiles, 2), dtype=np.int64)  # auto: (instructions, chip cycle) at the last look
+        self._watched: set[int] = set()  # auto: loaded tiles without a translator yet
 
     def arguments(self) -> tuple[np.ndarray, List, np.ndarray]:
         """``run_chip``'s jit_on, jit_tables and jit_params."""
@@ -52,10 +65,15 @@ class ChipTranslation:
         if self.stats is None:
             self.stats = TranslationStats()
         cached = False
+        now = chip.cycle
         for t in range(len(self.on)):
             if self._stopped[t] or t not in chip.programs or int(chip.cores.st[t, S_CODE_SIZE]) == 0:
                 continue
             translator = self.translators[t]
+            if translator is None and self.engine == "auto" and not self._busy(chip, t, now):
+                self._watched.add(t)
+                continue
+            self._watched.discard(t)
             if translator is None:
                 translator = TranslatingCore(chip.cores, tile=t, mode=self.engine, stats=self.stats)
                 self.translators[t] = translator
@@ -67,6 +85,18 @@ class ChipTranslation:
         if live:
             self.params[kc.J_THRESHOLD] = live[0].ask_threshold(cached)
             self.params[kc.J_STRETCH] = live[0].stretch
+
+    def watching(self) -> bool:
+        """auto: whether some loaded tile may still get a translator (the chip is looked at again)."""
+        return self.engine == "auto" and bool(self._watched)
+
+    def _busy(self, chip: MPSoC, t: int, now: int) -> bool:
+        """auto: whether tile ``t`` worked enough since the last look to be worth translating."""
+        done = int(chip.cores.opc[t].sum())
+        instructions = done - self._seen[t, 0]
+        cycles = now - self._seen[t, 1]
+        self._seen[t] = done, now
+        return instructions >= AUTO_MIN_INSTRUCTIONS and instructions >= AUTO_BUSY_SHARE * cycles
 
     def _give(self, t: int) -> None:
         translator = self.translators[t]
@@ -86,7 +116,7 @@ class ChipTranslation:
         translator = self.translators[t]
         assert translator is not None, f"tile {t} asked for a translation without a translator"
         state = translator.state
-        translator.translate(int(state.st[t, S_PC]))
+        translator.translate(int(state.st[t, S_PC]))  # or installs what another core translated there
         self._give(t)
         state.st[t, S_RUN] = RUN_CHUNK
         live = [tr for tr in self.translators if tr is not None]
@@ -101,6 +131,7 @@ class ChipTranslation:
     def stop(self, t: int) -> None:
         """Tile ``t`` interprets from now on (a breakpoint, a profile)."""
         self._stopped[t] = True
+        self._watched.discard(t)
         self.on[t] = 0
         self.translators[t] = None
         self._tables[t] = self._empty

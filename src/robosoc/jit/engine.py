@@ -10,7 +10,7 @@ those of the interpreter (docs/translation.md).
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -64,6 +64,25 @@ class _Translated:
     address: int  # of the region function (0: nothing translated)
     pcs: np.ndarray  # word indices of the translated instructions
     words: np.ndarray  # their contents when translated
+    #: its count slots: (operation or counter, delta) rows, rows per slot, next slot (region-relative, -1: none)
+    slot_rows: np.ndarray = field(default_factory=lambda: np.zeros((0, 2), dtype=np.int64))
+    slot_lens: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    slot_next: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    #: addresses of its blocks' starts and the blocks' indices; addresses its side exits continue at
+    block_starts: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    block_indices: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    side_exits: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+
+    @staticmethod
+    def of(region: Region, emitted: EmittedRegion, address: int, pcs: np.ndarray, words: np.ndarray) -> _Translated:
+        slots = emitted.slots if region.blocks else []
+        rows = np.array([row for h, _ in slots for row in h], dtype=np.int64).reshape(-1, 2)
+        lens = np.array([len(h) for h, _ in slots], dtype=np.int64)
+        nxt = np.array([n for _, n in slots], dtype=np.int64)
+        starts = np.array(list(emitted.blocks), dtype=np.int64)
+        indices = np.array(list(emitted.blocks.values()), dtype=np.int64)
+        sides = np.array([b.next_pc for b in region.blocks.values() if b.end is End.SIDE], dtype=np.int64)
+        return _Translated(region, emitted, address, pcs, words, rows, lens, nxt, starts, indices, sides)
 
 
 #: (target, multiplier) -> regions translated in this process (any core, any run), in order
@@ -112,6 +131,8 @@ class TranslatingCore:
         self._sizes: dict[int, int] = {}  # auto: pc -> instructions of the region found there
         self._code_size = -1
         self._jt: JitArrays | None = None
+        self._known_seen = 0  # entries of _TRANSLATED[key] this core has looked at
+        self._known_starts_in: set[int] = set()  # starts of the regions installed from there or translated here
 
     @property
     def compiler(self) -> Compiler:
@@ -174,12 +195,30 @@ class TranslatingCore:
 
     # --- translation --------------------------------------------------------------------------
     def _install_known(self) -> None:
-        """Enter every region this process translated for the same build whose words are unchanged."""
+        """Enter every region this process translated for the same build whose words are unchanged
+        (after the tables were made afresh, or self-modifying code made the core forget them)."""
+        self._known_seen = 0
+        self._known_starts_in = set()
+        self._install_new_known()
+
+    def _install_new_known(self) -> None:
+        """Enter the regions translated in this process (by any core) since this core last looked,
+        one per start, whose words this core holds too: cores running the same code translate each
+        region once between them."""
+        done_list = _TRANSLATED.get(self._key(), [])
+        if self._known_seen > len(done_list):  # the list was reset
+            self._known_seen = 0
         m32 = self.state.m32[self.tile]
-        for done in _TRANSLATED.get(self._key(), []):
-            if np.array_equal(m32[done.pcs], done.words):
-                self._install(done)
-                self.stats.reused += 1
+        known = []
+        for done in done_list[self._known_seen :]:
+            start = done.region.start
+            if start not in self._known_starts_in and np.array_equal(m32[done.pcs], done.words):
+                known.append(done)
+                self._known_starts_in.add(start)
+        self._known_seen = len(done_list)
+        if known:
+            self._install_many(known)
+            self.stats.reused += len(known)
 
     def _key(self) -> tuple[Target, bool]:
         return self._target(), int(self.state.st[self.tile, S_MUL]) != 0
@@ -228,6 +267,9 @@ class TranslatingCore:
             self._sizes.clear()
             if jt.entry_fn[(pc - self._target().base) >> 2] != 0:
                 return Region(pc, {})
+        self._install_new_known()  # another core may have translated it meanwhile
+        if jt.entry_fn[(pc - self._target().base) >> 2] != 0:
+            return Region(pc, {})
         target, has_mul = self._key()
         base = target.base
         view = self._view()
@@ -249,57 +291,69 @@ class TranslatingCore:
         else:
             emitted, address = EmittedRegion(ir="", function="", blocks={}), 0
             pcs = np.array([(pc - base) >> 2], dtype=np.int64)
-        done = _Translated(region, emitted, address, pcs, m32[pcs].copy())
-        _TRANSLATED.setdefault((target, has_mul), []).append(done)
+        done = _Translated.of(region, emitted, address, pcs, m32[pcs].copy())
+        done_list = _TRANSLATED.setdefault((target, has_mul), [])
+        done_list.append(done)
         self._install(done)
+        if self._known_seen == len(done_list) - 1:
+            self._known_seen = len(done_list)
+        self._known_starts_in.add(done.region.start)
         self.stats.regions += 1
         self.stats.instructions += region.instructions
         return region
 
     def _install(self, done: _Translated) -> None:
+        self._install_many([done])
+
+    def _install_many(self, dones: list[_Translated]) -> None:
+        """Enter translated regions in the tables (their count slots and words added in one go)."""
         jt = self._jt
         assert jt is not None
         base = self._target().base
-        region = done.region
-        if not region.blocks:
-            jt.hot[(region.start - base) >> 2] = NEVER_TRANSLATE
-            return
-        slot_base = self._nslots
-        self._add_slots(done.emitted.slots, slot_base)
-        jt = self._jt
-        for start, k in done.emitted.blocks.items():
-            i = (start - base) >> 2
-            if jt.entry_fn[i] == 0:
-                jt.entry_fn[i] = done.address
-                jt.entry_slot[i] = slot_base
-                jt.entry_blk[i] = k
-        jt.tmap[done.pcs] = 1
         n = int(jt.ctx[CTX_WORDS])
-        self._jt = jt = jt._replace(
-            tpcs=np.concatenate([jt.tpcs[:n], done.pcs]), twords=np.concatenate([jt.twords[:n], done.words])
-        )
-        jt.ctx[CTX_WORDS] = n + len(done.pcs)
-        for block in region.blocks.values():
-            if block.end is End.SIDE:
-                i = (block.next_pc - base) >> 2
-                if jt.entry_fn[i] == 0:
-                    jt.hot[i] = NEVER_TRANSLATE
-        if jt.entry_fn[(region.start - base) >> 2] == 0:
-            jt.hot[(region.start - base) >> 2] = NEVER_TRANSLATE
+        pcs, words = [jt.tpcs[:n]], [jt.twords[:n]]
+        slots_added = False
+        for done in dones:
+            region = done.region
+            if not region.blocks:
+                jt.hot[(region.start - base) >> 2] = NEVER_TRANSLATE
+                continue
+            slot_base = self._nslots
+            self._queue_slots(done, slot_base)
+            slots_added = True
+            at = (done.block_starts - base) >> 2
+            free = jt.entry_fn[at] == 0  # a block already entered by an earlier region keeps its entry
+            jt.entry_fn[at[free]] = done.address
+            jt.entry_slot[at[free]] = slot_base
+            jt.entry_blk[at[free]] = done.block_indices[free]
+            jt.tmap[done.pcs] = 1
+            pcs.append(done.pcs)
+            words.append(done.words)
+            sides = (done.side_exits - base) >> 2
+            jt.hot[sides[jt.entry_fn[sides] == 0]] = NEVER_TRANSLATE
+            if jt.entry_fn[(region.start - base) >> 2] == 0:
+                jt.hot[(region.start - base) >> 2] = NEVER_TRANSLATE
+        if slots_added:
+            self._commit_slots()
+        jt = self._jt
+        self._jt = jt = jt._replace(tpcs=np.concatenate(pcs), twords=np.concatenate(words))
+        jt.ctx[CTX_WORDS] = len(jt.tpcs)
 
-    def _add_slots(self, slots: list[tuple[list[tuple[int, int]], int]], slot_base: int) -> None:
-        hist = [row for h, _ in slots for row in h]
-        self._slot_hist.append(np.array(hist, dtype=np.int64).reshape(-1, 2))
-        self._slot_len.append(np.array([len(h) for h, _ in slots], dtype=np.int64))
-        self._slot_next.append(np.array([n + slot_base if n >= 0 else -1 for _, n in slots], dtype=np.int64))
-        self._nslots += len(slots)
+    def _queue_slots(self, done: _Translated, slot_base: int) -> None:
+        self._slot_hist.append(done.slot_rows)
+        self._slot_len.append(done.slot_lens)
+        self._slot_next.append(np.where(done.slot_next >= 0, done.slot_next + slot_base, -1))
+        self._nslots += len(done.slot_lens)
+
+    def _commit_slots(self) -> None:
+        """The count-slot arrays of every queued slot (counts zero: they are flushed between calls)."""
         rows = np.concatenate(self._slot_hist)
         ptr = np.zeros(self._nslots + 1, dtype=np.int64)
         np.cumsum(np.concatenate(self._slot_len), out=ptr[1:])
         jt = self._jt
         assert jt is not None
         self._jt = jt._replace(
-            cnt=np.zeros(self._nslots, dtype=np.int64),  # all zero between dispatcher calls
+            cnt=np.zeros(self._nslots, dtype=np.int64),
             slot_ptr=ptr,
             slot_next=np.concatenate(self._slot_next),
             slot_kc=rows[:, 0].copy(),
