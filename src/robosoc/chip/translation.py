@@ -65,12 +65,12 @@ class ChipTranslation:
         if self.stats is None:
             self.stats = TranslationStats()
         cached = False
-        now = chip.cycle
+        busy = self._busy(chip) if self.engine == "auto" else None
         for t in range(len(self.on)):
             if self._stopped[t] or t not in chip.programs or int(chip.cores.st[t, S_CODE_SIZE]) == 0:
                 continue
             translator = self.translators[t]
-            if translator is None and self.engine == "auto" and not self._busy(chip, t, now):
+            if translator is None and busy is not None and not busy[t]:
                 self._watched.add(t)
                 continue
             self._watched.discard(t)
@@ -90,13 +90,15 @@ class ChipTranslation:
         """auto: whether some loaded tile may still get a translator (the chip is looked at again)."""
         return self.engine == "auto" and bool(self._watched)
 
-    def _busy(self, chip: MPSoC, t: int, now: int) -> bool:
-        """auto: whether tile ``t`` worked enough since the last look to be worth translating."""
-        done = int(chip.cores.opc[t].sum())
-        instructions = done - self._seen[t, 0]
-        cycles = now - self._seen[t, 1]
-        self._seen[t] = done, now
-        return instructions >= AUTO_MIN_INSTRUCTIONS and instructions >= AUTO_BUSY_SHARE * cycles
+    def _busy(self, chip: MPSoC) -> np.ndarray:
+        """auto: per tile, whether it worked enough since the last look to be worth translating."""
+        done = chip.cores.opc.sum(axis=1)
+        now = chip.cycle
+        instructions = done - self._seen[:, 0]
+        cycles = now - self._seen[:, 1]
+        self._seen[:, 0] = done
+        self._seen[:, 1] = now
+        return (instructions >= AUTO_MIN_INSTRUCTIONS) & (instructions >= AUTO_BUSY_SHARE * cycles)
 
     def _give(self, t: int) -> None:
         translator = self.translators[t]
