@@ -9,6 +9,7 @@ import struct
 import subprocess
 import sys
 import threading
+import time
 from pathlib import Path
 
 import numpy as np
@@ -45,9 +46,18 @@ def _subscribe(ws, channels: list[dict]) -> dict[int, dict]:
     return subscriptions
 
 
-def _first_message(ws) -> tuple[int, int, bytes]:
+def _first_message(ws, failed: list[BaseException]) -> tuple[int, int, bytes]:
+    """The first message frame; fails at once when the publishing thread has failed (``failed``)."""
+    deadline = time.monotonic() + WAIT_S
     while True:
-        frame = ws.recv(timeout=WAIT_S)
+        if failed:
+            raise AssertionError("publishing failed") from failed[0]
+        try:
+            frame = ws.recv(timeout=0.2)
+        except TimeoutError:
+            if time.monotonic() > deadline:
+                raise
+            continue
         if isinstance(frame, bytes) and frame[0] == MESSAGE_DATA:
             subscription, ns = struct.unpack_from("<IQ", frame, 1)
             return subscription, ns, frame[13:]
@@ -65,15 +75,20 @@ def test_a_client_gets_the_channels_and_messages_equal_to_the_rows(host_flight: 
             assert {(c["encoding"], c["schemaEncoding"]) for c in channels} == {("cdr", "ros2msg")}
             subscriptions = _subscribe(ws, channels)
 
+            failed: list[BaseException] = []
+
             def publish() -> None:  # until the subscription has reached the server
-                while not stop.is_set():
-                    for row in rows:
-                        live.publish(row)
+                try:
+                    while not stop.is_set():
+                        for row in rows:
+                            live.publish(row)
+                except BaseException as exc:  # shown by the test, not lost in the thread
+                    failed.append(exc)
 
             publisher = threading.Thread(target=publish, daemon=True)
             publisher.start()
             try:
-                subscription, ns, payload = _first_message(ws)
+                subscription, ns, payload = _first_message(ws, failed)
             finally:
                 stop.set()
                 publisher.join(WAIT_S)
