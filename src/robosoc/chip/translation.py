@@ -52,9 +52,10 @@ class ChipTranslation:
         self._seen = np.zeros((tiles, 2), dtype=np.int64)  # auto: (instructions, chip cycle) at the last look
         self._watched: set[int] = set()  # auto: loaded tiles without a translator yet
 
-    def arguments(self) -> tuple[np.ndarray, List, np.ndarray]:
-        """``run_chip``'s jit_on, jit_tables and jit_params."""
-        return self.on, self._tables, self.params
+    def arguments(self) -> tuple[np.ndarray, List | None, np.ndarray]:
+        """``run_chip``'s jit_on, jit_tables and jit_params (no tables while no tile translates: the
+        chip loop compiled for the interpreter alone then runs)."""
+        return self.on, self._tables if self.params[kc.J_ANY] else None, self.params
 
     def prepare(self, chip: MPSoC) -> None:
         """Before a run: a translator for every loaded core tile, and its current tables."""

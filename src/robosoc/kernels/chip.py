@@ -23,7 +23,8 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit
+from numba import njit, types
+from numba.extending import overload
 
 from robosoc.isa.table import MEMORY_CYCLES
 from robosoc.kernels import ni_registers as ni
@@ -543,34 +544,61 @@ def _take_deliveries(st, book, noc):
     glob[nk.G_NEV] = 0
 
 
-@njit(cache=True)
-def _run_awake(core, tiles, until, jit_on, jit_tables, jit_params, one, rest):  # type: ignore[no-untyped-def]
+def _run_awake(core, tiles, until, jit_tables, jit_on, jit_params, one, rest):  # type: ignore[no-untyped-def]
     """Run ``tiles`` to ``until``: each translating tile alone, the interpreted ones together.
 
-    ``run_cores`` has this one call site: inlined, the core interpreter is most of what numba
-    compiles (the translating tiles' dispatch loop is compiled on its own).
+    Compiled per type of ``jit_tables`` (below): ``None`` (no tile translates) runs ``run_cores``
+    alone, so a chip on the interpreter never compiles the translator's dispatch loop.
     """
-    k = 0
-    for i in range(tiles.shape[0]):
-        t = tiles[i]
-        if jit_params[J_ANY] != 0 and jit_on[t] != 0:
-            one[0] = t
-            run_translated(core, one, until, jit_tables[t], jit_params[J_THRESHOLD], jit_params[J_STRETCH])
-        else:
-            rest[k] = t
-            k += 1
-    if k > 0:
-        run_cores(core, rest[:k], until)
+    raise NotImplementedError("only for compiled code")
 
 
-@njit(cache=True)
-def _check_translated(core, t, jt) -> None:  # type: ignore[no-untyped-def]
+@overload(_run_awake, jit_options={"cache": True})
+def _run_awake_typed(core, tiles, until, jit_tables, jit_on, jit_params, one, rest):  # type: ignore[no-untyped-def]
+    if isinstance(jit_tables, types.NoneType):
+
+        def interpreted(core, tiles, until, jit_tables, jit_on, jit_params, one, rest):  # type: ignore[no-untyped-def]
+            run_cores(core, tiles, until)  # inlined: the core interpreter is most of what numba compiles
+
+        return interpreted
+
+    def translating(core, tiles, until, jit_tables, jit_on, jit_params, one, rest):  # type: ignore[no-untyped-def]
+        k = 0
+        for i in range(tiles.shape[0]):
+            t = tiles[i]
+            if jit_params[J_ANY] != 0 and jit_on[t] != 0:
+                one[0] = t
+                run_translated(core, one, until, jit_tables[t], jit_params[J_THRESHOLD], jit_params[J_STRETCH])
+            else:
+                rest[k] = t
+                k += 1
+        if k > 0:
+            run_cores(core, rest[:k], until)
+
+    return translating
+
+
+def _check_translated(core, t, jit_tables, jit_on) -> None:  # type: ignore[no-untyped-def]
     """Forget tile ``t``'s translations if a word they were made from changed (a DMA into code)."""
-    m32 = core.m32
-    for k in range(jt.ctx[CTX_WORDS]):
-        if m32[t, jt.tpcs[k]] != jt.twords[k]:
-            forget_translations(jt)
+    raise NotImplementedError("only for compiled code")
+
+
+@overload(_check_translated, jit_options={"cache": True})
+def _check_translated_typed(core, t, jit_tables, jit_on):  # type: ignore[no-untyped-def]
+    if isinstance(jit_tables, types.NoneType):
+        return lambda core, t, jit_tables, jit_on: None
+
+    def check(core, t, jit_tables, jit_on):  # type: ignore[no-untyped-def]
+        if jit_on[t] == 0:
             return
+        jt = jit_tables[t]
+        m32 = core.m32
+        for k in range(jt.ctx[CTX_WORDS]):
+            if m32[t, jt.tpcs[k]] != jt.twords[k]:
+                forget_translations(jt)
+                return
+
+    return check
 
 
 @njit(cache=True)
@@ -583,6 +611,7 @@ def run_chip(  # type: ignore[no-untyped-def]
     (:class:`robosoc.kernels.jit_dispatch.JitArrays`); when one turns hot at a word without a
     translation the chip stops with CHIP_TRANSLATE, the host translates a region there and calls
     again, and the quantum goes on exactly where it stopped (as after a breakpoint).
+    ``jit_tables`` ``None``: every tile interprets (the translator is then not compiled at all).
     """
     st, out = core.st, core.out
     glob = noc.glob
@@ -731,7 +760,7 @@ def run_chip(  # type: ignore[no-untyped-def]
         while True:
             if hi > lo:
                 # the awake cores to H, then each stopped one on
-                _run_awake(core, runx[lo:hi] if bulk else run[lo:hi], H, jit_on, jit_tables, jit_params, one, rest)
+                _run_awake(core, runx[lo:hi] if bulk else run[lo:hi], H, jit_tables, jit_on, jit_params, one, rest)
                 if not fill:  # the one core handled last, at its next stop
                     nq = stop_queue.push(queue, qcyc, nq, lo, st[run[lo], S_CYCLE])
                 hi = lo
@@ -784,12 +813,8 @@ def run_chip(  # type: ignore[no-untyped-def]
                 if not ni_access(t, core, book, noc):
                     failed = t
                     break
-                if (
-                    jit_on[t] != 0
-                    and cst[t, K_RECEIVED] != received
-                    and cst[t, K_RECV_ADDR] - st[t, S_MEM_BASE] < st[t, S_CODE_SIZE]
-                ):
-                    _check_translated(core, t, jit_tables[t])  # the packet was copied into code
+                if cst[t, K_RECEIVED] != received and cst[t, K_RECV_ADDR] - st[t, S_MEM_BASE] < st[t, S_CODE_SIZE]:
+                    _check_translated(core, t, jit_tables, jit_on)  # the packet was copied into code
                 if cst[t, K_SENT] != sent or cst[t, K_RECEIVED] != received:
                     if quiet:
                         glob[nk.G_CYCLE] = s0  # the network was idle up to here
