@@ -46,11 +46,11 @@ def _subscribe(ws, channels: list[dict]) -> dict[int, dict]:
     return subscriptions
 
 
-def _first_message(ws, failed: list[BaseException]) -> tuple[int, int, bytes]:
-    """The first message frame; fails at once when the publishing thread has failed (``failed``)."""
+def _first_message(ws, failed: list[BaseException] | None = None) -> tuple[int, int, bytes]:
+    """The first message frame; fails at once when a publishing thread has failed (``failed``)."""
     deadline = time.monotonic() + WAIT_S
     while True:
-        if failed:
+        if failed:  # (None or empty: nobody failed)
             raise AssertionError("publishing failed") from failed[0]
         try:
             frame = ws.recv(timeout=0.2)
