@@ -186,3 +186,53 @@ def test_sweep_html_without_failures_or_rows(table):
     page = sweep_html("t", RECORDS[:2], [], table)
     assert "Failed points" not in page and "2 points finished, 2 ok, 0 failed." in page
     assert ("<h2>Points</h2>" in page) == bool(table)
+
+
+def test_figure_styles_and_labels_of_deep_fields():
+    records = [record("fixed", 1, 10.0, 5.0, **{"chip.noc.arbiter": "hermes"})]
+    fig = pareto_figure(records, ["chip.noc.arbiter"], "estimator")
+    try:
+        (ax,) = fig.axes
+        assert tuple(fig.get_size_inches()) == (7, 4.5)
+        (points,) = ax.collections
+        assert points.get_label() == "arbiter=hermes"  # the last part of the dotted name
+        assert list(points.get_sizes()) == [28]
+        (front,) = ax.lines
+        assert (front.get_linestyle(), front.get_color(), front.get_linewidth()) == ("--", "k", 1)
+        assert ax.get_legend().get_texts()[0].get_fontsize() == 7
+        assert ax.xaxis.get_gridlines()[0].get_alpha() == 0.3
+    finally:
+        plt.close(fig)
+    fig = metric_figure(RECORDS, "tasks.estimator.energy_nj_mean", "firmware.arith")
+    try:
+        (ax,) = fig.axes
+        assert tuple(fig.get_size_inches()) == (6, 3.6)
+        (points,) = ax.collections
+        assert list(points.get_sizes()) == [18] and points.get_alpha() == 0.7
+        (mean,) = ax.lines
+        assert (mean.get_linestyle(), mean.get_color()) == ("-", "C1")
+        assert ax.get_legend().get_texts()[0].get_fontsize() == 7
+    finally:
+        plt.close(fig)
+
+
+def test_sweep_html_structure_is_exact_for_a_failure_and_a_table():
+    page = sweep_html("t", RECORDS[4:], [], "a,b\n1,2\n")
+    assert (
+        "<h2>Failed points</h2><ul><li>{&quot;firmware.arith&quot;: &quot;float&quot;}, seed 3: a &lt;bad&gt; point"
+        "</li></ul>"
+    ) in page
+    assert (
+        "<table><thead><tr><th>a</th><th>b</th></tr></thead><tbody><tr><td>1</td><td>2</td></tr></tbody></table>"
+        in page
+    )
+    assert "<style>body{font-family:sans-serif;margin:2em}figure{display:inline-block;margin:.5em}" in page
+    assert "table{border-collapse:collapse;font-size:12px}td,th{border:1px solid #ccc;padding:2px 6px}</style>" in page
+
+
+def test_write_sweep_plots_makes_the_plots_folder_and_its_parents(tmp_path: Path):
+    out = tmp_path / "a" / "b"
+    plots = write_sweep_plots(out, RECORDS, [], [])
+    assert [p.name for _, p, _ in plots] == ["pareto-estimator.png", "pareto-pid.png"]
+    again = write_sweep_plots(out, RECORDS, [], [])  # an existing folder is fine
+    assert [p for _, p, _ in again] == [p for _, p, _ in plots]
