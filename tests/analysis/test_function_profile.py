@@ -241,3 +241,48 @@ def test_top_ranks_one_task_on_one_tile_by_cycles_then_energy_then_name() -> Non
     assert [r.function for r in profile.top((0, 1), 1, n=2)] == ["b", "c"]
     assert profile.top((1, 1), 1) == []
     assert profile.tiles() == [(0, 1), (1, 0)]
+
+
+def test_profile_json_and_csv_of_a_hand_made_profile(tmp_path) -> None:
+    from robosoc.analysis.function_profile import COUNT_NAMES, CSV_FIELDS, NOC_ROW, FunctionProfile, ProfileRow
+
+    first, second = COUNT_NAMES[0], COUNT_NAMES[-1]
+    rows = [
+        ProfileRow((0, 1), 1, "estimator", "ekf_step", 900, 500, {first: 400, second: 7, COUNT_NAMES[1]: 0}, 2500.0),
+        ProfileRow((0, 1), 0, "kernel", "tick", 100, 60, {first: 60}, 500.0),
+        ProfileRow((1, 0), 2, "pid", "pid_step", 300, 200, {}, 1000.0),
+        ProfileRow(None, None, "", NOC_ROW, 0, 0, {}, 3000.0),
+    ]
+    profile = FunctionProfile(rows, 4.0, notes=["a note"])
+    data = profile.to_json()
+    assert data["schema"] == 1 and data["clock_ns"] == 4.0 and data["notes"] == ["a note"]
+    assert data["totals"] == {
+        "cycles": {"0,1": 1000, "1,0": 300},
+        "instructions": {"0,1": 560, "1,0": 200},
+        "tiles_uj": {"0,1": pytest.approx(0.003), "1,0": pytest.approx(0.001)},
+        "noc_uj": pytest.approx(0.003),
+        "total_uj": pytest.approx(0.007),
+    }
+    assert data["rows"][0] == {
+        "tile": "0,1", "task": 1, "task_name": "estimator", "function": "ekf_step", "cycles": 900,
+        "instructions": 500, "energy_nj": 2.5, "counts": {first: 400, second: 7},
+    }  # fmt: skip
+    assert data["rows"][3]["tile"] == "" and data["rows"][3]["task"] is None
+    no_noc = FunctionProfile(rows[:3], 4.0).to_json()["totals"]
+    assert no_noc["noc_uj"] == 0.0 and no_noc["total_uj"] == pytest.approx(0.004)
+
+    table = list(csv.reader(profile.csv_text().splitlines()))
+    assert tuple(table[0]) == CSV_FIELDS
+    assert table[1][:7] == ["0,1", "1", "estimator", "ekf_step", "900", "500", "2.500000"]
+    assert table[1][7] == "400" and table[1][-1] == "7" and table[1][8] == "0"
+    assert table[4][:7] == ["", "", "", NOC_ROW, "0", "0", "3.000000"]
+    assert table[4][7:] == ["0"] * len(COUNT_NAMES)
+    assert profile.csv_text().endswith("\n") and "\r" not in profile.csv_text()
+
+    json_path, csv_path = profile.write(tmp_path)
+    assert (json_path.name, csv_path.name) == ("profile.json", "profile.csv")
+    text = json_path.read_text(encoding="utf-8")
+    assert text.endswith("}\n") and '\n "schema": 1,' in text  # indented by one space
+    assert json.loads(text) == json.loads(json.dumps(data))
+    assert csv_path.read_text(encoding="utf-8") == profile.csv_text()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["profile.csv", "profile.json"]
