@@ -55,7 +55,7 @@ class ChipTranslation:
     def arguments(self) -> tuple[np.ndarray, List | None, np.ndarray]:
         """``run_chip``'s jit_on, jit_tables and jit_params (no tables while no tile translates: the
         chip loop compiled for the interpreter alone then runs)."""
-        return self.on, self._tables if self.params[kc.J_ANY] else None, self.params
+        return self.on, self._tables if self.on.any() else None, self.params
 
     def prepare(self, chip: MPSoC) -> None:
         """Before a run: a translator for every loaded core tile, and its current tables."""
@@ -65,7 +65,6 @@ class ChipTranslation:
 
         if self.stats is None:
             self.stats = TranslationStats()
-        cached = False
         busy = self._busy(chip) if self.engine == "auto" else None
         for t in range(len(self.on)):
             if self._stopped[t] or t not in chip.programs or int(chip.cores.st[t, S_CODE_SIZE]) == 0:
@@ -80,10 +79,13 @@ class ChipTranslation:
                 self.translators[t] = translator
                 self.on[t] = 1
             self._give(t)
-            cached = cached or translator.has_cached_regions()
+        self._set_threshold()
+
+    def _set_threshold(self) -> None:
+        """The dispatch loop's parameters, from the translators (they share mode and budget)."""
         live = [tr for tr in self.translators if tr is not None]
-        self.params[kc.J_ANY] = 1 if live else 0
         if live:
+            cached = any(tr.has_cached_regions() for tr in live)
             self.params[kc.J_THRESHOLD] = live[0].ask_threshold(cached)
             self.params[kc.J_STRETCH] = live[0].stretch
 
@@ -122,8 +124,7 @@ class ChipTranslation:
         translator.translate(int(state.st[t, S_PC]))  # or installs what another core translated there
         self._give(t)
         state.st[t, S_RUN] = RUN_CHUNK
-        live = [tr for tr in self.translators if tr is not None]
-        self.params[kc.J_THRESHOLD] = live[0].ask_threshold(any(tr.has_cached_regions() for tr in live))
+        self._set_threshold()
 
     def forget(self, t: int) -> None:
         """Tile ``t``'s code was (re)loaded from outside: its translations no longer hold."""
@@ -139,8 +140,6 @@ class ChipTranslation:
         self.translators[t] = None
         self._tables[t] = self._empty
         self._given[t] = None
-        if not self.on.any():
-            self.params[kc.J_ANY] = 0
 
     def stop_all(self) -> None:
         for t in range(len(self.on)):

@@ -10,7 +10,7 @@ those of the interpreter (docs/translation.md).
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -65,13 +65,13 @@ class _Translated:
     pcs: np.ndarray  # word indices of the translated instructions
     words: np.ndarray  # their contents when translated
     #: its count slots: (operation or counter, delta) rows, rows per slot, next slot (region-relative, -1: none)
-    slot_rows: np.ndarray = field(default_factory=lambda: np.zeros((0, 2), dtype=np.int64))
-    slot_lens: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
-    slot_next: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    slot_rows: np.ndarray
+    slot_lens: np.ndarray
+    slot_next: np.ndarray
     #: addresses of its blocks' starts and the blocks' indices; addresses its side exits continue at
-    block_starts: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
-    block_indices: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
-    side_exits: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    block_starts: np.ndarray
+    block_indices: np.ndarray
+    side_exits: np.ndarray
 
     @staticmethod
     def of(region: Region, emitted: EmittedRegion, address: int, pcs: np.ndarray, words: np.ndarray) -> _Translated:

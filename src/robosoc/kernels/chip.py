@@ -68,7 +68,7 @@ from robosoc.kernels.dev_irq import (
     irq_scan,
     requests_possible,
 )
-from robosoc.kernels.jit_dispatch import CTX_WORDS, RUN_TRANSLATE, forget_translations, run_translated
+from robosoc.kernels.jit_dispatch import RUN_TRANSLATE, forget_if_changed, run_translated
 
 # tile states
 K_OFF, K_RUN, K_SLEEP, K_EXITED, K_FAULT, K_IO = 0, 1, 2, 3, 4, 5
@@ -133,8 +133,7 @@ CHIP_TRANSLATE = 7  # a core's pc turned hot: translate a region there and call 
 # the translated-code parameters of run_chip (``jit_params``)
 J_THRESHOLD = 0  # arrivals at a word before the host is asked to translate there
 J_STRETCH = 1  # cycles the interpreter runs between arrivals (auto)
-J_ANY = 2  # 1: some tile runs translated code
-J_SIZE = 3
+J_SIZE = 2
 
 # network-interface misuse (K_ERR)
 CE_NONE = 0
@@ -566,7 +565,7 @@ def _run_awake_typed(core, tiles, until, jit_tables, jit_on, jit_params, one, re
         k = 0
         for i in range(tiles.shape[0]):
             t = tiles[i]
-            if jit_params[J_ANY] != 0 and jit_on[t] != 0:
+            if jit_on[t] != 0:
                 one[0] = t
                 run_translated(core, one, until, jit_tables[t], jit_params[J_THRESHOLD], jit_params[J_STRETCH])
             else:
@@ -589,14 +588,8 @@ def _check_translated_typed(core, t, jit_tables, jit_on):  # type: ignore[no-unt
         return lambda core, t, jit_tables, jit_on: None
 
     def check(core, t, jit_tables, jit_on):  # type: ignore[no-untyped-def]
-        if jit_on[t] == 0:
-            return
-        jt = jit_tables[t]
-        m32 = core.m32
-        for k in range(jt.ctx[CTX_WORDS]):
-            if m32[t, jt.tpcs[k]] != jt.twords[k]:
-                forget_translations(jt)
-                return
+        if jit_on[t] != 0:
+            forget_if_changed(jit_tables[t], core.m32[t])
 
     return check
 

@@ -185,6 +185,16 @@ def forget_translations(jt: JitArrays) -> None:
     jt.ctx[CTX_FLUSHES] += 1
 
 
+@njit(cache=True)
+def forget_if_changed(jt: JitArrays, m32_t: np.ndarray) -> None:
+    """Forget every translation if a word one was made from no longer holds its instruction
+    (written by the interpreter's stores or a DMA)."""
+    for k in range(jt.ctx[CTX_WORDS]):
+        if m32_t[jt.tpcs[k]] != jt.twords[k]:
+            forget_translations(jt)
+            return
+
+
 @njit(cache=True, inline="always")
 def _store_hits_translation(jt: JitArrays, word: int, regs_t: np.ndarray, base: int, code: int) -> bool:
     """Whether the store ``word`` (about to run with ``regs_t``) writes a translated word."""
@@ -293,10 +303,7 @@ def run_translated(
                 pc = st_t[S_PC]
                 cyc = st_t[S_CYCLE]
                 status = st_t[S_RUN]
-                for k in range(ctx[CTX_WORDS]):
-                    if m32[t, jt.tpcs[k]] != jt.twords[k]:
-                        forget_translations(jt)
-                        break
+                forget_if_changed(jt, m32[t])
                 if status != RUN_CHUNK:
                     flush_counts(jt, opc_t, ctr[t])
                     return
@@ -353,6 +360,7 @@ __all__ = [
     "JitArrays",
     "empty_tables",
     "flush_counts",
+    "forget_if_changed",
     "forget_translations",
     "run_translated",
 ]
