@@ -18,7 +18,7 @@ from numba.typed import List
 
 from robosoc.kernels import chip as kc
 from robosoc.kernels.core_layout import RUN_CHUNK, S_CODE_SIZE, S_PC, S_RUN
-from robosoc.kernels.jit_dispatch import JitArrays, empty_tables
+from robosoc.kernels.jit_dispatch import JitArrays, empty_tables, set_tables
 
 if TYPE_CHECKING:
     from robosoc.chip.mpsoc import MPSoC
@@ -51,6 +51,7 @@ class ChipTranslation:
         self.stats: TranslationStats | None = None
         self._seen = np.zeros((tiles, 2), dtype=np.int64)  # auto: (instructions, chip cycle) at the last look
         self._watched: set[int] = set()  # auto: loaded tiles without a translator yet
+        self._cached = False  # auto: some translator's code has regions compiled by an earlier run
 
     def arguments(self) -> tuple[np.ndarray, List | None, np.ndarray]:
         """``run_chip``'s jit_on, jit_tables and jit_params (no tables while no tile translates: the
@@ -79,15 +80,16 @@ class ChipTranslation:
                 self.translators[t] = translator
                 self.on[t] = 1
             self._give(t)
-        self._set_threshold()
-
-    def _set_threshold(self) -> None:
-        """The dispatch loop's parameters, from the translators (they share mode and budget)."""
         live = [tr for tr in self.translators if tr is not None]
-        if live:
-            cached = any(tr.has_cached_regions() for tr in live)
-            self.params[kc.J_THRESHOLD] = live[0].ask_threshold(cached)
-            self.params[kc.J_STRETCH] = live[0].stretch
+        self._cached = self.engine == "auto" and any(tr.has_cached_regions() for tr in live)
+        self._set_threshold(live[0] if live else None)
+
+    def _set_threshold(self, translator: TranslatingCore | None) -> None:
+        """The dispatch loop's parameters, from a translator (they share mode and budget) and whether
+        some translator has cached regions (known from :meth:`prepare`: not scanned per translation)."""
+        if translator is not None:
+            self.params[kc.J_THRESHOLD] = translator.ask_threshold(self._cached)
+            self.params[kc.J_STRETCH] = translator.stretch
 
     def watching(self) -> bool:
         """auto: whether some loaded tile may still get a translator (the chip is looked at again)."""
@@ -108,7 +110,7 @@ class ChipTranslation:
         assert translator is not None
         tables = translator.tables()
         if tables is not self._given[t]:
-            self._tables[t] = tables
+            set_tables(self._tables, t, tables)
             self._given[t] = tables
 
     def ran(self, seconds: float) -> None:
@@ -124,7 +126,7 @@ class ChipTranslation:
         translator.translate(int(state.st[t, S_PC]))  # or installs what another core translated there
         self._give(t)
         state.st[t, S_RUN] = RUN_CHUNK
-        self._set_threshold()
+        self._set_threshold(translator)
 
     def forget(self, t: int) -> None:
         """Tile ``t``'s code was (re)loaded from outside: its translations no longer hold."""
@@ -138,7 +140,7 @@ class ChipTranslation:
         self._watched.discard(t)
         self.on[t] = 0
         self.translators[t] = None
-        self._tables[t] = self._empty
+        set_tables(self._tables, t, self._empty)
         self._given[t] = None
 
     def stop_all(self) -> None:

@@ -175,6 +175,13 @@ def flush_counts(jt: JitArrays, opc_t: np.ndarray, ctr_t: np.ndarray) -> None:
 
 
 @njit(cache=True)
+def set_tables(tables, t: int, jt: JitArrays) -> None:  # type: ignore[no-untyped-def]
+    """``tables[t] = jt`` for a numba typed list of tables (compiled and cached here: the typed
+    list's own ``__setitem__`` compiles in every process and costs a dispatch per call)."""
+    tables[t] = jt
+
+
+@njit(cache=True)
 def forget_translations(jt: JitArrays) -> None:
     jt.entry_fn[:] = 0
     jt.entry_slot[:] = 0
@@ -363,4 +370,5 @@ __all__ = [
     "forget_if_changed",
     "forget_translations",
     "run_translated",
+    "set_tables",
 ]
