@@ -3,6 +3,7 @@ worked out here by hand (docs/results-logs.md gives the schema)."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 from pathlib import Path
@@ -10,6 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from robosoc.analysis import run_summary
 from robosoc.analysis.run_summary import (
     HOST_TIMING_KEYS,
     SCHEMA,
@@ -180,3 +182,27 @@ def test_write_summary_writes_json_with_null_for_nan_and_leaves_no_temporary(tmp
     assert sorted(p.name for p in tmp_path.iterdir()) == ["summary.json"]
     write_summary({"x": 1}, path)  # replaces
     assert json.loads(path.read_text()) == {"x": 1}
+
+
+def test_the_chip_clock_is_the_runs_own_when_there_is_one():
+    scenario = ScenarioConfig()
+    run = dataclasses.replace(result(), clock_ns=scenario.chip.tile.clock_period_ns * 2.5)
+    summary = vehicle_summary(scenario, np.zeros((0, len(ROW_FIELDS))), 0.1, run, 1.0, 1.0)
+    assert summary["chip"]["clock_ns"] == scenario.chip.tile.clock_period_ns * 2.5
+
+
+def test_a_summary_file_is_two_space_json_and_an_interrupted_write_keeps_the_last_one(tmp_path: Path, monkeypatch):
+    path = tmp_path / "summary.json"
+    write_summary({"a": 1, "b": {"c": [1, 2]}, "é": math.nan}, path)
+    assert path.read_bytes() == (
+        b'{\n  "a": 1,\n  "b": {\n    "c": [\n      1,\n      2\n    ]\n  },\n  "\\u00e9": null\n}\n'
+    )
+
+    def interrupted(src, dst):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(run_summary.os, "replace", interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        write_summary({"a": 2}, path)
+    assert json.loads(path.read_text()) == {"a": 1, "b": {"c": [1, 2]}, "é": None}  # still the last whole one
+    assert json.loads((tmp_path / "summary.json.tmp").read_text(encoding="utf-8")) == {"a": 2}
