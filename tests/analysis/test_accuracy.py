@@ -138,3 +138,38 @@ def test_quaternion_error_edge_cases() -> None:
         np.array([[math.cos(math.pi / 4), math.sin(math.pi / 4), 0, 0]]), np.array([[2.0, 0, 0, 0]])
     )
     assert turn.mean_deg == pytest.approx(90.0)
+
+
+def test_golden_replay_follows_each_attitude_setpoint_on_its_own_axis() -> None:
+    """Roll, then pitch, then yaw steps of different sizes: the golden model fed the flight's
+    packets commands the motors as the flight's own controller did, axis for axis."""
+    from robosoc.config.scenario import FlightPlan, ScenarioConfig, SetpointStep
+    from robosoc.config.vehicle import vehicle_preset
+    from robosoc.control.flight import fly
+    from robosoc.control.host import HostController
+
+    steps = (SetpointStep(1.2, "roll", 8.0), SetpointStep(1.6, "pitch", -5.0), SetpointStep(2.0, "yaw", 20.0))
+    scenario = ScenarioConfig(duration_s=2.4, flight=FlightPlan(takeoff_s=0.4, climb_s=0.6, steps=steps))
+    vehicle = vehicle_preset(scenario.vehicle)
+    rows = fly(scenario, vehicle, HostController.for_scenario(scenario, vehicle), 4)
+    sp = rows[:, [ROW_FIELDS.index(f"sp_{a}") for a in ("roll", "pitch", "yaw")]]
+    assert len(set(np.round(sp[-1], 6))) == 3  # three different attitude setpoints at the end
+    gold = golden_replay(rows, scenario, vehicle)
+    pwm = rows[:, [ROW_FIELDS.index(f"pwm{i}") for i in range(4)]]
+    assert np.abs(gold.pwm - pwm).max() <= 3
+    # each step moves the four motors apart in its own pattern: the replay sees the same steps
+    late = rows[:, ROW_FIELDS.index("t")] > 1.3
+    assert np.ptp(gold.pwm[late], axis=0).max() > 20
+
+
+def test_parallel_quaternions_of_any_length_are_zero_degrees_apart() -> None:
+    """Rounding can put the normalised dot product of parallel quaternions a hair above 1: the
+    angle is still 0, never NaN; so are unnormalised integer inputs."""
+    a = np.random.default_rng(1).normal(size=(1000, 4))
+    b = 3.0 * a
+    dot = np.abs(np.einsum("ij,ij->i", a, b)) / np.sqrt(np.einsum("ij,ij->i", a, a) * np.einsum("ij,ij->i", b, b))
+    assert (dot > 1.0).any()  # the case this test is about
+    err = quaternion_error(a, b)
+    assert 0.0 <= err.max_deg < 1e-5 and 0.0 <= err.mean_deg < 1e-6  # not NaN: the rows above 1 count 0
+    ints = quaternion_error(np.array([[2, 0, 0, 0]]), np.array([[1, 0, 0, 0]]))
+    assert ints.max_deg == 0.0 and ints.max_component == 1.0
