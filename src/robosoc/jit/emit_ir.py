@@ -163,6 +163,7 @@ class _Writer:
         self.pending = 0  # cycles of the instructions since then
         self.cur = "entry"  # the basic block being written
         self.jumps: list[tuple[str, str, str]] = []  # through the entry table: (from label, pc, cycle)
+        self.exits: list[tuple[str, int, str, int, str]] = []  # to the loop: (from label, code, pc, slot, cycle)
 
     def tmp(self) -> str:
         self.n += 1
@@ -249,14 +250,40 @@ class _Writer:
 
     # --- leaving a block ----------------------------------------------------------------------
     def leave(self, code: int, pc: int | str, slot: int = -1, cyc: str | None = None) -> None:
-        """Return ``code`` to the dispatch loop with pc and cycle in ctx (and one count to ``slot``)."""
+        """Return ``code`` to the dispatch loop with pc and cycle in ctx (and one count to ``slot``),
+        through the function's one way out (:meth:`leave_block`): an exit costs a branch here."""
         cyc = cyc or self.cycles()
         self.flush()
-        self.emit(f"store i64 {pc}, i64* {self.field('%ctx', CTX_PC)}")
-        self.emit(f"store i64 {cyc}, i64* {self.field('%ctx', CTX_CYC)}")
-        if slot >= 0:
-            self.add_i64(self.field("%cnt", slot), 1)
-        self.emit(f"ret i32 {code}")
+        self.exits.append((self.cur, code, str(pc), slot, cyc))
+        self.emit("br label %leave")
+
+    def leave_block(self) -> None:
+        """The shared way out to the dispatch loop: pc and cycle into ctx, a count, the exit code.
+
+        One block for every exit keeps the IR (and the code generator's time) small: the side
+        exits of memory accesses, limits and jumps are most of a region's ways out.
+        """
+        if not self.exits:
+            return
+        self.put_label("leave")
+        incoming = [(f"%{lb}", *rest) for lb, *rest in self.exits]
+        self.emit(f"%xcode = phi i32 {', '.join(f'[ {code}, {lb} ]' for lb, code, _, _, _ in incoming)}")
+        self.emit(f"%xpc = phi i64 {', '.join(f'[ {pc}, {lb} ]' for lb, _, pc, _, _ in incoming)}")
+        self.emit(f"%xcyc = phi i64 {', '.join(f'[ {cyc}, {lb} ]' for lb, _, _, _, cyc in incoming)}")
+        counts = any(slot >= 0 for _, _, _, slot, _ in self.exits)
+        if counts:
+            self.emit(f"%xslot = phi i64 {', '.join(f'[ {slot}, {lb} ]' for lb, _, _, slot, _ in incoming)}")
+        self.emit(f"store i64 %xpc, i64* {self.field('%ctx', CTX_PC)}")
+        self.emit(f"store i64 %xcyc, i64* {self.field('%ctx', CTX_CYC)}")
+        if counts:
+            counted = self.tmp()
+            self.emit(f"{counted} = icmp sge i64 %xslot, 0")
+            self.emit(f"br i1 {counted}, label %leave.count, label %leave.ret")
+            self.put_label("leave.count")
+            self.add_i64(self.field("%cnt", "%xslot"), 1)
+            self.emit("br label %leave.ret")
+            self.put_label("leave.ret")
+        self.emit("ret i32 %xcode")
 
     def branch(self, pc: int, cyc: str) -> None:
         """Continue at this region's block at ``pc`` (a branch within the function)."""
@@ -374,6 +401,7 @@ class _Writer:
         for block in self.region.blocks.values():
             self.block(block)
         self.jump_block()
+        self.leave_block()  # after the jump block, which leaves through it too
         body, self.lines = self.lines, [f"define i32 @{self.name}({_PARAMS}) nounwind {{", "entry:"]
         self.emit("%cycp = alloca i64")
         self.emit("store i64 %cyc, i64* %cycp")
