@@ -4,15 +4,17 @@
 # mutmut maps each mutated function to the tests that called it while its stats run was going:
 # a function called by a module- or session-scoped fixture is mapped only to the first test that
 # set the fixture up, so its mutants are checked against that one test while every later test
-# reading the fixture's result could catch them.  These hooks record, for each test, the functions
-# called before its body ran (its fixtures' set-up) and, when the stats run ends, map those
-# functions to every test that shares one of the test's module-, class-, package- or
-# session-scoped fixtures.
+# reading the fixture's result could catch them.  These hooks record the functions each module-,
+# class-, package- or session-scoped fixture called while it was set up, and, when the stats run
+# ends, map them to every test that uses that fixture (the same fixture at the same place: one
+# module's module fixture is not another module's).  Only the calls made by the fixture's own
+# set-up count: a session fixture every test reaches (pytest's tmp_path_factory) does not drag the
+# functions of other fixtures along.
 import os as _mutation_os
 
 import pytest as _mutation_pytest
 
-_MUTATION_SETUP_CALLS: dict[str, set[str]] = {}
+_MUTATION_FIXTURE_CALLS: dict[tuple[str, ...], set[str]] = {}
 
 
 def _mutation_stats_run() -> bool:
@@ -23,12 +25,30 @@ def _mutation_nodeid(item) -> str:  # type: ignore[no-untyped-def]
     return item.nodeid.removeprefix("mutants/")
 
 
-@_mutation_pytest.hookimpl(tryfirst=True)
-def pytest_runtest_call(item):  # type: ignore[no-untyped-def]
-    if _mutation_stats_run():
-        from mutmut.state import state
+def _mutation_where(scope: str, path) -> str:  # type: ignore[no-untyped-def]
+    """Where one instance of a fixture of ``scope`` lives, from a path in it (a test's or the node's)."""
+    if scope == "session":
+        return ""
+    if scope == "package":
+        return str(path if path.is_dir() else path.parent)
+    return str(path)  # module and class fixtures: one instance per test file (a class's is finer)
 
-        _MUTATION_SETUP_CALLS[_mutation_nodeid(item)] = set(state()._stats)
+
+@_mutation_pytest.hookimpl(hookwrapper=True)
+def pytest_fixture_setup(fixturedef, request):  # type: ignore[no-untyped-def]
+    scope = str(fixturedef.scope)
+    if not _mutation_stats_run() or scope == "function":
+        yield
+        return
+    from mutmut.state import state
+
+    before = set(state()._stats)
+    yield
+    called = set(state()._stats) - before
+    if called:
+        node_path = getattr(request.node, "path", None)
+        key = (fixturedef.argname, fixturedef.baseid, scope, _mutation_where(scope, node_path))
+        _MUTATION_FIXTURE_CALLS.setdefault(key, set()).update(called)
 
 
 def _mutation_shared_fixtures(item) -> list[tuple[str, ...]]:  # type: ignore[no-untyped-def]
@@ -36,10 +56,8 @@ def _mutation_shared_fixtures(item) -> list[tuple[str, ...]]:  # type: ignore[no
     keys = []
     for name, defs in info.name2fixturedefs.items() if info is not None else ():
         scope = str(getattr(defs[-1], "scope", "function"))
-        if scope == "function":
-            continue
-        where = {"session": "", "package": str(item.path.parent)}.get(scope, str(item.path))
-        keys.append((name, defs[-1].baseid, scope, where))
+        if scope != "function":
+            keys.append((name, defs[-1].baseid, scope, _mutation_where(scope, item.path)))
     return keys
 
 
@@ -48,18 +66,8 @@ def pytest_sessionfinish(session):  # type: ignore[no-untyped-def]
         return
     from mutmut.state import state
 
-    sharing: dict[tuple[str, ...], set[str]] = {}
-    keys_of: dict[str, list[tuple[str, ...]]] = {}
-    for item in getattr(session, "items", []):
-        keys = _mutation_shared_fixtures(item)
-        keys_of[_mutation_nodeid(item)] = keys
-        for key in keys:
-            sharing.setdefault(key, set()).add(_mutation_nodeid(item))
     table = state().tests_by_mangled_function_name
-    for nodeid, functions in _MUTATION_SETUP_CALLS.items():
-        group: set[str] = set()
-        for key in keys_of.get(nodeid, ()):
-            group |= sharing[key]
-        if group:
-            for function in functions:
-                table[function] |= group
+    for item in getattr(session, "items", []):
+        for key in _mutation_shared_fixtures(item):
+            for function in _MUTATION_FIXTURE_CALLS.get(key, ()):
+                table[function].add(_mutation_nodeid(item))
