@@ -166,6 +166,11 @@ def test_builds_measured_in_worker_processes_equal_those_measured_in_turn() -> N
     finals = [a for a in seen if a[1:] == (1, 1)]
     assert finals[-4:] == [(f"{b} event", 1, 1) for b in ("float+mul", "float-no-mul", "fixed+mul", "fixed-no-mul")]
     assert {key for key, _, _ in seen} >= {f"{b} event" for b in ("float+mul", "fixed-no-mul")}
+    # and each build's worker sent samples done on the way (every tenth), read while the builds ran
+    for b in ("float+mul", "float-no-mul", "fixed+mul", "fixed-no-mul"):
+        steps = [(k, total) for key, k, total in seen if key == f"{b} event" and (k, total) != (1, 1)]
+        assert steps and all(k % 10 == 0 or k == total for k, total in steps), b
+        assert steps[0][0] < steps[0][1] and len({total for _, total in steps}) == 1, b
     assert parallel.run("fixed+mul", "event") is parallel.runs[2]
     assert parallel.run("fixed+mul", "periodic") is None and parallel.run("fixed", "event") is None
 
@@ -288,13 +293,14 @@ def test_a_replayed_build_reports_every_sample_or_every_tenth_to_its_worker_queu
 def test_a_closed_loop_build_flies_the_spec_scenario_and_reports_each_sample() -> None:
     spec = TableSpec(iterations=2, closed_loop=True, seed=3, workers=1)
     seen: list[tuple[str, int, int]] = []
+    # not the default firmware (fixed+mul): the build flown is the one asked for
     run = table_one.measure_build(
-        table_one.build_config("fixed", True, "event"), spec, None, None, lambda *a: seen.append(a)
+        table_one.build_config("fixed", False, "event"), spec, None, None, lambda *a: seen.append(a)
     )
     total = round(spec.scenario().duration_s * 100)
     assert total == 302
-    assert seen == [("fixed+mul event", k, total) for k in range(1, total + 1)]
-    assert (run.source, run.build, run.samples) == ("closed-loop", "fixed+mul", 2)
+    assert seen == [("fixed-no-mul event", k, total) for k in range(1, total + 1)]
+    assert (run.source, run.build, run.release, run.samples) == ("closed-loop", "fixed-no-mul", "event", 2)
     assert run.first_sample == 300  # take-off at 3 s
     assert run.tasks["estimator"].jobs == 2 and run.pwm.samples == 2
 
@@ -401,15 +407,18 @@ def _full_run(build: str, release: str, base: float) -> BuildRun:
 def test_table_text_puts_every_figure_in_its_row_and_column() -> None:
     runs = [_full_run("float+mul", "periodic", 1000.0), _full_run("fixed-no-mul", "periodic", 3.0)]
     orderings = [
+        table_one.OrderingCheck("estimator", "energy", "x", "a", "b", "event", True, False),  # another release
         table_one.OrderingCheck("pid", "energy", "fixed < float (with multiplier)", "fixed+mul", "float+mul",
                                 "periodic", True, None),
         table_one.OrderingCheck("estimator", "response", "multiplier < none (fixed)", "fixed+mul", "fixed-no-mul",
                                 "periodic", False, True),
-        table_one.OrderingCheck("estimator", "energy", "x", "a", "b", "event", True, False),  # another release
+        table_one.OrderingCheck("pid", "response", "fixed < float (no multiplier)", "fixed-no-mul", "float-no-mul",
+                                "periodic", True, False),
     ]  # fmt: skip
     fixed_vs_float = {
-        ("periodic", False): QuaternionError(4, 0.001, 0.002, 0.1, 0.2),
         ("event", True): QuaternionError(4, 0.5, 0.5, 5.0, 5.0),
+        ("periodic", False): QuaternionError(4, 0.001, 0.002, 0.1, 0.2),
+        ("periodic", True): QuaternionError(4, 0.0025, 0.003, 0.3, 0.4),
     }
     result = table_one.TableResult(TableSpec(releases=("event", "periodic")), runs, orderings, fixed_vs_float)
     lines = table_one.format_table(result)
@@ -452,6 +461,7 @@ def test_table_text_puts_every_figure_in_its_row_and_column() -> None:
         "orderings (lower is better; seed: holds in the seed's Table I; ours: holds here):",
         "  PID energy   fixed < float (with multiplier)              seed yes  ours -",
         "  EKF response multiplier < none (fixed)                    seed NO   ours yes",
+        "  PID response fixed < float (no multiplier)                seed yes  ours NO",
         "accuracy (mean error per quaternion component in %, the seed's terms; mean / max angle):",
         "  float+mul     EKF vs float64 golden 0.1234 % (0.1235° / 0.5000°); vs truth 2.000 % (1.500° / 3.250°);"
         " PWM within 1 count of golden 90.0 % (max diff 2)",
@@ -459,6 +469,7 @@ def test_table_text_puts_every_figure_in_its_row_and_column() -> None:
         " PWM within 1 count of golden 90.0 % (max diff 2)",
         "  golden        float64 EKF vs truth 0.440 % (0.250° / 0.750°); seed: EKF vs truth 0.44 %",
         "  fixed vs float (no multiplier): 0.1000 % (0.1000° / 0.2000°); seed: 0.19 %",
+        "  fixed vs float (with multiplier): 0.2500 % (0.3000° / 0.4000°); seed: 0.19 %",
         "",
     ]  # the event release has no run: no section
 
