@@ -206,3 +206,11 @@ def test_a_summary_file_is_two_space_json_and_an_interrupted_write_keeps_the_las
         write_summary({"a": 2}, path)
     assert json.loads(path.read_text()) == {"a": 1, "b": {"c": [1, 2]}, "é": None}  # still the last whole one
     assert json.loads((tmp_path / "summary.json.tmp").read_text(encoding="utf-8")) == {"a": 2}
+
+
+def test_a_vehicle_summary_of_a_flight_holds_its_flight_figures(hover_flight):
+    scenario = ScenarioConfig(duration_s=6.0, controller="host")
+    rest = vehicle_preset(scenario.vehicle).rest_height
+    summary = vehicle_summary(scenario, hover_flight, rest, None, 6.0, 3.0)
+    assert summary["flight"] == flight_summary(hover_flight, scenario, rest)
+    assert summary["flight"]["hover_rms_m"] < 0.5
