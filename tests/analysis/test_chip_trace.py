@@ -154,3 +154,12 @@ def test_trace_file_is_written_whole(trace: dict, tmp_path: Path) -> None:
     write_chip_trace(trace, path)
     assert json.loads(path.read_text()) == trace
     assert not list(tmp_path.glob("*.partial"))
+
+
+def test_the_trace_shows_the_application_tiles_and_the_io_tile_only(trace: dict, chip_flight: ChipReplay) -> None:
+    run = chip_flight.run
+    io = run.chip.config.io_tile
+    expected = {f"tile ({x},{y})" for x, y in run.tiles} | {f"tile ({io[0]},{io[1]}) I/O"}
+    names = {e["args"]["name"] for e in trace["traceEvents"] if e["name"] == "process_name"}
+    assert names == expected
+    assert trace["otherData"]["firmware"] == chip_flight.result.firmware.label

@@ -36,7 +36,9 @@ def _timeline() -> ChipTimeline:
     packets = [
         Packet(IO, A, 10, 8, 30, 45),  # delivered: both ends and a flow
         Packet(IO, A, 12, 6, 50, 70),  # sent while the first still leaves: a second send lane
+        Packet(A, B, 14, 4, 40, 48),  # overlaps both: lanes are per sender and per receiver
         Packet(A, B, 460, 4, None, None),  # not delivered yet: the sender's slice only
+        Packet(A, B, 470, 2, 480, None),  # arrived, not yet seen by the receiver: the same
     ]
     return ChipTimeline([A, B], IO, spans, sleeps, packets, lost=2, end_cycle=1000)
 
@@ -82,6 +84,7 @@ def test_each_thread_is_named_once_with_its_sort_index(trace: dict) -> None:
         (1, 12): "NoC send",
         (3, 3): "NoC receive",
         (3, 2): "NoC send",
+        (2, 3): "NoC receive",
     }
     assert len(_by(trace, name="thread_name")) == len(names)
     order = {(e["pid"], e["tid"]): e["args"]["sort_index"] for e in _by(trace, name="thread_sort_index")}
@@ -135,7 +138,11 @@ def test_packets_have_a_slice_at_each_end_and_a_flow_between(trace: dict) -> Non
         (1, 12, "packet to (1,0)", pytest.approx(12 * US), pytest.approx(6 * US), {"to": "1,0", "flits": 6}),
         (3, 3, "packet from (0,0)", pytest.approx(50 * US), pytest.approx(20 * US),
          {"from": "0,0", "flits": 6, "latency_cycles": 58}),
+        (3, 2, "packet to (0,1)", pytest.approx(14 * US), pytest.approx(4 * US), {"to": "0,1", "flits": 4}),
+        (2, 3, "packet from (1,0)", pytest.approx(40 * US), pytest.approx(8 * US),
+         {"from": "1,0", "flits": 4, "latency_cycles": 34}),
         (3, 2, "packet to (0,1)", pytest.approx(460 * US), pytest.approx(4 * US), {"to": "0,1", "flits": 4}),
+        (3, 2, "packet to (0,1)", pytest.approx(470 * US), pytest.approx(2 * US), {"to": "0,1", "flits": 2}),
     ]  # fmt: skip
     flows = [{k: v for k, v in e.items() if k != "ts"} for e in trace["traceEvents"] if e["ph"] in "sf"]
     assert flows == [
@@ -143,9 +150,11 @@ def test_packets_have_a_slice_at_each_end_and_a_flow_between(trace: dict) -> Non
         {"name": "packet", "cat": "noc", "ph": "f", "id": 1, "pid": 3, "tid": 3, "bp": "e"},
         {"name": "packet", "cat": "noc", "ph": "s", "id": 2, "pid": 1, "tid": 12},
         {"name": "packet", "cat": "noc", "ph": "f", "id": 2, "pid": 3, "tid": 3, "bp": "e"},
+        {"name": "packet", "cat": "noc", "ph": "s", "id": 3, "pid": 3, "tid": 2},
+        {"name": "packet", "cat": "noc", "ph": "f", "id": 3, "pid": 2, "tid": 3, "bp": "e"},
     ]
     times = [e["ts"] for e in trace["traceEvents"] if e["ph"] in "sf"]
-    assert times == pytest.approx([14 * US, 37.5 * US, 15 * US, 60 * US])
+    assert times == pytest.approx([14 * US, 37.5 * US, 15 * US, 60 * US, 16 * US, 44 * US])
 
 
 def test_lanes_reuse_a_lane_once_it_is_free() -> None:
