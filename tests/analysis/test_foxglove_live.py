@@ -161,9 +161,10 @@ def test_publishing_is_held_back_to_the_pace(monkeypatch, host_flight: np.ndarra
     monkeypatch.setattr(live_module.time, "monotonic", clock.monotonic)
     monkeypatch.setattr(live_module.time, "sleep", clock.sleep)
     t = host_flight[:, ROW_FIELDS.index("t")]
-    first = host_flight[0]
+    first = host_flight[0].copy()
+    first[ROW_FIELDS.index("t")] = 2.0  # a live view joined at 2 s: the pace counts from there
     later = host_flight[int(np.argmin(np.abs(t - (t[0] + 1.0))))].copy()
-    later[ROW_FIELDS.index("t")] = first[ROW_FIELDS.index("t")] + 1.0
+    later[ROW_FIELDS.index("t")] = 3.0
     with LiveFlight(0, pace=pace) as live:
         live.publish(first)
         assert clock.slept == []

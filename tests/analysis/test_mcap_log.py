@@ -135,3 +135,18 @@ def test_rows_without_flight_columns_are_refused(tmp_path: Path) -> None:
     with pytest.raises(ValueError, match="columns"):
         write_flight_mcap(np.zeros((3, 4)), tmp_path / "x.mcap")
     assert not (tmp_path / "x.mcap").exists()
+
+
+def test_one_schema_per_type_and_messages_numbered_in_write_order(rows: np.ndarray, tmp_path: Path) -> None:
+    path = tmp_path / "flight.mcap"
+    count = write_flight_mcap(rows[:3], path)
+    with path.open("rb") as stream:
+        reader = make_reader(stream)
+        summary = reader.get_summary()
+        messages = list(reader.iter_messages(log_time_order=False))
+    names = [s.name for s in summary.schemas.values()]
+    assert len(names) == len(set(names))  # each type registered once, shared by its topics
+    assert len(summary.channels) == len({c.topic for c in summary.channels.values()})
+    assert [m.sequence for _, _, m in messages] == list(range(count))
+    assert all(m.publish_time == m.log_time for _, _, m in messages)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["flight.mcap"]  # no partial file left
