@@ -236,3 +236,33 @@ def test_write_sweep_plots_makes_the_plots_folder_and_its_parents(tmp_path: Path
     assert [p.name for _, p, _ in plots] == ["pareto-estimator.png", "pareto-pid.png"]
     again = write_sweep_plots(out, RECORDS, [], [])  # an existing folder is fine
     assert [p for _, p, _ in again] == [p for _, p, _ in plots]
+
+
+def test_each_written_plot_is_the_figure_of_its_own_task_field_and_metric(tmp_path: Path):
+    """The PNGs are byte for byte the figures drawn here for the same task, field and metric."""
+    both = [record("fixed", 1, 10.0, 5.0, **{"chip.width": 2}), record("float", 1, 30.0, 9.0, **{"chip.width": 3})]
+    varied = ["firmware.arith", "chip.width"]
+    metric = "tasks.estimator.energy_nj_mean"
+    plots = write_sweep_plots(tmp_path / "out", both, varied, [metric])
+    expected = [(pareto_figure(both, varied, task), 100) for task in ("estimator", "pid")]
+    expected += [(metric_figure(both, metric, field), 80) for field in varied]
+    assert len(plots) == len(expected)
+    for (caption, path, _), (fig, dpi) in zip(plots, expected, strict=True):
+        mine = tmp_path / "mine.png"
+        fig.savefig(mine, dpi=dpi)
+        plt.close(fig)
+        assert path.read_bytes() == mine.read_bytes(), caption
+    # two varied fields: each point's label names both, in the order given
+    fig = pareto_figure(both, varied, "estimator")
+    try:
+        assert [c.get_label() for c in fig.axes[0].collections] == ["arith=fixed, width=2", "arith=float, width=3"]
+    finally:
+        plt.close(fig)
+
+
+def test_the_points_table_has_one_row_per_line_in_order():
+    page = sweep_html("t", RECORDS[:1], [], "point,value\n0,<1>\n1,2\n")
+    assert (
+        "<h2>Points</h2><table><thead><tr><th>point</th><th>value</th></tr></thead><tbody>"
+        "<tr><td>0</td><td>&lt;1&gt;</td></tr><tr><td>1</td><td>2</td></tr></tbody></table>"
+    ) in page
