@@ -181,3 +181,28 @@ def test_a_trace_file_is_compact_json_and_an_interrupted_write_leaves_no_partial
         write_chip_trace({"traceEvents": []}, path)
     assert json.loads(path.read_text(encoding="utf-8")) == trace  # the last whole file stays
     assert sorted(p.name for p in tmp_path.iterdir()) == ["chip-trace.json"]
+
+
+def test_sleeps_past_the_chips_cycle_and_tiles_that_only_slept() -> None:
+    """A tile's own cycle can run ahead of the chip's (a long quantum): a sleep still going lasts to
+    the later of the two.  A tile whose recording holds only a sleep still gets its core thread.  Two
+    packets reaching one tile at overlapping times take two receive lanes."""
+    c = (1, 1)
+    timeline = ChipTimeline(
+        [A, B, c],
+        IO,
+        spans=[TaskSpan(A, KERNEL_TASK_ID, 0, 500), TaskSpan(B, KERNEL_TASK_ID, 0, 350)],
+        sleeps=[Sleep(B, 320, None), Sleep(c, 100, None)],
+        packets=[Packet(IO, B, 0, 4, 10, 40), Packet(A, B, 2, 4, 20, 30)],
+        end_cycle=300,
+    )
+    trace = chip_trace(timeline, [], 4.0, {})
+    sleeps = {e["pid"]: (e["ts"], e["dur"]) for e in _by(trace, name="sleep", ph="X")}
+    pid = {xy: k + 1 for k, xy in enumerate(sorted({A, B, c, IO}))}
+    assert sleeps[pid[B]] == (pytest.approx(320 * US), pytest.approx(30 * US))  # to B's own 350, not 300
+    assert sleeps[pid[c]] == (pytest.approx(100 * US), pytest.approx(200 * US))  # no span: to the chip's cycle
+    names = {(e["pid"], e["tid"]): e["args"]["name"] for e in _by(trace, name="thread_name")}
+    assert names[(pid[c], 1)] == "core"
+    receive = [(e["tid"], e["name"]) for e in _by(trace, cat="noc", ph="X") if e["pid"] == pid[B]]
+    assert receive == [(3, "packet from (0,0)"), (13, "packet from (1,0)")]
+    assert names[(pid[B], 13)] == "NoC receive"
