@@ -67,6 +67,11 @@ def test_replay_profile_totals_equal_the_run_totals(replays) -> None:
         assert got["energy_pj"] == pytest.approx(result.energy_pj[f"tile {xy}"], rel=1e-12)
         assert got["energy_pj"] == pytest.approx(_pj(counters), rel=1e-12)
     assert totals[None]["energy_pj"] == pytest.approx(result.energy_pj["noc"], rel=1e-12)
+    (noc,) = [r for r in result.profile.rows if r.tile is None]
+    assert (noc.task, noc.task_name, noc.function, noc.cycles, noc.instructions, noc.counts) == (
+        None, "", NOC_ROW, 0, 0, {}
+    )  # fmt: skip
+    assert result.profile.rows[-1] is noc and result.profile.clock_ns == result.clock_ns
     # and per task: each task's rows add up to its own counters
     for (xy, task), pj in result.task_energy_pj.items():
         mine = [r for r in result.profile.rows if r.tile == xy and r.task == task]
