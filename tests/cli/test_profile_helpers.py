@@ -94,3 +94,28 @@ def test_summary_json_is_read_or_refused_by_name(tmp_path: Path) -> None:
     path.write_text("{oops")
     with pytest.raises(CliError, match=rf"^{path}: not JSON: "):
         _read_summary(path)
+
+
+def test_the_table_aligns_names_left_and_figures_right_under_a_left_title() -> None:
+    buffer = io.StringIO()
+    console = Console(file=buffer, width=200, color_system=None, force_terminal=False)
+    print_profile(console, PROFILE, 2)
+    raw = buffer.getvalue().splitlines()
+    assert raw[0].rstrip() == "tile 0,0: 20,000 cycles, 2.500 uJ"  # the title starts at the left edge
+    header = next(line for line in raw if "function" in line and "cycles" in line)
+    row = next(line for line in raw if "predict" in line)
+    assert row.index("ekf (1)") == header.index("task")  # names start under their headings
+    assert row.index("predict") == header.index("function")
+    for heading, cell in (("cycles", "6,000"), ("%", "60.0"), ("instructions", "3,000"), ("energy nJ", "1,500.0")):
+        assert row.index(cell) + len(cell) == header.index(heading) + len(heading), heading  # figures end under them
+
+
+def test_the_rest_row_is_dim_and_large_energies_keep_their_digits() -> None:
+    buffer = io.StringIO()
+    console = Console(file=buffer, width=200, color_system="standard", force_terminal=True)
+    print_profile(console, PROFILE, 2)
+    (more,) = [line for line in buffer.getvalue().splitlines() if "(2 more)" in line]
+    assert "\x1b[2m" in more  # dim
+    big = FunctionProfile([_row((0, 0), 1, "ekf", "f", 1, 1, 5e9), _row(None, None, "", "(NoC)", 0, 0, 7e9)], 4.0)
+    lines = _printed(5, profile=big)
+    assert "tile 0,0: 1 cycles, 5000.000 uJ" in lines and lines[-1] == "NoC (routers): 7000.000 uJ"
