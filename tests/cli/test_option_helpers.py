@@ -638,3 +638,25 @@ def test_load_program_errors_name_the_file(tmp_path: Path, monkeypatch: pytest.M
     with pytest.raises(CliError) as caught:
         files.load_program(text)
     assert caught.value.message == f"{text}: malformed ELF file (IndexError: index out of range)"
+
+
+def test_without_a_null_device_to_compare_rich_is_not_taken_for_a_closed_pipe(monkeypatch: pytest.MonkeyPatch) -> None:
+    import os
+    import sys
+
+    null = open(os.devnull, "w")  # noqa: SIM115  (closed at the end)
+    real_stat = os.stat
+    try:
+        monkeypatch.setattr(sys, "stdout", null)  # stdout changed to the null device ...
+        assert errors._rich_closed_pipe((-1, -1)) is True
+
+        def no_null(path, *args, **kwargs):  # type: ignore[no-untyped-def]
+            if path == os.devnull:
+                raise PermissionError(path)
+            return real_stat(path, *args, **kwargs)
+
+        monkeypatch.setattr(errors.os, "stat", no_null)  # ... but it cannot be told from any other file
+        assert errors._rich_closed_pipe((-1, -1)) is False
+    finally:
+        monkeypatch.undo()
+        null.close()

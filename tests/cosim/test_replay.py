@@ -88,7 +88,9 @@ def test_firmware_replay_command_writes_jobs_and_summary(tmp_path: Path):
     assert "fixed+mul: 30 samples, 30 PWM commands, 0 deadline misses" in result.stdout
     lines = (out / "jobs.csv").read_text().splitlines()
     assert len(lines) == 1 + 2 * 30
-    summary = json.loads((out / "summary.json").read_text())
+    text = (out / "summary.json").read_text()
+    summary = json.loads(text)
+    assert text == json.dumps(summary, indent=2) + "\n"  # two-space JSON, one final newline
     assert summary["tasks"]["estimator"]["jobs"] == 30 and summary["tasks"]["pid"]["deadline_misses"] == 0
 
 
