@@ -195,3 +195,21 @@ def test_the_live_server_option(monkeypatch: pytest.MonkeyPatch) -> None:
     assert console.export_text().endswith(
         "foxglove: ws://127.0.0.1:8765 (Foxglove: Open connection, Foxglove WebSocket)\n"
     )
+
+
+def test_the_live_view_gets_the_first_vehicles_rows_only() -> None:
+    from robosoc.cli import fly as fly_cli
+
+    class Live:
+        def __init__(self) -> None:
+            self.rows: list[str] = []
+
+        def publish(self, row) -> None:  # type: ignore[no-untyped-def]
+            self.rows.append(row)
+
+    live = Live()
+    on_row = fly_cli._live_rows(live)
+    for vehicle, row in ((0, "a"), (1, "b"), (0, "c"), (2, "d")):
+        on_row(vehicle, row)
+    assert live.rows == ["a", "c"]
+    assert fly_cli._live_rows(None) is None
