@@ -3,10 +3,14 @@
 :func:`load` runs the browser twice on a local file, with every host name unresolvable (the page
 must need no network): once to dump the DOM after its scripts ran, once for a screenshot.  The
 browser's stderr log carries every console message of the page (``INFO:CONSOLE``).
+
+``ROBOSOC_TEST_BROWSER=off`` leaves the browser out (the tests skip their rendering part): mutation
+runs set it, where each surviving mutant would otherwise start the browser for every render test.
 """
 
 from __future__ import annotations
 
+import os
 import re
 import shutil
 import subprocess
@@ -15,7 +19,11 @@ from pathlib import Path
 
 import matplotlib.image
 
-BROWSER = shutil.which("chromium") or shutil.which("chromium-browser")
+BROWSER = (
+    None
+    if os.environ.get("ROBOSOC_TEST_BROWSER") == "off"
+    else shutil.which("chromium") or shutil.which("chromium-browser")
+)
 FLAGS = [
     "--headless", "--no-sandbox", "--disable-gpu", "--no-first-run", "--host-resolver-rules=MAP * ~NOTFOUND",
     "--enable-logging=stderr", "--v=0",
