@@ -140,7 +140,7 @@ def test_a_renderer_that_cannot_start_closes_the_sink_and_says_why(fakes, tmp_pa
 def test_samples_drive_a_bar_of_simulated_seconds_that_replaces_the_spinner(monkeypatch: pytest.MonkeyPatch) -> None:
     from robosoc.cli import fly
 
-    readings = [100.0, 100.0, 100.1, 101.0]  # the bar's start, then the three samples below
+    readings = [0.0, 0.0, 0.1, 0.2, 0.5]  # the bar's start, then the four samples below
 
     def clock() -> float:
         return readings.pop(0) if len(readings) > 1 else readings[0]
@@ -158,10 +158,14 @@ def test_samples_drive_a_bar_of_simulated_seconds_that_replaces_the_spinner(monk
     assert (task.total, task.completed, task.fields) == (200, 1, {"sim": "0.01/2 s", "rtf": ""})
     progress.sample(9)  # 0.1 s simulated in 0.1 s: too early for a real-time factor
     assert (task.completed, task.fields["sim"], task.fields["rtf"]) == (10, "0.10/2 s", "")
-    progress.sample(99)  # 1 s simulated in 1 s
-    assert (task.completed, task.fields["sim"], task.fields["rtf"]) == (100, "1.00/2 s", "1.00x real time")
+    progress.sample(19)  # 0.2 s simulated in 0.2 s: still too early
+    assert (task.completed, task.fields["rtf"]) == (20, "")
+    progress.sample(99)  # 1 s simulated in 0.5 s
+    assert (task.completed, task.fields["sim"], task.fields["rtf"]) == (100, "1.00/2 s", "2.00x real time")
+    assert task.description == "fly"
     shown = _rendered(bar)
-    assert shown.startswith("flight") and "1.00/2 s" in shown and "1.00x real time" in shown
+    assert shown.startswith("flight ") and "1.00/2 s" in shown and "2.00x real time" in shown
+    assert shown.index("━") < shown.index("1.00/2 s") < shown.index("2.00x real time")  # the bar, then the figures
     progress.stop()
     assert progress.progress is None and not bar.live.is_started
 

@@ -361,7 +361,7 @@ class _VideoState:
             self.sink.close()
 
 
-def _fmt(value: float | None, scale: float = 1.0, digits: int = 2, unit: str = "") -> str:
+def _fmt(value: float | None, scale: float, digits: int, unit: str = "") -> str:
     if value is None or (isinstance(value, float) and math.isnan(value)):
         return "n/a"
     return f"{value * scale:.{digits}f}{(' ' + unit) if unit else ''}"
