@@ -249,3 +249,67 @@ def test_a_full_section_in_order_with_vehicles_one_level_down(drawn):
     assert "<pre>name = &#x27;&lt;x&gt;&#x27;\n</pre>" in page
     assert "<details><summary>summary.json</summary><pre>{\n  &quot;energy&quot;: {" in page
     assert "<h2>Energy</h2>" not in page  # no per-part energy object
+
+
+def _legend_plot(ax) -> None:
+    ax.plot([0, 1], [1, 2], label="hello <x>")
+    ax.legend()
+
+
+def test_a_plot_is_inline_svg_of_its_size_with_text_kept_as_text_and_no_date():
+    svg = report._svg(_legend_plot, "one", (7, 3.2))
+    assert svg.startswith('<svg xmlns:xlink="http://www.w3.org/1999/xlink" width="504pt" height="230.4pt"')
+    assert svg.count("<svg") == 1 and svg.rstrip().endswith("</svg>")
+    assert "hello &lt;x&gt;" in svg and "<text" in svg  # text stays text (svg.fonttype none), searchable
+    assert "font-size: 9px" in svg and "font-size: 10px" not in svg
+    assert "<dc:date>" not in svg  # no date: the same plot gives the same bytes
+    assert report._svg(_legend_plot, "one", (7, 3.2)) == svg
+    other = report._svg(_legend_plot, "two", (7, 3.2))
+    assert other != svg and len(other) == len(svg)  # ids salted by the name: two plots on one page differ
+    assert plt.get_fignums() == []  # closed
+
+
+def test_stacked_plots_share_their_time_axis_unless_asked_not_to():
+    seen: list[tuple] = []
+
+    def draw(*axes) -> None:
+        seen.append(tuple(axes))
+
+    report._svg(draw, "a", (4, 3), 2)
+    report._svg(draw, "b", (4, 3), 2, sharex=False)
+    report._svg(draw, "c", (4, 3))
+    (a1, a2), (b1, b2), (c1,) = seen
+    assert a1.get_shared_x_axes().joined(a1, a2)
+    assert not b1.get_shared_x_axes().joined(b1, b2)
+    assert not c1.get_shared_x_axes().joined(c1, a1) and c1.get_figure().get_size_inches().tolist() == [4, 3]
+
+
+def test_profile_rows_are_grouped_by_tile_and_task_with_the_chip_row_left_out():
+    def row(tile, task, function, cycles, instructions=1):  # type: ignore[no-untyped-def]
+        return {"tile": tile, "task": task, "function": function, "cycles": cycles, "instructions": instructions}
+
+    profile = {
+        "rows": [
+            row("1,0", 2, "b", 10), row("1,0", 2, "a", 10), row("1,0", 2, "c", 30),
+            row("0,1", 1, "main", 5), row("", None, "(NoC)", 0, 0), row("0,1", 0, "(sleep)", 99, 0),
+        ]
+    }  # fmt: skip
+    tasks = report._profile_tasks(profile)
+    assert list(tasks) == [("0,1", 1), ("1,0", 2)]  # sorted; the NoC row and a task without instructions out
+    assert [r["function"] for r in tasks[("1,0", 2)]] == ["c", "a", "b"]  # most cycles first, then by name
+
+
+def test_the_page_heads_with_the_title_and_folder_and_writes_where_asked(tmp_path: Path):
+    run = RunFolder(tmp_path / "run <1>", summary={"scenario": "hover"}, scenario_text="x = 1\n")
+    page = report.render_report(run)
+    assert "<title>robosoc: hover</title>" in page and "<h1>robosoc run: hover</h1>" in page
+    assert f"<p>Folder: <code>{tmp_path}/run &lt;1&gt;</code></p>" in page
+    assert "<h2>Summary</h2>" in page and "<h3>" not in page
+    folder = tmp_path / "run"
+    folder.mkdir()
+    (folder / "summary.json").write_text('{"scenario": "s"}')
+    target = tmp_path / "elsewhere.html"
+    assert report.write_report(folder, target) == target
+    assert target.read_text(encoding="utf-8").startswith("<!DOCTYPE html>")
+    assert sorted(p.name for p in folder.iterdir()) == ["summary.json"]  # nothing written in the run folder
+    assert report.write_report(folder) == folder / "report.html" and (folder / "report.html").is_file()

@@ -90,7 +90,7 @@ def test_job_energy_stacks_the_parts_of_each_task_in_microjoules(drawn):
     bottom = np.zeros(2)
     for part, values in expected.items():
         bars = parts[part].patches
-        assert [b.get_height() for b in bars] == pytest.approx(values)
+        assert [b.get_height() for b in bars] == pytest.approx(values, rel=1e-12, abs=1e-15)
         assert [b.get_y() for b in bars] == pytest.approx(bottom)  # stacked on the parts before
         bottom += values
     assert [t.get_text() for t in ax.get_xticklabels()] == ["estimator", "pid"]
