@@ -352,9 +352,12 @@ def test_the_table_runs_builds_in_workers_only_when_there_are_several_of_each(mo
     calls: list[str] = []
     rows_seen: list[tuple] = []
 
+    progress_seen: list[object] = []
+
     def fake_build(fw, spec, rows, golden, on_progress=None):
         calls.append("here")
         rows_seen.append((rows, golden))
+        progress_seen.append(on_progress)
         return _run(fw.label, {"estimator": 1.0, "pid": 1.0}, {"estimator": 1.0, "pid": 1.0})
 
     def fake_workers(configs, spec, rows, golden, on_progress):
@@ -376,8 +379,11 @@ def test_the_table_runs_builds_in_workers_only_when_there_are_several_of_each(mo
     monkeypatch.setattr(replay, "built_in_rows", fake_rows)
     monkeypatch.setattr(accuracy, "golden_replay", fake_golden)
 
-    table_one.measure_table(TableSpec(iterations=1, workers=1, seed=7))
-    assert calls == ["here"] * 4
+    def report(*args):  # type: ignore[no-untyped-def]
+        return None
+
+    table_one.measure_table(TableSpec(iterations=1, workers=1, seed=7), report)
+    assert calls == ["here"] * 4 and progress_seen == [report] * 4  # in turn, each build reports its samples
     seconds = TableSpec(iterations=1).scenario().duration_s
     assert rows_seen[0] == (("rows", seconds, 7), ("golden", ("rows", seconds, 7), seconds))
     calls.clear()
