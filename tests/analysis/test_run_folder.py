@@ -218,3 +218,10 @@ def test_finite_is_a_float_for_finite_numbers_only() -> None:
     for value in (math.nan, math.inf, -math.inf, None, "1.0", True, False, [1.0], np.float64(1.0)):
         expected = 1.0 if isinstance(value, np.float64) else None
         assert finite(value) == expected, value
+
+
+def test_a_run_folder_notes_a_cut_last_job(tmp_path: Path) -> None:
+    (tmp_path / "jobs.csv").write_text(_jobs_text([_job("pid", "1,0", 1), _job("pid", "1,0", 2)[:3]]))
+    run = read_run_folder(tmp_path)
+    assert run.jobs is not None and run.jobs["task"].tolist() == ["pid"]
+    assert run.notes == ["jobs.csv: last line incomplete, skipped"]
