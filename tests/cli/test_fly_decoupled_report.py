@@ -143,3 +143,12 @@ def test_a_side_that_fails_is_an_error_naming_it(
         _run(monkeypatch, fake, None)
     assert (caught.value.message, caught.value.code) == (message, code)
     assert not fake.calls[0][3].exists()  # the temporary folder is removed
+
+
+def test_without_both_sides_counts_there_is_no_link_line(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
+    for readings, commands in (({}, SUMMARY["link"]["commands"]), (SUMMARY["link"]["readings"], {})):
+        summary = {**SUMMARY, "link": {**SUMMARY["link"], "readings": readings, "commands": commands}}
+        flight = DecoupledFlight(summary, physics={"ended": "done"}, chip={"ended": "done", "side": "chip"})
+        lines = _run(monkeypatch, _Fake(flight), tmp_path)
+        assert not any(line.startswith(("readings injected", "CPU time")) for line in lines)
+        assert "ekf 99 jobs: response mean 41.3 us, max 80.0 us; deadline misses 0" in lines

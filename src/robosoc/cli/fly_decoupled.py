@@ -115,10 +115,10 @@ def fly_decoupled_run(
         )
     lk = summary["link"]
     r, c = lk.get("readings") or {}, lk.get("commands") or {}
-    if r and c:
+    if r and c:  # each side's counts have all their keys (cosim/decoupled_chip.py, decoupled_physics.py)
         console.print(
-            f"readings injected {r.get('injected', 0)} (late {r.get('late', 0)}, stale {r.get('stale', 0)}); "
-            f"commands applied {c.get('received', 0)} (late {c.get('late', 0)}, missed {c.get('missed', 0)}); "
+            f"readings injected {r['injected']} (late {r['late']}, stale {r['stale']}); "
+            f"commands applied {c['received']} (late {c['late']}, missed {c['missed']}); "
             f"real-time factor {summary['real_time_factor'] or 0:.2f}"
         )
     if "cpu_s" in flight.physics and "cpu_s" in flight.chip:
