@@ -112,3 +112,25 @@ def test_a_host_controller_flight_has_no_task_rows() -> None:
     assert "hover height error RMS n/a" in lines
     assert not any(line.startswith(("deadline", "chip energy", "ekf")) for line in lines)
     assert lines[-1] == "real-time factor n/a (1 s simulated in 0.5 s)"
+
+
+def test_a_vehicle_without_flight_figures_shows_n_a_in_each_row() -> None:
+    crashed = {**_vehicle(), "flight": None}
+    lines = _lines({"vehicles": [_vehicle(), crashed], "simulated_s": 6.0, "host_s": 1.0, "real_time_factor": 6.0})
+    assert "roll step at 2 s: 90 % after 310 ms n/a" in lines
+    assert "pitch step at 4.5 s: 90 % after n/a n/a" in lines
+    assert "hover height error RMS 1.23 cm n/a" in lines and "height estimate RMS 0.31 cm n/a" in lines
+    assert "ekf jobs 600 600" in lines
+
+
+def test_the_table_title_and_right_aligned_values() -> None:
+    console = Console(file=io.StringIO(), width=160, record=True, color_system=None)
+    print_summary(console, {**_vehicle(), "simulated_s": 6.0, "host_s": 3.04, "real_time_factor": 1.9737})
+    raw = console.export_text().splitlines()
+    assert raw[0].strip() == "flight summary"
+    header = next(line for line in raw if "figure" in line)
+    assert header.startswith("figure")  # no edge, no padding at the edge
+    rms = next(line for line in raw if line.startswith("hover height error RMS"))
+    jobs = next(line for line in raw if line.startswith("ekf jobs"))
+    assert rms.rstrip().endswith("1.23 cm") and jobs.rstrip().endswith("600")
+    assert len(rms.rstrip()) == len(jobs.rstrip()) == len(header.rstrip())  # values end at the column's right edge
