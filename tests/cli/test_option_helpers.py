@@ -454,6 +454,7 @@ def test_link_options_name_the_option() -> None:
         ({"peer_timeout": 0.01}, "--peer-timeout: must be between 0.05 and 3600 s, got 0.01"),
         ({"connect_timeout": 4000.0}, "--connect-timeout: must be between 0.05 and 3600 s, got 4000.0"),
         ({"pace": "slow"}, "--pace: must be one of realtime, fast, got 'slow'"),
+        ({"pace": "a: b"}, "--pace: must be one of realtime, fast, got 'a: b'"),  # a colon in the value
         ({"resend": 99}, "--resend: must be between 0 and 8, got 99"),
     ):
         with pytest.raises(CliError) as caught:
@@ -497,7 +498,13 @@ def test_link_counts_table() -> None:
         },
     )
     lines = buffer.getvalue().splitlines()
-    assert lines[0].strip() == "datagrams"
+    assert lines[0].rstrip() == "datagrams"  # the title on the left, the table without padding at its edge
+    assert lines[1].startswith("direction") and lines[2].startswith("to chip")
+    # the figures end under their headings (right-aligned), the injected faults too
+    for k, name in enumerate(COUNTER_NAMES):
+        end = lines[1].index(name) + len(name)
+        assert lines[3][:end].rstrip().endswith(str(k + 1)) and lines[3][end : end + 1] in (" ", ""), name
+    assert lines[2].rstrip().endswith("2/0/0/0/1") and len(lines[2].rstrip()) == len(lines[1].rstrip())
     assert lines[1].split() == ["direction", *COUNTER_NAMES, "injected", "(lost/dupl/reor/trun/garb)"]
     assert lines[2].split() == ["to", "chip", "9", *["-"] * (len(COUNTER_NAMES) - 1), "2/0/0/0/1"]
     assert lines[3].split() == ["from", "chip", *[str(v) for v in counts.values()], "-"]

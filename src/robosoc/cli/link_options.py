@@ -140,9 +140,5 @@ def link_config(
         )
     except ValueError as exc:
         field = str(exc).split(":", 1)[0]
-        option = {
-            "peer_timeout_s": "--peer-timeout",
-            "connect_timeout_s": "--connect-timeout",
-            "heartbeat_s": "--peer-timeout",
-        }
+        option = {"peer_timeout_s": "--peer-timeout", "connect_timeout_s": "--connect-timeout"}
         raise options.fail(option.get(field, f"--{field}"), str(exc).split(": ", 1)[-1]) from None
