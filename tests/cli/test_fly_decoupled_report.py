@@ -152,3 +152,34 @@ def test_without_both_sides_counts_there_is_no_link_line(monkeypatch: pytest.Mon
         lines = _run(monkeypatch, _Fake(flight), tmp_path)
         assert not any(line.startswith(("readings injected", "CPU time")) for line in lines)
         assert "ekf 99 jobs: response mean 41.3 us, max 80.0 us; deadline misses 0" in lines
+
+
+def test_the_progress_bar_counts_samples_and_status_lines_are_dim(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
+    import rich.progress
+
+    made: list[rich.progress.Progress] = []
+
+    class Recording(rich.progress.Progress):
+        def __init__(self, *columns, **kwargs) -> None:  # type: ignore[no-untyped-def]
+            super().__init__(*columns, **kwargs)
+            made.append(self)
+
+    monkeypatch.setattr(rich.progress, "Progress", Recording)
+    flight = DecoupledFlight(SUMMARY, physics={"ended": "done"}, chip={"ended": "done", "side": "chip"})
+    monkeypatch.setattr(decoupled, "fly_decoupled", _Fake(flight))
+    console = Console(file=io.StringIO(), width=200, record=True, color_system="standard", force_terminal=True)
+    scenario = ScenarioConfig(name="hop", duration_s=1.0)
+    fly_decoupled_run(console, scenario, vehicle_preset("default"), FirmwareConfig(), 7, tmp_path, LinkConfig(), None)
+    (bar,) = made
+    (task,) = bar.tasks
+    assert (task.description, task.total, task.completed) == ("fly", 100, 50)  # 1 s at 100 Hz; the fake's 50
+    assert bar.live.transient and bar.console is console
+    kinds = [type(c).__name__ for c in bar.columns]
+    assert kinds == ["TextColumn", "BarColumn", "TextColumn", "TimeRemainingColumn"]
+    assert [c.text_format for c in bar.columns if isinstance(c, rich.progress.TextColumn)] == [
+        "flight", "{task.percentage:>3.0f}%"
+    ]  # fmt: skip
+    (status,) = [line for line in console.export_text(styles=True).splitlines() if "both sides are up" in line]
+    assert "\x1b[2m" in status  # dim
