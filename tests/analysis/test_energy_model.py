@@ -196,6 +196,12 @@ def test_unreadable_and_invalid_files_name_the_file(tmp_path):
         EnergyModel.load(broken)
     assert (info.value.where, info.value.field) == (str(broken), "")
     assert info.value.reason.startswith("invalid TOML: ")
+    latin = tmp_path / "latin.toml"
+    latin.write_bytes(b"clock_ns = 4.0\n# caf\xe9\n")
+    with pytest.raises(ConfigError) as info:
+        EnergyModel.load(latin)
+    assert (info.value.where, info.value.field) == (str(latin), "")
+    assert info.value.reason == "not UTF-8 text (offset 20): expected a TOML file"
 
 
 def test_edge_values_that_are_accepted(tmp_path):

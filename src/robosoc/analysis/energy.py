@@ -73,7 +73,7 @@ class EnergyModel:
                 pj = entry.get("pj")
                 if isinstance(pj, bool) or not isinstance(pj, int | float) or pj < 0:
                     raise ConfigError(where, f"{field}.pj", f"expected a non-negative number, got {pj!r}")
-                status = entry.get("status", "")
+                status = entry.get("status")
                 if status not in ("published", "assumed", "measured"):
                     raise ConfigError(where, f"{field}.status", "must be 'published', 'measured' or 'assumed'")
                 source = entry.get("source")
