@@ -18,22 +18,6 @@ from robosoc.analysis.run_folder import RunFolder
 from robosoc.control.flight import ROW_FIELDS
 
 
-@pytest.fixture
-def drawn(monkeypatch):
-    """(name, size, rows, sharex, axes) of every plot drawn, in order."""
-    plots: list[tuple] = []
-
-    def capture(draw, name, size, nrows=1, *, sharex=True):  # type: ignore[no-untyped-def]
-        _, axes = plt.subplots(nrows, 1, squeeze=False)
-        draw(*axes[:, 0])
-        plots.append((name, size, nrows, sharex, list(axes[:, 0])))
-        return f"<svg id='{name}'/>"
-
-    monkeypatch.setattr(report, "_svg", capture)
-    yield plots
-    plt.close("all")
-
-
 def flight(n: int = 5, estimate: bool = True) -> np.ndarray:
     """``n`` rows 0.01 s apart, each column a known ramp: column c of row k is c + k / 10."""
     rows = np.array([[c + k / 10 for c in range(len(ROW_FIELDS))] for k in range(n)], dtype=float)
@@ -59,7 +43,7 @@ def test_trajectory_plots_height_with_setpoint_and_estimate_then_drift(drawn):
         '<figure class="plot" data-plot="trajectory"><svg id=\'traj\'/><figcaption>Trajectory: height against its'
         " setpoint, horizontal drift</figcaption></figure>"
     )
-    ((name, size, nrows, sharex, (ax_z, ax_xy)),) = drawn
+    ((name, size, nrows, sharex, (ax_z, ax_xy), _),) = drawn
     assert (name, size, nrows, sharex) == ("traj", (10, 5), 2, True)
     assert lines(ax_z) == [
         ("true height z", "-", list(col(rows, "z"))),
@@ -89,7 +73,7 @@ def test_attitude_plots_each_axis_in_degrees(drawn):
     rows = flight()
     page = report._attitude(rows)
     assert "<figcaption>Attitude: true, estimated and setpoint</figcaption>" in page
-    ((name, size, nrows, sharex, axes),) = drawn
+    ((name, size, nrows, sharex, axes, _),) = drawn
     assert (name, size, nrows, sharex) == ("att", (10, 7), 3, True)
     for ax, axis in zip(axes, ("roll", "pitch", "yaw"), strict=True):
         got = lines(ax)
@@ -107,7 +91,7 @@ def test_pwm_plot_steps_each_motor(drawn):
     rows = flight()
     page = report._pwm(rows)
     assert "<figcaption>Motor PWM commands</figcaption>" in page and 'data-plot="pwm"' in page
-    ((name, size, nrows, _, (ax,)),) = drawn
+    ((name, size, nrows, _, (ax,), _),) = drawn
     assert (name, size, nrows) == ("pwm", (10, 3), 1)
     assert [line.get_label() for line in ax.lines] == [f"motor {i}" for i in range(4)]
     for i, line in enumerate(ax.lines):
@@ -122,7 +106,7 @@ def test_long_flights_are_thinned_to_at_most_max_points(drawn):
     rows = np.zeros((n, len(ROW_FIELDS)))
     rows[:, ROW_FIELDS.index("t")] = np.arange(n)
     report._pwm(rows)
-    ((*_, (ax,)),) = drawn
+    ((*_, (ax,), _),) = drawn
     x = list(ax.lines[0].get_xdata())
     assert x == list(range(0, n, 3))  # every third row: ceil(n / MAX_POINTS) = 3
     assert len(report._thin(rows[: report.MAX_POINTS])) == report.MAX_POINTS  # short enough: every row
@@ -144,7 +128,7 @@ def test_energy_bars_per_summary_object_with_the_noc_beside_the_tiles(drawn):
     assert figures[0].endswith("<figcaption>Energy by tiles</figcaption></figure>")
     assert figures[1].startswith('<figure class="plot" data-plot="energy-classes_uj">')
     assert figures[1].endswith("<figcaption>Energy by classes</figcaption></figure>")
-    (name, size, nrows, _, (tiles,)), (_, _, _, _, (classes,)) = drawn
+    (name, size, nrows, _, (tiles,), _), (_, _, _, _, (classes,), _) = drawn
     assert (name, size, nrows) == ("energy-tiles_uj", (7, 3.2), 1)
     assert [t.get_text() for t in tiles.get_xticklabels()] == ["tile 0,1", "tile 1,0", "NoC"]
     assert [b.get_height() for b in tiles.patches] == [3.0, 1.5, 0.5]

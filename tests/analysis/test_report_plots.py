@@ -9,28 +9,10 @@ from __future__ import annotations
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt
 import numpy as np
 import pytest
 
 from robosoc.analysis import report
-
-
-@pytest.fixture
-def drawn(monkeypatch):
-    """The (name, size, rows, sharex, axes) of every plot drawn, in order."""
-    plots: list[tuple] = []
-
-    def capture(draw, name, size, nrows=1, *, sharex=True):  # type: ignore[no-untyped-def]
-        fig, axes = plt.subplots(nrows, 1, squeeze=False)
-        draw(*axes[:, 0])
-        plots.append((name, size, nrows, sharex, list(axes[:, 0]), fig))
-        return "<svg/>"
-
-    monkeypatch.setattr(report, "_svg", capture)
-    yield plots
-    for *_, fig in plots:
-        plt.close(fig)
 
 
 def jobs() -> dict[str, np.ndarray]:

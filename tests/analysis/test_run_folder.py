@@ -67,13 +67,21 @@ def test_a_bad_flight_row_before_the_last_names_its_line(tmp_path: Path) -> None
         read_flight_rows(path, [])
 
 
-@pytest.mark.parametrize("text", ["", "t,x,y\n1,2,3\n"])
-def test_a_file_that_is_not_a_flight_log_is_refused(tmp_path: Path, text: str) -> None:
-    path = tmp_path / "flight.csv"
+@pytest.mark.parametrize(
+    ("name", "read", "text", "what"),
+    [
+        ("flight.csv", read_flight_rows, "", "a robosoc flight log"),
+        ("flight.csv", read_flight_rows, "t,x,y\n1,2,3\n", "a robosoc flight log"),
+        ("jobs.csv", read_jobs, "", "a robosoc job record file"),
+        ("jobs.csv", read_jobs, "task,tile\n", "a robosoc job record file"),
+    ],
+)
+def test_a_file_without_its_header_is_refused(tmp_path: Path, name: str, read, text: str, what: str) -> None:
+    path = tmp_path / name
     path.write_text(text)
     with pytest.raises(RunFolderError) as caught:
-        read_flight_rows(path, [])
-    assert str(caught.value) == f"{path}: not a robosoc flight log (unexpected header)"
+        read(path, [])
+    assert str(caught.value) == f"{path}: not {what} (unexpected header)"
 
 
 def test_jobs_are_columns_with_text_for_task_and_tile(tmp_path: Path) -> None:
@@ -87,15 +95,6 @@ def test_jobs_are_columns_with_text_for_task_and_tile(tmp_path: Path) -> None:
     i = JOB_CSV_FIELDS.index(number)
     assert jobs[number].dtype == float and jobs[number].tolist() == [10.0 + i, 20.0 + i]
     assert notes == ["jobs.csv: last line incomplete, skipped"]  # the empty line between is no job
-
-
-@pytest.mark.parametrize("text", ["", "task,tile\n"])
-def test_a_file_that_is_not_a_job_record_is_refused(tmp_path: Path, text: str) -> None:
-    path = tmp_path / "jobs.csv"
-    path.write_text(text)
-    with pytest.raises(RunFolderError) as caught:
-        read_jobs(path, [])
-    assert str(caught.value) == f"{path}: not a robosoc job record file (unexpected header)"
 
 
 def test_a_job_with_a_bad_number_names_its_column(tmp_path: Path) -> None:
