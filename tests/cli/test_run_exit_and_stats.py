@@ -165,3 +165,34 @@ def test_mesh_stats_hold_every_counter(programs: dict[str, Path], tmp_path: Path
         assert tile["tasks"] and all(set(t["counters"]) == CORE_COUNTERS | TASK_EXTRA for t in tile["tasks"].values())
     assert set(record["noc"]["counters"]) == NOC_COUNTERS
     assert set(record["noc"]["energy_pj"]) == {"buffers", "control", "leakage"}
+
+
+def test_stats_are_two_space_json_and_a_failed_write_names_the_file(
+    programs: dict[str, Path], tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from robosoc.cli import run as run_cli
+    from robosoc.cli.errors import CliError
+
+    stats = tmp_path / "stats.json"
+    result = CliRunner().invoke(app, ["run", str(programs["ok-fast"]), "--stats", str(stats)])
+    assert result.exit_code == 0, result.output
+    text = stats.read_text()
+    assert text == json.dumps(json.loads(text), indent=2) + "\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["stats.json"]  # no temporary file left
+
+    def full(self, *args, **kwargs):  # type: ignore[no-untyped-def]
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(Path, "write_text", full)
+    with pytest.raises(CliError) as caught:
+        run_cli._write_json(tmp_path / "again.json", {"a": 1})
+    assert caught.value.message == f"--stats: {tmp_path / 'again.json'}: cannot write: No space left on device"
+
+
+def test_a_mesh_that_is_not_square(programs: dict[str, Path], tmp_path: Path) -> None:
+    stats = tmp_path / "stats.json"
+    tiles = ("ok-fast", "seven-fast", "ok-fast", "ok-fast", "ok-fast")  # 3x2: five core tiles
+    args = ["run", *(str(programs[n]) for n in tiles), "--mesh", "3x2", "--stats", str(stats)]
+    result = CliRunner().invoke(app, [*args, "--exit-code", "program"])
+    assert result.exit_code == 7, result.output
+    assert set(json.loads(stats.read_text())["tiles"]) == {"1,0", "2,0", "0,1", "1,1", "2,1"}
