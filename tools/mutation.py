@@ -131,7 +131,7 @@ def run(layer: str, spec: dict[str, Any], workdir: Path, resume: bool, survivors
     prepare(spec, workdir, resume or survivors)
     env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}  # mutmut puts mutants/src first
     env["ROBOSOC_CACHE"] = str(workdir / "cache")  # numba and firmware builds, kept between runs
-    env.update(spec.get("env", {}))  # the layer's own environment (e.g. no browser for the render tests)
+    env.update({k: str(v) for k, v in spec.get("env", {}).items()})  # the layer's own (e.g. no browser)
     # mutmut forks a worker per mutant: a BLAS thread pool started before the fork deadlocks the child
     for name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_NUM_THREADS"):
         env[name] = "1"

@@ -6,9 +6,6 @@ histograms, labels and titles can be compared with figures worked out here from 
 
 from __future__ import annotations
 
-import matplotlib
-
-matplotlib.use("Agg")
 import numpy as np
 import pytest
 

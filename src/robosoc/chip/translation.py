@@ -82,14 +82,14 @@ class ChipTranslation:
             self._give(t)
         live = [tr for tr in self.translators if tr is not None]
         self._cached = self.engine == "auto" and any(tr.has_cached_regions() for tr in live)
-        self._set_threshold(live[0] if live else None)
+        if live:
+            self._set_threshold(live[0])
 
-    def _set_threshold(self, translator: TranslatingCore | None) -> None:
+    def _set_threshold(self, translator: TranslatingCore) -> None:
         """The dispatch loop's parameters, from a translator (they share mode and budget) and whether
         some translator has cached regions (known from :meth:`prepare`: not scanned per translation)."""
-        if translator is not None:
-            self.params[kc.J_THRESHOLD] = translator.ask_threshold(self._cached)
-            self.params[kc.J_STRETCH] = translator.stretch
+        self.params[kc.J_THRESHOLD] = translator.ask_threshold(self._cached)
+        self.params[kc.J_STRETCH] = translator.stretch
 
     def watching(self) -> bool:
         """auto: whether some loaded tile may still get a translator (the chip is looked at again)."""
