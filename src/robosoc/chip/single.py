@@ -21,7 +21,7 @@ from robosoc.chip.counters import counters_dict
 from robosoc.chip.elf import Program, Region, load_elf
 from robosoc.config.ranges import DEVICE_MAP_BASE, MAX_CYCLES, check_int
 from robosoc.isa.disasm import disassemble
-from robosoc.jit import ENGINES
+from robosoc.jit import DEFAULT_ENGINE, ENGINES
 from robosoc.kernels.core import run_cores
 from robosoc.kernels.core_layout import (
     ADDRESS_ERRORS,
@@ -204,7 +204,12 @@ class SingleCoreSoC:
     """One HF-RISCV core with its SRAM at 0x40000000 and the SoC devices."""
 
     def __init__(
-        self, *, mul: bool = True, sram_size: int = DEFAULT_SRAM_SIZE, errata: str = "spec", engine: str = "interp"
+        self,
+        *,
+        mul: bool = True,
+        sram_size: int = DEFAULT_SRAM_SIZE,
+        errata: str = "spec",
+        engine: str = DEFAULT_ENGINE,
     ) -> None:
         """A core after reset.
 
@@ -382,7 +387,7 @@ def run_elf(
     sram_size: int = DEFAULT_SRAM_SIZE,
     on_output: Callable[[bytes], object] | None = None,
     errata: str = "spec",
-    engine: str = "interp",
+    engine: str = DEFAULT_ENGINE,
 ) -> RunResult:
     """Load an ELF into a fresh single-core SoC and run it to its exit."""
     soc = SingleCoreSoC(mul=mul, sram_size=sram_size, errata=errata, engine=engine)

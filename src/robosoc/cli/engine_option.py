@@ -7,7 +7,7 @@ from typing import Annotated
 import typer
 
 from robosoc.cli import options
-from robosoc.jit import ENGINES
+from robosoc.jit import DEFAULT_ENGINE, ENGINES
 
 ENGINE_HELP = (
     "interp: the interpreter; jit: translate code to native code at first use; auto: translate the code that "
@@ -16,9 +16,9 @@ ENGINE_HELP = (
 
 Engine = Annotated[
     str | None,
-    typer.Option("--engine", help=ENGINE_HELP + "  [default: interp, or the chip file's]", show_default=False,
-                 callback=options.choice(*ENGINES)),
+    typer.Option("--engine", help=f"{ENGINE_HELP}  [default: {DEFAULT_ENGINE}, or the chip file's]",
+                 show_default=False, callback=options.choice(*ENGINES)),
 ]  # fmt: skip
-"""``None``: not given (the chip configuration's engine, ``interp`` by default)."""
+"""``None``: not given (the chip configuration's engine, :data:`DEFAULT_ENGINE` by default)."""
 
 __all__ = ["ENGINE_HELP", "Engine"]

@@ -16,6 +16,7 @@ from robosoc.cli.engine_option import Engine
 from robosoc.cli.errors import CliError
 from robosoc.cli.gdb_option import GDB_HELP, TILE_HELP, check_gdb_options, gdb_session
 from robosoc.config.ranges import MAX_CYCLES
+from robosoc.jit import DEFAULT_ENGINE
 
 if TYPE_CHECKING:
     from robosoc.analysis.energy import EnergyModel
@@ -165,7 +166,7 @@ def run(
                   exit_code, inputs, gdb=gdb, gdb_tile=tile, engine=engine)  # fmt: skip
     else:
         _run_single(programs[0], mul, max_cycles, stats, model, sram_size, trace, profile, errata, exit_code,
-                    inputs, gdb=gdb, engine=engine or "interp")  # fmt: skip
+                    inputs, gdb=gdb, engine=engine or (DEFAULT_ENGINE if gdb is None else "interp"))  # fmt: skip
 
 
 def _run_single(

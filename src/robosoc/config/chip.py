@@ -67,6 +67,8 @@ ERRATA_CHOICES = ("spec", "rtl")
 ENGINE_CHOICES = ("interp", "jit", "auto")
 """How the cores execute: the interpreter, or code translated at a region's first arrival or once
 it turns hot (docs/translation.md); every engine gives the same cycles, counters and outputs."""
+DEFAULT_ENGINE = "auto"
+"""The engine of a chip or core when none is named: interprets, and translates what turns hot."""
 
 
 def _check_sram(name: str, value: int) -> None:
@@ -193,7 +195,7 @@ class ChipConfig:
     tiles: tuple[TileOverride, ...] = ()
     noc: NocConfig = field(default_factory=NocConfig)
     errata: str = "spec"
-    engine: str = "interp"
+    engine: str = DEFAULT_ENGINE
 
     def __post_init__(self) -> None:
         if self.errata not in ERRATA_CHOICES:

@@ -7,6 +7,7 @@ the tables the compiled dispatch loop (:mod:`robosoc.kernels.jit_dispatch`) read
 (:mod:`~robosoc.jit.engine`).
 """
 
+from robosoc.config.chip import DEFAULT_ENGINE
 from robosoc.config.chip import ENGINE_CHOICES as ENGINES
 
-__all__ = ["ENGINES"]
+__all__ = ["DEFAULT_ENGINE", "ENGINES"]
