@@ -53,10 +53,10 @@ class ChipTranslation:
         self._watched: set[int] = set()  # auto: loaded tiles without a translator yet
         self._cached = False  # auto: some translator's code has regions compiled by an earlier run
 
-    def arguments(self) -> tuple[np.ndarray, List | None, np.ndarray]:
-        """``run_chip``'s jit_on, jit_tables and jit_params (no tables while no tile translates: the
-        chip loop compiled for the interpreter alone then runs)."""
-        return self.on, self._tables if self.on.any() else None, self.params
+    def arguments(self) -> tuple[np.ndarray, List, np.ndarray]:
+        """``run_chip``'s jit_on, jit_tables and jit_params (the same types whatever the engine: the
+        chip loop is compiled once, with the dispatch loop in it)."""
+        return self.on, self._tables, self.params
 
     def prepare(self, chip: MPSoC) -> None:
         """Before a run: a translator for every loaded core tile, and its current tables."""

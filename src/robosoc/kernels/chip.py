@@ -23,14 +23,13 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit, types
-from numba.extending import overload
+from numba import njit
 
 from robosoc.isa.table import MEMORY_CYCLES
 from robosoc.kernels import ni_registers as ni
 from robosoc.kernels import noc as nk
 from robosoc.kernels import stop_queue
-from robosoc.kernels.core import LW, SW, U1, U2, CoreArrays, fields, run_cores
+from robosoc.kernels.core import LW, SW, U1, U2, CoreArrays, fields, interpret_cores
 from robosoc.kernels.core_layout import (
     C_MMIO,
     CTR_SIZE,
@@ -543,55 +542,29 @@ def _take_deliveries(st, book, noc):
     glob[nk.G_NEV] = 0
 
 
+@njit(cache=True, inline="always")
 def _run_awake(core, tiles, until, jit_tables, jit_on, jit_params, one, rest):  # type: ignore[no-untyped-def]
-    """Run ``tiles`` to ``until``: each translating tile alone, the interpreted ones together.
-
-    Compiled per type of ``jit_tables`` (below): ``None`` (no tile translates) runs ``run_cores``
-    alone, so a chip on the interpreter never compiles the translator's dispatch loop.
-    """
-    raise NotImplementedError("only for compiled code")
-
-
-@overload(_run_awake, jit_options={"cache": True})
-def _run_awake_typed(core, tiles, until, jit_tables, jit_on, jit_params, one, rest):  # type: ignore[no-untyped-def]
-    if isinstance(jit_tables, types.NoneType):
-
-        def interpreted(core, tiles, until, jit_tables, jit_on, jit_params, one, rest):  # type: ignore[no-untyped-def]
-            run_cores(core, tiles, until)  # inlined: the core interpreter is most of what numba compiles
-
-        return interpreted
-
-    def translating(core, tiles, until, jit_tables, jit_on, jit_params, one, rest):  # type: ignore[no-untyped-def]
-        k = 0
-        for i in range(tiles.shape[0]):
-            t = tiles[i]
-            if jit_on[t] != 0:
-                one[0] = t
-                run_translated(core, one, until, jit_tables[t], jit_params[J_THRESHOLD], jit_params[J_STRETCH])
-            else:
-                rest[k] = t
-                k += 1
-        if k > 0:
-            run_cores(core, rest[:k], until)
-
-    return translating
+    """Run ``tiles`` to ``until``: each translating tile alone in the dispatch loop, the interpreted
+    ones together (through ``interpret_cores``, the dispatch loop's own copy of the interpreter:
+    numba compiles one, and one variant of the chip loop whatever the engine)."""
+    k = 0
+    for i in range(tiles.shape[0]):
+        t = tiles[i]
+        if jit_on[t] != 0:
+            one[0] = t
+            run_translated(core, one, until, jit_tables[t], jit_params[J_THRESHOLD], jit_params[J_STRETCH])
+        else:
+            rest[k] = t
+            k += 1
+    if k > 0:
+        interpret_cores(core, rest[:k], until)
 
 
+@njit(cache=True, inline="always")
 def _check_translated(core, t, jit_tables, jit_on) -> None:  # type: ignore[no-untyped-def]
     """Forget tile ``t``'s translations if a word they were made from changed (a DMA into code)."""
-    raise NotImplementedError("only for compiled code")
-
-
-@overload(_check_translated, jit_options={"cache": True})
-def _check_translated_typed(core, t, jit_tables, jit_on):  # type: ignore[no-untyped-def]
-    if isinstance(jit_tables, types.NoneType):
-        return lambda core, t, jit_tables, jit_on: None
-
-    def check(core, t, jit_tables, jit_on):  # type: ignore[no-untyped-def]
-        if jit_on[t] != 0:
-            forget_if_changed(jit_tables[t], core.m32[t])
-
-    return check
+    if jit_on[t] != 0:
+        forget_if_changed(jit_tables[t], core.m32[t])
 
 
 @njit(cache=True)
@@ -604,7 +577,6 @@ def run_chip(  # type: ignore[no-untyped-def]
     (:class:`robosoc.kernels.jit_dispatch.JitArrays`); when one turns hot at a word without a
     translation the chip stops with CHIP_TRANSLATE, the host translates a region there and calls
     again, and the quantum goes on exactly where it stopped (as after a breakpoint).
-    ``jit_tables`` ``None``: every tile interprets (the translator is then not compiled at all).
     """
     st, out = core.st, core.out
     glob = noc.glob

@@ -731,3 +731,11 @@ def run_cores(core: CoreArrays, tiles: np.ndarray, until: int) -> None:
         st[t, S_RUN] = status
         ctr[t, C_TAKEN] = n_taken
         ctr[t, C_MUL_STALL] = n_mulstall
+
+
+@njit(cache=True)
+def interpret_cores(core: CoreArrays, tiles: np.ndarray, until: int) -> None:
+    """``run_cores`` as a function of its own, not inlined: a kernel that calls the interpreter from
+    several places (the translator's dispatch loop, the chip loop with translating tiles) calls this
+    one, so numba compiles the interpreter once for it instead of once per call site."""
+    run_cores(core, tiles, until)

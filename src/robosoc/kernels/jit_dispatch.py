@@ -25,7 +25,7 @@ from llvmlite import ir
 from numba import njit, types
 from numba.extending import intrinsic
 
-from robosoc.kernels.core import CoreArrays, fetch_error, run_cores
+from robosoc.kernels.core import CoreArrays, fetch_error, interpret_cores
 from robosoc.kernels.core_layout import (
     ERR_FETCH_DATA,
     OPC_SIZE,
@@ -303,40 +303,36 @@ def run_translated(
                     status = RUN_TRANSLATE
                     break
             interpret = True
-            if stretch > 0:
-                st_t[S_PC] = pc
-                st_t[S_CYCLE] = cyc
-                run_cores(core, tiles, min(stop, cyc + stretch))
-                pc = st_t[S_PC]
-                cyc = st_t[S_CYCLE]
-                status = st_t[S_RUN]
-                forget_if_changed(jt, m32[t])
-                if status != RUN_CHUNK:
-                    flush_counts(jt, opc_t, ctr[t])
-                    return
-                continue
         if not interpret:
             continue
-        # one instruction by the interpreter (two for a trap: its shadow runs before the vector)
-        i = (pc - base) >> 2
-        word = np.int64(m32[t, i]) & M32 if (pc - base) < code else 0
-        smc = _store_hits_translation(jt, word, regs_t, base, code)
-        if (word & 0x7F) == _SYSTEM_OPCODE and (pc + 8 - base) < code:
-            smc = smc or _store_hits_translation(jt, np.int64(m32[t, i + 2]) & M32, regs_t, base, code)
-        step_to = cyc + 1
-        if (word & 0xFFF) == _JAL_X0_OPCODE and (
-            (word >> 12) == 0 or (word == 0xFFDFF06F and i > 0 and (np.int64(m32[t, i - 1]) & M32) == _NOP)
-        ):
-            step_to = next_event  # an idle loop: the interpreter skips its iterations up to the event
+        smc = False
+        stretched = fn == 0 and jt.tmap[i] == 0 and stretch > 0
+        if stretched:
+            # stretch cycles at the interpreter's speed (auto); its stores into code are found after
+            step_to = min(stop, cyc + stretch)
+        else:
+            # one instruction by the interpreter (two for a trap: its shadow runs before the vector)
+            i = (pc - base) >> 2
+            word = np.int64(m32[t, i]) & M32 if (pc - base) < code else 0
+            smc = _store_hits_translation(jt, word, regs_t, base, code)
+            if (word & 0x7F) == _SYSTEM_OPCODE and (pc + 8 - base) < code:
+                smc = smc or _store_hits_translation(jt, np.int64(m32[t, i + 2]) & M32, regs_t, base, code)
+            step_to = cyc + 1
+            if (word & 0xFFF) == _JAL_X0_OPCODE and (
+                (word >> 12) == 0 or (word == 0xFFDFF06F and i > 0 and (np.int64(m32[t, i - 1]) & M32) == _NOP)
+            ):
+                step_to = next_event  # an idle loop: the interpreter skips its iterations up to the event
+            ctx[CTX_STEPS] += 1
         st_t[S_PC] = pc
         st_t[S_CYCLE] = cyc
-        ctx[CTX_STEPS] += 1
-        run_cores(core, tiles, step_to)
+        interpret_cores(core, tiles, step_to)
         pc = st_t[S_PC]
         cyc = st_t[S_CYCLE]
         status = st_t[S_RUN]
         if smc:
             forget_translations(jt)
+        elif stretched:
+            forget_if_changed(jt, m32[t])
         if status != RUN_CHUNK:
             flush_counts(jt, opc_t, ctr[t])
             return
