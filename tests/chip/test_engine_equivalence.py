@@ -292,3 +292,47 @@ def test_auto_installs_regions_compiled_by_an_earlier_run_at_once(tmp_path, monk
     assert second.translator.stats.regions >= 1
     stats = second.translator.compiler.stats
     assert stats.cache_hits == stats.modules >= 1
+
+
+def test_auto_on_a_fresh_install_interprets_until_compiling_the_dispatch_loop_pays(monkeypatch) -> None:
+    """numba has not compiled the dispatch loop yet: auto runs the interpreter (which interp would
+    compile as well) and counts the time, and takes the dispatch loop once that time would pay for
+    compiling it (docs/translation.md)."""
+    import robosoc.jit.engine as engine
+
+    monkeypatch.setattr(engine, "compiled_or_cached", lambda kernel: False)
+    monkeypatch.setattr(engine, "_dispatch_loop_ready", False)
+    monkeypatch.setattr(engine, "STRETCHES", {"auto": 50})
+    monkeypatch.setattr(engine, "AUTO_COMPILE_SHARE", 1e9)  # regions themselves always worth compiling
+    words = indirect_calls(2000)
+    monkeypatch.setattr(engine, "ESTIMATED_DISPATCH_LOOP_SECONDS", 1e12)
+    soc = assert_same(words, "auto", 1_000_000, len(words))
+    assert soc.translator.stats.regions == soc.translator.stats.reused == 0
+    assert int(soc.translator.tables().ctx[CTX_STEPS]) == 0  # the dispatch loop never ran
+    assert soc.translator.stats.run_seconds > 0
+    assert not engine._dispatch_loop_ready
+    # worth it at once: the slices run in the dispatch loop and translate
+    monkeypatch.setattr(engine, "ESTIMATED_DISPATCH_LOOP_SECONDS", 0.0)
+    monkeypatch.setattr(engine, "_TRANSLATED", {})
+    soc = assert_same(words, "auto", 1_000_000, len(words))
+    assert engine._dispatch_loop_ready
+    assert soc.translator.stats.regions >= 1
+
+
+def test_compiled_or_cached_knows_a_kernel_numba_has_not_compiled() -> None:
+    from numba import njit
+
+    from robosoc.kernels import compiled_or_cached
+    from robosoc.kernels.jit_dispatch import run_translated
+
+    @njit(cache=True)
+    def never_cached(x: int) -> int:  # a closure: numba cannot cache it, and it is not compiled yet
+        return x + 1
+
+    assert not compiled_or_cached(never_cached)
+    assert never_cached(1) == 2
+    assert compiled_or_cached(never_cached)
+    assert_same(indirect_calls(10), "jit")  # compiles (or loads) the dispatch loop, into numba's cache
+    assert compiled_or_cached(run_translated)
+    # a dispatcher that has compiled nothing yet finds the dispatch loop in numba's cache
+    assert compiled_or_cached(njit(cache=True)(run_translated.py_func))

@@ -37,9 +37,6 @@ if TYPE_CHECKING:
 
 T = TypeVar("T")
 
-#: The kernel whose compiled form marks the cache as filled (the MPSoC's main loop).
-MARKER = "chip.run_chip-*.nbi"
-
 COMPILING = "compiling the chip simulator with numba (first run only, cached afterwards; about a minute) ..."
 
 #: ``jal x0, 0``: a core spinning on one instruction, enough to make numba compile everything.
@@ -56,8 +53,11 @@ def numba_cache_dir() -> Path:
 
 
 def kernels_cached() -> bool:
-    """Whether numba's cache holds the compiled chip kernels."""
-    return any(numba_cache_dir().rglob(MARKER))
+    """Whether numba's cache holds the compiled chip kernels (the MPSoC's main loop, which calls the rest)."""
+    from robosoc.kernels import compiled_or_cached
+    from robosoc.kernels.chip import run_chip
+
+    return compiled_or_cached(run_chip)
 
 
 #: Callees of the main loop a child process compiles, largest first (module, function); together

@@ -18,6 +18,8 @@ import numpy as np
 from robosoc.jit.compiler import Compiler, add_to_manifest, manifest_key, read_manifest, shared_compiler
 from robosoc.jit.emit_ir import NAME_PLACEHOLDER, EmittedRegion, Target, emit_region
 from robosoc.jit.regions import MAX_REGION_INSTRUCTIONS, CodeView, End, Region, discover
+from robosoc.kernels import compiled_or_cached
+from robosoc.kernels.core import run_cores
 from robosoc.kernels.core_layout import ERRATA_RTL, S_CODE_SIZE, S_ERRATA, S_MEM_BASE, S_MEM_SIZE, S_MUL, S_PC, S_RUN
 from robosoc.kernels.jit_dispatch import (
     CTX_FLUSHES,
@@ -46,6 +48,12 @@ AUTO_COMPILE_SHARE = 0.25
 #: the test programs: about 0.25 ms per guest instruction and 2 ms per module, CPU time).
 ESTIMATED_SECONDS_PER_INSTRUCTION = 0.3e-3
 ESTIMATED_SECONDS_PER_MODULE = 3e-3
+#: numba's compile time of the dispatch loop (``run_translated``, with its copy of the interpreter), 20
+#: to 36 s on the 2-core machine: ``auto`` on one core of a fresh install interprets (``run_cores``,
+#: which ``interp`` compiles too) until it has run 1/AUTO_COMPILE_SHARE times that long.  Any chip
+#: run, or a ``jit`` run, compiles it (into numba's cache) on the way.
+ESTIMATED_DISPATCH_LOOP_SECONDS = 30.0
+_dispatch_loop_ready = False  # compiled or cached: looked up until it is
 #: Regions of ``auto`` are smaller (a hot loop and what it calls, rather than whole functions): the
 #: cost of each decision stays small.
 AUTO_MAX_REGION_INSTRUCTIONS = 100
@@ -381,10 +389,25 @@ class TranslatingCore:
             return NEVER_ASK
         return self.threshold
 
+    def _dispatch_loop_ready(self) -> bool:
+        """auto: whether the dispatch loop may run (numba has it compiled or cached, or the core has
+        run long enough on the interpreter for its compilation to be worth it, as for a region)."""
+        global _dispatch_loop_ready
+        if not _dispatch_loop_ready:
+            _dispatch_loop_ready = compiled_or_cached(run_translated) or (
+                AUTO_COMPILE_SHARE * self.stats.run_seconds >= ESTIMATED_DISPATCH_LOOP_SECONDS
+            )
+        return _dispatch_loop_ready
+
     def step_until(self, until: int) -> int:
         """Run the tile to cycle ``until`` (or an event); its RUN_* status, as ``run_cores`` leaves it."""
         arrays = self.state.arrays()
         st = self.state.st[self.tile]
+        if self.mode == "auto" and not self._dispatch_loop_ready():
+            start = time.perf_counter()
+            run_cores(arrays, self._tiles, until)  # a fresh install: the interpreter numba compiles first
+            self.stats.run_seconds += time.perf_counter() - start
+            return int(st[S_RUN])
         while True:
             start = time.perf_counter()
             jt = self._tables()

@@ -34,3 +34,13 @@ def _numba_cache_dir() -> Path:
 
 if not os.environ.get("NUMBA_CACHE_DIR"):
     numba.config.CACHE_DIR = str(_numba_cache_dir())
+
+
+def compiled_or_cached(kernel: numba.core.dispatcher.Dispatcher) -> bool:
+    """Whether the ``@njit(cache=True)`` ``kernel`` is compiled in this process or in numba's cache
+    (its first call then takes about a second, instead of compiling for tens of seconds)."""
+    if kernel.signatures:
+        return True
+    func = kernel.py_func
+    index = f"{func.__module__.rsplit('.', 1)[-1]}.{func.__qualname__}-*.nbi"  # numba's index file of it
+    return any(Path(numba.config.CACHE_DIR).rglob(index))
