@@ -6,8 +6,10 @@ slice and the output buffer in the same order.  Between events it calls the tran
 has an entry at the pc (through a function pointer, :func:`call_region`), which runs blocks only
 while the block's worst-case cycles end before the next event (docs/translation.md).  Whatever a
 region does not do -- device accesses, misaligned or unmapped accesses, traps, illegal words, the
-idle loops the interpreter skips, blocks that could reach an event -- the interpreter does, one
-instruction at a time, by calling ``run_cores`` with the slice ending at the next cycle.
+idle loops the interpreter skips -- the interpreter does, one instruction at a time, by calling
+``run_cores`` with the slice ending at the next cycle; from a block that could reach the next event
+it runs up to the event (on the chip: to the end of the quantum) and the translated words are
+compared with memory after.
 
 A region returns one of the X_* codes with the pc and cycle in ``ctx``.  Instruction counts are
 kept per block (``cnt``: one slot per block and per side exit, each with a signed histogram over the
@@ -274,6 +276,7 @@ def run_translated(
             break
         i = (pc - base) >> 2
         interpret = False
+        limited = False
         fn = jt.entry_fn[i]
         if fn != 0:
             x = call_region(fn, p_ctx, p_regs, p_mem, p_cnt + 8 * jt.entry_slot[i], cyc, next_event, jt.entry_blk[i])
@@ -284,6 +287,7 @@ def run_translated(
                 interpret = True
                 if x == X_LIMIT:
                     ctx[CTX_LIMITS] += 1
+                    limited = True
         elif jt.tmap[i] != 0:  # inside a translated block (after an event): step to the next block start,
             interpret = True  # unless control returns here often (an interrupted polling loop)
             ctx[CTX_MIDBLOCK] += 1
@@ -306,8 +310,12 @@ def run_translated(
         if not interpret:
             continue
         smc = False
-        stretched = fn == 0 and jt.tmap[i] == 0 and stretch > 0
-        if stretched:
+        stretched = limited or (fn == 0 and jt.tmap[i] == 0 and stretch > 0)
+        if limited:
+            # the next block could pass the event: the interpreter runs up to it (on the chip, the
+            # end of every quantum), its stores into code are found after
+            step_to = next_event
+        elif stretched:
             # stretch cycles at the interpreter's speed (auto); its stores into code are found after
             step_to = min(stop, cyc + stretch)
         else:
