@@ -80,9 +80,14 @@ class _Translated:
     block_starts: np.ndarray
     block_indices: np.ndarray
     side_exits: np.ndarray
+    #: per word of ``pcs``: the instructions from it to the end of its block (1..255: the dispatch
+    #: loop's ``tmap``, which lets the interpreter run the rest of a block entered in the middle)
+    rest: np.ndarray
 
     @staticmethod
-    def of(region: Region, emitted: EmittedRegion, address: int, pcs: np.ndarray, words: np.ndarray) -> _Translated:
+    def of(
+        region: Region, emitted: EmittedRegion, address: int, pcs: np.ndarray, words: np.ndarray, base: int
+    ) -> _Translated:
         slots = emitted.slots if region.blocks else []
         rows = np.array([row for h, _ in slots for row in h], dtype=np.int64).reshape(-1, 2)
         lens = np.array([len(h) for h, _ in slots], dtype=np.int64)
@@ -90,7 +95,9 @@ class _Translated:
         starts = np.array(list(emitted.blocks), dtype=np.int64)
         indices = np.array(list(emitted.blocks.values()), dtype=np.int64)
         sides = np.array([b.next_pc for b in region.blocks.values() if b.end is End.SIDE], dtype=np.int64)
-        return _Translated(region, emitted, address, pcs, words, rows, lens, nxt, starts, indices, sides)
+        left = {(i.pc - base) >> 2: len(b.insns) - k for b in region.blocks.values() for k, i in enumerate(b.insns)}
+        rest = np.array([min(left.get(int(w), 1), 255) for w in pcs], dtype=np.uint8)
+        return _Translated(region, emitted, address, pcs, words, rows, lens, nxt, starts, indices, sides, rest)
 
 
 #: (target, multiplier) -> regions translated in this process (any core, any run), in order
@@ -299,7 +306,7 @@ class TranslatingCore:
         else:
             emitted, address = EmittedRegion(ir="", function="", blocks={}), 0
             pcs = np.array([(pc - base) >> 2], dtype=np.int64)
-        done = _Translated.of(region, emitted, address, pcs, m32[pcs].copy())
+        done = _Translated.of(region, emitted, address, pcs, m32[pcs].copy(), base)
         done_list = _TRANSLATED.setdefault((target, has_mul), [])
         done_list.append(done)
         self._install(done)
@@ -334,7 +341,7 @@ class TranslatingCore:
             jt.entry_fn[at[free]] = done.address
             jt.entry_slot[at[free]] = slot_base
             jt.entry_blk[at[free]] = done.block_indices[free]
-            jt.tmap[done.pcs] = 1
+            jt.tmap[done.pcs] = done.rest
             pcs.append(done.pcs)
             words.append(done.words)
             sides = (done.side_exits - base) >> 2

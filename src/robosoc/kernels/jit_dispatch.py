@@ -95,8 +95,9 @@ class JitArrays(NamedTuple):
 
     ``entry_fn`` native address of the region function with a block starting at the word (0: none),
     ``entry_slot`` its region's first count slot, ``entry_blk`` the block's index in it, ``hot``
-    arrivals at a word without an entry (NEVER_TRANSLATE: none can start there), ``tmap`` 1 for
-    words some region translated, ``tpcs``/``twords`` those words' indices and contents when
+    arrivals at a word without an entry (NEVER_TRANSLATE: none can start there), ``tmap`` for
+    words some region translated the instructions from there to the end of the block (1..255; 0:
+    not translated), ``tpcs``/``twords`` those words' indices and contents when
     translated, ``cnt`` executions per count slot, ``slot_ptr``/``slot_kc``/``slot_delta`` each
     slot's histogram (CSR), ``slot_next`` the slot whose count a slot's executions are also added
     to (-1: none; always an earlier slot), ``ctx`` the region call's in/out slots.
@@ -288,7 +289,7 @@ def run_translated(
                 if x == X_LIMIT:
                     ctx[CTX_LIMITS] += 1
                     limited = True
-        elif jt.tmap[i] != 0:  # inside a translated block (after an event): step to the next block start,
+        elif jt.tmap[i] != 0:  # inside a translated block (after an event): run to the next block start,
             interpret = True  # unless control returns here often (an interrupted polling loop)
             ctx[CTX_MIDBLOCK] += 1
             h = jt.hot[i]
@@ -310,8 +311,13 @@ def run_translated(
         if not interpret:
             continue
         smc = False
-        stretched = limited or (fn == 0 and jt.tmap[i] == 0 and stretch > 0)
-        if limited:
+        midblock = fn == 0 and jt.tmap[i] != 0
+        stretched = limited or midblock or (fn == 0 and stretch > 0)
+        if midblock:
+            # inside a translated block: the interpreter runs at most the rest of it (tmap: the
+            # instructions left, each of at least a cycle), to the next block start; stores after
+            step_to = min(next_event, cyc + jt.tmap[i])
+        elif limited:
             # the next block could pass the event: the interpreter runs up to it (on the chip, the
             # end of every quantum), its stores into code are found after
             step_to = next_event
