@@ -70,9 +70,9 @@ it turns hot (docs/translation.md); every engine gives the same cycles, counters
 DEFAULT_ENGINE = "auto"
 """The engine of one core when none is named: interprets, and translates what turns hot."""
 DEFAULT_CHIP_ENGINE = "interp"
-"""The engine of a chip's cores when none is named.  Not ``auto`` yet: on the flights' chips the
-translating tiles run short slices (the quanta, the wake-ups) and pay the dispatch loop's entry and
-exit on each, so ``auto`` flies 20-30 % slower than the interpreter (docs/translation.md)."""
+"""The engine of a chip's cores when none is named.  Not ``auto`` yet: the flights' chips fly 10 to
+40 % slower with it than on the interpreter (what it compiles does not pay back within a flight;
+docs/translation.md, "Not done yet")."""
 
 
 def _check_sram(name: str, value: int) -> None:
