@@ -276,55 +276,47 @@ def run_translated(
             status = RUN_OUTPUT
             break
         i = (pc - base) >> 2
-        interpret = False
-        limited = False
         fn = jt.entry_fn[i]
+        step_to = -1  # where the interpreter runs to next (-1: one instruction, below)
         if fn != 0:
             x = call_region(fn, p_ctx, p_regs, p_mem, p_cnt + 8 * jt.entry_slot[i], cyc, next_event, jt.entry_blk[i])
             ctx[CTX_CALLS] += 1
             pc = ctx[CTX_PC]
             cyc = ctx[CTX_CYC]
-            if x != X_JUMP:
-                interpret = True
-                if x == X_LIMIT:
-                    ctx[CTX_LIMITS] += 1
-                    limited = True
-        elif jt.tmap[i] != 0:  # inside a translated block (after an event): run to the next block start,
-            interpret = True  # unless control returns here often (an interrupted polling loop)
-            ctx[CTX_MIDBLOCK] += 1
-            h = jt.hot[i]
-            if h > NEVER_TRANSLATE:
-                h += 1
-                jt.hot[i] = h
-                if h >= threshold * MIDBLOCK_FACTOR:
-                    status = RUN_TRANSLATE
-                    break
+            if x == X_JUMP:
+                continue
+            if x == X_LIMIT:
+                # the next block could pass the event: the interpreter runs up to it (on the chip,
+                # the end of every quantum)
+                ctx[CTX_LIMITS] += 1
+                step_to = next_event
         else:
+            left = jt.tmap[i]
             h = jt.hot[i]
-            if h > NEVER_TRANSLATE:
-                h += 1
-                jt.hot[i] = h
-                if h >= threshold:
-                    status = RUN_TRANSLATE
-                    break
-            interpret = True
-        if not interpret:
-            continue
+            if left != 0:
+                # inside a translated block (after an event): the interpreter runs at most the rest
+                # of it (each instruction takes a cycle or more), unless control returns here often
+                # (an interrupted polling loop)
+                ctx[CTX_MIDBLOCK] += 1
+                if h > NEVER_TRANSLATE:
+                    h += 1
+                    jt.hot[i] = h
+                    if h >= threshold * MIDBLOCK_FACTOR:
+                        status = RUN_TRANSLATE
+                        break
+                step_to = min(next_event, cyc + left)
+            else:
+                if h > NEVER_TRANSLATE:
+                    h += 1
+                    jt.hot[i] = h
+                    if h >= threshold:
+                        status = RUN_TRANSLATE
+                        break
+                if stretch > 0:  # auto: stretch cycles at the interpreter's speed
+                    step_to = min(stop, cyc + stretch)
         smc = False
-        midblock = fn == 0 and jt.tmap[i] != 0
-        stretched = limited or midblock or (fn == 0 and stretch > 0)
-        if midblock:
-            # inside a translated block: the interpreter runs at most the rest of it (tmap: the
-            # instructions left, each of at least a cycle), to the next block start; stores after
-            step_to = min(next_event, cyc + jt.tmap[i])
-        elif limited:
-            # the next block could pass the event: the interpreter runs up to it (on the chip, the
-            # end of every quantum), its stores into code are found after
-            step_to = next_event
-        elif stretched:
-            # stretch cycles at the interpreter's speed (auto); its stores into code are found after
-            step_to = min(stop, cyc + stretch)
-        else:
+        many = step_to >= 0  # the interpreter's stores into translated code are found after
+        if not many:
             # one instruction by the interpreter (two for a trap: its shadow runs before the vector)
             i = (pc - base) >> 2
             word = np.int64(m32[t, i]) & M32 if (pc - base) < code else 0
@@ -345,7 +337,7 @@ def run_translated(
         status = st_t[S_RUN]
         if smc:
             forget_translations(jt)
-        elif stretched:
+        elif many:
             forget_if_changed(jt, m32[t])
         if status != RUN_CHUNK:
             flush_counts(jt, opc_t, ctr[t])
