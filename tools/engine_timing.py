@@ -68,8 +68,20 @@ def main() -> None:
     parser.add_argument("--engines", default="interp,auto")
     parser.add_argument("--iterations", default="2,30,300,3000")
     args = parser.parse_args()
+    from robosoc.jit import ENGINES
+
     engines = args.engines.split(",")
-    builds = _builds([int(n) for n in args.iterations.split(",")])
+    if args.repeats < 1:
+        parser.error(f"--repeats: at least 1, got {args.repeats}")
+    if len(engines) < 2 or any(e not in ENGINES for e in engines):
+        parser.error(f"--engines: two or more of {', '.join(ENGINES)}, comma-separated; got {args.engines!r}")
+    try:
+        iterations = [int(n) for n in args.iterations.split(",")]
+    except ValueError:
+        iterations = [0]
+    if any(n < 1 for n in iterations):
+        parser.error(f"--iterations: positive whole numbers, comma-separated; got {args.iterations!r}")
+    builds = _builds(iterations)
     for engine in engines:  # numba's cache filled before anything is timed
         _run(builds[0][1], engine, False)
     print(f"{'program':28} " + " ".join(f"{e:>9}" for e in engines) + "   ratio to " + engines[0])
