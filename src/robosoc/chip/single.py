@@ -254,6 +254,7 @@ class SingleCoreSoC:
         """Count every instruction's executions and extra cycles per word of code from here on (the
         exact profile, :func:`robosoc.analysis.function_profile.core_profile`; load the program
         first).  Translated code does not count: the core runs on the interpreter from here on."""
+        self.forget_translations()
         self.translator = None
         self.state.enable_profile()
 

@@ -139,6 +139,9 @@ class ChipTranslation:
         self._stopped[t] = True
         self._watched.discard(t)
         self.on[t] = 0
+        translator = self.translators[t]
+        if translator is not None:
+            translator.forget()  # the interpreter stops before none of its blocks
         self.translators[t] = None
         set_tables(self._tables, t, self._empty)
         self._given[t] = None

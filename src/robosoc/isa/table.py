@@ -178,6 +178,7 @@ OP_UNDECODED = 0
 OP_ILLEGAL = len(INSTRUCTIONS) + 1
 OP_FETCH_FAULT = len(INSTRUCTIONS) + 2  # sentinel row after the last word of memory
 OP_BREAK = len(INSTRUCTIONS) + 3  # a debugger's breakpoint: the core stops before the instruction
+OP_ENTRY = len(INSTRUCTIONS) + 4  # a translated block starts here: the interpreter stops before it (RUN_ENTRY)
 
 
 #: Operand formats whose instructions write ``rd``: every format but stores and branches.  FENCE

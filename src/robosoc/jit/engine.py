@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from robosoc.isa.table import OP_ENTRY, Timing, lookup
 from robosoc.jit.compiler import Compiler, add_to_manifest, manifest_key, read_manifest, shared_compiler
 from robosoc.jit.emit_ir import NAME_PLACEHOLDER, EmittedRegion, Target, emit_region
 from robosoc.jit.regions import MAX_REGION_INSTRUCTIONS, CodeView, End, Region, discover
@@ -28,6 +29,7 @@ from robosoc.kernels.jit_dispatch import (
     RUN_TRANSLATE,
     JitArrays,
     empty_tables,
+    flush_counts,
     run_translated,
 )
 
@@ -61,6 +63,11 @@ THRESHOLDS = {"jit": 1, "auto": AUTO_THRESHOLD}
 NEVER_ASK = 1 << 40  # a threshold no word reaches
 STRETCHES = {"jit": 0, "auto": AUTO_STRETCH}
 M32 = 0xFFFFFFFF
+
+
+def _traps(word: int) -> bool:
+    ins = lookup(word)
+    return ins is not None and ins.timing is Timing.TRAP
 
 
 @dataclass(frozen=True)
@@ -158,9 +165,26 @@ class TranslatingCore:
 
     # --- tables -------------------------------------------------------------------------------
     def forget(self) -> None:
-        """Drop every translation (call after writing code from outside the core)."""
+        """Drop every translation (call after writing code from outside the core, or before the
+        core goes back to the interpreter for good)."""
+        self._clear_marks()
         self._code_size = -1
         self._jt = None
+
+    def _clear_marks(self) -> None:
+        """The interpreter no longer stops before translated blocks (their OP_ENTRY rows, see
+        :meth:`_mark`, are decoded again when executed)."""
+        rows = self.state.op_rows(self.tile)
+        rows[rows == OP_ENTRY] = 0
+
+    def _mark(self, at: np.ndarray) -> None:
+        """Let the interpreter stop before the blocks starting at word indices ``at`` (OP_ENTRY in
+        their predecode rows), so that the dispatch loop runs them translated even when the
+        interpreter reaches them in a stretch; not a trap's shadow, which the interpreter must run
+        right after the trap, before the vector."""
+        m32 = self.state.m32[self.tile]
+        keep = [i for i in at.tolist() if i < 2 or not _traps(int(m32[i - 2]) & M32)]
+        self.state.dec[self.tile, 2 * np.array(keep, dtype=np.int64)] = OP_ENTRY
 
     def tables(self) -> JitArrays:
         """The tables the dispatch loop reads (its statistics are in ``ctx``: CTX_CALLS, CTX_STEPS ...)."""
@@ -169,6 +193,7 @@ class TranslatingCore:
     def _tables(self) -> JitArrays:
         code = int(self.state.st[self.tile, S_CODE_SIZE])
         if self._jt is None or code != self._code_size:
+            self._clear_marks()
             self._jt = empty_tables(code // 4 + 1)  # the word after the code: its fetch error is the interpreter's
             self._code_size = code
             self._slot_hist: list[np.ndarray] = []  # per region: (kc, delta) rows of its slots
@@ -339,6 +364,7 @@ class TranslatingCore:
             at = (done.block_starts - base) >> 2
             free = jt.entry_fn[at] == 0  # a block already entered by an earlier region keeps its entry
             jt.entry_fn[at[free]] = done.address
+            self._mark(at[free])
             jt.entry_slot[at[free]] = slot_base
             jt.entry_blk[at[free]] = done.block_indices[free]
             jt.tmap[done.pcs] = done.rest
@@ -419,6 +445,7 @@ class TranslatingCore:
             start = time.perf_counter()
             jt = self._tables()
             run_translated(arrays, self._tiles, until, jt, self.ask_threshold(), self.stretch)
+            flush_counts(jt, arrays.opc[self.tile], arrays.ctr[self.tile])  # left in jt at RUN_CHUNK
             self.stats.run_seconds += time.perf_counter() - start
             status = int(st[S_RUN])
             if status != RUN_TRANSLATE:

@@ -67,7 +67,7 @@ from robosoc.kernels.dev_irq import (
     irq_scan,
     requests_possible,
 )
-from robosoc.kernels.jit_dispatch import RUN_TRANSLATE, forget_if_changed, run_translated
+from robosoc.kernels.jit_dispatch import RUN_TRANSLATE, flush_counts, forget_if_changed, run_translated
 
 # tile states
 K_OFF, K_RUN, K_SLEEP, K_EXITED, K_FAULT, K_IO = 0, 1, 2, 3, 4, 5
@@ -564,7 +564,7 @@ def _run_awake(core, tiles, until, jit_tables, jit_on, jit_params, one, rest):  
 def _check_translated(core, t, jit_tables, jit_on) -> None:  # type: ignore[no-untyped-def]
     """Forget tile ``t``'s translations if a word they were made from changed (a DMA into code)."""
     if jit_on[t] != 0:
-        forget_if_changed(jit_tables[t], core.m32[t])
+        forget_if_changed(jit_tables[t], core.m32[t], core.dec[t])
 
 
 @njit(cache=True)
@@ -854,6 +854,9 @@ def run_chip(  # type: ignore[no-untyped-def]
         if full:
             status = CHIP_OUTPUT
             break
+    for t in range(n):
+        if jit_on[t] != 0:  # the translated blocks' counts of the quanta that ran to their end
+            flush_counts(jit_tables[t], core.opc[t], core.ctr[t])
     gst[G_TIME] = T
     gst[G_STATUS] = status
     return status

@@ -35,6 +35,7 @@ from robosoc.isa.table import (
     MUL_BASE_CYCLES,
     OP,
     OP_BREAK,
+    OP_ENTRY,
     OP_FETCH_FAULT,
     OP_ILLEGAL,
     SINGLE_CYCLES,
@@ -64,12 +65,14 @@ from robosoc.kernels.core_layout import (
     OUT_CAPACITY,
     RUN_BREAK,
     RUN_CHUNK,
+    RUN_ENTRY,
     RUN_ERROR,
     RUN_EXIT,
     RUN_MAX_CYCLES,
     RUN_NI,
     RUN_OUTPUT,
     S_CODE_SIZE,
+    S_CODE_STORES,
     S_CYCLE,
     S_ERR,
     S_ERR_ADDR,
@@ -113,6 +116,7 @@ FENCE = OP["fence"]
 FIRST_SYSTEM = OP["ecall"]
 FETCH_FAULT = OP_FETCH_FAULT
 BREAK = OP_BREAK
+ENTRY = OP_ENTRY
 ILLEGAL = OP_ILLEGAL
 
 F_I, F_SHIFT, F_LOAD, F_S = int(Fmt.I), int(Fmt.SHIFT), int(Fmt.LOAD), int(Fmt.S)
@@ -339,8 +343,9 @@ def run_cores(core: CoreArrays, tiles: np.ndarray, until: int) -> None:
 
     Every array has one row per core (tile).  A core stops at the first instruction boundary at or
     after ``until``, at its exit, an error, its cycle budget, a full output buffer, before an
-    instruction a debugger marked (RUN_BREAK), or just before an access to its network-interface
-    registers (RUN_NI: the chip simulator performs that access
+    instruction a debugger marked (RUN_BREAK) or where a translated block starts (RUN_ENTRY: only
+    the dispatch loop's cores have such words, :mod:`robosoc.kernels.jit_dispatch`), or just before
+    an access to its network-interface registers (RUN_NI: the chip simulator performs that access
     in global time order).  The reason is left in ``st[t, S_RUN]``; all state stays in the arrays,
     so calls can be repeated.
 
@@ -448,6 +453,7 @@ def run_cores(core: CoreArrays, tiles: np.ndarray, until: int) -> None:
                     m32[t, wi] = regs_t[rs2]
                     if wi < code_words:
                         dec_t[wi << U1] = 0  # the word may be code: decode it again
+                        st[t, S_CODE_STORES] += 1
                     cyc += MEMORY_CYCLES
                     pc += 4
                 else:
@@ -653,6 +659,7 @@ def run_cores(core: CoreArrays, tiles: np.ndarray, until: int) -> None:
                     wi = np.uint64(off) >> U2
                     if wi < code_words:
                         dec_t[wi << U1] = 0  # the word may be code: decode it again
+                        st[t, S_CODE_STORES] += 1
                     cyc += MEMORY_CYCLES
                     pc += 4
                 else:
@@ -707,6 +714,10 @@ def run_cores(core: CoreArrays, tiles: np.ndarray, until: int) -> None:
             elif op == BREAK:
                 opc_t[kc] -= 1  # not executed: a debugger stops the core before it
                 status = RUN_BREAK
+                break
+            elif op == ENTRY:
+                opc_t[kc] -= 1  # not executed here: the dispatch loop runs the translated block
+                status = RUN_ENTRY
                 break
             elif op & UNSUPPORTED_BIT:
                 err = ERR_UNSUPPORTED

@@ -58,6 +58,7 @@ S_PROF_STRIDE = 46  # columns of a task's bank (words of code + 2); 0: not profi
 # MPSoC tiles (S_NI = 1): how far the chip loop vouches for the packet line (kernels/chip.py, "long quanta")
 S_EXT_FINAL = 47  # IRQ_CAUSE reads of device cycles >= this stop the core (RUN_NI): the line may still rise
 S_MASK_LOCK = 48  # 1: a store setting IRQ_MASK bit 1 (the packet line) stops the core (RUN_NI)
+S_CODE_STORES = 49  # stores the interpreter made into the loaded code (a translator checks its words when it moves)
 ST_SIZE = 50
 
 # run status
@@ -68,6 +69,7 @@ RUN_MAX_CYCLES = 3
 RUN_OUTPUT = 4  # the output buffer is full: drain it and call again
 RUN_NI = 5  # stopped before an access to the network-interface registers
 RUN_BREAK = 6  # stopped before an instruction whose predecode row holds a breakpoint (OP_BREAK)
+RUN_ENTRY = 7  # stopped before a word where a translated block starts (OP_ENTRY: the dispatch loop runs it)
 
 # what a device register store did (the devices' store functions, kernels/soc_bus.py)
 DEV_WRITTEN = 0

@@ -13,9 +13,13 @@ compared with memory after.
 
 A region returns one of the X_* codes with the pc and cycle in ``ctx``.  Instruction counts are
 kept per block (``cnt``: one slot per block and per side exit, each with a signed histogram over the
-interpreter's per-operation counters) and added to ``opc`` when the loop returns, so the counters
-equal the interpreter's.  Stores into the loaded code are always the interpreter's; when one
-writes a word some region translated (``tmap``), the loop forgets every translation.
+interpreter's per-operation counters) and added to ``opc`` by :func:`flush_counts`, so the counters
+equal the interpreter's: the loop flushes when it returns for anything but the end of the slice,
+and the caller when it reads the counters (on the chip, once per call of the chip loop: a slice is
+a quantum there, often a few cycles, and a flush costs a pass over every slot).  Stores into the
+loaded code are always the interpreter's, which counts them (``S_CODE_STORES``); when the count
+moved, the loop compares the translated words with memory and forgets every translation if one
+changed (a pass over those words, so not after every interpreted stretch).
 """
 
 from __future__ import annotations
@@ -27,16 +31,19 @@ from llvmlite import ir
 from numba import njit, types
 from numba.extending import intrinsic
 
+from robosoc.isa.table import OP_ENTRY
 from robosoc.kernels.core import CoreArrays, fetch_error, interpret_cores
 from robosoc.kernels.core_layout import (
     ERR_FETCH_DATA,
     OPC_SIZE,
     OUT_CAPACITY,
     RUN_CHUNK,
+    RUN_ENTRY,
     RUN_ERROR,
     RUN_MAX_CYCLES,
     RUN_OUTPUT,
     S_CODE_SIZE,
+    S_CODE_STORES,
     S_CYCLE,
     S_ERR,
     S_ERR_ADDR,
@@ -74,7 +81,11 @@ CTX_CTR = 12
 CTX_WORDS = 13  # entries of tpcs/twords that hold translated words (0 after forgetting them)
 CTX_ENTRY_BLK = 14
 CTX_MIDBLOCK = 15  # interpreter steps at translated words that start no block (statistics)
-CTX_SIZE = 16
+#: 1 + the word whose OP_ENTRY row the loop took off for the interpreter to run it, while the core
+#: is still there (0: none); it goes back when the core has left the word (a core stopped there for
+#: the chip loop, RUN_NI, must hold its decoded row)
+CTX_UNMARKED = 16
+CTX_SIZE = 17
 
 # dispatcher results beyond the interpreter's RUN_* codes
 RUN_TRANSLATE = 100  # the pc in st[S_PC] turned hot: translate a region there and call again
@@ -83,8 +94,6 @@ NEVER_TRANSLATE = -(1 << 30)
 #: arrivals inside a translated block (threshold times this) before a region starts there too
 MIDBLOCK_FACTOR = 8  # hot counter of a word no region can start at
 
-_STORE_OPCODE = 0x23
-_SYSTEM_OPCODE = 0x73
 _JAL_X0_OPCODE = 0x6F  # jal with rd = x0 (low 12 bits)
 _NOP = 0x13
 M32 = 0xFFFFFFFF
@@ -185,7 +194,12 @@ def set_tables(tables, t: int, jt: JitArrays) -> None:  # type: ignore[no-untype
 
 
 @njit(cache=True)
-def forget_translations(jt: JitArrays) -> None:
+def forget_translations(jt: JitArrays, dec_t: np.ndarray) -> None:
+    """Drop every translation of the core whose predecode rows are ``dec_t`` (and the interpreter's
+    stops before their blocks)."""
+    for i in range(jt.entry_fn.shape[0]):
+        if jt.entry_fn[i] != 0 and dec_t[2 * i] == OP_ENTRY:
+            dec_t[2 * i] = 0  # decoded again when executed
     jt.entry_fn[:] = 0
     jt.entry_slot[:] = 0
     jt.entry_blk[:] = 0
@@ -196,25 +210,13 @@ def forget_translations(jt: JitArrays) -> None:
 
 
 @njit(cache=True)
-def forget_if_changed(jt: JitArrays, m32_t: np.ndarray) -> None:
+def forget_if_changed(jt: JitArrays, m32_t: np.ndarray, dec_t: np.ndarray) -> None:
     """Forget every translation if a word one was made from no longer holds its instruction
     (written by the interpreter's stores or a DMA)."""
     for k in range(jt.ctx[CTX_WORDS]):
         if m32_t[jt.tpcs[k]] != jt.twords[k]:
-            forget_translations(jt)
+            forget_translations(jt, dec_t)
             return
-
-
-@njit(cache=True, inline="always")
-def _store_hits_translation(jt: JitArrays, word: int, regs_t: np.ndarray, base: int, code: int) -> bool:
-    """Whether the store ``word`` (about to run with ``regs_t``) writes a translated word."""
-    if (word & 0x7F) != _STORE_OPCODE:
-        return False
-    imm = ((word >> 25) << 5) | ((word >> 7) & 31)
-    imm = (imm ^ 0x800) - 0x800
-    addr = (np.int64(regs_t[(word >> 15) & 31]) + imm) & M32
-    off = (addr - base) & M32
-    return off < code and jt.tmap[off >> 2] != 0
 
 
 @njit(cache=True)
@@ -226,12 +228,13 @@ def run_translated(
     Leaves the RUN_* status in st[t, S_RUN], or RUN_TRANSLATE with the pc of a word that turned
     hot (``threshold`` arrivals without an entry) for the caller to translate.  At a word without a
     translation the interpreter runs one instruction (``stretch`` 0), or ``stretch`` cycles at its
-    own speed, after which the translated words are compared with what was translated (a store the
-    interpreter made into them forgets every translation).
+    own speed.  Returning at the end of the slice (RUN_CHUNK) it leaves the block counts in
+    ``jt.cnt``: the caller flushes them (:func:`flush_counts`) before it reads the counters.
     """
-    st, ctr, opc, regs, m8, _m16, m32, _dec, _out = core
+    st, ctr, opc, regs, m8, _m16, m32, dec, _out = core
     t = tiles[0]
     st_t = st[t]
+    dec_t = dec[t]
     regs_t = regs[t]
     opc_t = opc[t]
     base = st_t[S_MEM_BASE]
@@ -259,6 +262,11 @@ def run_translated(
     err = 0
     err_addr = 0
     while True:
+        u = ctx[CTX_UNMARKED] - 1
+        if u >= 0 and pc != base + 4 * u:
+            if jt.entry_fn[u] != 0:
+                dec_t[2 * u] = OP_ENTRY
+            ctx[CTX_UNMARKED] = 0
         # the interpreter's boundary: interrupt controller, end of the slice, output buffer
         next_event = min(st_t[S_IRQ_CHECK], stop)
         if cyc >= next_event:
@@ -314,15 +322,10 @@ def run_translated(
                         break
                 if stretch > 0:  # auto: stretch cycles at the interpreter's speed
                     step_to = min(stop, cyc + stretch)
-        smc = False
-        many = step_to >= 0  # the interpreter's stores into translated code are found after
-        if not many:
+        if step_to < 0:
             # one instruction by the interpreter (two for a trap: its shadow runs before the vector)
             i = (pc - base) >> 2
             word = np.int64(m32[t, i]) & M32 if (pc - base) < code else 0
-            smc = _store_hits_translation(jt, word, regs_t, base, code)
-            if (word & 0x7F) == _SYSTEM_OPCODE and (pc + 8 - base) < code:
-                smc = smc or _store_hits_translation(jt, np.int64(m32[t, i + 2]) & M32, regs_t, base, code)
             step_to = cyc + 1
             if (word & 0xFFF) == _JAL_X0_OPCODE and (
                 (word >> 12) == 0 or (word == 0xFFDFF06F and i > 0 and (np.int64(m32[t, i - 1]) & M32) == _NOP)
@@ -331,14 +334,19 @@ def run_translated(
             ctx[CTX_STEPS] += 1
         st_t[S_PC] = pc
         st_t[S_CYCLE] = cyc
+        stores = st_t[S_CODE_STORES]
+        i = (pc - base) >> 2
+        if 0 <= pc - base < code and dec_t[2 * i] == OP_ENTRY:
+            dec_t[2 * i] = 0  # the interpreter starts with this block's first instruction
+            ctx[CTX_UNMARKED] = i + 1
         interpret_cores(core, tiles, step_to)
         pc = st_t[S_PC]
         cyc = st_t[S_CYCLE]
         status = st_t[S_RUN]
-        if smc:
-            forget_translations(jt)
-        elif many:
-            forget_if_changed(jt, m32[t])
+        if st_t[S_CODE_STORES] != stores:
+            forget_if_changed(jt, m32[t], dec_t)  # the interpreter stored into the loaded code
+        if status == RUN_ENTRY:
+            status = RUN_CHUNK  # at a translated block: the loop calls it
         if status != RUN_CHUNK:
             flush_counts(jt, opc_t, ctr[t])
             return
@@ -352,7 +360,8 @@ def run_translated(
     st_t[S_PC] = pc & M32
     st_t[S_CYCLE] = cyc
     st_t[S_RUN] = status
-    flush_counts(jt, opc_t, ctr[t])
+    if status != RUN_CHUNK:
+        flush_counts(jt, opc_t, ctr[t])
 
 
 __all__ = [
