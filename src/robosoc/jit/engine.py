@@ -149,7 +149,7 @@ class TranslatingCore:
         self._compiler = compiler
         self.stats = stats if stats is not None else TranslationStats()
         self._tiles = np.array([tile], dtype=np.int64)
-        self._backoff: dict[int, int] = {}  # auto: word -> deferrals of the region starting there
+        self._parked: dict[int, int] = {}  # auto: word index -> pc of a deferred region (not sampled for now)
         self._sizes: dict[int, int] = {}  # auto: pc -> instructions of the region found there
         self._code_size = -1
         self._jt: JitArrays | None = None
@@ -201,6 +201,7 @@ class TranslatingCore:
             self._slot_next: list[np.ndarray] = []
             self._nslots = 0
             self._flushes_seen = 0
+            self._parked.clear()
             self._install_known()
             self._known_starts = read_manifest(self._manifest_key()) if self.mode == "auto" else set()
             self._cached_starts = frozenset(self._known_starts)  # compiled by an earlier run: installed at once
@@ -267,7 +268,7 @@ class TranslatingCore:
         """Translate the region starting at ``pc`` and enter its blocks in the tables.
 
         With ``auto``, a region that would have to be compiled while compiling is not yet worth it
-        is left to the interpreter: its word is sampled again after twice as many arrivals.
+        is left to the interpreter: its word is parked until the budget could pay for it.
         """
         start = time.perf_counter()
         try:
@@ -288,11 +289,26 @@ class TranslatingCore:
         return ESTIMATED_SECONDS_PER_MODULE + per_insn * instructions
 
     def _defer(self, pc: int) -> None:
+        """Park the word: the dispatch loop stops counting its arrivals until the budget could pay
+        for its region (:meth:`_unpark`), so that a short budget costs one stop per word, not one
+        per few arrivals (with regions in the object cache the loop keeps asking)."""
         i = (pc - self._target().base) >> 2
-        n = self._backoff.get(i, 0) + 1
-        self._backoff[i] = n
-        self._tables().hot[i] = -min(self.threshold << n, 1 << 28)  # counts up to the threshold again
+        self._tables().hot[i] = NEVER_TRANSLATE
+        self._parked[i] = pc
         self.stats.deferred += 1
+
+    def _unpark(self) -> None:
+        """auto: parked words whose region the budget could pay for twice over count arrivals again
+        (the margin keeps a budget at the edge from being spent on stops that defer again)."""
+        if not self._parked:
+            return
+        jt = self._tables()
+        budget = self._budget()
+        for i, pc in list(self._parked.items()):
+            if 2 * self._estimate(self._sizes.get(pc, AUTO_MAX_REGION_INSTRUCTIONS)) <= budget:
+                if jt.entry_fn[i] == 0 and jt.hot[i] == NEVER_TRANSLATE:
+                    jt.hot[i] = 0
+                del self._parked[i]
 
     def _translate(self, pc: int) -> Region:
         jt = self._tables()
@@ -305,6 +321,7 @@ class TranslatingCore:
             self._flushes_seen = int(jt.ctx[CTX_FLUSHES])
             self._install_known()
             self._sizes.clear()
+            self._parked.clear()
             if jt.entry_fn[(pc - self._target().base) >> 2] != 0:
                 return Region(pc, {})
         self._install_new_known()  # another core may have translated it meanwhile
@@ -416,6 +433,7 @@ class TranslatingCore:
         """
         if self.mode != "auto":
             return self.threshold
+        self._unpark()
         if cached is None:
             cached = self.has_cached_regions()
         if not cached and self._budget() < self._estimate(AUTO_MAX_REGION_INSTRUCTIONS):

@@ -36,6 +36,7 @@ from robosoc.kernels.core_layout import (
     NEVER,
     OPC_SIZE,
     RUN_BREAK,
+    RUN_ENTRY,
     RUN_ERROR,
     RUN_EXIT,
     RUN_NI,
@@ -133,6 +134,10 @@ CHIP_TRANSLATE = 7  # a core's pc turned hot: translate a region there and call 
 J_THRESHOLD = 0  # arrivals at a word before the host is asked to translate there
 J_STRETCH = 1  # cycles the interpreter runs between arrivals (auto)
 J_SIZE = 2
+#: a translating tile whose stretch of the quantum is shorter than this runs on the interpreter with
+#: the others (a call of the dispatch loop costs more than a few interpreted instructions: with two
+#: cores awake a quantum is G_LOOK_IDLE cycles), unless it stopped before a translated block
+JIT_MIN_SLICE = 64
 
 # network-interface misuse (K_ERR)
 CE_NONE = 0
@@ -548,9 +553,10 @@ def _run_awake(core, tiles, until, jit_tables, jit_on, jit_params, one, rest):  
     ones together (through ``interpret_cores``, the dispatch loop's own copy of the interpreter:
     numba compiles one, and one variant of the chip loop whatever the engine)."""
     k = 0
+    st = core.st
     for i in range(tiles.shape[0]):
         t = tiles[i]
-        if jit_on[t] != 0:
+        if jit_on[t] != 0 and (st[t, S_RUN] == RUN_ENTRY or until - st[t, S_CYCLE] >= JIT_MIN_SLICE):
             one[0] = t
             run_translated(core, one, until, jit_tables[t], jit_params[J_THRESHOLD], jit_params[J_STRETCH])
         else:
@@ -775,6 +781,10 @@ def run_chip(  # type: ignore[no-untyped-def]
                     st[t, S_EXT_FINAL] = s0 + look_idle
                     lo, hi = rt, rt + 1
                     continue
+                if a - ni.NI_BASE == ni.TASK_ID and jit_on[t] != 0:
+                    # the task accounting reads the counters: the translated blocks' counts first (a
+                    # tile that ran on the interpreter in a short quantum has not flushed them)
+                    flush_counts(jit_tables[t], core.opc[t], core.ctr[t])
                 if not ni_access(t, core, book, noc):
                     failed = t
                     break
