@@ -9,6 +9,7 @@ translated code, and that breakpoints and profiles fall back to the interpreter.
 
 from __future__ import annotations
 
+import itertools
 from pathlib import Path
 
 import pytest
@@ -198,3 +199,37 @@ def test_auto_translates_the_busy_tiles_only_and_changes_nothing() -> None:
             stats = chip._jit.stats
             assert stats is not None and stats.reused > 0
     assert states["auto"] == states["interp"]
+
+
+def test_auto_looks_ever_less_often_at_a_chip_whose_tiles_stay_asleep(monkeypatch) -> None:
+    """Every look at the tiles without a translator stops the chip loop; while looks find no busy
+    tile the interval doubles up to AUTO_LOOK_MAX_CYCLES (a sleeping chip would otherwise spend its
+    host time on them), and the chip's state stays the interpreter's."""
+    from robosoc.benchmarks.chip import _build
+    from robosoc.chip.translation import AUTO_LOOK_CYCLES, AUTO_LOOK_MAX_CYCLES, ChipTranslation
+
+    sleepy = _build("sleepy_tick.c", True, {"TICKS": 1000})
+    looks = []
+    prepare = ChipTranslation.prepare
+
+    def counted(self, chip):  # type: ignore[no-untyped-def]
+        looks.append(chip.cycle)
+        prepare(self, chip)
+
+    monkeypatch.setattr(ChipTranslation, "prepare", counted)
+    until = 16 * AUTO_LOOK_MAX_CYCLES
+    states = {}
+    for engine in ("interp", "auto"):
+        looks.clear()
+        chip = MPSoC(ChipConfig(), engine=engine)
+        chip.load_all(sleepy)
+        chip.step(until)
+        states[engine] = (chip.cycle, {xy: chip.counters(xy) for xy in chip.core_tiles()})
+    assert states["auto"] == states["interp"]
+    assert chip._jit.look_cycles() == AUTO_LOOK_MAX_CYCLES
+    assert all(tr is None for tr in chip._jit.translators)
+    # the gaps between looks: 2**21, 2**22, ... up to 2**24, then 2**24 (against 2**20 throughout)
+    gaps = [b - a for a, b in itertools.pairwise(looks)]
+    assert gaps == sorted(gaps) and gaps[0] == 2 * AUTO_LOOK_CYCLES, gaps
+    assert gaps[-2:] == [AUTO_LOOK_MAX_CYCLES] * 2, gaps
+    assert len(looks) < until // AUTO_LOOK_MAX_CYCLES + 5

@@ -29,7 +29,7 @@ from robosoc.chip.single import (
     errata_report,
     exit_word,
 )
-from robosoc.chip.translation import AUTO_LOOK_CYCLES, ChipTranslation
+from robosoc.chip.translation import ChipTranslation
 from robosoc.config.chip import MIN_PACKET_FLITS, ChipConfig
 from robosoc.isa.disasm import disassemble
 from robosoc.isa.table import MEMORY_CYCLES
@@ -313,8 +313,8 @@ class MPSoC:
         jit = self._jit
         while True:
             jit.prepare(self)
-            # auto looks at the tiles that do not translate yet every AUTO_LOOK_CYCLES
-            to = min(until, self.cycle + AUTO_LOOK_CYCLES) if jit.watching() else until
+            # auto looks at the tiles that do not translate yet every jit.look_cycles()
+            to = min(until, self.cycle + jit.look_cycles()) if jit.watching() else until
             while True:
                 start = time.perf_counter()
                 status = kc.run_chip(self.cores.arrays(), self.noc, self.book(), to, *jit.arguments())

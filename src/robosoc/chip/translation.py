@@ -34,6 +34,9 @@ AUTO_MIN_INSTRUCTIONS = 200_000
 #: auto: chip cycles between looks at the tiles that do not translate yet (a long step is cut into
 #: pieces of this length while there are such tiles: stopping the chip loop anywhere is exact)
 AUTO_LOOK_CYCLES = 1 << 20
+#: ... doubled after each look that gave no tile a translator, up to this (a mostly sleeping chip
+#: runs millions of cycles per millisecond of host time: a stop per 2**20 cycles halved its speed)
+AUTO_LOOK_MAX_CYCLES = 1 << 24
 
 
 class ChipTranslation:
@@ -52,6 +55,7 @@ class ChipTranslation:
         self._seen = np.zeros((tiles, 2), dtype=np.int64)  # auto: (instructions, chip cycle) at the last look
         self._watched: set[int] = set()  # auto: loaded tiles without a translator yet
         self._cached = False  # auto: some translator's code has regions compiled by an earlier run
+        self._look = AUTO_LOOK_CYCLES  # auto: chip cycles to the next look
 
     def arguments(self) -> tuple[np.ndarray, List, np.ndarray]:
         """``run_chip``'s jit_on, jit_tables and jit_params (the same types whatever the engine: the
@@ -67,6 +71,7 @@ class ChipTranslation:
         if self.stats is None:
             self.stats = TranslationStats()
         busy = self._busy(chip) if self.engine == "auto" else None
+        made = False
         for t in range(len(self.on)):
             if self._stopped[t] or t not in chip.programs or int(chip.cores.st[t, S_CODE_SIZE]) == 0:
                 continue
@@ -78,8 +83,11 @@ class ChipTranslation:
             if translator is None:
                 translator = TranslatingCore(chip.cores, tile=t, mode=self.engine, stats=self.stats)
                 self.translators[t] = translator
+                made = True
                 self.on[t] = 1
             self._give(t)
+        if busy is not None:
+            self._look = AUTO_LOOK_CYCLES if made else min(2 * self._look, AUTO_LOOK_MAX_CYCLES)
         live = [tr for tr in self.translators if tr is not None]
         self._cached = self.engine == "auto" and any(tr.has_cached_regions() for tr in live)
         if live:
@@ -90,6 +98,10 @@ class ChipTranslation:
         some translator has cached regions (known from :meth:`prepare`: not scanned per translation)."""
         self.params[kc.J_THRESHOLD] = translator.ask_threshold(self._cached)
         self.params[kc.J_STRETCH] = translator.stretch
+
+    def look_cycles(self) -> int:
+        """auto: chip cycles from now to the next look at the tiles without a translator."""
+        return self._look
 
     def watching(self) -> bool:
         """auto: whether some loaded tile may still get a translator (the chip is looked at again)."""
