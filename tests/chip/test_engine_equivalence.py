@@ -336,3 +336,28 @@ def test_compiled_or_cached_knows_a_kernel_numba_has_not_compiled() -> None:
     assert compiled_or_cached(run_translated)
     # a dispatcher that has compiled nothing yet finds the dispatch loop in numba's cache
     assert compiled_or_cached(njit(cache=True)(run_translated.py_func))
+
+
+def test_a_breakpoint_set_after_translating_stops_the_core_on_the_interpreter() -> None:
+    """Translated blocks hold OP_ENTRY in their predecode rows (the interpreter stops before them
+    for the dispatch loop); setting a breakpoint puts the core back on the interpreter, so those
+    marks must go: the core then stops at the breakpoint with RUN_BREAK after the loop's 40
+    iterations, as on a core that never translated."""
+    from robosoc.isa.table import OP_ENTRY
+    from robosoc.kernels.core_layout import RUN_BREAK, S_RUN
+
+    loop = [A.i("addi", 10, 0, 0), A.i("addi", 10, 10, 1), A.i("addi", 11, 0, 40), A.branch("bne", 10, 11, -8)]
+    words = [*loop, A.i("addi", 12, 10, 0), *exit_with(10)]
+    stops = {}
+    for engine in ("interp", "jit"):
+        soc = make_soc(words, engine=engine)
+        soc.step_until(100)  # the loop runs translated (jit)
+        if engine == "jit":
+            assert (soc.state.op_rows(0) == OP_ENTRY).any()
+        soc.set_breakpoint(SRAM_BASE + 4 * len(loop))
+        assert not (soc.state.op_rows(0) == OP_ENTRY).any()
+        status = soc.step_until(1_000_000)
+        stops[engine] = (status, soc.state.pc, soc.cycle, int(soc.state.regs[0, 10]))
+        assert status == RUN_BREAK == int(soc.state.st[0, S_RUN])
+    assert stops["jit"] == stops["interp"]
+    assert (stops["jit"][1], stops["jit"][3]) == (SRAM_BASE + 4 * len(loop), 40)

@@ -298,6 +298,7 @@ class SingleCoreSoC:
 
         Translated code does not see breakpoints: the core runs on the interpreter from here on.
         """
+        self.forget_translations()
         self.translator = None
         self.state.set_breakpoint(addr, on)
 
