@@ -361,3 +361,34 @@ def test_a_breakpoint_set_after_translating_stops_the_core_on_the_interpreter() 
         assert status == RUN_BREAK == int(soc.state.st[0, S_RUN])
     assert stops["jit"] == stops["interp"]
     assert (stops["jit"][1], stops["jit"][3]) == (SRAM_BASE + 4 * len(loop), 40)
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_a_trap_whose_shadow_starts_a_translated_block_runs_as_on_the_interpreter(engine: str) -> None:
+    """The word 8 bytes after an ecall (its shadow: it runs after the trap, before the vector) is
+    also a branch target, hence a translated block start marked OP_ENTRY: at the second ecall the
+    interpreter stops before it and the dispatch loop must still run it before taking the vector."""
+    from test_interrupts import IRQ, sw_const
+
+    from robosoc.kernels.core_layout import S_ERR
+
+    t1, a4, a5, a6, t3 = 6, 14, 15, 16, 28
+    body = [
+        *A.li(t3, IRQ),
+        *sw_const(t3, 0x00, SRAM_BASE + 0x400),  # IRQ_VECTOR: the handler at word 0x100
+        A.i("addi", a6, 0, 3),
+        A.ECALL,  # E
+        A.i("addi", a4, a4, 1),  # E + 4: the handler returns here
+        A.i("addi", a5, a5, 1),  # E + 8: the shadow, and the target of the bne below
+        A.i("addi", a6, a6, -1),
+        A.branch("beq", a6, 0, 16),  # to the exit
+        A.i("andi", t1, a6, 1),
+        A.branch("bne", t1, 0, -16),  # odd: back to E + 8
+        A.jal(0, -28),  # even: to the ecall again
+        *exit_with(a5),
+    ]
+    handler = [A.NOP, A.load("lw", 13, t3, 0x40), A.i("addi", 27, 13, -4), A.jalr(0, 27, 0)]  # back to E + 4
+    words = body + [A.NOP] * (0x100 - len(body)) + handler
+    soc = assert_same(words, engine, 100_000, len(words))
+    assert soc.counters()["traps"] == 2 and int(soc.state.st[0, S_ERR]) == 0
+    assert int(soc.state.regs[0, a5]) == 5  # the shadow twice, and 3 times through E + 4 and the loop

@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from robosoc.isa.table import OP_ENTRY, Timing, lookup
+from robosoc.isa.table import OP_ENTRY
 from robosoc.jit.compiler import Compiler, add_to_manifest, manifest_key, read_manifest, shared_compiler
 from robosoc.jit.emit_ir import NAME_PLACEHOLDER, EmittedRegion, Target, emit_region
 from robosoc.jit.regions import MAX_REGION_INSTRUCTIONS, CodeView, End, Region, discover
@@ -63,11 +63,6 @@ THRESHOLDS = {"jit": 1, "auto": AUTO_THRESHOLD}
 NEVER_ASK = 1 << 40  # a threshold no word reaches
 STRETCHES = {"jit": 0, "auto": AUTO_STRETCH}
 M32 = 0xFFFFFFFF
-
-
-def _traps(word: int) -> bool:
-    ins = lookup(word)
-    return ins is not None and ins.timing is Timing.TRAP
 
 
 @dataclass(frozen=True)
@@ -180,11 +175,10 @@ class TranslatingCore:
     def _mark(self, at: np.ndarray) -> None:
         """Let the interpreter stop before the blocks starting at word indices ``at`` (OP_ENTRY in
         their predecode rows), so that the dispatch loop runs them translated even when the
-        interpreter reaches them in a stretch; not a trap's shadow, which the interpreter must run
-        right after the trap, before the vector."""
-        m32 = self.state.m32[self.tile]
-        keep = [i for i in at.tolist() if i < 2 or not _traps(int(m32[i - 2]) & M32)]
-        self.state.dec[self.tile, 2 * np.array(keep, dtype=np.int64)] = OP_ENTRY
+        interpreter reaches them in a stretch.  A trap's shadow may be one: the trap sets the
+        controller's next look one cycle after it, so the loop runs the shadow (translated or not)
+        before the vector."""
+        self.state.dec[self.tile, 2 * at] = OP_ENTRY
 
     def tables(self) -> JitArrays:
         """The tables the dispatch loop reads (its statistics are in ``ctx``: CTX_CALLS, CTX_STEPS ...)."""
