@@ -21,7 +21,17 @@ from robosoc.jit.emit_ir import NAME_PLACEHOLDER, EmittedRegion, Target, emit_re
 from robosoc.jit.regions import MAX_REGION_INSTRUCTIONS, CodeView, End, Region, discover
 from robosoc.kernels import compiled_or_cached
 from robosoc.kernels.core import run_cores
-from robosoc.kernels.core_layout import ERRATA_RTL, S_CODE_SIZE, S_ERRATA, S_MEM_BASE, S_MEM_SIZE, S_MUL, S_PC, S_RUN
+from robosoc.kernels.core_layout import (
+    ERRATA_RTL,
+    RUN_CHUNK,
+    S_CODE_SIZE,
+    S_ERRATA,
+    S_MEM_BASE,
+    S_MEM_SIZE,
+    S_MUL,
+    S_PC,
+    S_RUN,
+)
 from robosoc.kernels.jit_dispatch import (
     CTX_FLUSHES,
     CTX_WORDS,
@@ -457,9 +467,10 @@ class TranslatingCore:
             start = time.perf_counter()
             jt = self._tables()
             run_translated(arrays, self._tiles, until, jt, self.ask_threshold(), self.stretch)
-            flush_counts(jt, arrays.opc[self.tile], arrays.ctr[self.tile])  # left in jt at RUN_CHUNK
-            self.stats.run_seconds += time.perf_counter() - start
             status = int(st[S_RUN])
+            if status == RUN_CHUNK:  # the loop leaves the block counts in jt only then
+                flush_counts(jt, arrays.opc[self.tile], arrays.ctr[self.tile])
+            self.stats.run_seconds += time.perf_counter() - start
             if status != RUN_TRANSLATE:
                 return status
             self.translate(int(st[S_PC]))

@@ -8,8 +8,10 @@ while the block's worst-case cycles end before the next event (docs/translation.
 region does not do -- device accesses, misaligned or unmapped accesses, traps, illegal words, the
 idle loops the interpreter skips -- the interpreter does, one instruction at a time, by calling
 ``run_cores`` with the slice ending at the next cycle; from a block that could reach the next event
-it runs up to the event (on the chip: to the end of the quantum) and the translated words are
-compared with memory after.
+it runs up to the event (on the chip: to the end of the quantum).  Every translated block start
+holds OP_ENTRY in its predecode row, so the interpreter, wherever it runs, stops before translated
+code (RUN_ENTRY) and the loop calls it; to run such a word itself the loop takes the mark off until
+the core has left the word (CTX_UNMARKED).
 
 A region returns one of the X_* codes with the pc and cycle in ``ctx``.  Instruction counts are
 kept per block (``cnt``: one slot per block and per side exit, each with a signed histogram over the
