@@ -261,6 +261,21 @@ def test_sleeping_forever_is_reported():
         chip.run(max_cycles=1_000_000)
 
 
+@pytest.mark.parametrize("pc", [SRAM + 2, SRAM + 0x40, SRAM - 4])
+def test_a_running_tile_whose_pc_left_its_code_is_named_before_the_chip_runs(pc):
+    from robosoc.chip.single import CoreError
+    from robosoc.kernels.core_layout import S_PC
+
+    chip = MPSoC(ChipConfig())
+    for xy in ((1, 0), (0, 1)):
+        chip.load(xy, program([A.i("addi", T0, 0, 1), *exit_with(0)]))
+    t = chip.config.tile_index((0, 1))
+    chip.cores.st[t, S_PC] = pc  # as a debugger's register write could leave it
+    with pytest.raises(CoreError, match=rf"^tile \(0, 1\): pc 0x{pc:08x} .* is not an instruction of the loaded code"):
+        chip.step(100)
+    assert chip.cycle == 0  # nothing ran
+
+
 def test_per_task_counters_add_up_to_the_tile_totals():
     words = [*A.li(T0, NI)]
     for task in (1, 2, 1):
