@@ -4,7 +4,8 @@
  * TIMER1 counts every 16 cycles and clears at CTC = 15624, so its compare flag toggles every
  * 250 000 cycles (1 ms at 250 MHz).  Each tick wakes the core, the interrupt handler
  * acknowledges the tick and does a little work (a few hundred instructions, like a control task),
- * and the core goes back to sleep.  After TICKS ticks the program exits.
+ * and the core goes back to sleep.  After TICKS ticks the program exits.  WORK sets the handler's
+ * loop (default 64 rounds).
  */
 #include <stdint.h>
 
@@ -13,6 +14,9 @@
 
 #ifndef TICKS
 #define TICKS 20
+#endif
+#ifndef WORK
+#define WORK 64
 #endif
 
 static volatile uint32_t ticks;
@@ -26,7 +30,7 @@ void irq_handler(uint32_t cause)
     HF_REG32(HF_TIMERCAUSE_INV) ^= HF_TIMERCAUSE_T1_CTC; /* acknowledge the toggle */
     ticks++;
     uint32_t acc = work;
-    for (uint32_t i = 0; i < 64; i++) {
+    for (uint32_t i = 0; i < WORK; i++) {
         acc = acc * 3u + i;
     }
     work = acc;
