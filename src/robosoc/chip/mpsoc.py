@@ -164,6 +164,7 @@ class MPSoC:
         self.gst[kc.G_LOOK_SINGLE] = 1 if lockstep else kc.SINGLE_QUANTUM
         self.xout = np.zeros((n, XOUT_CAPACITY), dtype=np.uint8)
         self.io_out = np.zeros((IO_ROWS, kc.IO_COLS), dtype=np.int64)
+        self._work = np.zeros((kc.WORK_ROWS, n), dtype=np.int64)
         self.programs: dict[int, Program] = {}
         self._queue_next = 0
         self._io_received: list[tuple[int, list[int]]] = []
@@ -299,7 +300,7 @@ class MPSoC:
     # --- running ---------------------------------------------------------------------------
     def book(self) -> kc.ChipBook:
         """The chip loop's own arrays, as the kernels take them."""
-        return kc.ChipBook(self.cst, self.acc, self.snap, self.gst, self.xout, self.io_out, self.rec)
+        return kc.ChipBook(self.cst, self.acc, self.snap, self.gst, self.xout, self.io_out, self.rec, self._work)
 
     def step(self, until: int) -> int:
         """Advance the chip to ``until`` (or a host event); returns the CHIP_* reason.

@@ -29,6 +29,7 @@ from robosoc.isa.table import MEMORY_CYCLES
 from robosoc.kernels import ni_registers as ni
 from robosoc.kernels import noc as nk
 from robosoc.kernels import stop_queue
+from robosoc.kernels.borrowed import borrow, row
 from robosoc.kernels.core import LW, SW, U1, U2, CoreArrays, fields, interpret_cores
 from robosoc.kernels.core_layout import (
     C_MMIO,
@@ -169,7 +170,9 @@ class ChipBook(NamedTuple):
     ``cst`` per-tile chip state (K_* columns), ``acc`` per-task accounting vectors (A_*), ``snap``
     the counters at the last attribution, ``gst`` global scalars (G_*), ``xout`` per-tile output
     kept for the host, ``io_out`` packets that reached the I/O tile (IO_COLS per row), ``rec``
-    timeline events (R_* rows of REC_COLS; no rows: not recording).
+    timeline events (R_* rows of REC_COLS; no rows: not recording), ``work`` WORK_ROWS rows of one
+    entry per tile, the chip loop's scratch lists (held by the host, so the loop borrows them:
+    :mod:`robosoc.kernels.borrowed`).
     """
 
     cst: np.ndarray
@@ -179,6 +182,10 @@ class ChipBook(NamedTuple):
     xout: np.ndarray
     io_out: np.ndarray
     rec: np.ndarray
+    work: np.ndarray
+
+
+WORK_ROWS = 6
 
 
 # Explicit signatures on the small helpers called with constants: numba would otherwise compile
@@ -289,7 +296,7 @@ def ni_access(t, core, book, noc):
     pc = st[t, S_PC]
     s = st[t, S_CYCLE]
     i = np.uint64(pc - base) >> U2
-    op, rd, rs1, rs2, imm = fields(dec[t], i)
+    op, rd, rs1, rs2, imm = fields(row(dec, t), i)
     addr = (regs[t, rs1] + imm) & 0xFFFFFFFF
     off = addr - ni.NI_BASE
     if op != LW and op != SW:
@@ -360,7 +367,7 @@ def ni_access(t, core, book, noc):
         st[t, S_PC] = pc + 4
         cst[t, K_STATE] = K_SLEEP
         cst[t, K_SLEEP_FROM] = end
-        cst[t, K_WAKE] = wake_time(st[t], end)
+        cst[t, K_WAKE] = wake_time(row(st, t), end)
         record(book.rec, gst, R_SLEEP, t, end, 0, 0, pc, cst[t, K_SLEEP_CYCLES], 0)
         return True
     elif off == ni.NI_CMD:
@@ -432,7 +439,7 @@ def _stop_address(t, core):
     """The address of the load or store tile t stopped before (RUN_NI)."""
     st, regs, dec = core.st, core.regs, core.dec
     i = np.uint64(st[t, S_PC] - st[t, S_MEM_BASE]) >> U2
-    _, _, rs1, _, imm = fields(dec[t], i)
+    _, _, rs1, _, imm = fields(row(dec, t), i)
     return (regs[t, rs1] + imm) & 0xFFFFFFFC
 
 
@@ -455,19 +462,20 @@ def _wake_if_due(t, st, cst, H):
     packet sent in it can arrive before H), so the controller may look up to H for good.
     """
     start = cst[t, K_SLEEP_FROM]
-    if requests_possible(st[t]):
-        irq_scan(st[t], H)
-        w = max(earliest_entry(st[t]), start)
+    st_t = row(st, t)
+    if requests_possible(st_t):
+        irq_scan(st_t, H)
+        w = max(earliest_entry(st_t), start)
         if w < H:
             _wake(t, st, cst, w)
             return
     else:
         w = cst[t, K_WAKE]
-        if w < H and cause_enabled(st[t], w - 1):
+        if w < H and cause_enabled(st_t, w - 1):
             _wake(t, st, cst, w)
             return
         start = max(start, w)  # a point the search reached without finding the cause
-    cst[t, K_WAKE] = wake_time(st[t], start)
+    cst[t, K_WAKE] = wake_time(st_t, start)
 
 
 @njit(cache=True)
@@ -523,27 +531,27 @@ def _take_deliveries(st, book, noc):
         d = ev[r, nk.EV_TILE]
         rise = ev[r, nk.EV_CYCLE] + 1
         if d == io:
-            row = gst[G_IO_COUNT]
-            io_out[row, 0] = ev[r, nk.EV_CYCLE]
-            io_out[row, 1] = ev[r, nk.EV_LEN]
-            io_out[row, 2] = ev[r, nk.EV_FIRST]
+            line = gst[G_IO_COUNT]
+            io_out[line, 0] = ev[r, nk.EV_CYCLE]
+            io_out[line, 1] = ev[r, nk.EV_LEN]
+            io_out[line, 2] = ev[r, nk.EV_FIRST]
             for k in range(nk.MEM_FLITS):
-                io_out[row, 3 + k] = ev[r, nk.EV_FLITS + k]
-            gst[G_IO_COUNT] = row + 1
+                io_out[line, 3 + k] = ev[r, nk.EV_FLITS + k]
+            gst[G_IO_COUNT] = line + 1
             continue
         cst[d, K_RX_READY] = rise
         cst[d, K_RX_LEN] = ev[r, nk.EV_LEN]
         record(book.rec, gst, R_DELIVER, d, rise, ev[r, nk.EV_FIRST], ev[r, nk.EV_LEN], ev[r, nk.EV_FLITS + 2],
                ev[r, nk.EV_FLITS + 3], ev[r, nk.EV_FLITS + 5])  # fmt: skip
         if (st[d, S_IRQ_MASK] & CAUSE_PACKET) != 0:
-            irq_external_rise(st[d], rise)
+            irq_external_rise(row(st, d), rise)
         else:
             # the line feeds the controller only through IRQ_MASK bit 1: with it clear only IRQ_CAUSE
             # reads see it (and those wait for S_EXT_FINAL), so a core that ran ahead of the rise in a
             # long quantum is told without rewinding its controller into its past
             st[d, S_EXT_RISE] = rise
         if cst[d, K_STATE] == K_SLEEP:
-            cst[d, K_WAKE] = wake_time(st[d], cst[d, K_SLEEP_FROM])
+            cst[d, K_WAKE] = wake_time(row(st, d), cst[d, K_SLEEP_FROM])
     glob[nk.G_NEV] = 0
 
 
@@ -570,7 +578,7 @@ def _run_awake(core, tiles, until, jit_tables, jit_on, jit_params, one, rest):  
 def _check_translated(core, t, jit_tables, jit_on) -> None:  # type: ignore[no-untyped-def]
     """Forget tile ``t``'s translations if a word they were made from changed (a DMA into code)."""
     if jit_on[t] != 0:
-        forget_if_changed(jit_tables[t], core.m32[t], core.dec[t])
+        forget_if_changed(jit_tables[t], row(core.m32, t), row(core.dec, t))
 
 
 @njit(cache=True)
@@ -584,18 +592,28 @@ def run_chip(  # type: ignore[no-untyped-def]
     translation the chip stops with CHIP_TRANSLATE, the host translates a region there and calls
     again, and the quantum goes on exactly where it stopped (as after a breakpoint).
     """
+    # every array borrowed: the host holds them for the call, and the references numba would count
+    # at each call, unpacking and view below cost as much as a sleeping chip's instructions
+    core = CoreArrays(borrow(core.st), borrow(core.ctr), borrow(core.opc), borrow(core.regs), borrow(core.m8),
+                      borrow(core.m16), borrow(core.m32), borrow(core.dec), borrow(core.out))  # fmt: skip
+    noc = nk.NocState(borrow(noc.cfg), borrow(noc.glob), borrow(noc.buf), borrow(noc.port), borrow(noc.tile),
+                      borrow(noc.mem), borrow(noc.ev), borrow(noc.queue))  # fmt: skip
+    book = ChipBook(borrow(book.cst), borrow(book.acc), borrow(book.snap), borrow(book.gst), borrow(book.xout),
+                    borrow(book.io_out), borrow(book.rec), borrow(book.work))  # fmt: skip
+    jit_on = borrow(jit_on)
+    jit_params = borrow(jit_params)
     st, out = core.st, core.out
     glob = noc.glob
     cst, gst, xout, io_out = book.cst, book.gst, book.xout, book.io_out
     n = cst.shape[0]
     look_idle = gst[G_LOOK_IDLE]
     look_active = gst[G_LOOK_ACTIVE]
-    run = np.empty(n, dtype=np.int64)  # the awake cores, in tile order (the order of equal-cycle stops)
-    runx = np.empty(n, dtype=np.int64)  # those of them that run (not those waiting to report an error)
-    queue = np.empty(n, dtype=np.int64)  # the stopped ones in handling order (kernels/stop_queue.py)
-    qcyc = np.empty(n, dtype=np.int64)
-    one = np.empty(1, dtype=np.int64)  # a translating tile (run alone)
-    rest = np.empty(n, dtype=np.int64)  # the interpreted tiles of a run
+    run = row(book.work, 0)  # the awake cores, in tile order (the order of equal-cycle stops)
+    runx = row(book.work, 1)  # those of them that run (not those waiting to report an error)
+    queue = row(book.work, 2)  # the stopped ones in handling order (kernels/stop_queue.py)
+    qcyc = row(book.work, 3)
+    one = row(book.work, 4)[:1]  # a translating tile (run alone)
+    rest = row(book.work, 5)  # the interpreted tiles of a run
     look_single = gst[G_LOOK_SINGLE]
     xcap = xout.shape[1]
     T = gst[G_TIME]
@@ -784,7 +802,7 @@ def run_chip(  # type: ignore[no-untyped-def]
                 if a - ni.NI_BASE == ni.TASK_ID and jit_on[t] != 0:
                     # the task accounting reads the counters: the translated blocks' counts first (a
                     # tile that ran on the interpreter in a short quantum has not flushed them)
-                    flush_counts(jit_tables[t], core.opc[t], core.ctr[t])
+                    flush_counts(jit_tables[t], row(core.opc, t), row(core.ctr, t))
                 if not ni_access(t, core, book, noc):
                     failed = t
                     break
@@ -866,7 +884,7 @@ def run_chip(  # type: ignore[no-untyped-def]
             break
     for t in range(n):
         if jit_on[t] != 0:  # the translated blocks' counts of the quanta that ran to their end
-            flush_counts(jit_tables[t], core.opc[t], core.ctr[t])
+            flush_counts(jit_tables[t], row(core.opc, t), row(core.ctr, t))
     gst[G_TIME] = T
     gst[G_STATUS] = status
     return status

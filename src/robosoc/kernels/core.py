@@ -42,6 +42,7 @@ from robosoc.isa.table import (
     TRAP_CYCLES,
     Fmt,
 )
+from robosoc.kernels.borrowed import row
 from robosoc.kernels.core_layout import (
     C_MMIO,
     C_MUL_STALL,
@@ -370,9 +371,9 @@ def run_cores(core: CoreArrays, tiles: np.ndarray, until: int) -> None:
     st, ctr, opc, regs, m8, m16, m32, dec, out = core
     for k in range(tiles.shape[0]):
         t = tiles[k]
-        opc_t = opc[t]
-        regs_t = regs[t]
-        dec_t = dec[t]
+        opc_t = row(opc, t)
+        regs_t = row(regs, t)
+        dec_t = row(dec, t)
         base = st[t, S_MEM_BASE]
         size = st[t, S_MEM_SIZE]
         code = st[t, S_CODE_SIZE]
@@ -397,7 +398,7 @@ def run_cores(core: CoreArrays, tiles: np.ndarray, until: int) -> None:
             if cyc >= next_event:
                 if cyc >= st[t, S_IRQ_CHECK]:
                     was = pc
-                    pc, cyc = irq_event(st[t], ctr[t], pc, cyc)
+                    pc, cyc = irq_event(row(st, t), row(ctr, t), pc, cyc)
                     err = fetch_error(pc, base, code, size)
                     if err != 0:  # IRQ_VECTOR outside the loaded code
                         err_addr = pc
@@ -434,7 +435,7 @@ def run_cores(core: CoreArrays, tiles: np.ndarray, until: int) -> None:
                 if (off & M32) < size:
                     regs_t[rd] = m32[t, np.uint64(off) >> U2]
                 else:
-                    v, status, err = load_device(st[t], ctr[t], opc_t, kc, addr, cyc)
+                    v, status, err = load_device(row(st, t), row(ctr, t), opc_t, kc, addr, cyc)
                     if status != RUN_CHUNK:
                         err_addr = addr
                         break
@@ -458,7 +459,7 @@ def run_cores(core: CoreArrays, tiles: np.ndarray, until: int) -> None:
                     pc += 4
                 else:
                     status, err, pc, cyc = store_device(
-                        st[t], ctr[t], out[t], opc_t, kc, addr, np.int64(regs_t[rs2]), pc, cyc
+                        row(st, t), row(ctr, t), row(out, t), opc_t, kc, addr, np.int64(regs_t[rs2]), pc, cyc
                     )  # int64 like the other store: one compiled mmio_store
                     if status != RUN_CHUNK:
                         err_addr = addr
@@ -628,7 +629,7 @@ def run_cores(core: CoreArrays, tiles: np.ndarray, until: int) -> None:
                     else:
                         v = _sext(np.int64(m16[t, np.uint64(off) >> U1]), 16)
                 else:
-                    w, status, err = load_device(st[t], ctr[t], opc_t, kc, addr, cyc)
+                    w, status, err = load_device(row(st, t), row(ctr, t), opc_t, kc, addr, cyc)
                     if status != RUN_CHUNK:
                         err_addr = addr
                         break
@@ -664,7 +665,9 @@ def run_cores(core: CoreArrays, tiles: np.ndarray, until: int) -> None:
                     pc += 4
                 else:
                     value = regs_t[rs2] & 0xFF if op == SB else regs_t[rs2] & 0xFFFF
-                    status, err, pc, cyc = store_device(st[t], ctr[t], out[t], opc_t, kc, addr, value, pc, cyc)
+                    status, err, pc, cyc = store_device(
+                        row(st, t), row(ctr, t), row(out, t), opc_t, kc, addr, value, pc, cyc
+                    )
                     if status != RUN_CHUNK:
                         err_addr = addr
                         break
@@ -703,7 +706,7 @@ def run_cores(core: CoreArrays, tiles: np.ndarray, until: int) -> None:
             elif op >= FIRST_SYSTEM and op < ILLEGAL:
                 # SYSTEM opcode: trap.  EPC = trap + 8; the instruction at trap + 8 executes first.
                 cyc += TRAP_CYCLES
-                trap(st[t], pc, cyc)
+                trap(row(st, t), pc, cyc)
                 flow_jump(st, t, opc_t, pc, pc + 8, base)
                 pc += 8
                 next_event = cyc + 1

@@ -34,6 +34,7 @@ from numba import njit, types
 from numba.extending import intrinsic
 
 from robosoc.isa.table import OP_ENTRY
+from robosoc.kernels.borrowed import row
 from robosoc.kernels.core import CoreArrays, fetch_error, interpret_cores
 from robosoc.kernels.core_layout import (
     ERR_FETCH_DATA,
@@ -235,10 +236,11 @@ def run_translated(
     """
     st, ctr, opc, regs, m8, _m16, m32, dec, _out = core
     t = tiles[0]
-    st_t = st[t]
-    dec_t = dec[t]
-    regs_t = regs[t]
-    opc_t = opc[t]
+    st_t = row(st, t)
+    dec_t = row(dec, t)
+    regs_t = row(regs, t)
+    opc_t = row(opc, t)
+    ctr_t = row(ctr, t)
     base = st_t[S_MEM_BASE]
     size = st_t[S_MEM_SIZE]
     code = st_t[S_CODE_SIZE]
@@ -250,10 +252,10 @@ def run_translated(
     ctx = jt.ctx
     p_ctx = np.int64(ctx.ctypes.data)
     p_regs = np.int64(regs_t.ctypes.data)
-    p_mem = np.int64(m8[t].ctypes.data)
+    p_mem = np.int64(row(m8, t).ctypes.data)
     p_cnt = np.int64(jt.cnt.ctypes.data)
     p_st = np.int64(st_t.ctypes.data)
-    p_ctr = np.int64(ctr[t].ctypes.data)
+    p_ctr = np.int64(ctr_t.ctypes.data)
     ctx[CTX_ENTRY_FN] = np.int64(jt.entry_fn.ctypes.data)
     ctx[CTX_ENTRY_SLOT] = np.int64(jt.entry_slot.ctypes.data)
     ctx[CTX_ENTRY_BLK] = np.int64(jt.entry_blk.ctypes.data)
@@ -273,7 +275,7 @@ def run_translated(
         next_event = min(st_t[S_IRQ_CHECK], stop)
         if cyc >= next_event:
             if cyc >= st_t[S_IRQ_CHECK]:
-                pc, cyc = irq_event(st_t, ctr[t], pc, cyc)
+                pc, cyc = irq_event(st_t, ctr_t, pc, cyc)
                 err = fetch_error(pc, base, code, size)
                 if err != 0:
                     err_addr = pc
@@ -346,11 +348,11 @@ def run_translated(
         cyc = st_t[S_CYCLE]
         status = st_t[S_RUN]
         if st_t[S_CODE_STORES] != stores:
-            forget_if_changed(jt, m32[t], dec_t)  # the interpreter stored into the loaded code
+            forget_if_changed(jt, row(m32, t), dec_t)  # the interpreter stored into the loaded code
         if status == RUN_ENTRY:
             status = RUN_CHUNK  # at a translated block: the loop calls it
         if status != RUN_CHUNK:
-            flush_counts(jt, opc_t, ctr[t])
+            flush_counts(jt, opc_t, ctr_t)
             return
     if err != 0:
         status = RUN_ERROR
@@ -363,7 +365,7 @@ def run_translated(
     st_t[S_CYCLE] = cyc
     st_t[S_RUN] = status
     if status != RUN_CHUNK:
-        flush_counts(jt, opc_t, ctr[t])
+        flush_counts(jt, opc_t, ctr_t)
 
 
 __all__ = [
