@@ -116,6 +116,36 @@ def test_a_store_into_translated_code_is_seen(width: str, engine: str) -> None:
         assert soc.translator.tables().ctx[CTX_FLUSHES] >= 1  # the translation was forgotten
 
 
+# ---------------------------------------------------------------- the edges of memory
+
+EDGE_SRAM = 64 * 1024
+
+
+@pytest.mark.parametrize("width", ["w", "h", "b"])
+@pytest.mark.parametrize("where", ["code start", "data start", "memory end"])
+def test_accesses_at_the_edges_of_code_and_memory_are_the_interpreters(width: str, where: str) -> None:
+    """A translated load or store one check decides (inside the data part, aligned) against the
+    interpreter at every offset around the end of the code and the end of SRAM: stores into the
+    code, misaligned accesses and accesses past the end leave to the interpreter (or its error)."""
+    body = [A.i("addi", 11, 0, 3)] * 5
+    tail = 10  # words after the body: li (2), store, load, exit_with
+    code_words = len(body) + tail
+    edge = {"code start": 0, "data start": 4 * code_words, "memory end": EDGE_SRAM}[where]
+    for delta in (-4, -3, -2, -1, 0, 1, 2, 3, 4):
+        off = edge + delta
+        words = [
+            *body,
+            *A.li(6, SRAM_BASE + off),
+            A.i("addi", 10, 0, 0x5A5),
+            A.store("s" + width, 10, 6, 0),
+            A.load("l" + width if width == "w" else "l" + width + "u", 12, 6, 0),
+            *exit_with(12),
+        ]
+        words += [A.NOP] * (code_words - len(words))
+        assert len(words) == code_words, (len(words), code_words)
+        assert_same(words, "jit", 5_000, code_words, sram_size=EDGE_SRAM)
+
+
 # ---------------------------------------------------------------- errors
 
 

@@ -151,6 +151,7 @@ class _Writer:
         self.lines: list[str] = []
         self.n = 0
         self.uses_mul = False
+        self.uses_fshr = False
         self.index = {pc: k for k, pc in enumerate(region.blocks)}
         # where a return (jalr x0, 0(ra)) may land inside the region: the return sites of its calls,
         # when there are few (else returns go through the entry table)
@@ -508,19 +509,23 @@ class _Writer:
         a, addr, off = self.reg(insn.rs1), self.tmp(), self.tmp()
         self.emit(f"{addr} = add i32 {a}, {insn.imm}")
         self.emit(f"{off} = sub i32 {addr}, {_i32(self.t.base)}")
-        bad = self.tmp()
-        if load:
-            self.emit(f"{bad} = icmp uge i32 {off}, {_i32(self.t.mem_size)}")
-        else:  # stores into the loaded code are the interpreter's (self-modifying code)
-            data = self.tmp()
-            self.emit(f"{data} = sub i32 {off}, {_i32(self.t.code_size)}")
-            self.emit(f"{bad} = icmp uge i32 {data}, {_i32(self.t.mem_size - self.t.code_size)}")
-        if align:
-            m, mis, both = self.tmp(), self.tmp(), self.tmp()
-            self.emit(f"{m} = and i32 {off}, {align}")
-            self.emit(f"{mis} = icmp ne i32 {m}, 0")
-            self.emit(f"{both} = or i1 {bad}, {mis}")
-            bad = both
+        # stores into the loaded code are the interpreter's (self-modifying code): a store checks
+        # the offset into the data part
+        start = 0 if load else self.t.code_size
+        part = off
+        if start:
+            part = self.tmp()
+            self.emit(f"{part} = sub i32 {off}, {_i32(start)}")
+        # out of the part or misaligned, in one compare: rotated right by log2(size), an aligned
+        # offset is its index and a misaligned one has its low bits on top, beyond any index (the
+        # part's start and size are whole words)
+        shift = align.bit_length()
+        index, bad = part, self.tmp()
+        if shift:
+            index = self.tmp()
+            self.emit(f"{index} = call i32 @llvm.fshr.i32(i32 {part}, i32 {part}, i32 {shift})")
+            self.uses_fshr = True
+        self.emit(f"{bad} = icmp uge i32 {index}, {_i32((self.t.mem_size - start) >> shift)}")
         self.cond_exit(bad, X_SIDE, insn.pc, self.prefix[j], "m")
         z, p = self.tmp(), self.tmp()
         self.emit(f"{z} = zext i32 {off} to i64")
@@ -620,6 +625,7 @@ def _mul_latency_ir() -> str:
 
 
 _MUL_LATENCY_IR = _mul_latency_ir()
+_FSHR_DECLARATION = "declare i32 @llvm.fshr.i32(i32, i32, i32)"
 
 
 def emit_region(target: Target, region: Region, name: str = NAME_PLACEHOLDER) -> EmittedRegion:
@@ -629,5 +635,5 @@ def emit_region(target: Target, region: Region, name: str = NAME_PLACEHOLDER) ->
     """
     w = _Writer(target, region, name)
     w.function()
-    text = "\n".join([_MUL_LATENCY_IR if w.uses_mul else "", *w.lines, ""])
+    text = "\n".join([_MUL_LATENCY_IR if w.uses_mul else "", _FSHR_DECLARATION if w.uses_fshr else "", *w.lines, ""])
     return EmittedRegion(ir=text, function=name, blocks=dict(w.index), slots=w.slots)
