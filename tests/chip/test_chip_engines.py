@@ -251,3 +251,33 @@ def test_auto_leaves_a_tile_that_works_in_bursts_on_the_interpreter() -> None:
     assert all(tr is None for tr in chip._jit.translators)
     assert 0.05 < share < AUTO_BUSY_SHARE  # above the share this test was written against (0.05)
     assert share * AUTO_LOOK_MAX_CYCLES / 4 > AUTO_MIN_INSTRUCTIONS  # enough work for the later looks
+
+
+def test_auto_compiles_in_the_background_and_changes_nothing(monkeypatch) -> None:
+    """With a cold object cache auto hands regions to the compiling thread and the tile interprets
+    them meanwhile; what the thread compiled is entered at the next step (here: after waiting for
+    it), and the chip's state is the interpreter's whatever the timing."""
+    from robosoc.benchmarks.chip import _build
+    from robosoc.chip.translation import AUTO_LOOK_CYCLES
+    from robosoc.jit.compiler import Compiler
+
+    monkeypatch.setattr(Compiler, "ready", lambda self, ir, placeholder: False)  # nothing cached
+    busy = _build("matrix_bench.c", True, {"BENCH_ITERATIONS": 100000, "BENCH_QUIET": None})
+    states = {}
+    for engine in ("interp", "auto"):
+        chip = MPSoC(ChipConfig(), engine=engine)
+        chip.load((1, 0), busy)
+        chip.load((0, 1), busy)
+        for k in range(1, 9):
+            chip.step(k * AUTO_LOOK_CYCLES)
+            chip._jit.finish_compiles(wait=True)
+        states[engine] = (
+            chip.cycle,
+            {xy: chip.counters(xy) for xy in chip.core_tiles()},
+            {xy: chip.pc(xy) for xy in chip.core_tiles()},
+            chip.cores.regs.copy().tolist(),
+        )
+    stats = chip._jit.stats
+    assert stats is not None and stats.background > 0 and stats.regions > 0
+    assert all(tr.compiling() == 0 for tr in chip._jit.translators if tr is not None)
+    assert states["auto"] == states["interp"]

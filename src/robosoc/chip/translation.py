@@ -85,9 +85,11 @@ class ChipTranslation:
             self._watched.discard(t)
             if translator is None:
                 translator = TranslatingCore(chip.cores, tile=t, mode=self.engine, stats=self.stats)
+                translator.background = self.engine == "auto"  # compiled on a spare core meanwhile
                 self.translators[t] = translator
                 made = True
                 self.on[t] = 1
+            translator.finish_compiles()
             self._give(t)
         if busy is not None:
             self._look = AUTO_LOOK_CYCLES if made else min(2 * self._look, AUTO_LOOK_MAX_CYCLES)
@@ -138,6 +140,7 @@ class ChipTranslation:
         translator = self.translators[t]
         assert translator is not None, f"tile {t} asked for a translation without a translator"
         state = translator.state
+        translator.finish_compiles()
         translator.translate(int(state.st[t, S_PC]))  # or installs what another core translated there
         self._give(t)
         state.st[t, S_RUN] = RUN_CHUNK
@@ -160,6 +163,13 @@ class ChipTranslation:
         self.translators[t] = None
         set_tables(self._tables, t, self._empty)
         self._given[t] = None
+
+    def finish_compiles(self, wait: bool = False) -> None:
+        """Enter what the background thread compiled (all of it, waiting, with ``wait``)."""
+        for t, translator in enumerate(self.translators):
+            if translator is not None and translator.compiling():
+                translator.finish_compiles(wait)
+                self._give(t)
 
     def stop_all(self) -> None:
         for t in range(len(self.on)):

@@ -12,12 +12,15 @@ from __future__ import annotations
 
 import hashlib
 import os
+import queue
 import tempfile
+import threading
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import llvmlite.binding as llvm
+from numba.core.compiler_lock import global_compiler_lock
 
 from robosoc.toolchain.cache import cache_root
 
@@ -38,10 +41,32 @@ class CompileStats:
     cpu_seconds: float = 0.0  # process time of add()
     compiled_seconds: float = 0.0  # wall time of the modules compiled (not from the disk cache)
     compiled_instructions: int = 0  # guest instructions in them
+    background_seconds: float = 0.0  # wall time of the modules compiled in the background thread
+
+
+@dataclass
+class Pending:
+    """A module handed to the background thread (:meth:`Compiler.compile_later`)."""
+
+    ir_template: str
+    placeholder: str
+    names: list[str]
+    instructions: int
+    done: threading.Event = field(default_factory=threading.Event)
+    obj: bytes = b""
+    hit: bool = False
+    error: BaseException | None = None
+    seconds: float = 0.0  # wall time in the background thread
 
 
 class Compiler:
-    """One MCJIT engine that native regions are added to; addresses stay valid for its lifetime."""
+    """One MCJIT engine that native regions are added to; addresses stay valid for its lifetime.
+
+    LLVM's work (parsing, passes, code generation, loading) runs under numba's global compiler
+    lock: llvmlite shares one LLVM context with numba, and :meth:`compile_later` compiles in a
+    second thread (llvmlite's calls release the GIL, so on a machine with a spare core the
+    simulation goes on meanwhile).
+    """
 
     def __init__(self, cache: bool = True) -> None:
         llvm.initialize_native_target()
@@ -59,6 +84,8 @@ class Compiler:
         self.stats = CompileStats()
         self.loaded: dict[str, int] = {}
         self.stems: set[str] = set()  # modules loaded into the engine
+        self._jobs: queue.Queue[Pending] = queue.Queue()
+        self._worker: threading.Thread | None = None
 
     def key(self, ir_text: str) -> str:
         return hashlib.sha256((self.env + "\n" + ir_text).encode()).hexdigest()
@@ -76,14 +103,15 @@ class Compiler:
         path = self._path(ir_text)
         if path is not None and path.is_file():
             return path.read_bytes(), True
-        t0 = time.perf_counter()
-        module = llvm.parse_assembly(ir_text)
-        module.verify()
-        t1 = time.perf_counter()
-        self._optimise(module)
-        t2 = time.perf_counter()
-        obj = self.tm.emit_object(module)
-        t3 = time.perf_counter()
+        with global_compiler_lock:
+            t0 = time.perf_counter()
+            module = llvm.parse_assembly(ir_text)
+            module.verify()
+            t1 = time.perf_counter()
+            self._optimise(module)
+            t2 = time.perf_counter()
+            obj = self.tm.emit_object(module)
+            t3 = time.perf_counter()
         self.stats.parse_seconds += t1 - t0
         self.stats.optimise_seconds += t2 - t1
         self.stats.codegen_seconds += t3 - t2
@@ -116,17 +144,7 @@ class Compiler:
         real = [n.replace(placeholder, stem) for n in names]
         if stem not in self.stems:
             obj, hit = self.object_code(ir_template.replace(placeholder, stem))
-            t0 = time.perf_counter()
-            self.engine.add_object_file(llvm.ObjectFileRef.from_data(obj))
-            self.engine.finalize_object()
-            self.stats.load_seconds += time.perf_counter() - t0
-            for n in real:
-                address = self.engine.get_function_address(n)
-                if not address:
-                    raise RuntimeError(f"translated function {n} not found after loading its object")
-                self.loaded[n] = address
-            self.stems.add(stem)
-            self.stats.modules += 1
+            self._load(stem, real, obj)
             self.stats.cache_hits += int(hit)
             if not hit:
                 self.stats.compiled_seconds += time.perf_counter() - start
@@ -135,6 +153,66 @@ class Compiler:
             self.stats.reused += 1
         self.stats.seconds += time.perf_counter() - start
         self.stats.cpu_seconds += time.process_time() - cpu
+        return [self.loaded[n] for n in real]
+
+    def _load(self, stem: str, real: list[str], obj: bytes) -> None:
+        t0 = time.perf_counter()
+        with global_compiler_lock:
+            self.engine.add_object_file(llvm.ObjectFileRef.from_data(obj))
+            self.engine.finalize_object()
+            addresses = [self.engine.get_function_address(n) for n in real]
+        self.stats.load_seconds += time.perf_counter() - t0
+        for n, address in zip(real, addresses, strict=True):
+            if not address:
+                raise RuntimeError(f"translated function {n} not found after loading its object")
+            self.loaded[n] = address
+        self.stems.add(stem)
+        self.stats.modules += 1
+
+    def ready(self, ir_template: str, placeholder: str) -> bool:
+        """Whether :meth:`add` would cost no compiling (loaded in this process, or in the disk cache)."""
+        stem = self._stem(ir_template)
+        if stem in self.stems:
+            return True
+        path = self._path(ir_template.replace(placeholder, stem))
+        return path is not None and path.is_file()
+
+    def compile_later(self, ir_template: str, placeholder: str, names: list[str], instructions: int = 0) -> Pending:
+        """Compile a module in the background thread; :meth:`finish` loads it once ``done`` is set."""
+        job = Pending(ir_template, placeholder, names, instructions)
+        self._jobs.put(job)
+        if self._worker is None:
+            self._worker = threading.Thread(target=self._work, name="robosoc-jit-compile", daemon=True)
+            self._worker.start()
+        return job
+
+    def _work(self) -> None:
+        while True:
+            job = self._jobs.get()
+            start = time.perf_counter()
+            try:
+                stem = self._stem(job.ir_template)
+                job.obj, job.hit = self.object_code(job.ir_template.replace(job.placeholder, stem))
+            except BaseException as exc:  # handed to the main thread by finish()
+                job.error = exc
+            job.seconds = time.perf_counter() - start
+            job.done.set()
+
+    def finish(self, job: Pending) -> list[int]:
+        """Load a module :meth:`compile_later` compiled (``job.done`` set); its functions' addresses."""
+        if job.error is not None:
+            raise job.error
+        stem = self._stem(job.ir_template)
+        real = [n.replace(job.placeholder, stem) for n in job.names]
+        if stem not in self.stems:
+            self._load(stem, real, job.obj)
+            self.stats.cache_hits += int(job.hit)
+            if not job.hit:
+                self.stats.compiled_seconds += job.seconds
+                self.stats.compiled_instructions += job.instructions
+                self.stats.background_seconds += job.seconds
+        else:
+            self.stats.reused += 1
         return [self.loaded[n] for n in real]
 
 

@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from robosoc.isa.table import OP_ENTRY
-from robosoc.jit.compiler import Compiler, add_to_manifest, manifest_key, read_manifest, shared_compiler
+from robosoc.jit.compiler import Compiler, Pending, add_to_manifest, manifest_key, read_manifest, shared_compiler
 from robosoc.jit.emit_ir import NAME_PLACEHOLDER, EmittedRegion, Target, emit_region
 from robosoc.jit.regions import MAX_REGION_INSTRUCTIONS, CodeView, End, Region, discover
 from robosoc.kernels import compiled_or_cached
@@ -69,6 +69,8 @@ _dispatch_loop_ready = False  # compiled or cached: looked up until it is
 #: Regions of ``auto`` are smaller (a hot loop and what it calls, rather than whole functions): the
 #: cost of each decision stays small.
 AUTO_MAX_REGION_INSTRUCTIONS = 100
+#: auto with background compiling (on the chip): regions waiting for the compiling thread at most
+BACKGROUND_QUEUE = 4
 THRESHOLDS = {"jit": 1, "auto": AUTO_THRESHOLD}
 NEVER_ASK = 1 << 40  # a threshold no word reaches
 STRETCHES = {"jit": 0, "auto": AUTO_STRETCH}
@@ -128,6 +130,7 @@ class TranslationStats:
     flushes: int = 0  # times self-modifying code made the core forget its translations
     reused: int = 0  # regions this process had translated already (same words)
     deferred: int = 0  # auto: hot regions left to the interpreter for now (compiling would cost too much yet)
+    background: int = 0  # regions handed to the background thread
     run_seconds: float = 0.0  # host time in the dispatch loop
     translate_seconds: float = 0.0  # host time finding, writing and compiling regions (deferrals included)
 
@@ -160,6 +163,9 @@ class TranslatingCore:
         self._jt: JitArrays | None = None
         self._known_seen = 0  # entries of _TRANSLATED[key] this core has looked at
         self._known_starts_in: set[int] = set()  # starts of the regions installed from there or translated here
+        #: compile regions in the background thread (auto on the chip): the core interprets them meanwhile
+        self.background = False
+        self._compiling: list[tuple[Pending, Region, EmittedRegion, np.ndarray, np.ndarray]] = []
 
     @property
     def compiler(self) -> Compiler:
@@ -309,7 +315,11 @@ class TranslatingCore:
         jt = self._tables()
         budget = self._budget()
         for i, pc in list(self._parked.items()):
-            if 2 * self._estimate(self._sizes.get(pc, AUTO_MAX_REGION_INSTRUCTIONS)) <= budget:
+            if self.background:
+                ok = budget > 0 and len(self._compiling) < BACKGROUND_QUEUE
+            else:
+                ok = 2 * self._estimate(self._sizes.get(pc, AUTO_MAX_REGION_INSTRUCTIONS)) <= budget
+            if ok:
                 if jt.entry_fn[i] == 0 and jt.hot[i] == NEVER_TRANSLATE:
                     jt.hot[i] = 0
                 del self._parked[i]
@@ -317,6 +327,13 @@ class TranslatingCore:
     def _translate(self, pc: int) -> Region:
         jt = self._tables()
         rent = self.mode == "auto" and pc not in self._known_starts  # compiled only when worth it
+        if rent and self.background:
+            # compiling costs this thread nothing: the budget pays for finding and writing regions,
+            # and the queue is kept short (a region asked for meanwhile waits its turn)
+            if self._budget() <= 0 or len(self._compiling) >= BACKGROUND_QUEUE:
+                self._defer(pc)
+                return Region(pc, {})
+            rent = False
         if rent and self._estimate(self._sizes.get(pc, 0)) > self._budget():
             self._defer(pc)  # (not even a region of the size found here before) could be compiled yet
             return Region(pc, {})
@@ -331,7 +348,7 @@ class TranslatingCore:
         self._install_new_known()  # another core may have translated it meanwhile
         if jt.entry_fn[(pc - self._target().base) >> 2] != 0:
             return Region(pc, {})
-        target, has_mul = self._key()
+        target = self._target()
         base = target.base
         view = self._view()
         m32 = self.state.m32[self.tile]
@@ -344,15 +361,30 @@ class TranslatingCore:
                 return Region(pc, {})
         if region.blocks:
             emitted = emit_region(target, region)
-            address = self.compiler.add(emitted.ir, NAME_PLACEHOLDER, [emitted.function], region.instructions)[0]
-            if pc not in self._known_starts and self.compiler.cache_dir is not None:
-                self._known_starts.add(pc)
-                add_to_manifest(self._manifest_key(), pc)
             pcs = np.array(sorted((p - base) >> 2 for p in region.words()), dtype=np.int64)
+            if self.background and not self.compiler.ready(emitted.ir, NAME_PLACEHOLDER):
+                # compiled in the background thread; installed by finish_compiles() (the word waits)
+                job = self.compiler.compile_later(emitted.ir, NAME_PLACEHOLDER, [emitted.function], region.instructions)
+                self._compiling.append((job, region, emitted, pcs, m32[pcs].copy()))
+                jt.hot[(pc - base) >> 2] = NEVER_TRANSLATE
+                self.stats.background += 1
+                return Region(pc, {})
+            address = self.compiler.add(emitted.ir, NAME_PLACEHOLDER, [emitted.function], region.instructions)[0]
         else:
             emitted, address = EmittedRegion(ir="", function="", blocks={}), 0
             pcs = np.array([(pc - base) >> 2], dtype=np.int64)
-        done = _Translated.of(region, emitted, address, pcs, m32[pcs].copy(), base)
+        return self._enter(region, emitted, address, pcs, m32[pcs].copy())
+
+    def _enter(
+        self, region: Region, emitted: EmittedRegion, address: int, pcs: np.ndarray, words: np.ndarray
+    ) -> Region:
+        """Note a translated region (for every core of this build) and enter it in this core's tables."""
+        target, has_mul = self._key()
+        pc = region.start
+        if region.blocks and pc not in self._known_starts and self.compiler.cache_dir is not None:
+            self._known_starts.add(pc)
+            add_to_manifest(self._manifest_key(), pc)
+        done = _Translated.of(region, emitted, address, pcs, words, target.base)
         done_list = _TRANSLATED.setdefault((target, has_mul), [])
         done_list.append(done)
         self._install(done)
@@ -362,6 +394,33 @@ class TranslatingCore:
         self.stats.regions += 1
         self.stats.instructions += region.instructions
         return region
+
+    def compiling(self) -> int:
+        """Regions waiting for the background thread."""
+        return len(self._compiling)
+
+    def finish_compiles(self, wait: bool = False) -> bool:
+        """Enter the regions the background thread has compiled (all of them, waiting, with
+        ``wait``); whether any was entered.  A region whose words changed meanwhile is dropped (its
+        word is asked for again)."""
+        entered = False
+        while self._compiling:
+            job, region, emitted, pcs, words = self._compiling[0]
+            if not job.done.is_set() and not wait:
+                break
+            job.done.wait()
+            self._compiling.pop(0)
+            start = time.perf_counter()
+            address = self.compiler.finish(job)[0]
+            jt = self._tables()
+            i = (region.start - self._target().base) >> 2
+            if np.array_equal(self.state.m32[self.tile][pcs], words) and jt.entry_fn[i] == 0:
+                self._enter(region, emitted, address, pcs, words)
+                entered = True
+            elif jt.entry_fn[i] == 0:
+                jt.hot[i] = 0
+            self.stats.translate_seconds += time.perf_counter() - start
+        return entered
 
     def _install(self, done: _Translated) -> None:
         self._install_many([done])
@@ -440,7 +499,8 @@ class TranslatingCore:
         self._unpark()
         if cached is None:
             cached = self.has_cached_regions()
-        if not cached and self._budget() < self._estimate(AUTO_MAX_REGION_INSTRUCTIONS):
+        cost = 0.0 if self.background else self._estimate(AUTO_MAX_REGION_INSTRUCTIONS)
+        if not cached and self._budget() <= cost:
             return NEVER_ASK
         return self.threshold
 
