@@ -90,6 +90,7 @@ class ChipTranslation:
                 made = True
                 self.on[t] = 1
             translator.finish_compiles()
+            translator.install_known()  # what the other tiles' compiles gave
             self._give(t)
         if busy is not None:
             self._look = AUTO_LOOK_CYCLES if made else min(2 * self._look, AUTO_LOOK_MAX_CYCLES)

@@ -116,6 +116,8 @@ class _Translated:
 
 #: (target, multiplier) -> regions translated in this process (any core, any run), in order
 _TRANSLATED: dict[tuple[Target, bool], list[_Translated]] = {}
+#: (build, region start) of the regions the background thread is compiling for some core
+_COMPILING: set[tuple[tuple[Target, bool], int]] = set()
 
 
 def translated_instructions() -> int:
@@ -316,7 +318,7 @@ class TranslatingCore:
         budget = self._budget()
         for i, pc in list(self._parked.items()):
             if self.background:
-                ok = budget > 0 and len(self._compiling) < BACKGROUND_QUEUE
+                ok = budget > 0 and len(self._compiling) < BACKGROUND_QUEUE and (self._key(), pc) not in _COMPILING
             else:
                 ok = 2 * self._estimate(self._sizes.get(pc, AUTO_MAX_REGION_INSTRUCTIONS)) <= budget
             if ok:
@@ -329,8 +331,9 @@ class TranslatingCore:
         rent = self.mode == "auto" and pc not in self._known_starts  # compiled only when worth it
         if rent and self.background:
             # compiling costs this thread nothing: the budget pays for finding and writing regions,
-            # and the queue is kept short (a region asked for meanwhile waits its turn)
-            if self._budget() <= 0 or len(self._compiling) >= BACKGROUND_QUEUE:
+            # and the queue is kept short (a region asked for meanwhile waits its turn); a region
+            # another core handed over already is entered from there once compiled
+            if self._budget() <= 0 or len(self._compiling) >= BACKGROUND_QUEUE or (self._key(), pc) in _COMPILING:
                 self._defer(pc)
                 return Region(pc, {})
             rent = False
@@ -366,6 +369,7 @@ class TranslatingCore:
                 # compiled in the background thread; installed by finish_compiles() (the word waits)
                 job = self.compiler.compile_later(emitted.ir, NAME_PLACEHOLDER, [emitted.function], region.instructions)
                 self._compiling.append((job, region, emitted, pcs, m32[pcs].copy()))
+                _COMPILING.add((self._key(), pc))
                 jt.hot[(pc - base) >> 2] = NEVER_TRANSLATE
                 self.stats.background += 1
                 return Region(pc, {})
@@ -399,6 +403,12 @@ class TranslatingCore:
         """Regions waiting for the background thread."""
         return len(self._compiling)
 
+    def install_known(self) -> None:
+        """Enter the regions other cores of the same build translated since this core last looked
+        (with background compiling they are entered at step boundaries, not when asked for)."""
+        if self._jt is not None:
+            self._install_new_known()
+
     def finish_compiles(self, wait: bool = False) -> bool:
         """Enter the regions the background thread has compiled (all of them, waiting, with
         ``wait``); whether any was entered.  A region whose words changed meanwhile is dropped (its
@@ -410,6 +420,7 @@ class TranslatingCore:
                 break
             job.done.wait()
             self._compiling.pop(0)
+            _COMPILING.discard((self._key(), region.start))
             start = time.perf_counter()
             address = self.compiler.finish(job)[0]
             jt = self._tables()
