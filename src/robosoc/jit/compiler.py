@@ -144,24 +144,26 @@ class Compiler:
         real = [n.replace(placeholder, stem) for n in names]
         if stem not in self.stems:
             obj, hit = self.object_code(ir_template.replace(placeholder, stem))
-            self._load(stem, real, obj)
-            self.stats.cache_hits += int(hit)
-            if not hit:
-                self.stats.compiled_seconds += time.perf_counter() - start
-                self.stats.compiled_instructions += instructions
+            self._load(stem, real, obj, hit, time.perf_counter() - start, instructions)
         else:
             self.stats.reused += 1
         self.stats.seconds += time.perf_counter() - start
         self.stats.cpu_seconds += time.process_time() - cpu
         return [self.loaded[n] for n in real]
 
-    def _load(self, stem: str, real: list[str], obj: bytes) -> None:
+    def _load(self, stem: str, real: list[str], obj: bytes, hit: bool, seconds: float, instructions: int) -> None:
+        """Load a module's object into the engine and count it (``seconds`` to get the object)."""
         t0 = time.perf_counter()
         with global_compiler_lock:
             self.engine.add_object_file(llvm.ObjectFileRef.from_data(obj))
             self.engine.finalize_object()
             addresses = [self.engine.get_function_address(n) for n in real]
-        self.stats.load_seconds += time.perf_counter() - t0
+        load = time.perf_counter() - t0
+        self.stats.load_seconds += load
+        self.stats.cache_hits += int(hit)
+        if not hit:
+            self.stats.compiled_seconds += seconds + load
+            self.stats.compiled_instructions += instructions
         for n, address in zip(real, addresses, strict=True):
             if not address:
                 raise RuntimeError(f"translated function {n} not found after loading its object")
@@ -205,11 +207,8 @@ class Compiler:
         stem = self._stem(job.ir_template)
         real = [n.replace(job.placeholder, stem) for n in job.names]
         if stem not in self.stems:
-            self._load(stem, real, job.obj)
-            self.stats.cache_hits += int(job.hit)
+            self._load(stem, real, job.obj, job.hit, job.seconds, job.instructions)
             if not job.hit:
-                self.stats.compiled_seconds += job.seconds
-                self.stats.compiled_instructions += job.instructions
                 self.stats.background_seconds += job.seconds
         else:
             self.stats.reused += 1

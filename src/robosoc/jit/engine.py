@@ -318,13 +318,18 @@ class TranslatingCore:
         budget = self._budget()
         for i, pc in list(self._parked.items()):
             if self.background:
-                ok = budget > 0 and len(self._compiling) < BACKGROUND_QUEUE and (self._key(), pc) not in _COMPILING
+                ok = budget > 0 and self._may_hand_over(pc)
             else:
                 ok = 2 * self._estimate(self._sizes.get(pc, AUTO_MAX_REGION_INSTRUCTIONS)) <= budget
             if ok:
                 if jt.entry_fn[i] == 0 and jt.hot[i] == NEVER_TRANSLATE:
                     jt.hot[i] = 0
                 del self._parked[i]
+
+    def _may_hand_over(self, pc: int) -> bool:
+        """Background compiling: whether the region at ``pc`` may go to the thread now (this core's
+        queue has room, and no core has handed it over already)."""
+        return len(self._compiling) < BACKGROUND_QUEUE and (self._key(), pc) not in _COMPILING
 
     def _translate(self, pc: int) -> Region:
         jt = self._tables()
@@ -333,7 +338,7 @@ class TranslatingCore:
             # compiling costs this thread nothing: the budget pays for finding and writing regions,
             # and the queue is kept short (a region asked for meanwhile waits its turn); a region
             # another core handed over already is entered from there once compiled
-            if self._budget() <= 0 or len(self._compiling) >= BACKGROUND_QUEUE or (self._key(), pc) in _COMPILING:
+            if self._budget() <= 0 or not self._may_hand_over(pc):
                 self._defer(pc)
                 return Region(pc, {})
             rent = False
