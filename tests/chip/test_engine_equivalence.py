@@ -20,7 +20,14 @@ from core_harness import exit_with, make_soc
 from robosoc.chip.core_state import SRAM_BASE
 from robosoc.chip.single import CoreError, CycleBudgetExceeded, SingleCoreSoC
 from robosoc.jit.compiler import Compiler
-from robosoc.jit.emit_ir import MUL_WORST_CYCLES, Target, emit_region, multiplier_tail_table
+from robosoc.jit.emit_ir import (
+    MUL_WORST_CYCLES,
+    MemoryCheck,
+    Target,
+    emit_region,
+    memory_checks,
+    multiplier_tail_table,
+)
 from robosoc.jit.regions import CodeView, discover
 from robosoc.kernels.core import _MUL_CHUNK, mul_latency
 from robosoc.kernels.jit_dispatch import CTX_FLUSHES, CTX_STEPS
@@ -151,6 +158,72 @@ def test_accesses_at_the_edges_of_code_and_memory_are_the_interpreters(width: st
         words += [A.NOP] * (code_words - len(words))
         assert len(words) == code_words, (len(words), code_words)
         assert_same(words, "jit", 5_000, code_words, sram_size=EDGE_SRAM)
+
+
+#: accesses through one base register (name, offset), checked as groups: stores, then loads
+GROUPS = {
+    "words": [("sw", 0), ("sw", 4), ("sw", 8), ("sw", 12), ("lw", 12), ("lw", 0), ("lw", 8)],
+    # the span ends a byte past a word: with the word at SRAM's last word, the byte is past the end
+    "word and byte": [("sw", 0), ("sb", 4), ("lw", 0), ("lbu", 4)],
+    "mixed widths": [("sw", 4), ("sh", 2), ("sb", 1), ("sh", 10), ("lhu", 6), ("lw", 8), ("lb", -1), ("lbu", 3)],
+    # the halfword at 1 is never aligned when the word at 0 is: two groups, one of them always leaves
+    "no common alignment": [("sb", 7), ("sw", 0), ("sh", 1), ("lh", -3), ("lw", 4), ("lbu", 2)],
+}
+
+
+@pytest.mark.parametrize("group", sorted(GROUPS))
+@pytest.mark.parametrize("where", ["code start", "data start", "memory end"])
+def test_grouped_accesses_at_the_edges_are_the_interpreters(group: str, where: str, monkeypatch) -> None:
+    """Accesses through one base register are checked once, before the first of them: at every
+    base around the ends of the code and of SRAM, aligned or not, the translated block does what
+    the interpreter does (the block leaves before the group, and the interpreter makes each access
+    or raises its error at the one that fails)."""
+    import robosoc.jit.engine as jit_engine
+    accesses = GROUPS[group]
+    body = [A.i("addi", 11, 0, 3)] * 5
+    code_words = len(body) + 2 + 1 + len(accesses) + 2 * (len(accesses) - 1) + 8
+    edge = {"code start": 0, "data start": 4 * code_words, "memory end": EDGE_SRAM}[where]
+    for delta in range(-6, 7):
+        words = [*body, *A.li(6, SRAM_BASE + edge + delta), A.i("addi", 10, 0, 0x5A5)]
+        loaded = []
+        for k, (name, imm) in enumerate(accesses):
+            if name.startswith("s"):
+                words.append(A.store(name, 10, 6, imm))
+            else:
+                loaded.append(12 + k)
+                words.append(A.load(name, 12 + k, 6, imm))
+        for r in loaded[1:]:
+            words.append(A.r("xor", loaded[0], loaded[0], r))
+        words += exit_with(loaded[0])
+        words += [A.NOP] * (code_words - len(words))
+        assert len(words) == code_words, (len(words), code_words)
+        # translated afresh: a region left by an earlier base (which started inside the group, after
+        # a way out) would split the group
+        monkeypatch.setattr(jit_engine, "_TRANSLATED", {})
+        assert_same(words, "jit", 5_000, code_words, sram_size=EDGE_SRAM)
+
+
+def test_accesses_through_one_base_are_checked_once() -> None:
+    """A register save and restore is one check each; a write to the base, the other kind of
+    access or an alignment no one test covers starts another check."""
+    sp, a0 = 2, 10
+    words = [
+        *(A.store("sw", r, sp, 4 * r) for r in range(8, 12)),  # one check
+        *(A.load("lw", r, sp, 4 * r) for r in range(12, 16)),  # one check (loads)
+        A.store("sb", 8, sp, 1),  # with the stores above? no: the loads did not write sp, so yes
+        A.i("addi", sp, sp, -16),  # writes the base: what follows is checked again
+        A.load("lw", a0, sp, 0),
+        A.load("lw", 11, a0, 0),  # another base
+        A.load("lh", 12, a0, 1),  # never aligned with the word at 0: its own check
+        A.jal(0, 0),
+    ]
+    view = CodeView(lambda a: words[(a - SRAM_BASE) >> 2], SRAM_BASE, 4 * len(words), EDGE_SRAM, True)
+    (block,) = discover(view, SRAM_BASE).blocks.values()
+    checks = memory_checks(block.insns, Target(SRAM_BASE, EDGE_SRAM, 4 * len(words), False))
+    assert sorted(checks) == [0, 4, 10, 11, 12]
+    assert checks[0] == MemoryCheck(start=4 * len(words), low=1, span=47, align=3, anchor=32)
+    assert checks[4] == MemoryCheck(start=0, low=48, span=16, align=3, anchor=48)
+    assert checks[12] == MemoryCheck(start=0, low=1, span=2, align=1, anchor=1)
 
 
 # ---------------------------------------------------------------- errors

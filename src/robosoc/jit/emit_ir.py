@@ -132,6 +132,88 @@ class EmittedRegion:
     slots: list[tuple[list[tuple[int, int]], int]] = field(default_factory=list)
 
 
+@dataclass(frozen=True)
+class MemoryCheck:
+    """The check before the first access of a group: the bytes at ``low``..``low + span`` from the
+    base register lie in the part of memory from ``start`` on, and the access at ``anchor`` is
+    aligned to ``align + 1`` bytes (which aligns the others)."""
+
+    start: int
+    low: int
+    span: int
+    align: int
+    anchor: int
+
+
+def _access(insn: Insn) -> tuple[bool, int] | None:
+    """(is a load, size in bytes) of a memory access, else None."""
+    if insn.name in _LOADS:
+        return True, _LOADS[insn.name][0] // 8
+    if insn.name in _STORES:
+        return False, _STORES[insn.name][0] // 8
+    return None
+
+
+def _group_check(insns: list[Insn], group: list[int], target: Target) -> MemoryCheck | None:
+    """The one check that stands for every access of ``group``, or None when none can."""
+    sizes = [(insns[j].imm, _access(insns[j])) for j in group]
+    load = sizes[0][1][0]
+    widest = max(size for _, (_, size) in sizes)
+    anchor = next(imm for imm, (_, size) in sizes if size == widest)
+    if any((imm - anchor) % size for imm, (_, size) in sizes):
+        return None  # no one alignment test stands for all of them
+    low = min(imm for imm, _ in sizes)
+    span = max(imm + size for imm, (_, size) in sizes) - low
+    start = 0 if load else target.code_size
+    if len(group) > 1 and span > target.mem_size - start:
+        return None
+    return MemoryCheck(start, low, span, widest - 1, anchor)
+
+
+def _single_check(insns: list[Insn], j: int, target: Target) -> MemoryCheck:
+    check = _group_check(insns, [j], target)
+    assert check is not None
+    return check
+
+
+def memory_checks(insns: list[Insn], target: Target) -> dict[int, MemoryCheck]:
+    """The memory checks of a block, by the index of the access each is made before.
+
+    Accesses of one kind (loads, or stores) through the same base register, which no instruction
+    between them writes, form a group checked once, before its first access: a register save or
+    restore sequence is one compare instead of one per access, and one way out.  When the check
+    fails, the block leaves before the group's first access and the interpreter runs the accesses
+    one by one (with the same results and errors as without the group).  Loads may read all of
+    SRAM; stores only its data part, past the loaded code (self-modifying code is the
+    interpreter's).
+    """
+    open_groups: dict[tuple[int, bool], list[int]] = {}
+    checks: dict[int, MemoryCheck] = {}
+
+    def close(key: tuple[int, bool]) -> None:
+        group = open_groups.pop(key)
+        check = _group_check(insns, group, target)
+        if check is not None:
+            checks[group[0]] = check
+        else:  # each access checked on its own (a group of one always has its check)
+            for j in group:
+                checks[j] = _single_check(insns, j, target)
+
+    for j, insn in enumerate(insns):
+        access = _access(insn)
+        if access is not None:
+            key = (insn.rs1, access[0])
+            if key in open_groups and _group_check(insns, [*open_groups[key], j], target) is None:
+                close(key)
+            open_groups.setdefault(key, []).append(j)
+        if insn.rd and insn.ins.fmt not in (Fmt.S, Fmt.B):
+            for key in [k for k in open_groups if k[0] == insn.rd]:
+                close(key)
+    for key in list(open_groups):
+        close(key)
+    return checks
+
+
 _PARAMS = "i64* noalias %ctx, i32* noalias %regs, i8* noalias %mem, i64* noalias %cnt, i64 %cyc, i64 %limit, i64 %blk"
 _FN_TYPE = "i32 (i64*, i32*, i8*, i64*, i64, i64, i64)"
 #: count-slot index of the taken-branch counter: past the per-operation counters (see flush_counts)
@@ -377,7 +459,8 @@ class _Writer:
         # counts the prefix before j (a chain of slots, one per exit point), the block's ends the rest
         # after the last exit point (and the taken branch) chained to that point's prefix.
         self.kcs = [self.kc(i) for i in insns]
-        points = [j for j, i in enumerate(insns) if i.name in _LOADS or i.name in _STORES or i.name == "jalr"]
+        self.checks = memory_checks(insns, self.t)
+        points = [j for j, i in enumerate(insns) if j in self.checks or i.name == "jalr"]
         self.prefix: dict[int, int] = {}
         last, nxt = 0, -1
         for j in points:
@@ -505,28 +588,13 @@ class _Writer:
     def memory(self, j: int, insn: Insn) -> None:
         name = insn.name
         load = name in _LOADS
-        bits, ext, align = _LOADS[name] if load else (_STORES[name][0], "", _STORES[name][1])
+        bits, ext = _LOADS[name][:2] if load else (_STORES[name][0], "")
         a, addr, off = self.reg(insn.rs1), self.tmp(), self.tmp()
         self.emit(f"{addr} = add i32 {a}, {insn.imm}")
         self.emit(f"{off} = sub i32 {addr}, {_i32(self.t.base)}")
-        # stores into the loaded code are the interpreter's (self-modifying code): a store checks
-        # the offset into the data part
-        start = 0 if load else self.t.code_size
-        part = off
-        if start:
-            part = self.tmp()
-            self.emit(f"{part} = sub i32 {off}, {_i32(start)}")
-        # out of the part or misaligned, in one compare: rotated right by log2(size), an aligned
-        # offset is its index and a misaligned one has its low bits on top, beyond any index (the
-        # part's start and size are whole words)
-        shift = align.bit_length()
-        index, bad = part, self.tmp()
-        if shift:
-            index = self.tmp()
-            self.emit(f"{index} = call i32 @llvm.fshr.i32(i32 {part}, i32 {part}, i32 {shift})")
-            self.uses_fshr = True
-        self.emit(f"{bad} = icmp uge i32 {index}, {_i32((self.t.mem_size - start) >> shift)}")
-        self.cond_exit(bad, X_SIDE, insn.pc, self.prefix[j], "m")
+        check = self.checks.get(j)
+        if check is not None:
+            self.check_memory(j, insn, check, off)
         z, p = self.tmp(), self.tmp()
         self.emit(f"{z} = zext i32 {off} to i64")
         self.emit(f"{p} = getelementptr i8, i8* %mem, i64 {z}")
@@ -551,6 +619,40 @@ class _Writer:
             self.emit(f"{w} = trunc i32 {v} to {ty}")
             v = w
         self.emit(f"store {ty} {v}, {ty}* {q}, align {bits // 8}")
+
+    def check_memory(self, j: int, insn: Insn, check: MemoryCheck, off: str) -> None:
+        """Leave before instruction ``j`` unless every access of its group is in its part and aligned.
+
+        ``off`` is instruction ``j``'s offset from SRAM's base.  A group of one is one compare: the
+        offset into the part rotated right by log2(size) is an aligned access's index, and a
+        misaligned one has its low bits on top, beyond any index (the part's start and size are
+        whole words).  A larger group compares the lowest offset of its span with the last one the
+        span fits at, and tests the alignment of its widest access.
+        """
+        part = off
+        shift = check.align.bit_length()
+        if check.start or check.low != insn.imm:
+            part = self.tmp()
+            self.emit(f"{part} = sub i32 {off}, {_i32(check.start + insn.imm - check.low)}")
+        room = self.t.mem_size - check.start
+        bad = self.tmp()
+        if check.span == check.align + 1 and check.low == check.anchor:  # one access (or one word)
+            index = part
+            if shift:
+                index = self.tmp()
+                self.emit(f"{index} = call i32 @llvm.fshr.i32(i32 {part}, i32 {part}, i32 {shift})")
+                self.uses_fshr = True
+            self.emit(f"{bad} = icmp uge i32 {index}, {_i32(room >> shift)}")
+        elif not shift:
+            self.emit(f"{bad} = icmp ugt i32 {part}, {_i32(room - check.span)}")
+        else:
+            out, low, mis = self.tmp(), self.tmp(), self.tmp()
+            self.emit(f"{out} = icmp ugt i32 {part}, {_i32(room - check.span)}")
+            self.emit(f"{low} = and i32 {off}, {check.align}")
+            skew = (check.anchor - insn.imm) & check.align
+            self.emit(f"{mis} = icmp ne i32 {low}, {(-skew) & check.align}")
+            self.emit(f"{bad} = or i1 {out}, {mis}")
+        self.cond_exit(bad, X_SIDE, insn.pc, self.prefix[j], "m")
 
     def multiply(self, insn: Insn) -> None:
         self.uses_mul = True
