@@ -179,6 +179,7 @@ def test_grouped_accesses_at_the_edges_are_the_interpreters(group: str, where: s
     the interpreter does (the block leaves before the group, and the interpreter makes each access
     or raises its error at the one that fails)."""
     import robosoc.jit.engine as jit_engine
+
     accesses = GROUPS[group]
     body = [A.i("addi", 11, 0, 3)] * 5
     code_words = len(body) + 2 + 1 + len(accesses) + 2 * (len(accesses) - 1) + 8
