@@ -9,6 +9,7 @@ interrupts at random periods, polling loops, critical sections, device reads, mu
 
 from __future__ import annotations
 
+import threading
 import warnings
 
 import numpy as np
@@ -72,10 +73,12 @@ def assert_same(words: list[int], engine: str, max_cycles: int = 200_000, code_w
 @pytest.mark.parametrize("mul,errata", irq.FLAVOURS, ids=["rv32i", "rv32im-spec", "rv32im-rtl"])
 def test_random_interrupt_programs_run_as_on_the_interpreter(mul: bool, errata: str, engine: str, monkeypatch) -> None:
     if engine == "auto":
-        # these runs are short: auto's budget would leave them to the interpreter, unless the jit
-        # variant ran first in this process and left its regions (the test must not rely on that)
+        # these runs are short: auto's budget would leave them to the interpreter, and its compiling
+        # thread deliver after they end, unless the jit variant ran first in this process and left
+        # its regions (the test must not rely on that)
         import robosoc.jit.engine as jit_engine
 
+        monkeypatch.setattr(jit_engine, "AUTO_BACKGROUND", False)
         monkeypatch.setattr(jit_engine, "AUTO_COMPILE_SHARE", 1e9)
         monkeypatch.setattr(jit_engine, "STRETCHES", {"auto": 50})  # samples often enough to find hot words
     translated = 0
@@ -390,7 +393,9 @@ def test_auto_installs_regions_compiled_by_an_earlier_run_at_once(tmp_path, monk
     monkeypatch.setattr(engine, "_TRANSLATED", {})
     monkeypatch.setattr(compiler, "_SHARED", None)
     words = indirect_calls(2000)
-    # the first run may compile whatever turns hot (as a long run would; short stretches sample often)
+    # the first run may compile whatever turns hot (as a long run would; short stretches sample
+    # often), in line: a run this short ends before the compiling thread delivers
+    monkeypatch.setattr(engine, "AUTO_BACKGROUND", False)
     monkeypatch.setattr(engine, "AUTO_COMPILE_SHARE", 1e9)
     monkeypatch.setattr(engine, "STRETCHES", {"auto": 50})
     first = assert_same(words, "auto", 1_000_000, len(words))
@@ -405,6 +410,80 @@ def test_auto_installs_regions_compiled_by_an_earlier_run_at_once(tmp_path, monk
     assert stats.cache_hits == stats.modules >= 1
 
 
+def _run_waiting_for_compiles(soc: SingleCoreSoC, max_cycles: int, chunk: int) -> tuple[object, dict[str, np.ndarray]]:
+    """``outcome`` of a run in chunks, each after the compiling thread finished what it was given
+    (which the core enters itself when it runs on)."""
+
+    def advance(until: int) -> int:
+        for job, *_ in soc.translator._compiling:
+            job.done.wait()
+        return soc.step_until(until)
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        result = soc.run(max_cycles=max_cycles, chunk=chunk, advance=advance)
+    arrays = {n: getattr(soc.state, n).copy() for n in ("st", "ctr", "opc", "regs", "m8")}
+    return (result.exit_code, soc.counters()), arrays
+
+
+def test_auto_on_one_core_compiles_in_the_background_and_changes_nothing(tmp_path, monkeypatch) -> None:
+    """auto hands its regions to the compiling thread and interprets them meanwhile; the chunk
+    after they arrive runs them translated, with the interpreter's cycles, counters and state."""
+    import robosoc.jit.compiler as compiler
+    import robosoc.jit.engine as engine
+
+    monkeypatch.setenv("ROBOSOC_CACHE", str(tmp_path))
+    monkeypatch.setattr(engine, "_TRANSLATED", {})
+    monkeypatch.setattr(compiler, "_SHARED", None)
+    monkeypatch.setattr(engine, "AUTO_COMPILE_SHARE", 1e9)
+    monkeypatch.setattr(engine, "STRETCHES", {"auto": 50})
+    words = indirect_calls(2000)
+    ref = make_soc(words)
+    ref.state.set_code_size(4 * len(words))
+    want = outcome(ref, 1_000_000)
+    soc = make_soc(words, engine="auto")
+    soc.state.set_code_size(4 * len(words))
+    soc.forget_translations()
+    assert soc.translator.background
+    got = _run_waiting_for_compiles(soc, 1_000_000, 5_000)
+    assert got[0] == want[0]
+    for name, arr in want[1].items():
+        assert np.array_equal(got[1][name], arr), f"{name} differs"
+    stats = soc.translator.stats
+    assert 1 <= stats.regions <= stats.background  # the regions came from the thread
+    assert int(soc.translator.tables().ctx[CTX_STEPS]) < got[0][1]["instructions"] // 2  # and ran
+
+
+def test_a_region_compiling_for_a_core_that_is_gone_keeps_no_other_core_waiting(tmp_path, monkeypatch) -> None:
+    """A run that ends while its region compiles leaves it loaded in the process (and in the disk
+    cache): the next core that asks for the region enters it, instead of waiting for the first
+    core to."""
+    import robosoc.jit.compiler as compiler
+    import robosoc.jit.engine as engine
+
+    monkeypatch.setenv("ROBOSOC_CACHE", str(tmp_path))
+    monkeypatch.setattr(engine, "_TRANSLATED", {})
+    monkeypatch.setattr(compiler, "_SHARED", None)
+    monkeypatch.setattr(engine, "_COMPILING", {})
+    monkeypatch.setattr(engine, "AUTO_COMPILE_SHARE", 1e9)
+    monkeypatch.setattr(engine, "STRETCHES", {"auto": 50})
+    gate = threading.Event()  # the compiling thread starts once the first run has ended
+    work = compiler.Compiler._work
+    monkeypatch.setattr(compiler.Compiler, "_work", lambda self: (gate.wait(), work(self)))
+    words = indirect_calls(2000)
+    first = assert_same(words, "auto", 1_000_000, len(words))
+    assert first.translator.stats.regions == 0 and first.translator.compiling() >= 1
+    gate.set()
+    for job, *_ in first.translator._compiling:
+        job.done.wait()
+    del first
+    second = assert_same(words, "auto", 1_000_000, len(words))
+    assert second.translator.stats.deferred == 0  # no region waited for the first core's modules
+    assert second.translator.stats.regions >= 1
+    stats = second.translator.compiler.stats
+    assert stats.reused + stats.cache_hits >= 1  # the thread's module (loaded by it, or in the disk cache)
+
+
 def test_auto_on_a_fresh_install_interprets_until_compiling_the_dispatch_loop_pays(monkeypatch) -> None:
     """numba has not compiled the dispatch loop yet: auto runs the interpreter (which interp would
     compile as well) and counts the time, and takes the dispatch loop once that time would pay for
@@ -415,6 +494,7 @@ def test_auto_on_a_fresh_install_interprets_until_compiling_the_dispatch_loop_pa
     monkeypatch.setattr(engine, "_dispatch_loop_ready", False)
     monkeypatch.setattr(engine, "STRETCHES", {"auto": 50})
     monkeypatch.setattr(engine, "AUTO_COMPILE_SHARE", 1e9)  # regions themselves always worth compiling
+    monkeypatch.setattr(engine, "AUTO_BACKGROUND", False)  # and compiled before this short run ends
     words = indirect_calls(2000)
     monkeypatch.setattr(engine, "ESTIMATED_DISPATCH_LOOP_SECONDS", 1e12)
     soc = assert_same(words, "auto", 1_000_000, len(words))

@@ -85,7 +85,6 @@ class ChipTranslation:
             self._watched.discard(t)
             if translator is None:
                 translator = TranslatingCore(chip.cores, tile=t, mode=self.engine, stats=self.stats)
-                translator.background = self.engine == "auto"  # compiled on a spare core meanwhile
                 self.translators[t] = translator
                 made = True
                 self.on[t] = 1

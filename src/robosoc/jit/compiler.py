@@ -53,44 +53,29 @@ class Pending:
     names: list[str]
     instructions: int
     done: threading.Event = field(default_factory=threading.Event)
-    obj: bytes = b""
+    addresses: list[int] = field(default_factory=list)  # of ``names``, once loaded
     hit: bool = False
     error: BaseException | None = None
     seconds: float = 0.0  # wall time in the background thread
 
 
-class Compiler:
-    """One MCJIT engine that native regions are added to; addresses stay valid for its lifetime.
+class _Backend:
+    """What turns IR text into a native object: an LLVM context, a target machine for the host and
+    the pass pipeline.  The main thread's works in the global context numba uses too (under its
+    lock); the compiling thread has one of its own and needs no lock (LLVM contexts are independent
+    of each other), so the main thread never waits for a module the thread is compiling."""
 
-    LLVM's work (parsing, passes, code generation, loading) runs under numba's global compiler
-    lock: llvmlite shares one LLVM context with numba, and :meth:`compile_later` compiles in a
-    second thread (llvmlite's calls release the GIL, so on a machine with a spare core the
-    simulation goes on meanwhile).
-    """
-
-    def __init__(self, cache: bool = True) -> None:
-        llvm.initialize_native_target()
-        llvm.initialize_native_asmprinter()
+    def __init__(self, context: llvm.context.ContextRef | None = None) -> None:
         target = llvm.Target.from_default_triple()
         cpu, features = llvm.get_host_cpu_name(), llvm.get_host_cpu_features().flatten()
+        self.context = context
         self.tm = target.create_target_machine(
             cpu=cpu, features=features, opt=2, reloc="pic", codemodel="small", jit=True
         )
-        self.engine = llvm.create_mcjit_compiler(llvm.parse_assembly(""), self.tm)
         self.pto = llvm.create_pipeline_tuning_options(speed_level=2)
         self.pb = llvm.create_pass_builder(self.tm, self.pto)
-        self.cache_dir = cache_root() / "jit" if cache else None
-        self.env = f"llvm{llvm.llvm_version_info} {target.triple} {cpu} {features} pipeline{PIPELINE_VERSION}"
-        self.stats = CompileStats()
-        self.loaded: dict[str, int] = {}
-        self.stems: set[str] = set()  # modules loaded into the engine
-        self._jobs: queue.Queue[Pending] = queue.Queue()
-        self._worker: threading.Thread | None = None
 
-    def key(self, ir_text: str) -> str:
-        return hashlib.sha256((self.env + "\n" + ir_text).encode()).hexdigest()
-
-    def _optimise(self, module: llvm.ModuleRef) -> None:
+    def optimise(self, module: llvm.ModuleRef) -> None:
         pm = llvm.create_new_module_pass_manager()
         pm.add_always_inliner_pass()
         pm.add_sroa_pass()
@@ -98,23 +83,64 @@ class Compiler:
         pm.add_simplify_cfg_pass()
         pm.run(module, self.pb)
 
-    def object_code(self, ir_text: str) -> tuple[bytes, bool]:
-        """The native object of an IR module, from the cache when there: (bytes, was cached)."""
+    def compile(self, ir_text: str, stats: CompileStats) -> bytes:
+        """The native object of ``ir_text`` (its parse, pass and code generation times added to ``stats``)."""
+        t0 = time.perf_counter()
+        module = llvm.parse_assembly(ir_text, context=self.context)
+        module.verify()
+        t1 = time.perf_counter()
+        self.optimise(module)
+        t2 = time.perf_counter()
+        obj = self.tm.emit_object(module)
+        t3 = time.perf_counter()
+        stats.parse_seconds += t1 - t0
+        stats.optimise_seconds += t2 - t1
+        stats.codegen_seconds += t3 - t2
+        return obj
+
+
+class Compiler:
+    """One MCJIT engine that native regions are added to; addresses stay valid for its lifetime.
+
+    Compiling and loading in the main thread run under numba's global compiler lock (llvmlite
+    shares its global LLVM context with numba); :meth:`compile_later` compiles in a second thread,
+    in an LLVM context of its own (llvmlite's calls release the GIL, so on a machine with a spare
+    core the simulation goes on meanwhile).
+    """
+
+    def __init__(self, cache: bool = True) -> None:
+        llvm.initialize_native_target()
+        llvm.initialize_native_asmprinter()
+        self.main = _Backend()
+        self.tm = self.main.tm
+        self.engine = llvm.create_mcjit_compiler(llvm.parse_assembly(""), self.tm)
+        self.cache_dir = cache_root() / "jit" if cache else None
+        target = llvm.Target.from_default_triple()
+        cpu, features = llvm.get_host_cpu_name(), llvm.get_host_cpu_features().flatten()
+        self.env = f"llvm{llvm.llvm_version_info} {target.triple} {cpu} {features} pipeline{PIPELINE_VERSION}"
+        self.stats = CompileStats()
+        self.loaded: dict[str, int] = {}
+        self.stems: set[str] = set()  # modules loaded into the engine
+        self._jobs: queue.Queue[Pending] = queue.Queue()
+        self._worker: threading.Thread | None = None
+        self._load_lock = threading.Lock()  # loading into the engine: one thread at a time
+
+    def key(self, ir_text: str) -> str:
+        return hashlib.sha256((self.env + "\n" + ir_text).encode()).hexdigest()
+
+    def object_code(self, ir_text: str, backend: _Backend | None = None) -> tuple[bytes, bool]:
+        """The native object of an IR module, from the cache when there: (bytes, was cached).
+
+        Compiled by ``backend`` (the compiling thread's), else by the main thread's under numba's lock.
+        """
         path = self._path(ir_text)
         if path is not None and path.is_file():
             return path.read_bytes(), True
-        with global_compiler_lock:
-            t0 = time.perf_counter()
-            module = llvm.parse_assembly(ir_text)
-            module.verify()
-            t1 = time.perf_counter()
-            self._optimise(module)
-            t2 = time.perf_counter()
-            obj = self.tm.emit_object(module)
-            t3 = time.perf_counter()
-        self.stats.parse_seconds += t1 - t0
-        self.stats.optimise_seconds += t2 - t1
-        self.stats.codegen_seconds += t3 - t2
+        if backend is not None:
+            obj = backend.compile(ir_text, self.stats)
+        else:
+            with global_compiler_lock:
+                obj = self.main.compile(ir_text, self.stats)
         if path is not None:
             path.parent.mkdir(parents=True, exist_ok=True)
             fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".tmp")
@@ -144,32 +170,37 @@ class Compiler:
         real = [n.replace(placeholder, stem) for n in names]
         if stem not in self.stems:
             obj, hit = self.object_code(ir_template.replace(placeholder, stem))
-            self._load(stem, real, obj, hit, time.perf_counter() - start, instructions)
+            if not self._load(stem, real, obj, hit, time.perf_counter() - start, instructions):
+                self.stats.reused += 1  # the compiling thread loaded it meanwhile
         else:
             self.stats.reused += 1
         self.stats.seconds += time.perf_counter() - start
         self.stats.cpu_seconds += time.process_time() - cpu
         return [self.loaded[n] for n in real]
 
-    def _load(self, stem: str, real: list[str], obj: bytes, hit: bool, seconds: float, instructions: int) -> None:
-        """Load a module's object into the engine and count it (``seconds`` to get the object)."""
+    def _load(self, stem: str, real: list[str], obj: bytes, hit: bool, seconds: float, instructions: int) -> bool:
+        """Load a module's object into the engine and count it (``seconds`` to get the object);
+        whether it was loaded (False: loaded already, by the other thread)."""
         t0 = time.perf_counter()
-        with global_compiler_lock:
+        with self._load_lock, global_compiler_lock:
+            if stem in self.stems:
+                return False
             self.engine.add_object_file(llvm.ObjectFileRef.from_data(obj))
             self.engine.finalize_object()
             addresses = [self.engine.get_function_address(n) for n in real]
+            for n, address in zip(real, addresses, strict=True):
+                if not address:
+                    raise RuntimeError(f"translated function {n} not found after loading its object")
+                self.loaded[n] = address
+            self.stems.add(stem)
         load = time.perf_counter() - t0
         self.stats.load_seconds += load
         self.stats.cache_hits += int(hit)
         if not hit:
             self.stats.compiled_seconds += seconds + load
             self.stats.compiled_instructions += instructions
-        for n, address in zip(real, addresses, strict=True):
-            if not address:
-                raise RuntimeError(f"translated function {n} not found after loading its object")
-            self.loaded[n] = address
-        self.stems.add(stem)
         self.stats.modules += 1
+        return True
 
     def ready(self, ir_template: str, placeholder: str) -> bool:
         """Whether :meth:`add` would cost no compiling (loaded in this process, or in the disk cache)."""
@@ -180,7 +211,14 @@ class Compiler:
         return path is not None and path.is_file()
 
     def compile_later(self, ir_template: str, placeholder: str, names: list[str], instructions: int = 0) -> Pending:
-        """Compile a module in the background thread; :meth:`finish` loads it once ``done`` is set."""
+        """Compile and load a module in the background thread; :meth:`finish` gives its functions'
+        addresses once ``done`` is set.
+
+        The thread loads the object into the engine itself: llvmlite makes every LLVM call under
+        one process-wide lock, so a load in the main thread would wait for whatever module the
+        thread is generating code for (7 ms a region, measured); the main thread then makes no LLVM
+        call at all for a region compiled in the background.
+        """
         job = Pending(ir_template, placeholder, names, instructions)
         self._jobs.put(job)
         if self._worker is None:
@@ -189,30 +227,27 @@ class Compiler:
         return job
 
     def _work(self) -> None:
+        backend = _Backend(llvm.create_context())
         while True:
             job = self._jobs.get()
             start = time.perf_counter()
             try:
                 stem = self._stem(job.ir_template)
-                job.obj, job.hit = self.object_code(job.ir_template.replace(job.placeholder, stem))
+                obj, job.hit = self.object_code(job.ir_template.replace(job.placeholder, stem), backend)
+                real = [n.replace(job.placeholder, stem) for n in job.names]
+                job.seconds = time.perf_counter() - start
+                if self._load(stem, real, obj, job.hit, job.seconds, job.instructions) and not job.hit:
+                    self.stats.background_seconds += job.seconds
+                job.addresses = [self.loaded[n] for n in real]
             except BaseException as exc:  # handed to the main thread by finish()
                 job.error = exc
-            job.seconds = time.perf_counter() - start
             job.done.set()
 
     def finish(self, job: Pending) -> list[int]:
-        """Load a module :meth:`compile_later` compiled (``job.done`` set); its functions' addresses."""
+        """The addresses of the functions of a module :meth:`compile_later` loaded (``job.done`` set)."""
         if job.error is not None:
             raise job.error
-        stem = self._stem(job.ir_template)
-        real = [n.replace(job.placeholder, stem) for n in job.names]
-        if stem not in self.stems:
-            self._load(stem, real, job.obj, job.hit, job.seconds, job.instructions)
-            if not job.hit:
-                self.stats.background_seconds += job.seconds
-        else:
-            self.stats.reused += 1
-        return [self.loaded[n] for n in real]
+        return job.addresses
 
 
 def _manifest_path(key: str) -> Path:

@@ -69,7 +69,11 @@ _dispatch_loop_ready = False  # compiled or cached: looked up until it is
 #: Regions of ``auto`` are smaller (a hot loop and what it calls, rather than whole functions): the
 #: cost of each decision stays small.
 AUTO_MAX_REGION_INSTRUCTIONS = 100
-#: auto with background compiling (on the chip): regions waiting for the compiling thread at most
+#: ``auto`` compiles its regions in a background thread (the core interprets them meanwhile, and a
+#: second host core compiles): on one core and on the chip.  Tests that need a region translated
+#: before a short run ends set it False (compiling in line, within the budget).
+AUTO_BACKGROUND = True
+#: auto with background compiling: regions of a core waiting for the compiling thread at most
 BACKGROUND_QUEUE = 4
 THRESHOLDS = {"jit": 1, "auto": AUTO_THRESHOLD}
 NEVER_ASK = 1 << 40  # a threshold no word reaches
@@ -116,8 +120,10 @@ class _Translated:
 
 #: (target, multiplier) -> regions translated in this process (any core, any run), in order
 _TRANSLATED: dict[tuple[Target, bool], list[_Translated]] = {}
-#: (build, region start) of the regions the background thread is compiling for some core
-_COMPILING: set[tuple[tuple[Target, bool], int]] = set()
+#: (build, region start) -> the module the background thread compiles for some core; another core
+#: asking for the region waits for it, then enters it itself (the thread loaded it into the engine),
+#: so a core that is gone before its region was done (a run that ended) keeps nobody waiting
+_COMPILING: dict[tuple[tuple[Target, bool], int], Pending] = {}
 
 
 def translated_instructions() -> int:
@@ -165,8 +171,8 @@ class TranslatingCore:
         self._jt: JitArrays | None = None
         self._known_seen = 0  # entries of _TRANSLATED[key] this core has looked at
         self._known_starts_in: set[int] = set()  # starts of the regions installed from there or translated here
-        #: compile regions in the background thread (auto on the chip): the core interprets them meanwhile
-        self.background = False
+        #: compile regions in the background thread (auto): the core interprets them meanwhile
+        self.background = mode == "auto" and AUTO_BACKGROUND
         self._compiling: list[tuple[Pending, Region, EmittedRegion, np.ndarray, np.ndarray]] = []
 
     @property
@@ -327,9 +333,11 @@ class TranslatingCore:
                 del self._parked[i]
 
     def _may_hand_over(self, pc: int) -> bool:
-        """Background compiling: whether the region at ``pc`` may go to the thread now (this core's
-        queue has room, and no core has handed it over already)."""
-        return len(self._compiling) < BACKGROUND_QUEUE and (self._key(), pc) not in _COMPILING
+        """Background compiling: whether the region at ``pc`` may be translated now (this core's
+        queue has room, and no core's module of it is still compiling: once done, its object is
+        in the process or the disk cache and loading it costs no compiling)."""
+        pending = _COMPILING.get((self._key(), pc))
+        return len(self._compiling) < BACKGROUND_QUEUE and (pending is None or pending.done.is_set())
 
     def _translate(self, pc: int) -> Region:
         jt = self._tables()
@@ -374,7 +382,7 @@ class TranslatingCore:
                 # compiled in the background thread; installed by finish_compiles() (the word waits)
                 job = self.compiler.compile_later(emitted.ir, NAME_PLACEHOLDER, [emitted.function], region.instructions)
                 self._compiling.append((job, region, emitted, pcs, m32[pcs].copy()))
-                _COMPILING.add((self._key(), pc))
+                _COMPILING[(self._key(), pc)] = job
                 jt.hot[(pc - base) >> 2] = NEVER_TRANSLATE
                 self.stats.background += 1
                 return Region(pc, {})
@@ -425,7 +433,8 @@ class TranslatingCore:
                 break
             job.done.wait()
             self._compiling.pop(0)
-            _COMPILING.discard((self._key(), region.start))
+            if _COMPILING.get((self._key(), region.start)) is job:
+                del _COMPILING[(self._key(), region.start)]
             start = time.perf_counter()
             address = self.compiler.finish(job)[0]
             jt = self._tables()
@@ -540,6 +549,8 @@ class TranslatingCore:
             self.stats.run_seconds += time.perf_counter() - start
             return int(st[S_RUN])
         while True:
+            if self._compiling:
+                self.finish_compiles()  # what the background thread compiled meanwhile
             start = time.perf_counter()
             jt = self._tables()
             run_translated(arrays, self._tiles, until, jt, self.ask_threshold(), self.stretch)

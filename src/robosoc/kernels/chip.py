@@ -581,7 +581,7 @@ def _check_translated(core, t, jit_tables, jit_on) -> None:  # type: ignore[no-u
         forget_if_changed(jit_tables[t], row(core.m32, t), row(core.dec, t))
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def run_chip(  # type: ignore[no-untyped-def]
     core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int, jit_on, jit_tables, jit_params
 ) -> int:
