@@ -169,6 +169,9 @@ GROUPS = {
     # the span ends a byte past a word: with the word at SRAM's last word, the byte is past the end
     "word and byte": [("sw", 0), ("sb", 4), ("lw", 0), ("lbu", 4)],
     "mixed widths": [("sw", 4), ("sh", 2), ("sb", 1), ("sh", 10), ("lhu", 6), ("lw", 8), ("lb", -1), ("lbu", 3)],
+    # a wider access after a narrower one aligns the group: the halfword at 1 is never aligned
+    # when the word at 0 is (two groups), the one at 6 always is
+    "wider later": [("lh", 1), ("lw", 0), ("lhu", 6)],
     # the halfword at 1 is never aligned when the word at 0 is: two groups, one of them always leaves
     "no common alignment": [("sb", 7), ("sw", 0), ("sh", 1), ("lh", -3), ("lw", 4), ("lbu", 2)],
 }
@@ -228,6 +231,14 @@ def test_accesses_through_one_base_are_checked_once() -> None:
     assert checks[0] == MemoryCheck(start=4 * len(words), low=1, span=47, align=3, anchor=32)
     assert checks[4] == MemoryCheck(start=0, low=48, span=16, align=3, anchor=48)
     assert checks[12] == MemoryCheck(start=0, low=1, span=2, align=1, anchor=1)
+    # with 8 bytes of data after the code, no group of stores may span more: pairs of words
+    data = 4 * len(words)
+    stores = {j: c for j, c in memory_checks(block.insns, Target(SRAM_BASE, data + 8, data, False)).items() if c.start}
+    assert stores == {
+        0: MemoryCheck(start=data, low=32, span=8, align=3, anchor=32),
+        2: MemoryCheck(start=data, low=40, span=8, align=3, anchor=40),
+        8: MemoryCheck(start=data, low=1, span=1, align=0, anchor=1),
+    }
 
 
 # ---------------------------------------------------------------- errors

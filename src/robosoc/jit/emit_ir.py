@@ -154,26 +154,41 @@ def _access(insn: Insn) -> tuple[bool, int] | None:
     return None
 
 
-def _group_check(insns: list[Insn], group: list[int], target: Target) -> MemoryCheck | None:
-    """The one check that stands for every access of ``group``, or None when none can."""
-    sizes = [(insns[j].imm, _access(insns[j])) for j in group]
-    load = sizes[0][1][0]
-    widest = max(size for _, (_, size) in sizes)
-    anchor = next(imm for imm, (_, size) in sizes if size == widest)
-    if any((imm - anchor) % size for imm, (_, size) in sizes):
-        return None  # no one alignment test stands for all of them
-    low = min(imm for imm, _ in sizes)
-    span = max(imm + size for imm, (_, size) in sizes) - low
-    start = 0 if load else target.code_size
-    if len(group) > 1 and span > target.mem_size - start:
-        return None
-    return MemoryCheck(start, low, span, widest - 1, anchor)
+@dataclass
+class _Group:
+    """Accesses of one kind through one base register, checked together (see :func:`memory_checks`)."""
 
+    first: int  # index of the first access in the block
+    start: int  # where the part they may touch begins
+    room: int  # and its size
+    accesses: list[tuple[int, int]]  # (offset, size)
+    widest: int
+    anchor: int  # offset of the first of the widest accesses: its alignment aligns the others
+    low: int
+    high: int  # one past the last byte
 
-def _single_check(insns: list[Insn], j: int, target: Target) -> MemoryCheck:
-    check = _group_check(insns, [j], target)
-    assert check is not None
-    return check
+    @staticmethod
+    def of(j: int, imm: int, size: int, load: bool, target: Target) -> _Group:
+        start = 0 if load else target.code_size
+        return _Group(j, start, target.mem_size - start, [(imm, size)], size, imm, imm, imm + size)
+
+    def add(self, imm: int, size: int) -> bool:
+        """Take in an access, if one check can still stand for the group (else change nothing)."""
+        widest, anchor = (size, imm) if size > self.widest else (self.widest, self.anchor)
+        if anchor != self.anchor:
+            if any((a - anchor) % n for a, n in self.accesses):
+                return False
+        elif (imm - anchor) % size:
+            return False  # no one alignment test stands for all of them
+        low, high = min(self.low, imm), max(self.high, imm + size)
+        if high - low > self.room:
+            return False
+        self.accesses.append((imm, size))
+        self.widest, self.anchor, self.low, self.high = widest, anchor, low, high
+        return True
+
+    def check(self) -> MemoryCheck:
+        return MemoryCheck(self.start, self.low, self.high - self.low, self.widest - 1, self.anchor)
 
 
 def memory_checks(insns: list[Insn], target: Target) -> dict[int, MemoryCheck]:
@@ -187,25 +202,22 @@ def memory_checks(insns: list[Insn], target: Target) -> dict[int, MemoryCheck]:
     SRAM; stores only its data part, past the loaded code (self-modifying code is the
     interpreter's).
     """
-    open_groups: dict[tuple[int, bool], list[int]] = {}
+    open_groups: dict[tuple[int, bool], _Group] = {}
     checks: dict[int, MemoryCheck] = {}
 
     def close(key: tuple[int, bool]) -> None:
         group = open_groups.pop(key)
-        check = _group_check(insns, group, target)
-        if check is not None:
-            checks[group[0]] = check
-        else:  # each access checked on its own (a group of one always has its check)
-            for j in group:
-                checks[j] = _single_check(insns, j, target)
+        checks[group.first] = group.check()
 
     for j, insn in enumerate(insns):
         access = _access(insn)
         if access is not None:
-            key = (insn.rs1, access[0])
-            if key in open_groups and _group_check(insns, [*open_groups[key], j], target) is None:
+            load, size = access
+            key = (insn.rs1, load)
+            if key in open_groups and not open_groups[key].add(insn.imm, size):
                 close(key)
-            open_groups.setdefault(key, []).append(j)
+            if key not in open_groups:
+                open_groups[key] = _Group.of(j, insn.imm, size, load, target)
         if insn.rd and insn.ins.fmt not in (Fmt.S, Fmt.B):
             for key in [k for k in open_groups if k[0] == insn.rd]:
                 close(key)
