@@ -68,6 +68,8 @@ class _Backend:
     def __init__(self, context: llvm.context.ContextRef | None = None) -> None:
         target = llvm.Target.from_default_triple()
         cpu, features = llvm.get_host_cpu_name(), llvm.get_host_cpu_features().flatten()
+        #: what its objects depend on besides the IR (part of the cache key)
+        self.host = f"llvm{llvm.llvm_version_info} {target.triple} {cpu} {features}"
         self.context = context
         self.tm = target.create_target_machine(
             cpu=cpu, features=features, opt=2, reloc="pic", codemodel="small", jit=True
@@ -115,9 +117,7 @@ class Compiler:
         self.tm = self.main.tm
         self.engine = llvm.create_mcjit_compiler(llvm.parse_assembly(""), self.tm)
         self.cache_dir = cache_root() / "jit" if cache else None
-        target = llvm.Target.from_default_triple()
-        cpu, features = llvm.get_host_cpu_name(), llvm.get_host_cpu_features().flatten()
-        self.env = f"llvm{llvm.llvm_version_info} {target.triple} {cpu} {features} pipeline{PIPELINE_VERSION}"
+        self.env = f"{self.main.host} pipeline{PIPELINE_VERSION}"
         self.stats = CompileStats()
         self.loaded: dict[str, int] = {}
         self.stems: set[str] = set()  # modules loaded into the engine
