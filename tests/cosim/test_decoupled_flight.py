@@ -169,6 +169,43 @@ def test_ctrl_c_ends_fly_decoupled_with_what_was_done(tmp_path: Path) -> None:
     assert len(read_flight_log(out / "flight.csv")) >= 2
 
 
+@pytest.mark.parametrize("side", ["chip", "physics"])
+def test_a_side_whose_flight_ended_writes_its_record_through_its_ctrl_c(tmp_path: Path, monkeypatch, side: str) -> None:
+    """A side ended because its peer said bye first (the peer took its Ctrl-C first), then takes
+    its own Ctrl-C while it makes its record: its ``.json`` still comes out whole, and the handler
+    is back afterwards."""
+    import types
+
+    from robosoc.cosim import decoupled
+
+    class Interrupted(Exception):  # the test's own handler: a KeyboardInterrupt would stop pytest
+        pass
+
+    def handler(signum: int, frame: object) -> None:
+        raise Interrupted
+
+    def record(*args: object) -> dict:
+        os.kill(os.getpid(), signal.SIGINT)
+        time.sleep(0.05)  # the handler runs at the next bytecode, well within this
+        return {"ended": "peer_ended"}
+
+    monkeypatch.setattr(decoupled, f"serve_{side}", lambda *args, **kwargs: types.SimpleNamespace(result=None))
+    monkeypatch.setattr(decoupled, f"{side}_record", record)
+    config = ScenarioConfig()
+    vehicle = vehicle_preset(config.vehicle)
+    local = Address("127.0.0.1", 9)
+    previous = signal.signal(signal.SIGINT, handler)
+    try:
+        if side == "chip":
+            _, got = decoupled.run_chip_side(config, vehicle, FirmwareConfig(), 1, LinkConfig(), local, None, tmp_path)
+        else:
+            _, got = decoupled.run_physics_side(config, vehicle, 1, LinkConfig(), local, tmp_path)
+        assert signal.getsignal(signal.SIGINT) is handler
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    assert got == json.loads((tmp_path / f"{side}.json").read_text()) == {"ended": "peer_ended"}
+
+
 # --- clear errors ----------------------------------------------------------------------------------
 
 

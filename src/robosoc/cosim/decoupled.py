@@ -18,9 +18,10 @@ import json
 import multiprocessing
 import os
 import signal
+import threading
 import time
 import traceback
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from multiprocessing.connection import Connection, wait
 from pathlib import Path
@@ -45,6 +46,24 @@ __all__ = ["DecoupledFlight", "SideFailed", "fly_decoupled", "run_chip_side", "r
 SHUTDOWN_S = 20.0
 
 
+@contextlib.contextmanager
+def _interrupts_held() -> Iterator[None]:
+    """Ctrl-C is ignored while a side whose flight has ended writes what it did.
+
+    A side may end because its peer said bye (the peer took its Ctrl-C first) and then receive its
+    own: without this its record would be lost half written.  Signal handlers belong to the main
+    thread; elsewhere this does nothing.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
 def run_physics_side(
     scenario: ScenarioConfig,
     vehicle: VehicleConfig,
@@ -67,9 +86,10 @@ def run_physics_side(
     finally:
         if log is not None:
             log.close()
-    record = physics_record(outcome, scenario, vehicle)
-    if out is not None:
-        write_summary(record, out / "physics.json")
+    with _interrupts_held():
+        record = physics_record(outcome, scenario, vehicle)
+        if out is not None:
+            write_summary(record, out / "physics.json")
     return outcome, record
 
 
@@ -91,11 +111,12 @@ def run_chip_side(
         scenario, vehicle, fw, seed, config, peer, bind, chip=chip,
         log_path=out / "link-chip.log" if out is not None else None, on_status=on_status,
     )  # fmt: skip
-    record = chip_record(outcome, fw, chip or fw.seed_chip())
-    if out is not None:
-        if outcome.result is not None:
-            write_jobs_csv(outcome.result.jobs, out / "jobs.csv")
-        write_summary(record, out / "chip.json")
+    with _interrupts_held():
+        record = chip_record(outcome, fw, chip or fw.seed_chip())
+        if out is not None:
+            if outcome.result is not None:
+                write_jobs_csv(outcome.result.jobs, out / "jobs.csv")
+            write_summary(record, out / "chip.json")
     return outcome, record
 
 
