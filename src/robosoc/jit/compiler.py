@@ -114,8 +114,7 @@ class Compiler:
         llvm.initialize_native_target()
         llvm.initialize_native_asmprinter()
         self.main = _Backend()
-        self.tm = self.main.tm
-        self.engine = llvm.create_mcjit_compiler(llvm.parse_assembly(""), self.tm)
+        self.engine = llvm.create_mcjit_compiler(llvm.parse_assembly(""), self.main.tm)
         self.cache_dir = cache_root() / "jit" if cache else None
         self.env = f"{self.main.host} pipeline{PIPELINE_VERSION}"
         self.stats = CompileStats()
@@ -187,8 +186,8 @@ class Compiler:
                 return False
             self.engine.add_object_file(llvm.ObjectFileRef.from_data(obj))
             self.engine.finalize_object()
-            addresses = [self.engine.get_function_address(n) for n in real]
-            for n, address in zip(real, addresses, strict=True):
+            for n in real:
+                address = self.engine.get_function_address(n)
                 if not address:
                     raise RuntimeError(f"translated function {n} not found after loading its object")
                 self.loaded[n] = address

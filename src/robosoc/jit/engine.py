@@ -422,11 +422,9 @@ class TranslatingCore:
         if self._jt is not None:
             self._install_new_known()
 
-    def finish_compiles(self, wait: bool = False) -> bool:
+    def finish_compiles(self, wait: bool = False) -> None:
         """Enter the regions the background thread has compiled (all of them, waiting, with
-        ``wait``); whether any was entered.  A region whose words changed meanwhile is dropped (its
-        word is asked for again)."""
-        entered = False
+        ``wait``).  A region whose words changed meanwhile is dropped (its word is asked for again)."""
         while self._compiling:
             job, region, emitted, pcs, words = self._compiling[0]
             if not job.done.is_set() and not wait:
@@ -441,11 +439,9 @@ class TranslatingCore:
             i = (region.start - self._target().base) >> 2
             if np.array_equal(self.state.m32[self.tile][pcs], words) and jt.entry_fn[i] == 0:
                 self._enter(region, emitted, address, pcs, words)
-                entered = True
             elif jt.entry_fn[i] == 0:
                 jt.hot[i] = 0
             self.stats.translate_seconds += time.perf_counter() - start
-        return entered
 
     def _install(self, done: _Translated) -> None:
         self._install_many([done])
