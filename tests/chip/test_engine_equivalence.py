@@ -31,7 +31,7 @@ from robosoc.jit.emit_ir import (
 )
 from robosoc.jit.regions import CodeView, discover
 from robosoc.kernels.core import _MUL_CHUNK, mul_latency
-from robosoc.kernels.jit_dispatch import CTX_FLUSHES, CTX_STEPS
+from robosoc.kernels.jit_dispatch import CTX_FLUSHES, CTX_STEPS, JitArrays
 
 ENGINES = ["jit", "auto"]
 #: random programs per flavour: each is new code, compiled afresh (the comparison costs compile time)
@@ -339,6 +339,56 @@ def test_a_region_translated_once_is_reused_by_the_next_core() -> None:
     c.run(max_cycles=10_000)
     assert c.translator.stats.regions >= 1
 
+
+
+def _fresh_tables(soc: SingleCoreSoC) -> tuple[list[np.ndarray], np.ndarray]:
+    """The core's tables made afresh (as at a run's start) and its predecode rows then."""
+    tr = soc.translator
+    tr.forget()
+    tables = [a.copy() for a in tr.tables()]
+    return tables, soc.state.dec[0].copy()
+
+
+@pytest.mark.parametrize("later", [False, True], ids=["", "a-region-translated-since"])
+@pytest.mark.parametrize("changed", [None, 0, 1, 30], ids=["same", "first-word", "loop-word", "outside-the-region"])
+def test_a_core_copying_the_tables_of_the_last_gets_those_made_afresh(changed: int | None, later: bool, monkeypatch) -> None:
+    """The cores of a chip share one program: a core makes its fresh tables by copying those the
+    last core of the build made, which must equal entering every known region itself; a core whose
+    code differs anywhere (a region's word or not) makes its own."""
+    import robosoc.jit.engine as engine
+
+    monkeypatch.setattr(engine, "_TRANSLATED", {})
+    monkeypatch.setattr(engine, "_FRESH_TABLES", {})
+    words = [A.i("addi", 10, 0, 0), A.i("addi", 10, 10, 1), A.i("addi", 11, 0, 40), A.branch("bne", 10, 11, -8)]
+    words += exit_with(10)
+    words += [0] * (32 - len(words))  # an illegal word ends the region: word 30 is in no region
+    make_soc(words, engine="jit").run(max_cycles=10_000)
+    mine = list(words)
+    if changed is not None:
+        mine[changed] = A.i("addi", 12, 0, 7)
+    make_soc(words, engine="jit").translator.tables()  # made afresh, kept for the next core
+    if later:  # a region starting inside the loop (as after an interrupt there)
+        make_soc(words, engine="jit").translator.translate(SRAM_BASE + 8)
+    copied = make_soc(mine, engine="jit")
+    got = _fresh_tables(copied)
+    monkeypatch.setattr(engine, "_FRESH_TABLES", {})
+    made = make_soc(mine, engine="jit")
+    want = _fresh_tables(made)
+    assert len(got[0]) == len(want[0])
+    for name, a, b in zip(JitArrays._fields, got[0], want[0], strict=True):
+        assert np.array_equal(a, b), name
+    assert np.array_equal(got[1], want[1])  # the interpreter stops before the same blocks
+    assert (copied.translator.stats.reused, copied.translator._nslots) == (made.translator.stats.reused, made.translator._nslots)
+    # a region is entered unless one of its words changed (word 2 starts no block of the first)
+    entry_fn = want[0][0]
+    assert (entry_fn[0] != 0) == (changed in (None, 30))
+    if changed in (None, 30):
+        assert (entry_fn[2] != 0) == later
+    (got_result, got_arrays), (want_result, want_arrays) = (
+        outcome(soc, 10_000) for soc in (copied, make_soc(mine, engine="interp"))
+    )
+    assert got_result == want_result
+    assert all(np.array_equal(got_arrays[n], want_arrays[n]) for n in want_arrays)
 
 # ---------------------------------------------------------------- region structure and tiers
 

@@ -126,6 +126,25 @@ _TRANSLATED: dict[tuple[Target, bool], list[_Translated]] = {}
 _COMPILING: dict[tuple[tuple[Target, bool], int], Pending] = {}
 
 
+@dataclass(frozen=True)
+class _FreshTables:
+    """A core's tables right after they were made afresh and the regions known then entered."""
+
+    done_list: list[_Translated]  # _TRANSLATED's list they were made from (a test may replace it)
+    seen: int  # its entries then
+    code: np.ndarray  # the core's code words then
+    tables: JitArrays
+    slot_hist: tuple[np.ndarray, ...]
+    slot_len: tuple[np.ndarray, ...]
+    slot_next: tuple[np.ndarray, ...]
+    nslots: int
+    starts_in: frozenset[int]
+
+
+#: build -> the last fresh tables made for it (copied by the next core of that build and code)
+_FRESH_TABLES: dict[tuple[Target, bool], _FreshTables] = {}
+
+
 def translated_instructions() -> int:
     """Guest instructions in the regions this process translated."""
     return sum(t.region.instructions for regions in _TRANSLATED.values() for t in regions)
@@ -212,15 +231,17 @@ class TranslatingCore:
         code = int(self.state.st[self.tile, S_CODE_SIZE])
         if self._jt is None or code != self._code_size:
             self._clear_marks()
-            self._jt = empty_tables(code // 4 + 1)  # the word after the code: its fetch error is the interpreter's
             self._code_size = code
-            self._slot_hist: list[np.ndarray] = []  # per region: (kc, delta) rows of its slots
-            self._slot_len: list[np.ndarray] = []
-            self._slot_next: list[np.ndarray] = []
-            self._nslots = 0
             self._flushes_seen = 0
             self._parked.clear()
-            self._install_known()
+            if not self._install_as_before():
+                self._jt = empty_tables(code // 4 + 1)  # the word after the code: its fetch error is the interpreter's
+                self._slot_hist: list[np.ndarray] = []  # per region: (kc, delta) rows of its slots
+                self._slot_len: list[np.ndarray] = []
+                self._slot_next: list[np.ndarray] = []
+                self._nslots = 0
+                self._install_known()
+                self._remember_install()
             self._known_starts = read_manifest(self._manifest_key()) if self.mode == "auto" else set()
             self._cached_starts = frozenset(self._known_starts)  # compiled by an earlier run: installed at once
         return self._jt
@@ -259,6 +280,45 @@ class TranslatingCore:
         self._known_seen = 0
         self._known_starts_in = set()
         self._install_new_known()
+
+    def _install_as_before(self) -> bool:
+        """Fresh tables: copy those a core of the same build made fresh if its code held the same
+        words, and enter the regions translated since (the cores of a chip load one program: its
+        translations are entered once, not once per tile)."""
+        key = self._key()
+        done_list = _TRANSLATED.get(key)
+        made = _FRESH_TABLES.get(key)
+        if made is None or done_list is None or made.done_list is not done_list:
+            return False
+        if not np.array_equal(self.state.m32[self.tile, : len(made.code)], made.code):
+            return False
+        self._jt = JitArrays(*(a.copy() for a in made.tables))
+        self._mark(np.flatnonzero(made.tables.entry_fn))
+        self._slot_hist, self._slot_len, self._slot_next = list(made.slot_hist), list(made.slot_len), list(made.slot_next)
+        self._nslots = made.nslots
+        self._known_seen = made.seen
+        self._known_starts_in = set(made.starts_in)
+        self.stats.reused += len(made.starts_in)
+        self._install_new_known()  # translated since
+        return True
+
+    def _remember_install(self) -> None:
+        """Keep the fresh tables just made, for the next core of the same build (:meth:`_install_as_before`)."""
+        done_list = _TRANSLATED.get(self._key())
+        jt = self._jt
+        if done_list is None or jt is None:
+            return
+        _FRESH_TABLES[self._key()] = _FreshTables(
+            done_list=done_list,
+            seen=self._known_seen,
+            code=self.state.m32[self.tile, : self._code_size // 4].copy(),
+            tables=JitArrays(*(a.copy() for a in jt)),
+            slot_hist=tuple(self._slot_hist),
+            slot_len=tuple(self._slot_len),
+            slot_next=tuple(self._slot_next),
+            nslots=self._nslots,
+            starts_in=frozenset(self._known_starts_in),
+        )
 
     def _install_new_known(self) -> None:
         """Enter the regions translated in this process (by any core) since this core last looked,
