@@ -340,7 +340,6 @@ def test_a_region_translated_once_is_reused_by_the_next_core() -> None:
     assert c.translator.stats.regions >= 1
 
 
-
 def _fresh_tables(soc: SingleCoreSoC) -> tuple[list[np.ndarray], np.ndarray]:
     """The core's tables made afresh (as at a run's start) and its predecode rows then."""
     tr = soc.translator
@@ -351,7 +350,9 @@ def _fresh_tables(soc: SingleCoreSoC) -> tuple[list[np.ndarray], np.ndarray]:
 
 @pytest.mark.parametrize("later", [False, True], ids=["", "a-region-translated-since"])
 @pytest.mark.parametrize("changed", [None, 0, 1, 30], ids=["same", "first-word", "loop-word", "outside-the-region"])
-def test_a_core_copying_the_tables_of_the_last_gets_those_made_afresh(changed: int | None, later: bool, monkeypatch) -> None:
+def test_a_core_copying_the_tables_of_the_last_gets_those_made_afresh(
+    changed: int | None, later: bool, monkeypatch
+) -> None:
     """The cores of a chip share one program: a core makes its fresh tables by copying those the
     last core of the build made, which must equal entering every known region itself; a core whose
     code differs anywhere (a region's word or not) makes its own."""
@@ -378,7 +379,8 @@ def test_a_core_copying_the_tables_of_the_last_gets_those_made_afresh(changed: i
     for name, a, b in zip(JitArrays._fields, got[0], want[0], strict=True):
         assert np.array_equal(a, b), name
     assert np.array_equal(got[1], want[1])  # the interpreter stops before the same blocks
-    assert (copied.translator.stats.reused, copied.translator._nslots) == (made.translator.stats.reused, made.translator._nslots)
+    for tr_got, tr_want in [(copied.translator, made.translator)]:
+        assert (tr_got.stats.reused, tr_got._nslots) == (tr_want.stats.reused, tr_want._nslots)
     # a region is entered unless one of its words changed (word 2 starts no block of the first)
     entry_fn = want[0][0]
     assert (entry_fn[0] != 0) == (changed in (None, 30))
@@ -389,6 +391,7 @@ def test_a_core_copying_the_tables_of_the_last_gets_those_made_afresh(changed: i
     )
     assert got_result == want_result
     assert all(np.array_equal(got_arrays[n], want_arrays[n]) for n in want_arrays)
+
 
 # ---------------------------------------------------------------- region structure and tiers
 

@@ -294,7 +294,8 @@ class TranslatingCore:
             return False
         self._jt = JitArrays(*(a.copy() for a in made.tables))
         self._mark(np.flatnonzero(made.tables.entry_fn))
-        self._slot_hist, self._slot_len, self._slot_next = list(made.slot_hist), list(made.slot_len), list(made.slot_next)
+        self._slot_hist, self._slot_len = list(made.slot_hist), list(made.slot_len)
+        self._slot_next = list(made.slot_next)
         self._nslots = made.nslots
         self._known_seen = made.seen
         self._known_starts_in = set(made.starts_in)
