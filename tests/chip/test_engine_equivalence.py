@@ -379,8 +379,8 @@ def test_a_core_copying_the_tables_of_the_last_gets_those_made_afresh(
     for name, a, b in zip(JitArrays._fields, got[0], want[0], strict=True):
         assert np.array_equal(a, b), name
     assert np.array_equal(got[1], want[1])  # the interpreter stops before the same blocks
-    for tr_got, tr_want in [(copied.translator, made.translator)]:
-        assert (tr_got.stats.reused, tr_got._nslots) == (tr_want.stats.reused, tr_want._nslots)
+    mine_tr, made_tr = copied.translator, made.translator
+    assert (mine_tr.stats.reused, mine_tr._nslots) == (made_tr.stats.reused, made_tr._nslots)
     # a region is entered unless one of its words changed (word 2 starts no block of the first)
     entry_fn = want[0][0]
     assert (entry_fn[0] != 0) == (changed in (None, 30))
