@@ -10,9 +10,11 @@ optimisation and code generation and loads the object into the JIT.
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import os
 import queue
+import sys
 import tempfile
 import threading
 import time
@@ -26,6 +28,8 @@ from robosoc.toolchain.cache import cache_root
 
 #: Bumped whenever the pipeline or the IR conventions change, to invalidate old objects.
 PIPELINE_VERSION = 4
+#: The nice value of the background compiling thread (the lowest priority).
+BACKGROUND_NICE = 19
 
 
 @dataclass
@@ -226,6 +230,7 @@ class Compiler:
         return job
 
     def _work(self) -> None:
+        _yield_the_host()
         backend = _Backend(llvm.create_context())
         while True:
             job = self._jobs.get()
@@ -247,6 +252,16 @@ class Compiler:
         if job.error is not None:
             raise job.error
         return job.addresses
+
+
+def _yield_the_host() -> None:
+    """Give the calling thread the lowest priority (Linux, where a thread has a nice value of its
+    own): the compiling thread then takes only a host core nothing else wants, never time from
+    the simulation or from the processes beside it (a sweep's workers, a decoupled flight's two
+    sides).  Elsewhere it keeps its priority."""
+    if sys.platform.startswith("linux"):
+        with contextlib.suppress(OSError):
+            os.setpriority(os.PRIO_PROCESS, threading.get_native_id(), BACKGROUND_NICE)
 
 
 def _manifest_path(key: str) -> Path:
