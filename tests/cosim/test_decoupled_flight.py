@@ -153,7 +153,13 @@ def test_the_chip_side_ends_when_the_physics_goes_silent(tmp_path: Path) -> None
 
 def test_ctrl_c_ends_fly_decoupled_with_what_was_done(tmp_path: Path) -> None:
     out = tmp_path / "run"
-    fly = robosoc("fly", "--decoupled", "--seconds", "20", "--out", str(out))
+    # a shell's background job ignores Ctrl-C, and a child inherits that: this test's child must
+    # take it as a terminal's user's would (an exec'd child gets a handler's signal as SIG_DFL)
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        fly = robosoc("fly", "--decoupled", "--seconds", "20", "--out", str(out))
+    finally:
+        signal.signal(signal.SIGINT, previous)
     wait_for(lines_of(fly), "the chip said hello; flying")
     while not (out / "flight.csv").exists() or len((out / "flight.csv").read_text().splitlines()) < 3:
         assert fly.poll() is None, fly.stderr.read()  # type: ignore[union-attr]
