@@ -9,8 +9,6 @@ interrupts at random periods, polling loops, critical sections, device reads, mu
 
 from __future__ import annotations
 
-import os
-import sys
 import threading
 import warnings
 
@@ -25,7 +23,6 @@ from robosoc.chip.single import CoreError, CycleBudgetExceeded, SingleCoreSoC
 from robosoc.jit.compiler import Compiler
 from robosoc.jit.emit_ir import (
     MUL_WORST_CYCLES,
-    NAME_PLACEHOLDER,
     MemoryCheck,
     Target,
     emit_region,
@@ -327,28 +324,6 @@ def test_compiled_objects_are_cached_by_code_and_options(tmp_path, monkeypatch) 
     assert not second.object_code(_region_ir([A.i("addi", 10, 10, 2), *words[1:]]))[1]
     assert not second.object_code(_region_ir(words, mem_size=128 * 1024))[1]
     assert len(list((tmp_path / "jit").rglob("*.o"))) == 3
-
-
-@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="a thread has a priority of its own on Linux only")
-def test_the_compiling_thread_takes_only_idle_host_time(tmp_path, monkeypatch) -> None:
-    """Background compiling runs at the lowest priority (it must not slow the simulation beside it
-    on a busy host, such as a sweep's workers), and the thread that starts it keeps its own."""
-    from robosoc.jit.compiler import BACKGROUND_NICE
-
-    monkeypatch.setenv("ROBOSOC_CACHE", str(tmp_path))
-    words = [A.i("addi", 10, 10, 1), A.i("addi", 11, 11, 2), A.branch("bne", 10, 11, -8), *exit_with(10)]
-    region = discover(
-        CodeView(lambda a: words[(a - SRAM_BASE) >> 2], SRAM_BASE, 4 * len(words), 65536, True), SRAM_BASE
-    )
-    emitted = emit_region(Target(SRAM_BASE, 65536, 4 * len(words), False), region)
-    compiler = Compiler()
-    job = compiler.compile_later(emitted.ir, NAME_PLACEHOLDER, [emitted.function], region.instructions)
-    job.done.wait(60)
-    assert compiler.finish(job)[0] != 0
-    worker = compiler._worker
-    assert worker is not None and worker.native_id is not None
-    assert os.getpriority(os.PRIO_PROCESS, worker.native_id) == BACKGROUND_NICE
-    assert os.getpriority(os.PRIO_PROCESS, threading.get_native_id()) == os.getpriority(os.PRIO_PROCESS, 0)
 
 
 def test_a_region_translated_once_is_reused_by_the_next_core() -> None:

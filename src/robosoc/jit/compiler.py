@@ -10,11 +10,10 @@ optimisation and code generation and loads the object into the JIT.
 
 from __future__ import annotations
 
-import contextlib
+import functools
 import hashlib
 import os
 import queue
-import sys
 import tempfile
 import threading
 import time
@@ -28,8 +27,6 @@ from robosoc.toolchain.cache import cache_root
 
 #: Bumped whenever the pipeline or the IR conventions change, to invalidate old objects.
 PIPELINE_VERSION = 4
-#: The nice value of the background compiling thread (the lowest priority).
-BACKGROUND_NICE = 19
 
 
 @dataclass
@@ -230,7 +227,6 @@ class Compiler:
         return job
 
     def _work(self) -> None:
-        _yield_the_host()
         backend = _Backend(llvm.create_context())
         while True:
             job = self._jobs.get()
@@ -254,24 +250,20 @@ class Compiler:
         return job.addresses
 
 
-def _yield_the_host() -> None:
-    """Give the calling thread the lowest priority (Linux, where a thread has a nice value of its
-    own): the compiling thread then takes only a host core nothing else wants, never time from
-    the simulation or from the processes beside it (a sweep's workers, a decoupled flight's two
-    sides).  Elsewhere it keeps its priority."""
-    if sys.platform.startswith("linux"):
-        with contextlib.suppress(OSError):
-            os.setpriority(os.PRIO_PROCESS, threading.get_native_id(), BACKGROUND_NICE)
-
-
 def _manifest_path(key: str) -> Path:
     return cache_root() / "jit" / "manifests" / f"{key}.txt"
 
 
+@functools.cache
+def _manifest_host() -> str:
+    """LLVM and the host, asked once: each LLVM call waits for llvmlite's process-wide lock, which
+    the compiling thread holds while it generates code."""
+    return f"llvm{llvm.llvm_version_info} {llvm.get_default_triple()} {llvm.get_host_cpu_name()} {PIPELINE_VERSION}"
+
+
 def manifest_key(code: bytes, options: str) -> str:
     """The key of a program's manifest: its code bytes, build options, LLVM and host (as object keys)."""
-    env = f"llvm{llvm.llvm_version_info} {llvm.get_default_triple()} {llvm.get_host_cpu_name()} {PIPELINE_VERSION}"
-    return hashlib.sha256(env.encode() + options.encode() + code).hexdigest()
+    return hashlib.sha256(_manifest_host().encode() + options.encode() + code).hexdigest()
 
 
 def read_manifest(key: str) -> set[int]:
