@@ -257,6 +257,7 @@ def test_auto_compiles_in_the_background_and_changes_nothing(monkeypatch) -> Non
     """With a cold object cache auto hands regions to the compiling thread and the tile interprets
     them meanwhile; what the thread compiled is entered at the next step (here: after waiting for
     it), and the chip's state is the interpreter's whatever the timing."""
+    monkeypatch.setattr("robosoc.jit.engine.AUTO_WARMUP_SECONDS", 0.0)  # short runs translate too
     from robosoc.benchmarks.chip import _build
     from robosoc.chip.translation import AUTO_LOOK_CYCLES
     from robosoc.jit.compiler import Compiler

@@ -31,6 +31,7 @@ from robosoc.jit.emit_ir import (
 )
 from robosoc.jit.regions import CodeView, discover
 from robosoc.kernels.core import _MUL_CHUNK, mul_latency
+from robosoc.kernels.core_layout import S_CYCLE
 from robosoc.kernels.jit_dispatch import CTX_FLUSHES, CTX_STEPS, JitArrays
 
 ENGINES = ["jit", "auto"]
@@ -449,7 +450,26 @@ def test_auto_compiles_nothing_when_compiling_is_not_worth_it(monkeypatch) -> No
     assert soc.translator.stats.regions == 0
 
 
+def test_auto_asks_for_no_region_before_its_warm_up(monkeypatch) -> None:
+    """A run shorter than AUTO_WARMUP_SECONDS is interpreted as by interp (nothing found, written
+    or handed to the compiling thread); once the core has run that long, hot words are asked for."""
+    import robosoc.jit.engine as engine
+
+    monkeypatch.setattr(engine, "_TRANSLATED", {})
+    monkeypatch.setattr(engine, "AUTO_WARMUP_SECONDS", 3600.0)  # longer than any run here
+    words, _ = irq.build(7005, True, "spec")
+    soc = assert_same(words, "auto", irq.MAX_CYCLES, len(words), mul=True, sram_size=irq.SRAM_SIZE)
+    stats = soc.translator.stats
+    assert stats.run_seconds > 0 and (stats.regions, stats.background, stats.deferred) == (0, 0, 0)
+    assert soc.translator.ask_threshold(cached=False) == engine.NEVER_ASK
+    stats.run_seconds = 3600.5  # warmed up (and the budget is large)
+    assert soc.translator.ask_threshold(cached=False) == engine.AUTO_THRESHOLD
+    stats.run_seconds = 0.0  # regions compiled by an earlier run are installed from the start
+    assert soc.translator.ask_threshold(cached=True) == engine.AUTO_THRESHOLD
+
+
 def test_auto_installs_regions_compiled_by_an_earlier_run_at_once(tmp_path, monkeypatch) -> None:
+    monkeypatch.setattr("robosoc.jit.engine.AUTO_WARMUP_SECONDS", 0.0)  # short runs translate too
     import robosoc.jit.compiler as compiler
     import robosoc.jit.engine as engine
 
@@ -460,12 +480,12 @@ def test_auto_installs_regions_compiled_by_an_earlier_run_at_once(tmp_path, monk
     # the first run may compile whatever turns hot (as a long run would; short stretches sample
     # often), in line: a run this short ends before the compiling thread delivers
     monkeypatch.setattr(engine, "AUTO_BACKGROUND", False)
-    monkeypatch.setattr(engine, "AUTO_COMPILE_SHARE", 1e9)
+    monkeypatch.setattr(engine.TranslatingCore, "_budget", lambda self: float("inf"))  # always worth compiling
     monkeypatch.setattr(engine, "STRETCHES", {"auto": 50})
     first = assert_same(words, "auto", 1_000_000, len(words))
     assert first.translator.stats.regions >= 1
     # a new process (no regions in memory) that may not compile anything: the cached regions still come in
-    monkeypatch.setattr(engine, "AUTO_COMPILE_SHARE", 0.0)
+    monkeypatch.setattr(engine.TranslatingCore, "_budget", lambda self: 0.0)
     monkeypatch.setattr(engine, "_TRANSLATED", {})
     monkeypatch.setattr(compiler, "_SHARED", None)
     second = assert_same(words, "auto", 1_000_000, len(words))
@@ -493,6 +513,7 @@ def _run_waiting_for_compiles(soc: SingleCoreSoC, max_cycles: int, chunk: int) -
 def test_auto_on_one_core_compiles_in_the_background_and_changes_nothing(tmp_path, monkeypatch) -> None:
     """auto hands its regions to the compiling thread and interprets them meanwhile; the chunk
     after they arrive runs them translated, with the interpreter's cycles, counters and state."""
+    monkeypatch.setattr("robosoc.jit.engine.AUTO_WARMUP_SECONDS", 0.0)  # short runs translate too
     import robosoc.jit.compiler as compiler
     import robosoc.jit.engine as engine
 
@@ -522,6 +543,7 @@ def test_a_region_compiling_for_a_core_that_is_gone_keeps_no_other_core_waiting(
     """A run that ends while its region compiles leaves it loaded in the process (and in the disk
     cache): the next core that asks for the region enters it, instead of waiting for the first
     core to."""
+    monkeypatch.setattr("robosoc.jit.engine.AUTO_WARMUP_SECONDS", 0.0)  # short runs translate too
     import robosoc.jit.compiler as compiler
     import robosoc.jit.engine as engine
 
@@ -529,7 +551,7 @@ def test_a_region_compiling_for_a_core_that_is_gone_keeps_no_other_core_waiting(
     monkeypatch.setattr(engine, "_TRANSLATED", {})
     monkeypatch.setattr(compiler, "_SHARED", None)
     monkeypatch.setattr(engine, "_COMPILING", {})
-    monkeypatch.setattr(engine, "AUTO_COMPILE_SHARE", 1e9)
+    monkeypatch.setattr(engine.TranslatingCore, "_budget", lambda self: float("inf"))  # always worth compiling
     monkeypatch.setattr(engine, "STRETCHES", {"auto": 50})
     gate = threading.Event()  # the compiling thread starts once the first run has ended
     work = compiler.Compiler._work
@@ -548,16 +570,82 @@ def test_a_region_compiling_for_a_core_that_is_gone_keeps_no_other_core_waiting(
     assert stats.reused + stats.cache_hits >= 1  # the thread's module (loaded by it, or in the disk cache)
 
 
+def test_auto_stops_for_no_region_while_its_compiling_queue_is_full(tmp_path, monkeypatch) -> None:
+    """With BACKGROUND_QUEUE regions waiting for the compiling thread the loop asks for none (each
+    would be parked at once) and comes back every POLL_CYCLES to enter what the thread finished;
+    the call that only loads the kernel counts no run time."""
+    import robosoc.jit.compiler as compiler
+    import robosoc.jit.engine as engine
+
+    monkeypatch.setenv("ROBOSOC_CACHE", str(tmp_path))
+    monkeypatch.setattr(engine, "_TRANSLATED", {})
+    monkeypatch.setattr(compiler, "_SHARED", None)
+    monkeypatch.setattr(engine, "_COMPILING", {})
+    monkeypatch.setattr(engine, "AUTO_WARMUP_SECONDS", 0.0)
+    monkeypatch.setattr(engine.TranslatingCore, "_budget", lambda self: float("inf"))
+    monkeypatch.setattr(engine, "STRETCHES", {"auto": 50})
+    monkeypatch.setattr(engine, "POLL_CYCLES", 100)  # the run is 5,658 cycles long
+    gate = threading.Event()  # the thread compiles nothing during the run: the queue stays full
+    work = compiler.Compiler._work
+    monkeypatch.setattr(compiler.Compiler, "_work", lambda self: (gate.wait(), work(self)))
+    calls = []
+    dispatch = engine.run_translated
+    monkeypatch.setattr(engine, "_dispatch_loop_ready", True)
+    monkeypatch.setattr(engine, "run_translated", lambda *args: (calls.append(args[2]), dispatch(*args)))
+    words, _ = irq.build(7006, True, "spec")
+    soc = make_soc(words, engine="auto", mul=True, sram_size=irq.SRAM_SIZE)
+    soc.state.set_code_size(4 * len(words))
+    soc.forget_translations()
+    soc.step_until(soc.cycle)
+    assert soc.translator.stats.run_seconds == 0.0
+    got = outcome(soc, irq.MAX_CYCLES)
+    gate.set()
+    ref = make_soc(words, mul=True, sram_size=irq.SRAM_SIZE)
+    ref.state.set_code_size(4 * len(words))
+    want = outcome(ref, irq.MAX_CYCLES)
+    assert got[0] == want[0] and all(np.array_equal(got[1][n], want[1][n]) for n in want[1])
+    stats = soc.translator.stats
+    assert soc.translator.compiling() == stats.background == engine.BACKGROUND_QUEUE
+    assert stats.deferred == 0  # asked for nothing more once the queue was full
+    cycles = int(soc.state.st[0, S_CYCLE])
+    assert len(calls) > cycles // (2 * engine.POLL_CYCLES)  # came back to look for finished regions
+
+
+def test_auto_unparks_no_more_words_than_its_compiling_queue_has_room_for(monkeypatch) -> None:
+    """Parked words count arrivals again only as far as the queue has room: the others would stop
+    the loop to be parked again."""
+    import robosoc.jit.engine as engine
+
+    monkeypatch.setattr(engine, "AUTO_WARMUP_SECONDS", 0.0)
+    monkeypatch.setattr(engine.TranslatingCore, "_budget", lambda self: float("inf"))
+    monkeypatch.setattr(engine, "_COMPILING", {})
+    soc = make_soc(indirect_calls(10), engine="auto")
+    tr = soc.translator
+    assert tr.background
+    jt = tr.tables()
+    parked = range(2, 8)
+    for i in parked:
+        jt.hot[i] = engine.NEVER_TRANSLATE
+        tr._parked[i] = SRAM_BASE + 4 * i
+    tr._compiling = [None] * (engine.BACKGROUND_QUEUE - 2)  # two places left
+    tr.ask_threshold(cached=False)
+    assert [i for i in parked if jt.hot[i] == 0] == [2, 3] and sorted(tr._parked) == [4, 5, 6, 7]
+    tr._compiling = []
+    tr.ask_threshold(cached=False)
+    assert [i for i in parked if jt.hot[i] == 0] == [2, 3, 4, 5, 6, 7] and not tr._parked
+
+
 def test_auto_on_a_fresh_install_interprets_until_compiling_the_dispatch_loop_pays(monkeypatch) -> None:
     """numba has not compiled the dispatch loop yet: auto runs the interpreter (which interp would
     compile as well) and counts the time, and takes the dispatch loop once that time would pay for
     compiling it (docs/translation.md)."""
+    monkeypatch.setattr("robosoc.jit.engine.AUTO_WARMUP_SECONDS", 0.0)  # short runs translate too
     import robosoc.jit.engine as engine
 
     monkeypatch.setattr(engine, "compiled_or_cached", lambda kernel: False)
     monkeypatch.setattr(engine, "_dispatch_loop_ready", False)
     monkeypatch.setattr(engine, "STRETCHES", {"auto": 50})
-    monkeypatch.setattr(engine, "AUTO_COMPILE_SHARE", 1e9)  # regions themselves always worth compiling
+    monkeypatch.setattr(engine.TranslatingCore, "_budget", lambda self: float("inf"))  # always worth compiling
     monkeypatch.setattr(engine, "AUTO_BACKGROUND", False)  # and compiled before this short run ends
     words = indirect_calls(2000)
     monkeypatch.setattr(engine, "ESTIMATED_DISPATCH_LOOP_SECONDS", 1e12)

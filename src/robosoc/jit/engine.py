@@ -25,6 +25,7 @@ from robosoc.kernels.core_layout import (
     ERRATA_RTL,
     RUN_CHUNK,
     S_CODE_SIZE,
+    S_CYCLE,
     S_ERRATA,
     S_MEM_BASE,
     S_MEM_SIZE,
@@ -66,6 +67,12 @@ ESTIMATED_SECONDS_PER_MODULE = 3e-3
 #: run, or a ``jit`` run, compiles it (into numba's cache) on the way.
 ESTIMATED_DISPATCH_LOOP_SECONDS = 30.0
 _dispatch_loop_ready = False  # compiled or cached: looked up until it is
+#: ``auto`` translates nothing (unless its objects are cached) before the core (the chip) has run
+#: this long: a shorter run is interpreted as by ``interp``, at its speed.  Translating costs the
+#: main thread time (finding and writing regions, entering them) that a run this short does not
+#: win back: the matrix benchmark (0.1 s of interpreting) took 0.15 s without it, 0.11 s with
+#: it; at 1.1 s it gives up a third of auto's gain (docs/translation.md).
+AUTO_WARMUP_SECONDS = 0.2
 #: Regions of ``auto`` are smaller (a hot loop and what it calls, rather than whole functions): the
 #: cost of each decision stays small.
 AUTO_MAX_REGION_INSTRUCTIONS = 100
@@ -73,8 +80,13 @@ AUTO_MAX_REGION_INSTRUCTIONS = 100
 #: second host core compiles): on one core and on the chip.  Tests that need a region translated
 #: before a short run ends set it False (compiling in line, within the budget).
 AUTO_BACKGROUND = True
-#: auto with background compiling: regions of a core waiting for the compiling thread at most
+#: auto with background compiling: regions of a core waiting for the compiling thread at most;
+#: while the queue is full the dispatch loop asks for no region (each would only stop the loop to
+#: be parked: 120-270 stops of about 0.1 ms in a 0.1 s run of the matrix benchmark)
 BACKGROUND_QUEUE = 4
+#: ... and while regions compile it comes back every this many cycles to enter those done (a few
+#: ms of interpreting)
+POLL_CYCLES = 1 << 20
 THRESHOLDS = {"jit": 1, "auto": AUTO_THRESHOLD}
 NEVER_ASK = 1 << 40  # a threshold no word reaches
 STRETCHES = {"jit": 0, "auto": AUTO_STRETCH}
@@ -378,14 +390,18 @@ class TranslatingCore:
 
     def _unpark(self) -> None:
         """auto: parked words whose region the budget could pay for twice over count arrivals again
-        (the margin keeps a budget at the edge from being spent on stops that defer again)."""
+        (the margin keeps a budget at the edge from being spent on stops that defer again); with
+        background compiling, as many as the queue has room for (the others would only stop the
+        loop to be parked again: 430 stops in a 0.1 s run of the matrix benchmark)."""
         if not self._parked:
             return
         jt = self._tables()
         budget = self._budget()
+        room = BACKGROUND_QUEUE - len(self._compiling)
         for i, pc in list(self._parked.items()):
             if self.background:
-                ok = budget > 0 and self._may_hand_over(pc)
+                ok = room > 0 and budget > 0 and self._may_hand_over(pc)
+                room -= ok
             else:
                 ok = 2 * self._estimate(self._sizes.get(pc, AUTO_MAX_REGION_INSTRUCTIONS)) <= budget
             if ok:
@@ -582,7 +598,7 @@ class TranslatingCore:
         if cached is None:
             cached = self.has_cached_regions()
         cost = 0.0 if self.background else self._estimate(AUTO_MAX_REGION_INSTRUCTIONS)
-        if not cached and self._budget() <= cost:
+        if not cached and (self._budget() <= cost or self.stats.run_seconds < AUTO_WARMUP_SECONDS):
             return NEVER_ASK
         return self.threshold
 
@@ -605,16 +621,26 @@ class TranslatingCore:
             run_cores(arrays, self._tiles, until)  # a fresh install: the interpreter numba compiles first
             self.stats.run_seconds += time.perf_counter() - start
             return int(st[S_RUN])
+        loading = until <= int(st[S_CYCLE])  # a call that only loads the kernel is no run time
         while True:
             if self._compiling:
                 self.finish_compiles()  # what the background thread compiled meanwhile
             start = time.perf_counter()
             jt = self._tables()
-            run_translated(arrays, self._tiles, until, jt, self.ask_threshold(), self.stretch)
+            threshold = self.ask_threshold()
+            stop = until
+            if self._compiling:  # come back soon to enter them; ask nothing the queue has no room for
+                stop = min(until, int(st[S_CYCLE]) + POLL_CYCLES)
+                if len(self._compiling) >= BACKGROUND_QUEUE and not self._cached_starts:
+                    threshold = NEVER_ASK
+            run_translated(arrays, self._tiles, stop, jt, threshold, self.stretch)
             status = int(st[S_RUN])
             if status == RUN_CHUNK:  # the loop leaves the block counts in jt only then
                 flush_counts(jt, arrays.opc[self.tile], arrays.ctr[self.tile])
-            self.stats.run_seconds += time.perf_counter() - start
+            if not loading:
+                self.stats.run_seconds += time.perf_counter() - start
+            if status == RUN_CHUNK and stop < until:
+                continue
             if status != RUN_TRANSLATE:
                 return status
             self.translate(int(st[S_PC]))
