@@ -452,10 +452,12 @@ def test_auto_compiles_nothing_when_compiling_is_not_worth_it(monkeypatch) -> No
 
 def test_auto_asks_for_no_region_before_its_warm_up(monkeypatch) -> None:
     """A run shorter than AUTO_WARMUP_SECONDS is interpreted as by interp (nothing found, written
-    or handed to the compiling thread); once the core has run that long, hot words are asked for."""
+    or handed to the compiling thread); once the core, or the cores of its build in the process,
+    have run that long, hot words are asked for."""
     import robosoc.jit.engine as engine
 
     monkeypatch.setattr(engine, "_TRANSLATED", {})
+    monkeypatch.setattr(engine, "_BUILD_SECONDS", {})
     monkeypatch.setattr(engine, "AUTO_WARMUP_SECONDS", 3600.0)  # longer than any run here
     words, _ = irq.build(7005, True, "spec")
     soc = assert_same(words, "auto", irq.MAX_CYCLES, len(words), mul=True, sram_size=irq.SRAM_SIZE)
@@ -466,6 +468,17 @@ def test_auto_asks_for_no_region_before_its_warm_up(monkeypatch) -> None:
     assert soc.translator.ask_threshold(cached=False) == engine.AUTO_THRESHOLD
     stats.run_seconds = 0.0  # regions compiled by an earlier run are installed from the start
     assert soc.translator.ask_threshold(cached=True) == engine.AUTO_THRESHOLD
+    ran = engine._BUILD_SECONDS[soc.translator._key()]
+    assert 0 < ran < 3600  # the run counted for its build
+    engine._BUILD_SECONDS[soc.translator._key()] = 3600.5  # earlier runs of the build warmed it up
+    monkeypatch.setattr(engine.TranslatingCore, "_budget", lambda self: 1.0)  # (a new core's is 0 before it runs)
+    fresh = make_soc(words, engine="auto", mul=True, sram_size=irq.SRAM_SIZE)
+    fresh.state.set_code_size(4 * len(words))
+    assert fresh.translator.stats.run_seconds == 0
+    assert fresh.translator.ask_threshold(cached=False) == engine.AUTO_THRESHOLD
+    other = make_soc(words, engine="auto", mul=False, sram_size=irq.SRAM_SIZE)  # another build: not warm
+    other.state.set_code_size(4 * len(words))
+    assert other.translator.ask_threshold(cached=False) == engine.NEVER_ASK
 
 
 def test_auto_installs_regions_compiled_by_an_earlier_run_at_once(tmp_path, monkeypatch) -> None:

@@ -67,8 +67,9 @@ ESTIMATED_SECONDS_PER_MODULE = 3e-3
 #: run, or a ``jit`` run, compiles it (into numba's cache) on the way.
 ESTIMATED_DISPATCH_LOOP_SECONDS = 30.0
 _dispatch_loop_ready = False  # compiled or cached: looked up until it is
-#: ``auto`` translates nothing (unless its objects are cached) before the core (the chip) has run
-#: this long: a shorter run is interpreted as by ``interp``, at its speed.  Translating costs the
+#: ``auto`` translates nothing (unless its objects are cached) before the core (the chip), or the
+#: cores of the same build in this process, have run this long: a shorter run is interpreted as by
+#: ``interp``, at its speed.  Translating costs the
 #: main thread time (finding and writing regions, entering them) that a run this short does not
 #: win back: the matrix benchmark (0.1 s of interpreting) took 0.15 s without it, 0.11 s with
 #: it; at 1.1 s it gives up a third of auto's gain (docs/translation.md).
@@ -153,6 +154,9 @@ class _FreshTables:
     starts_in: frozenset[int]
 
 
+#: build -> seconds its cores ran in the dispatch loop in this process (a warm-up passed by earlier
+#: runs of a program, a benchmark's, counts for the next)
+_BUILD_SECONDS: dict[tuple[Target, bool], float] = {}
 #: build -> the last fresh tables made for it (copied by the next core of that build and code)
 _FRESH_TABLES: dict[tuple[Target, bool], _FreshTables] = {}
 
@@ -598,7 +602,8 @@ class TranslatingCore:
         if cached is None:
             cached = self.has_cached_regions()
         cost = 0.0 if self.background else self._estimate(AUTO_MAX_REGION_INSTRUCTIONS)
-        if not cached and (self._budget() <= cost or self.stats.run_seconds < AUTO_WARMUP_SECONDS):
+        warm = max(self.stats.run_seconds, _BUILD_SECONDS.get(self._key(), 0.0)) >= AUTO_WARMUP_SECONDS
+        if not cached and (self._budget() <= cost or not warm):
             return NEVER_ASK
         return self.threshold
 
@@ -638,7 +643,9 @@ class TranslatingCore:
             if status == RUN_CHUNK:  # the loop leaves the block counts in jt only then
                 flush_counts(jt, arrays.opc[self.tile], arrays.ctr[self.tile])
             if not loading:
-                self.stats.run_seconds += time.perf_counter() - start
+                seconds = time.perf_counter() - start
+                self.stats.run_seconds += seconds
+                _BUILD_SECONDS[self._key()] = _BUILD_SECONDS.get(self._key(), 0.0) + seconds
             if status == RUN_CHUNK and stop < until:
                 continue
             if status != RUN_TRANSLATE:
