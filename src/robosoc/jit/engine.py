@@ -69,10 +69,10 @@ ESTIMATED_DISPATCH_LOOP_SECONDS = 30.0
 _dispatch_loop_ready = False  # compiled or cached: looked up until it is
 #: ``auto`` translates nothing (unless its objects are cached) before the core (the chip), or the
 #: cores of the same build in this process, have run this long: a shorter run is interpreted as by
-#: ``interp``, at its speed.  Translating costs the
-#: main thread time (finding and writing regions, entering them) that a run this short does not
-#: win back: the matrix benchmark (0.1 s of interpreting) took 0.15 s without it, 0.11 s with
-#: it; at 1.1 s it gives up a third of auto's gain (docs/translation.md).
+#: ``interp``, at its speed.  Translating costs the main thread time (finding and writing regions,
+#: entering them) that a run this short does not win back: the matrix benchmark (0.1 s of
+#: interpreting) took 0.15 s without it, 0.11 s with it; at 1.1 s it gives up a third of auto's
+#: gain (docs/translation.md).
 AUTO_WARMUP_SECONDS = 0.2
 #: Regions of ``auto`` are smaller (a hot loop and what it calls, rather than whole functions): the
 #: cost of each decision stays small.
