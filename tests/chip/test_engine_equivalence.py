@@ -648,6 +648,38 @@ def test_auto_unparks_no_more_words_than_its_compiling_queue_has_room_for(monkey
     assert [i for i in parked if jt.hot[i] == 0] == [2, 3, 4, 5, 6, 7] and not tr._parked
 
 
+def test_the_compiling_thread_drops_what_a_core_that_is_gone_asked_for(tmp_path, monkeypatch) -> None:
+    """Jobs the thread has not started when their core is gone (its run and its SoC ended) are
+    dropped: a process's later work does not wait behind a backlog nobody will run."""
+    import robosoc.jit.compiler as compiler
+    import robosoc.jit.engine as engine
+
+    monkeypatch.setenv("ROBOSOC_CACHE", str(tmp_path))
+    monkeypatch.setattr(engine, "_TRANSLATED", {})
+    monkeypatch.setattr(compiler, "_SHARED", None)
+    monkeypatch.setattr(engine, "_COMPILING", {})
+    monkeypatch.setattr(engine, "AUTO_WARMUP_SECONDS", 0.0)
+    monkeypatch.setattr(engine.TranslatingCore, "_budget", lambda self: float("inf"))
+    monkeypatch.setattr(engine, "STRETCHES", {"auto": 50})
+    gate = threading.Event()
+    work = compiler.Compiler._work
+    monkeypatch.setattr(compiler.Compiler, "_work", lambda self: (gate.wait(), work(self)))
+    words, _ = irq.build(7006, True, "spec")
+    soc = make_soc(words, engine="auto", mul=True, sram_size=irq.SRAM_SIZE)
+    soc.state.set_code_size(4 * len(words))
+    soc.forget_translations()
+    outcome(soc, irq.MAX_CYCLES)
+    jobs = [job for job, *_ in soc.translator._compiling]
+    shared = soc.translator.compiler
+    assert len(jobs) == engine.BACKGROUND_QUEUE
+    del soc
+    gate.set()
+    for job in jobs:
+        assert job.done.wait(60)
+    assert all(job.dropped and not job.addresses for job in jobs)
+    assert shared.stats.modules == 0
+
+
 def test_auto_on_a_fresh_install_interprets_until_compiling_the_dispatch_loop_pays(monkeypatch) -> None:
     """numba has not compiled the dispatch loop yet: auto runs the interpreter (which interp would
     compile as well) and counts the time, and takes the dispatch loop once that time would pay for

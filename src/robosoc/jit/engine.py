@@ -461,7 +461,9 @@ class TranslatingCore:
             pcs = np.array(sorted((p - base) >> 2 for p in region.words()), dtype=np.int64)
             if self.background and not self.compiler.ready(emitted.ir, NAME_PLACEHOLDER):
                 # compiled in the background thread; installed by finish_compiles() (the word waits)
-                job = self.compiler.compile_later(emitted.ir, NAME_PLACEHOLDER, [emitted.function], region.instructions)
+                job = self.compiler.compile_later(
+                    emitted.ir, NAME_PLACEHOLDER, [emitted.function], region.instructions, owner=self
+                )
                 self._compiling.append((job, region, emitted, pcs, m32[pcs].copy()))
                 _COMPILING[(self._key(), pc)] = job
                 jt.hot[(pc - base) >> 2] = NEVER_TRANSLATE
