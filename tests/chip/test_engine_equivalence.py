@@ -648,9 +648,11 @@ def test_auto_unparks_no_more_words_than_its_compiling_queue_has_room_for(monkey
     assert [i for i in parked if jt.hot[i] == 0] == [2, 3, 4, 5, 6, 7] and not tr._parked
 
 
-def test_the_compiling_thread_drops_what_a_core_that_is_gone_asked_for(tmp_path, monkeypatch) -> None:
-    """Jobs the thread has not started when their core is gone (its run and its SoC ended) are
-    dropped: a process's later work does not wait behind a backlog nobody will run."""
+def test_the_compiling_thread_drops_what_no_live_core_could_use(tmp_path, monkeypatch) -> None:
+    """A job the thread has not started is dropped when no live core holds its region's code (its
+    run ended and nothing else runs the program): a process's later work does not share the host
+    with a backlog nobody will run.  Another core with the same code keeps it wanted (a
+    benchmark's next run, a chip's other tiles)."""
     import robosoc.jit.compiler as compiler
     import robosoc.jit.engine as engine
 
@@ -665,14 +667,26 @@ def test_the_compiling_thread_drops_what_a_core_that_is_gone_asked_for(tmp_path,
     work = compiler.Compiler._work
     monkeypatch.setattr(compiler.Compiler, "_work", lambda self: (gate.wait(), work(self)))
     words, _ = irq.build(7006, True, "spec")
-    soc = make_soc(words, engine="auto", mul=True, sram_size=irq.SRAM_SIZE)
-    soc.state.set_code_size(4 * len(words))
-    soc.forget_translations()
-    outcome(soc, irq.MAX_CYCLES)
-    jobs = [job for job, *_ in soc.translator._compiling]
-    shared = soc.translator.compiler
+
+    def core(code: list[int]) -> SingleCoreSoC:
+        soc = make_soc(code, engine="auto", mul=True, sram_size=irq.SRAM_SIZE)
+        soc.state.set_code_size(4 * len(code))
+        soc.forget_translations()
+        return soc
+
+    first = core(words)
+    outcome(first, irq.MAX_CYCLES)
+    jobs = [job for job, *_ in first.translator._compiling]
+    shared = first.translator.compiler
     assert len(jobs) == engine.BACKGROUND_QUEUE
-    del soc
+    second = core(words)  # the same program: wanted while either runs
+    del first
+    assert all(job.wanted() for job in jobs)
+    del second
+    assert not any(job.wanted() for job in jobs)
+    other = make_soc(words, engine="auto", mul=False, sram_size=irq.SRAM_SIZE)  # the code, another build
+    other.state.set_code_size(4 * len(words))
+    assert not any(job.wanted() for job in jobs)
     gate.set()
     for job in jobs:
         assert job.done.wait(60)

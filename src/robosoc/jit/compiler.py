@@ -17,7 +17,7 @@ import queue
 import tempfile
 import threading
 import time
-import weakref
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -59,10 +59,11 @@ class Pending:
     hit: bool = False
     error: BaseException | None = None
     seconds: float = 0.0  # wall time in the background thread
-    #: the object that asked for it (weakly): once it is gone (a run that ended) a job the thread
-    #: has not started is dropped, so a process's later work (the next test of a suite, the
-    #: processes beside it) does not wait for a backlog nobody will run
-    owner: weakref.ref | None = None
+    #: whether anybody could still use the module (None: always); a job nobody wants when the
+    #: thread comes to it (its run ended, and no other core runs the code) is dropped, so that a
+    #: process's later work (the next test of a suite, the processes beside it) does not share the
+    #: host with a backlog nobody will run
+    wanted: Callable[[], bool] | None = None
     dropped: bool = False
 
 
@@ -217,7 +218,12 @@ class Compiler:
         return path is not None and path.is_file()
 
     def compile_later(
-        self, ir_template: str, placeholder: str, names: list[str], instructions: int = 0, owner: object = None
+        self,
+        ir_template: str,
+        placeholder: str,
+        names: list[str],
+        instructions: int = 0,
+        wanted: Callable[[], bool] | None = None,
     ) -> Pending:
         """Compile and load a module in the background thread; :meth:`finish` gives its functions'
         addresses once ``done`` is set.
@@ -227,9 +233,7 @@ class Compiler:
         thread is generating code for (7 ms a region, measured); the main thread then makes no LLVM
         call at all for a region compiled in the background.
         """
-        job = Pending(
-            ir_template, placeholder, names, instructions, owner=weakref.ref(owner) if owner is not None else None
-        )
+        job = Pending(ir_template, placeholder, names, instructions, wanted=wanted)
         self._jobs.put(job)
         if self._worker is None:
             self._worker = threading.Thread(target=self._work, name="robosoc-jit-compile", daemon=True)
@@ -240,7 +244,7 @@ class Compiler:
         backend = _Backend(llvm.create_context())
         while True:
             job = self._jobs.get()
-            if job.owner is not None and job.owner() is None:
+            if job.wanted is not None and not job.wanted():
                 job.dropped = True
                 job.done.set()
                 continue

@@ -10,6 +10,8 @@ those of the interpreter (docs/translation.md).
 from __future__ import annotations
 
 import time
+import weakref
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -161,6 +163,25 @@ _BUILD_SECONDS: dict[tuple[Target, bool], float] = {}
 _FRESH_TABLES: dict[tuple[Target, bool], _FreshTables] = {}
 
 
+#: the translators of this process (those of ``auto``: whether a region still compiling is wanted)
+_LIVE: weakref.WeakSet[TranslatingCore] = weakref.WeakSet()
+
+
+def _wanted(key: tuple[Target, bool], pcs: np.ndarray, words: np.ndarray) -> Callable[[], bool]:
+    """Whether a live core of build ``key`` holds ``words`` at ``pcs`` (asked by the compiling
+    thread before it compiles a region: a benchmark's next run, a chip's other tiles still want
+    it; the next test's program does not)."""
+
+    def wanted() -> bool:
+        try:
+            cores = list(_LIVE)
+        except RuntimeError:  # the set changed meanwhile (the main thread made or dropped a core)
+            return True
+        return any(c._key() == key and np.array_equal(c.state.m32[c.tile][pcs], words) for c in cores)
+
+    return wanted
+
+
 def translated_instructions() -> int:
     """Guest instructions in the regions this process translated."""
     return sum(t.region.instructions for regions in _TRANSLATED.values() for t in regions)
@@ -208,6 +229,8 @@ class TranslatingCore:
         self._known_starts_in: set[int] = set()  # starts of the regions installed from there or translated here
         #: compile regions in the background thread (auto): the core interprets them meanwhile
         self.background = mode == "auto" and AUTO_BACKGROUND
+        if self.background:
+            _LIVE.add(self)
         self._compiling: list[tuple[Pending, Region, EmittedRegion, np.ndarray, np.ndarray]] = []
 
     @property
@@ -462,7 +485,11 @@ class TranslatingCore:
             if self.background and not self.compiler.ready(emitted.ir, NAME_PLACEHOLDER):
                 # compiled in the background thread; installed by finish_compiles() (the word waits)
                 job = self.compiler.compile_later(
-                    emitted.ir, NAME_PLACEHOLDER, [emitted.function], region.instructions, owner=self
+                    emitted.ir,
+                    NAME_PLACEHOLDER,
+                    [emitted.function],
+                    region.instructions,
+                    wanted=_wanted(self._key(), pcs, m32[pcs].copy()),
                 )
                 self._compiling.append((job, region, emitted, pcs, m32[pcs].copy()))
                 _COMPILING[(self._key(), pc)] = job
