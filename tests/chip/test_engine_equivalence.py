@@ -583,10 +583,9 @@ def test_a_region_compiling_for_a_core_that_is_gone_keeps_no_other_core_waiting(
     assert stats.reused + stats.cache_hits >= 1  # the thread's module (loaded by it, or in the disk cache)
 
 
-def test_auto_stops_for_no_region_while_its_compiling_queue_is_full(tmp_path, monkeypatch) -> None:
-    """With BACKGROUND_QUEUE regions waiting for the compiling thread the loop asks for none (each
-    would be parked at once) and comes back every POLL_CYCLES to enter what the thread finished;
-    the call that only loads the kernel counts no run time."""
+def _gated_compiling(tmp_path, monkeypatch):  # type: ignore[no-untyped-def]
+    """auto in a fresh process (nothing translated, an empty object cache) that translates at
+    once, with a compiling thread that starts only when the returned event is set."""
     import robosoc.jit.compiler as compiler
     import robosoc.jit.engine as engine
 
@@ -597,10 +596,18 @@ def test_auto_stops_for_no_region_while_its_compiling_queue_is_full(tmp_path, mo
     monkeypatch.setattr(engine, "AUTO_WARMUP_SECONDS", 0.0)
     monkeypatch.setattr(engine.TranslatingCore, "_budget", lambda self: float("inf"))
     monkeypatch.setattr(engine, "STRETCHES", {"auto": 50})
-    monkeypatch.setattr(engine, "POLL_CYCLES", 100)  # the run is 5,658 cycles long
-    gate = threading.Event()  # the thread compiles nothing during the run: the queue stays full
+    gate = threading.Event()
     work = compiler.Compiler._work
     monkeypatch.setattr(compiler.Compiler, "_work", lambda self: (gate.wait(), work(self)))
+    return engine, gate
+
+
+def test_auto_stops_for_no_region_while_its_compiling_queue_is_full(tmp_path, monkeypatch) -> None:
+    """With BACKGROUND_QUEUE regions waiting for the compiling thread the loop asks for none (each
+    would be parked at once) and comes back every POLL_CYCLES to enter what the thread finished;
+    the call that only loads the kernel counts no run time."""
+    engine, gate = _gated_compiling(tmp_path, monkeypatch)  # nothing compiled during the run: the queue stays full
+    monkeypatch.setattr(engine, "POLL_CYCLES", 100)  # the run is 5,658 cycles long
     calls = []
     dispatch = engine.run_translated
     monkeypatch.setattr(engine, "_dispatch_loop_ready", True)
@@ -653,19 +660,7 @@ def test_the_compiling_thread_drops_what_no_live_core_could_use(tmp_path, monkey
     run ended and nothing else runs the program): a process's later work does not share the host
     with a backlog nobody will run.  Another core with the same code keeps it wanted (a
     benchmark's next run, a chip's other tiles)."""
-    import robosoc.jit.compiler as compiler
-    import robosoc.jit.engine as engine
-
-    monkeypatch.setenv("ROBOSOC_CACHE", str(tmp_path))
-    monkeypatch.setattr(engine, "_TRANSLATED", {})
-    monkeypatch.setattr(compiler, "_SHARED", None)
-    monkeypatch.setattr(engine, "_COMPILING", {})
-    monkeypatch.setattr(engine, "AUTO_WARMUP_SECONDS", 0.0)
-    monkeypatch.setattr(engine.TranslatingCore, "_budget", lambda self: float("inf"))
-    monkeypatch.setattr(engine, "STRETCHES", {"auto": 50})
-    gate = threading.Event()
-    work = compiler.Compiler._work
-    monkeypatch.setattr(compiler.Compiler, "_work", lambda self: (gate.wait(), work(self)))
+    engine, gate = _gated_compiling(tmp_path, monkeypatch)
     words, _ = irq.build(7006, True, "spec")
 
     def core(code: list[int]) -> SingleCoreSoC:
