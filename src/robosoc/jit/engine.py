@@ -344,11 +344,12 @@ class TranslatingCore:
 
     def _remember_install(self) -> None:
         """Keep the fresh tables just made, for the next core of the same build (:meth:`_install_as_before`)."""
-        done_list = _TRANSLATED.get(self._key())
+        key = self._key()
+        done_list = _TRANSLATED.get(key)
         jt = self._jt
         if done_list is None or jt is None:
             return
-        _FRESH_TABLES[self._key()] = _FreshTables(
+        _FRESH_TABLES[key] = _FreshTables(
             done_list=done_list,
             seen=self._known_seen,
             code=self.state.m32[self.tile, : self._code_size // 4].copy(),
@@ -484,14 +485,15 @@ class TranslatingCore:
             pcs = np.array(sorted((p - base) >> 2 for p in region.words()), dtype=np.int64)
             if self.background and not self.compiler.ready(emitted.ir, NAME_PLACEHOLDER):
                 # compiled in the background thread; installed by finish_compiles() (the word waits)
+                words = m32[pcs].copy()
                 job = self.compiler.compile_later(
                     emitted.ir,
                     NAME_PLACEHOLDER,
                     [emitted.function],
                     region.instructions,
-                    wanted=_wanted(self._key(), pcs, m32[pcs].copy()),
+                    wanted=_wanted(self._key(), pcs, words),
                 )
-                self._compiling.append((job, region, emitted, pcs, m32[pcs].copy()))
+                self._compiling.append((job, region, emitted, pcs, words))
                 _COMPILING[(self._key(), pc)] = job
                 jt.hot[(pc - base) >> 2] = NEVER_TRANSLATE
                 self.stats.background += 1
@@ -674,7 +676,8 @@ class TranslatingCore:
             if not loading:
                 seconds = time.perf_counter() - start
                 self.stats.run_seconds += seconds
-                _BUILD_SECONDS[self._key()] = _BUILD_SECONDS.get(self._key(), 0.0) + seconds
+                key = self._key()
+                _BUILD_SECONDS[key] = _BUILD_SECONDS.get(key, 0.0) + seconds
             if status == RUN_CHUNK and stop < until:
                 continue
             if status != RUN_TRANSLATE:
