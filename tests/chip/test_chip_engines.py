@@ -282,3 +282,62 @@ def test_auto_compiles_in_the_background_and_changes_nothing(monkeypatch) -> Non
     assert stats is not None and stats.background > 0 and stats.regions > 0
     assert all(tr.compiling() == 0 for tr in chip._jit.translators if tr is not None)
     assert states["auto"] == states["interp"]
+
+
+def test_the_chip_looks_at_its_tiles_again_only_when_something_changed(monkeypatch) -> None:
+    """Before each run of the chip loop every tile is given what other tiles translated and its
+    current tables; when nothing changed since the last look (no region entered anywhere, no tile
+    loaded or stopped) the look is skipped, and each of those changes brings it back."""
+    from robosoc.jit.engine import TranslatingCore
+
+    def counting(rounds: int) -> Program:
+        return program(
+            [
+                A.i("addi", A0, 0, 0),
+                A.i("addi", T1, 0, rounds),
+                A.i("addi", A0, A0, 1),  # 2: loop
+                A.i("addi", T1, T1, -1),
+                A.branch("bne", T1, 0, -8),
+                *exit_with(A0),  # 5, 6, 7
+                A.i("addi", A0, A0, 2),  # 8: a subroutine nobody calls
+                A.jalr(0, RA, 0),
+            ]
+        )
+
+    sub = SRAM + 4 * 8
+    looks = []
+    install_known = TranslatingCore.install_known
+
+    def counted(self: TranslatingCore) -> None:
+        looks.append(self.tile)
+        install_known(self)
+
+    monkeypatch.setattr(TranslatingCore, "install_known", counted)
+    chip = MPSoC(ChipConfig(), engine="jit")
+    a, b = (chip.config.tile_index(xy) for xy in ((1, 0), (0, 1)))
+    chip.load((1, 0), counting(50))
+    chip.load((0, 1), counting(50))
+    chip.step(20)  # both tiles translate their first regions
+    jit = chip._jit
+    jit.prepare(chip)
+    jit.prepare(chip)
+    looks.clear()
+    jit.prepare(chip)
+    assert looks == []  # nothing new
+    translators = jit.translators
+    assert translators[a] is not None and translators[b] is not None
+    assert translators[b].tables().entry_fn[8] == 0
+    translators[a].translate(sub)  # entered by tile a: tile b is given it at the next look
+    jit.prepare(chip)
+    assert sorted(looks) == sorted([a, b])
+    assert translators[b].tables().entry_fn[8] != 0
+    looks.clear()
+    jit.prepare(chip)
+    assert looks == []
+    chip.load((0, 1), counting(60))  # as long as before: only the load tells
+    jit.prepare(chip)
+    assert b in looks
+    assert jit._given[b] is translators[b].tables()  # the tables made for the new code
+    # the region at the entry held the changed word; the subroutine's words are the same
+    assert translators[b].tables().entry_fn[0] == 0 and translators[b].tables().entry_fn[8] != 0
+    assert chip.run(max_cycles=100_000).exit_codes == {(1, 0): 50, (0, 1): 60}

@@ -59,6 +59,9 @@ class ChipTranslation:
         self._watched: set[int] = set()  # auto: loaded tiles without a translator yet
         self._cached = False  # auto: some translator's code has regions compiled by an earlier run
         self._look = AUTO_LOOK_CYCLES  # auto: chip cycles to the next look
+        #: what :meth:`prepare` last saw (:meth:`_situation`): the same again, it has nothing to do
+        self._prepared: tuple[int, int, bytes] | None = None
+        self._changes = 0  # tiles whose code was loaded since the chip was made
 
     def arguments(self) -> tuple[np.ndarray, List, np.ndarray]:
         """``run_chip``'s jit_on, jit_tables and jit_params (the same types whatever the engine: the
@@ -71,6 +74,14 @@ class ChipTranslation:
             return
         from robosoc.jit.engine import TranslatingCore, TranslationStats
 
+        situation = self._situation(chip)
+        if situation is not None and situation == self._prepared:
+            # nothing new for any tile (a per-tile look cost a sleeping 16x16 chip 1 ms per step):
+            # only auto's threshold moves with the run time
+            live = next((tr for tr in self.translators if tr is not None), None)
+            if live is not None:
+                self._set_threshold(live)
+            return
         if self.stats is None:
             self.stats = TranslationStats()
         busy = self._busy(chip) if self.engine == "auto" else None
@@ -97,6 +108,17 @@ class ChipTranslation:
         self._cached = self.engine == "auto" and any(tr.has_cached_regions() for tr in live)
         if live:
             self._set_threshold(live[0])
+        self._prepared = self._situation(chip)
+
+    def _situation(self, chip: MPSoC) -> tuple[int, int, bytes] | None:
+        """What decides the tiles' tables: regions entered in the process, code loaded into tiles,
+        the code sizes (None: a look is due anyway, for auto's watched tiles or regions still
+        compiling).  A stopped tile needs no look: :meth:`stop` took its tables away."""
+        from robosoc.jit.engine import entered_regions
+
+        if self._watched or any(tr is not None and tr.compiling() for tr in self.translators):
+            return None
+        return entered_regions(), self._changes, chip.cores.st[:, S_CODE_SIZE].tobytes()
 
     def _set_threshold(self, translator: TranslatingCore) -> None:
         """The dispatch loop's parameters, from a translator (they share mode and budget) and whether
@@ -148,6 +170,7 @@ class ChipTranslation:
 
     def forget(self, t: int) -> None:
         """Tile ``t``'s code was (re)loaded from outside: its translations no longer hold."""
+        self._changes += 1
         translator = self.translators[t]
         if translator is not None:
             translator.forget()

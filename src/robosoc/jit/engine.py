@@ -92,6 +92,7 @@ BACKGROUND_QUEUE = 4
 POLL_CYCLES = 1 << 20
 THRESHOLDS = {"jit": 1, "auto": AUTO_THRESHOLD}
 NEVER_ASK = 1 << 40  # a threshold no word reaches
+_KEY_FIELDS = [S_MEM_BASE, S_MEM_SIZE, S_CODE_SIZE, S_ERRATA, S_MUL]  # the state fields of a build
 STRETCHES = {"jit": 0, "auto": AUTO_STRETCH}
 M32 = 0xFFFFFFFF
 
@@ -148,7 +149,9 @@ class _FreshTables:
     done_list: list[_Translated]  # _TRANSLATED's list they were made from (a test may replace it)
     seen: int  # its entries then
     code: np.ndarray  # the core's code words then
+    code_bytes: bytes  # ... as bytes (compared faster)
     tables: JitArrays
+    mark_rows: np.ndarray  # the predecode rows of the words with an entry (OP_ENTRY there)
     slot_hist: tuple[np.ndarray, ...]
     slot_len: tuple[np.ndarray, ...]
     slot_next: tuple[np.ndarray, ...]
@@ -180,6 +183,15 @@ def _wanted(key: tuple[Target, bool], pcs: np.ndarray, words: np.ndarray) -> Cal
         return any(c._key() == key and np.array_equal(c.state.m32[c.tile][pcs], words) for c in cores)
 
     return wanted
+
+
+_ENTERED = 0  # regions entered as translated in this process (any core): see entered_regions()
+
+
+def entered_regions() -> int:
+    """How many times a region was noted as translated in this process: while it stays the same,
+    no core has a region of another core to enter (a chip skips its per-tile look)."""
+    return _ENTERED
 
 
 def translated_instructions() -> int:
@@ -225,6 +237,8 @@ class TranslatingCore:
         self._sizes: dict[int, int] = {}  # auto: pc -> instructions of the region found there
         self._code_size = -1
         self._jt: JitArrays | None = None
+        self._key_raw = b""  # the state fields _key() was made from, and what it made
+        self._key_made: tuple[Target, bool]  # made at the first call (no fields are b"")
         self._known_seen = 0  # entries of _TRANSLATED[key] this core has looked at
         self._known_starts_in: set[int] = set()  # starts of the regions installed from there or translated here
         #: compile regions in the background thread (auto): the core interprets them meanwhile
@@ -292,13 +306,7 @@ class TranslatingCore:
         return manifest_key(code, f"{self._key()!r} {self.mode}")
 
     def _target(self) -> Target:
-        st = self.state.st[self.tile]
-        return Target(
-            base=int(st[S_MEM_BASE]),
-            mem_size=int(st[S_MEM_SIZE]),
-            code_size=int(st[S_CODE_SIZE]),
-            rtl_errata=int(st[S_ERRATA]) == ERRATA_RTL,
-        )
+        return self._key()[0]
 
     def _view(self) -> CodeView:
         st = self.state.st[self.tile]
@@ -329,17 +337,18 @@ class TranslatingCore:
         made = _FRESH_TABLES.get(key)
         if made is None or done_list is None or made.done_list is not done_list:
             return False
-        if not np.array_equal(self.state.m32[self.tile, : len(made.code)], made.code):
+        if self.state.m32[self.tile, : len(made.code)].tobytes() != made.code_bytes:
             return False
         self._jt = JitArrays(*(a.copy() for a in made.tables))
-        self._mark(np.flatnonzero(made.tables.entry_fn))
+        self.state.dec[self.tile, made.mark_rows] = OP_ENTRY  # as _mark(): a 16x16 chip does it 255 times
         self._slot_hist, self._slot_len = list(made.slot_hist), list(made.slot_len)
         self._slot_next = list(made.slot_next)
         self._nslots = made.nslots
         self._known_seen = made.seen
         self._known_starts_in = set(made.starts_in)
         self.stats.reused += len(made.starts_in)
-        self._install_new_known()  # translated since
+        if made.seen != len(done_list):
+            self._install_new_known()  # translated since
         return True
 
     def _remember_install(self) -> None:
@@ -349,11 +358,14 @@ class TranslatingCore:
         jt = self._jt
         if done_list is None or jt is None:
             return
+        code = self.state.m32[self.tile, : self._code_size // 4].copy()
         _FRESH_TABLES[key] = _FreshTables(
             done_list=done_list,
             seen=self._known_seen,
-            code=self.state.m32[self.tile, : self._code_size // 4].copy(),
+            code=code,
+            code_bytes=code.tobytes(),
             tables=JitArrays(*(a.copy() for a in jt)),
+            mark_rows=2 * np.flatnonzero(jt.entry_fn),
             slot_hist=tuple(self._slot_hist),
             slot_len=tuple(self._slot_len),
             slot_next=tuple(self._slot_next),
@@ -381,7 +393,14 @@ class TranslatingCore:
             self.stats.reused += len(known)
 
     def _key(self) -> tuple[Target, bool]:
-        return self._target(), int(self.state.st[self.tile, S_MUL]) != 0
+        """The build this core's code is translated for: its target and whether it multiplies
+        (made again only when the state fields it comes from changed: a chip's tiles ask often)."""
+        raw = self.state.st[self.tile, _KEY_FIELDS].tobytes()
+        if raw != self._key_raw:
+            base, mem_size, code_size, errata, mul = self.state.st[self.tile, _KEY_FIELDS].tolist()
+            target = Target(base=base, mem_size=mem_size, code_size=code_size, rtl_errata=errata == ERRATA_RTL)
+            self._key_raw, self._key_made = raw, (target, mul != 0)
+        return self._key_made
 
     def translate(self, pc: int) -> Region:
         """Translate the region starting at ``pc`` and enter its blocks in the tables.
@@ -508,6 +527,8 @@ class TranslatingCore:
         self, region: Region, emitted: EmittedRegion, address: int, pcs: np.ndarray, words: np.ndarray
     ) -> Region:
         """Note a translated region (for every core of this build) and enter it in this core's tables."""
+        global _ENTERED
+        _ENTERED += 1
         target, has_mul = self._key()
         pc = region.start
         if region.blocks and pc not in self._known_starts and self.compiler.cache_dir is not None:
