@@ -566,6 +566,7 @@ def test_a_region_compiling_for_a_core_that_is_gone_keeps_no_other_core_waiting(
     monkeypatch.setattr(engine, "_COMPILING", {})
     monkeypatch.setattr(engine.TranslatingCore, "_budget", lambda self: float("inf"))  # always worth compiling
     monkeypatch.setattr(engine, "STRETCHES", {"auto": 50})
+    monkeypatch.setitem(engine.THRESHOLDS, "auto", 3)  # a short program: few samples per word
     gate = threading.Event()  # the compiling thread starts once the first run has ended
     work = compiler.Compiler._work
     monkeypatch.setattr(compiler.Compiler, "_work", lambda self: (gate.wait(), work(self)))
@@ -596,6 +597,7 @@ def _gated_compiling(tmp_path, monkeypatch):  # type: ignore[no-untyped-def]
     monkeypatch.setattr(engine, "AUTO_WARMUP_SECONDS", 0.0)
     monkeypatch.setattr(engine.TranslatingCore, "_budget", lambda self: float("inf"))
     monkeypatch.setattr(engine, "STRETCHES", {"auto": 50})
+    monkeypatch.setitem(engine.THRESHOLDS, "auto", 3)  # a short program: few samples per word
     gate = threading.Event()
     work = compiler.Compiler._work
     monkeypatch.setattr(compiler.Compiler, "_work", lambda self: (gate.wait(), work(self)))

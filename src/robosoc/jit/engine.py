@@ -51,8 +51,13 @@ if TYPE_CHECKING:
 
 #: Arrivals at a word without a translation before ``auto`` translates a region there; between
 #: arrivals the interpreter runs AUTO_STRETCH cycles at its own speed, so arrivals sample where
-#: the program spends its time.
-AUTO_THRESHOLD = 3
+#: the program spends its time.  A region costs the run about 10 ms (writing it on the main
+#: thread, compiling it beside: docs/translation.md), so only code where the run spends a
+#: sizeable share is worth it: with 3 the matrix benchmark translated some 40 regions in its
+#: first second, many of them lukewarm; with 20, on runs of 0.7, 1.1 and 3.6 s interpreted, auto
+#: was faster than with 3 (medians of 4-5 runs: 0.66 against 0.70, 0.93 against 0.92-1.01, 1.53
+#: against 1.67 s) and no slower on the 10 s flight.
+AUTO_THRESHOLD = 20
 AUTO_STRETCH = 20_000
 #: ``auto`` compiles a region (not in the object cache) only if the compile time spent so far plus
 #: its estimate stays within this share of the time the core has run: whatever the program, auto
