@@ -1,5 +1,7 @@
 """The instruction table: encodings do not overlap, decode and disassembly agree with the spec."""
 
+import random
+
 import rv32_asm as A
 from robosoc.isa.disasm import disassemble
 from robosoc.isa.table import INSTRUCTIONS, OP, OP_FETCH_FAULT, OP_ILLEGAL, lookup
@@ -37,6 +39,19 @@ def test_lookup_recognises_assembled_words():
         assert ins is not None and ins.name == name, (hex(word), name)
     assert lookup(0xFFFFFFFF) is None
     assert lookup(0x00000000) is None
+
+
+def test_lookup_finds_the_first_matching_row_of_the_whole_table():
+    """lookup() scans only the rows of the word's major opcode: the same row as a scan of every
+    row in table order, for random words and for every row's encodings with random free bits."""
+    rng = random.Random(7)
+
+    def first_match(word: int):  # type: ignore[no-untyped-def]
+        return next((ins for ins in INSTRUCTIONS if word & ins.mask == ins.match), None)
+
+    words = [rng.getrandbits(32) for _ in range(20_000)]
+    words += [ins.match | (rng.getrandbits(32) & ~ins.mask & 0xFFFFFFFF) for ins in INSTRUCTIONS for _ in range(200)]
+    assert all(lookup(w) is first_match(w) for w in words)
 
 
 def test_disassembly_shows_operands_and_absolute_targets():

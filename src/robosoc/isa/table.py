@@ -194,9 +194,17 @@ def writes_rd(ins: Instr) -> bool:
     return ins.fmt in _FORMATS_WRITING_RD or ins.name == "system"
 
 
+#: The rows by major opcode (the low 7 bits, which every row's mask holds), in table order: a
+#: lookup scans the few rows of its opcode (the translator decodes each word of a region).
+_ROWS_BY_OPCODE: dict[int, tuple[Instr, ...]] = {}
+for _ins in INSTRUCTIONS:
+    assert _ins.mask & 0x7F == 0x7F, f"{_ins.name}: its mask does not hold the major opcode"
+    _ROWS_BY_OPCODE[_ins.match & 0x7F] = (*_ROWS_BY_OPCODE.get(_ins.match & 0x7F, ()), _ins)
+
+
 def lookup(word: int) -> Instr | None:
     """The row that decodes ``word`` (first match wins: specific SYSTEM rows precede the catch-all)."""
-    for ins in INSTRUCTIONS:
+    for ins in _ROWS_BY_OPCODE.get(word & 0x7F, ()):
         if word & ins.mask == ins.match:
             return ins
     return None

@@ -164,7 +164,7 @@ def discover(
     """
     leaders: list[int] = [start]
     queued = {start}
-    visited: set[int] = set()
+    visited: dict[int, Insn] = {}  # the instructions taken, by pc (decoded once)
     count = 0
 
     def add(pc: int) -> None:
@@ -182,7 +182,7 @@ def discover(
             insn = _fetch(view, pc)
             if insn is None:
                 break
-            visited.add(pc)
+            visited[pc] = insn
             count += 1
             fmt = insn.ins.fmt
             if fmt is Fmt.B:
@@ -216,8 +216,7 @@ def discover(
                 side = view.in_code(pc) and _fetch(view, pc) is None
                 block.end, block.next_pc = (End.SIDE if side else End.FALL), pc
                 break
-            insn = _fetch(view, pc)
-            assert insn is not None
+            insn = visited[pc]
             block.insns.append(insn)
             fmt = insn.ins.fmt
             if fmt is Fmt.B:
