@@ -262,7 +262,7 @@ def test_auto_compiles_in_the_background_and_changes_nothing(monkeypatch) -> Non
     from robosoc.chip.translation import AUTO_LOOK_CYCLES
     from robosoc.jit.compiler import Compiler
 
-    monkeypatch.setattr(Compiler, "ready", lambda self, ir, placeholder: False)  # nothing cached
+    monkeypatch.setattr(Compiler, "ready", lambda self, ir: False)  # nothing cached
     busy = _build("matrix_bench.c", True, {"BENCH_ITERATIONS": 100000, "BENCH_QUIET": None})
     states = {}
     for engine in ("interp", "auto"):

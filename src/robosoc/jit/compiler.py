@@ -135,12 +135,13 @@ class Compiler:
     def key(self, ir_text: str) -> str:
         return hashlib.sha256((self.env + "\n" + ir_text).encode()).hexdigest()
 
-    def object_code(self, ir_text: str, backend: _Backend | None = None) -> tuple[bytes, bool]:
+    def object_code(self, ir_text: str, backend: _Backend | None = None, key: str | None = None) -> tuple[bytes, bool]:
         """The native object of an IR module, from the cache when there: (bytes, was cached).
 
         Compiled by ``backend`` (the compiling thread's), else by the main thread's under numba's lock.
+        ``key``: the cache key (:meth:`key` of the text, or of the template the text was made from).
         """
-        path = self._path(ir_text)
+        path = self._path(key if key is not None else self.key(ir_text))
         if path is not None and path.is_file():
             return path.read_bytes(), True
         if backend is not None:
@@ -156,13 +157,14 @@ class Compiler:
             Path(tmp).replace(path)  # readers see a whole object or none
         return obj, False
 
-    def _stem(self, ir_template: str) -> str:
-        return "r" + self.key(ir_template)[:32]
+    @staticmethod
+    def _stem(key: str) -> str:
+        """The functions' stem in a module whose template has cache key ``key``."""
+        return "r" + key[:32]
 
-    def _path(self, ir_text: str) -> Path | None:
+    def _path(self, key: str) -> Path | None:
         if self.cache_dir is None:
             return None
-        key = self.key(ir_text)
         return self.cache_dir / key[:2] / f"{key}.o"
 
     def add(self, ir_template: str, placeholder: str, names: list[str], instructions: int = 0) -> list[int]:
@@ -173,10 +175,11 @@ class Compiler:
         self-modifying code) reuses the code already loaded.
         """
         start, cpu = time.perf_counter(), time.process_time()
-        stem = self._stem(ir_template)
+        key = self.key(ir_template)  # hashed once: the stem and the object's file both come from it
+        stem = self._stem(key)
         real = [n.replace(placeholder, stem) for n in names]
         if stem not in self.stems:
-            obj, hit = self.object_code(ir_template.replace(placeholder, stem))
+            obj, hit = self.object_code(ir_template.replace(placeholder, stem), key=key)
             if not self._load(stem, real, obj, hit, time.perf_counter() - start, instructions):
                 self.stats.reused += 1  # the compiling thread loaded it meanwhile
         else:
@@ -209,12 +212,12 @@ class Compiler:
         self.stats.modules += 1
         return True
 
-    def ready(self, ir_template: str, placeholder: str) -> bool:
+    def ready(self, ir_template: str) -> bool:
         """Whether :meth:`add` would cost no compiling (loaded in this process, or in the disk cache)."""
-        stem = self._stem(ir_template)
-        if stem in self.stems:
+        key = self.key(ir_template)
+        if self._stem(key) in self.stems:
             return True
-        path = self._path(ir_template.replace(placeholder, stem))
+        path = self._path(key)
         return path is not None and path.is_file()
 
     def compile_later(
@@ -250,8 +253,9 @@ class Compiler:
                 continue
             start = time.perf_counter()
             try:
-                stem = self._stem(job.ir_template)
-                obj, job.hit = self.object_code(job.ir_template.replace(job.placeholder, stem), backend)
+                key = self.key(job.ir_template)
+                stem = self._stem(key)
+                obj, job.hit = self.object_code(job.ir_template.replace(job.placeholder, stem), backend, key)
                 real = [n.replace(job.placeholder, stem) for n in job.names]
                 job.seconds = time.perf_counter() - start
                 if self._load(stem, real, obj, job.hit, job.seconds, job.instructions) and not job.hit:

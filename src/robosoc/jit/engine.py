@@ -244,6 +244,7 @@ class TranslatingCore:
         self._jt: JitArrays | None = None
         self._key_raw = b""  # the state fields _key() was made from, and what it made
         self._key_made: tuple[Target, bool]  # made at the first call (no fields are b"")
+        self._manifest: str | None = None  # the loaded code's manifest key (_manifest_key)
         self._known_seen = 0  # entries of _TRANSLATED[key] this core has looked at
         self._known_starts_in: set[int] = set()  # starts of the regions installed from there or translated here
         #: compile regions in the background thread (auto): the core interprets them meanwhile
@@ -300,15 +301,18 @@ class TranslatingCore:
                 self._nslots = 0
                 self._install_known()
                 self._remember_install()
+            self._manifest = None  # the code's manifest key, made again when first asked for
             self._known_starts = read_manifest(self._manifest_key()) if self.mode == "auto" else set()
             self._cached_starts = frozenset(self._known_starts)  # compiled by an earlier run: installed at once
         return self._jt
 
     def _manifest_key(self) -> str:
-        """The loaded code and build options: the key of the list of regions compiled for them before."""
-        st = self.state.st[self.tile]
-        code = self.state.m8[self.tile, : int(st[S_CODE_SIZE])].tobytes()
-        return manifest_key(code, f"{self._key()!r} {self.mode}")
+        """The loaded code and build options: the key of the list of regions compiled for them
+        before (made once per load of the code: hashing it cost each region 0.1 ms)."""
+        if self._manifest is None:
+            code = self.state.m8[self.tile, : self._code_size].tobytes()
+            self._manifest = manifest_key(code, f"{self._key()!r} {self.mode}")
+        return self._manifest
 
     def _target(self) -> Target:
         return self._key()[0]
@@ -507,7 +511,7 @@ class TranslatingCore:
         if region.blocks:
             emitted = emit_region(target, region)
             pcs = np.array(sorted((p - base) >> 2 for p in region.words()), dtype=np.int64)
-            if self.background and not self.compiler.ready(emitted.ir, NAME_PLACEHOLDER):
+            if self.background and not self.compiler.ready(emitted.ir):
                 # compiled in the background thread; installed by finish_compiles() (the word waits)
                 words = m32[pcs].copy()
                 job = self.compiler.compile_later(
