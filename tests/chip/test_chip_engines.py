@@ -341,3 +341,40 @@ def test_the_chip_looks_at_its_tiles_again_only_when_something_changed(monkeypat
     # the region at the entry held the changed word; the subroutine's words are the same
     assert translators[b].tables().entry_fn[0] == 0 and translators[b].tables().entry_fn[8] != 0
     assert chip.run(max_cycles=100_000).exit_codes == {(1, 0): 50, (0, 1): 60}
+
+
+def test_auto_makes_no_translator_for_a_chip_that_never_turns_busy_yet_counts_its_run_time() -> None:
+    """A run whose tiles never turn busy does without the translating engine (not even imported:
+    30-45 ms a process); a tile that turns busy later gets a budget and warm-up counted from the
+    chip's start."""
+    import subprocess
+    import sys
+
+    script = (
+        "import sys\n"
+        "from robosoc.benchmarks.chip import _build\n"
+        "from robosoc.chip.mpsoc import MPSoC\n"
+        "from robosoc.config.chip import ChipConfig\n"
+        "chip = MPSoC(ChipConfig(), engine='auto')\n"
+        "chip.load_all(_build('sleepy_tick.c', True, {'TICKS': 20}))\n"
+        "chip.step(3_000_000)\n"
+        "print(chip._jit.stats is None, 'robosoc.jit.engine' in sys.modules)\n"
+    )
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=600, check=True)
+    assert done.stdout.split() == ["True", "False"], done.stderr
+
+    from robosoc.benchmarks.chip import _build
+
+    busy = _build("matrix_bench.c", True, {"BENCH_ITERATIONS": 100000, "BENCH_QUIET": None})
+    waiting = program([*A.li(T0, NI), A.store("sw", 0, T0, 0x24), *exit_with(0)])  # sleeps until a packet
+    chip = MPSoC(ChipConfig(), engine="auto")
+    chip.load((1, 1), waiting)
+    chip.step(5_000_000)
+    assert chip._jit.stats is None
+    before = chip._jit._run_seconds
+    assert before > 0
+    chip.load((1, 0), busy)
+    chip.step(chip.cycle + 5_000_000)
+    stats = chip._jit.stats
+    assert stats is not None and chip._jit.translators[chip.config.tile_index((1, 0))] is not None
+    assert stats.run_seconds == chip._jit._run_seconds > before  # counted from the chip's start

@@ -24,12 +24,12 @@ from robosoc.jit.compiler import Compiler
 from robosoc.jit.emit_ir import (
     MUL_WORST_CYCLES,
     MemoryCheck,
-    Target,
     emit_region,
     memory_checks,
     multiplier_tail_table,
 )
 from robosoc.jit.regions import CodeView, discover
+from robosoc.jit.target import Target
 from robosoc.kernels.core import _MUL_CHUNK, mul_latency
 from robosoc.kernels.core_layout import S_CYCLE
 from robosoc.kernels.jit_dispatch import CTX_FLUSHES, CTX_STEPS, JitArrays
@@ -401,8 +401,9 @@ def test_many_small_chained_regions_run_as_on_the_interpreter(monkeypatch) -> No
     """Regions of at most 8 instructions: control crosses regions all the time (tail calls through
     the entry table, returns into other regions, arrivals inside translated blocks after interrupts)."""
     import robosoc.jit.engine as engine
+    import robosoc.jit.regions as regions
 
-    monkeypatch.setattr(engine, "MAX_REGION_INSTRUCTIONS", 8)
+    monkeypatch.setattr(regions, "MAX_REGION_INSTRUCTIONS", 8)  # the cap of jit's regions
     monkeypatch.setattr(engine, "_TRANSLATED", {})  # nothing reused from the larger regions of other tests
     words, _ = irq.build(7003, True, "spec")
     soc = assert_same(words, "jit", irq.MAX_CYCLES, len(words), mul=True, sram_size=irq.SRAM_SIZE)

@@ -62,6 +62,7 @@ class ChipTranslation:
         #: what :meth:`prepare` last saw (:meth:`_situation`): the same again, it has nothing to do
         self._prepared: tuple[int, int, bytes] | None = None
         self._changes = 0  # tiles whose code was loaded since the chip was made
+        self._run_seconds = 0.0  # host seconds in the chip loop
 
     def arguments(self) -> tuple[np.ndarray, List, np.ndarray]:
         """``run_chip``'s jit_on, jit_tables and jit_params (the same types whatever the engine: the
@@ -72,8 +73,6 @@ class ChipTranslation:
         """Before a run: a translator for every loaded core tile, and its current tables."""
         if self.engine == "interp":
             return
-        from robosoc.jit.engine import TranslatingCore, TranslationStats
-
         situation = self._situation(chip)
         if situation is not None and situation == self._prepared:
             # nothing new for any tile (a per-tile look cost a sleeping 16x16 chip 1 ms per step):
@@ -82,8 +81,6 @@ class ChipTranslation:
             if live is not None:
                 self._set_threshold(live)
             return
-        if self.stats is None:
-            self.stats = TranslationStats()
         busy = self._busy(chip) if self.engine == "auto" else None
         made = False
         for t in range(len(self.on)):
@@ -95,7 +92,7 @@ class ChipTranslation:
                 continue
             self._watched.discard(t)
             if translator is None:
-                translator = TranslatingCore(chip.cores, tile=t, mode=self.engine, stats=self.stats)
+                translator = self._translator(chip, t)
                 self.translators[t] = translator
                 made = True
                 self.on[t] = 1
@@ -114,11 +111,24 @@ class ChipTranslation:
         """What decides the tiles' tables: regions entered in the process, code loaded into tiles,
         the code sizes (None: a look is due anyway, for auto's watched tiles or regions still
         compiling).  A stopped tile needs no look: :meth:`stop` took its tables away."""
-        from robosoc.jit.engine import entered_regions
-
         if self._watched or any(tr is not None and tr.compiling() for tr in self.translators):
             return None
-        return entered_regions(), self._changes, chip.cores.st[:, S_CODE_SIZE].tobytes()
+        entered = 0
+        if self.stats is not None:  # a translator was made: the engine is imported
+            from robosoc.jit.engine import entered_regions
+
+            entered = entered_regions()
+        return entered, self._changes, chip.cores.st[:, S_CODE_SIZE].tobytes()
+
+    def _translator(self, chip: MPSoC, t: int) -> TranslatingCore:
+        """A translator for tile ``t`` (the translating engine is imported only now: a short run of
+        ``auto`` whose tiles never turn busy does without it, 30-45 ms when Python has to compile
+        its modules' source)."""
+        from robosoc.jit.engine import TranslatingCore, TranslationStats
+
+        if self.stats is None:
+            self.stats = TranslationStats(run_seconds=self._run_seconds)
+        return TranslatingCore(chip.cores, tile=t, mode=self.engine, stats=self.stats)
 
     def _set_threshold(self, translator: TranslatingCore) -> None:
         """The dispatch loop's parameters, from a translator (they share mode and budget) and whether
@@ -153,7 +163,9 @@ class ChipTranslation:
             self._given[t] = tables
 
     def ran(self, seconds: float) -> None:
-        """The chip loop ran for ``seconds`` of host time."""
+        """The chip loop ran for ``seconds`` of host time (auto's budget and warm-up count from the
+        chip's start, not from its first translator's)."""
+        self._run_seconds += seconds
         if self.stats is not None:
             self.stats.run_seconds += seconds
 

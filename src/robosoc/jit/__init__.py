@@ -2,9 +2,9 @@
 
 The interpreter (:mod:`robosoc.kernels.core`) stays the reference and the fallback; this package
 only finds regions (:mod:`~robosoc.jit.regions`), writes their LLVM IR
-(:mod:`~robosoc.jit.emit_ir`), compiles and caches them (:mod:`~robosoc.jit.compiler`) and keeps
-the tables the compiled dispatch loop (:mod:`robosoc.kernels.jit_dispatch`) reads
-(:mod:`~robosoc.jit.engine`).
+(:mod:`~robosoc.jit.emit_ir`) for a core's build (:mod:`~robosoc.jit.target`), compiles and caches
+them (:mod:`~robosoc.jit.compiler`) and keeps the tables the compiled dispatch loop
+(:mod:`robosoc.kernels.jit_dispatch`) reads (:mod:`~robosoc.jit.engine`).
 """
 
 from robosoc.config.chip import DEFAULT_ENGINE

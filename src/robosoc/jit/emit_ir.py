@@ -36,6 +36,7 @@ from robosoc.isa.table import (
     Timing,
 )
 from robosoc.jit.regions import Block, End, Insn, Region
+from robosoc.jit.target import Target
 from robosoc.kernels.core import _MUL_CHUNK
 from robosoc.kernels.core_layout import C_MUL_STALL, C_TAKEN, OPC_SIZE, S_MUL_END, S_MULHSU_COUNT, S_MULHSU_PC
 from robosoc.kernels.jit_dispatch import (
@@ -110,16 +111,6 @@ _SET = {"slt": "slt", "slti": "slt", "sltu": "ult", "sltiu": "ult"}
 _BRANCH = {"beq": "eq", "bne": "ne", "blt": "slt", "bge": "sge", "bltu": "ult", "bgeu": "uge"}
 _LOADS = {"lb": (8, "sext", 0), "lbu": (8, "zext", 0), "lh": (16, "sext", 1), "lhu": (16, "zext", 1), "lw": (32, "", 3)}
 _STORES = {"sb": (8, 0), "sh": (16, 1), "sw": (32, 3)}
-
-
-@dataclass(frozen=True)
-class Target:
-    """What the translated code is specialised for (all of it is part of the cache key)."""
-
-    base: int
-    mem_size: int
-    code_size: int
-    rtl_errata: bool
 
 
 @dataclass

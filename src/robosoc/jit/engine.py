@@ -19,8 +19,7 @@ import numpy as np
 
 from robosoc.isa.table import OP_ENTRY
 from robosoc.jit.compiler import Compiler, Pending, add_to_manifest, manifest_key, read_manifest, shared_compiler
-from robosoc.jit.emit_ir import NAME_PLACEHOLDER, EmittedRegion, Target, emit_region
-from robosoc.jit.regions import MAX_REGION_INSTRUCTIONS, CodeView, End, Region, discover
+from robosoc.jit.target import Target
 from robosoc.kernels import compiled_or_cached
 from robosoc.kernels.core import run_cores
 from robosoc.kernels.core_layout import (
@@ -48,15 +47,21 @@ from robosoc.kernels.jit_dispatch import (
 
 if TYPE_CHECKING:
     from robosoc.chip.core_state import CoreState
+    from robosoc.jit.emit_ir import EmittedRegion
+    from robosoc.jit.regions import CodeView, Region
+
+# Finding and writing regions (robosoc.jit.regions, robosoc.jit.emit_ir) is imported at the first
+# translation: a short run of auto translates nothing, and importing them cost it 16-20 ms when
+# Python had to compile their source.
 
 #: Arrivals at a word without a translation before ``auto`` translates a region there; between
 #: arrivals the interpreter runs AUTO_STRETCH cycles at its own speed, so arrivals sample where
 #: the program spends its time.  A region costs the run about 10 ms (writing it on the main
 #: thread, compiling it beside: docs/translation.md), so only code where the run spends a
 #: sizeable share is worth it: with 3 the matrix benchmark translated some 40 regions in its
-#: first second, many of them lukewarm; with 20, on runs of 0.7, 1.1 and 3.6 s interpreted, auto
-#: was faster than with 3 (medians of 4-5 runs: 0.66 against 0.70, 0.93 against 0.92-1.01, 1.53
-#: against 1.67 s) and no slower on the 10 s flight.
+#: first second, many of them lukewarm; with 20, runs of 0.7, 1.1 and 3.6 s interpreted took
+#: 0.66-0.67, 0.88-0.92 and 1.53 s against 0.70, 0.92-1.12 and 1.67 s with 3 (medians of 4-5
+#: runs), and the 10 s flight was no slower.
 AUTO_THRESHOLD = 20
 AUTO_STRETCH = 20_000
 #: ``auto`` compiles a region (not in the object cache) only if the compile time spent so far plus
@@ -127,6 +132,8 @@ class _Translated:
     def of(
         region: Region, emitted: EmittedRegion, address: int, pcs: np.ndarray, words: np.ndarray, base: int
     ) -> _Translated:
+        from robosoc.jit.regions import End
+
         slots = emitted.slots if region.blocks else []
         rows = np.array([row for h, _ in slots for row in h], dtype=np.int64).reshape(-1, 2)
         lens = np.array([len(h) for h, _ in slots], dtype=np.int64)
@@ -318,6 +325,8 @@ class TranslatingCore:
         return self._key()[0]
 
     def _view(self) -> CodeView:
+        from robosoc.jit.regions import CodeView
+
         st = self.state.st[self.tile]
         base = int(st[S_MEM_BASE])
         m32 = self.state.m32[self.tile]
@@ -473,6 +482,9 @@ class TranslatingCore:
         return len(self._compiling) < BACKGROUND_QUEUE and (pending is None or pending.done.is_set())
 
     def _translate(self, pc: int) -> Region:
+        from robosoc.jit.emit_ir import NAME_PLACEHOLDER, EmittedRegion, emit_region
+        from robosoc.jit.regions import MAX_REGION_INSTRUCTIONS, Region, discover
+
         jt = self._tables()
         rent = self.mode == "auto" and pc not in self._known_starts  # compiled only when worth it
         if rent and self.background:
