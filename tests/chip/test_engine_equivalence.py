@@ -341,6 +341,32 @@ def test_a_region_translated_once_is_reused_by_the_next_core() -> None:
     assert c.translator.stats.regions >= 1
 
 
+def test_the_core_benchmark_warms_up_until_a_run_translates_nothing_new(monkeypatch) -> None:
+    """``bench core`` times runs only once translation has settled: a run that entered a region,
+    handed one to the compiling thread or put one off, or whose engine may not translate yet (auto
+    before its warm-up) is followed by another untimed run."""
+    import robosoc.jit.engine as engine
+    from robosoc.benchmarks.core import _settled
+
+    monkeypatch.setattr(engine, "_TRANSLATED", {})
+    monkeypatch.setattr(engine, "_FRESH_TABLES", {})
+    words = [A.i("addi", 10, 0, 0), A.i("addi", 10, 10, 1), A.i("addi", 11, 0, 40), A.branch("bne", 10, 11, -8)]
+    words += exit_with(10)
+
+    def ran(engine_name: str) -> SingleCoreSoC:
+        soc = make_soc(words, engine=engine_name)
+        soc.run(max_cycles=10_000)
+        return soc
+
+    assert _settled(ran("interp"))
+    assert not _settled(ran("jit"))  # translated its regions
+    assert _settled(ran("jit"))  # entered them from the process
+    monkeypatch.setattr(engine, "_BUILD_SECONDS", {})
+    assert not _settled(ran("auto"))  # its warm-up is not over: it may translate later
+    monkeypatch.setattr(engine, "AUTO_WARMUP_SECONDS", 0.0)
+    assert _settled(ran("auto"))  # may translate, and every region it wants is there
+
+
 def _fresh_tables(soc: SingleCoreSoC) -> tuple[list[np.ndarray], np.ndarray]:
     """The core's tables made afresh (as at a run's start) and its predecode rows then."""
     tr = soc.translator

@@ -1,9 +1,11 @@
 """``robosoc bench core``: simulated MIPS of one core on an EKF-like workload.
 
 The workload is ``firmware/bench/matrix_bench.c``: 7x7 Gauss-Jordan inverse and product, in
-soft-float and in Q16.16, as the seed's EKF does.  After a warm-up run (JIT compile or load from
-the numba cache; with a translating engine also the translation of the program's code) the
-program runs ``runs`` times on a fresh core each; each run's MIPS is instructions / host seconds
+soft-float and in Q16.16, as the seed's EKF does.  After untimed warm-up runs (JIT compile or load
+from the numba cache; with a translating engine also the translation of the program's code: runs
+until one translated nothing new, at most WARMUP_MAX_SECONDS; ``auto`` warms up and compiles in the
+background over several runs of this short program) the program runs ``runs`` times on a fresh
+core each; each run's MIPS is instructions / host seconds
 of the simulation loop with every counter on.  With ``engine`` jit or auto and ``compare``, the
 interpreter runs in the same loop, alternating with the engine, and the ratio is printed; the
 results of both engines must be identical (cycles, counters, output), else the benchmark fails.
@@ -13,12 +15,18 @@ from __future__ import annotations
 
 import statistics
 import time
+from typing import TYPE_CHECKING
 
 from rich.console import Console
 from rich.progress import Progress
 from rich.table import Table
 
+if TYPE_CHECKING:
+    from robosoc.chip.single import SingleCoreSoC
+
 ITERATIONS = 300  # about 34 M instructions with the multiplier
+#: untimed runs of a translating engine stop after this long even if it still translates
+WARMUP_MAX_SECONDS = 30.0
 
 
 def run_core_benchmark(
@@ -52,7 +60,8 @@ def run_core_benchmark(
     engines = [engine] if engine == "interp" or not compare else [engine, "interp"]
     reference: dict[str, int] | None = None
 
-    def one_run(name: str) -> tuple[int, int, float]:
+    def one_run(name: str) -> tuple[int, int, float, bool]:
+        """Instructions, cycles and host seconds of a run, and whether it translated nothing new."""
         nonlocal reference
         soc = SingleCoreSoC(mul=mul, engine=name)
         soc.load(program)
@@ -63,12 +72,15 @@ def run_core_benchmark(
             reference = result.counters
         elif result.counters != reference:
             raise RuntimeError(f"engine {name} gave other counters than the first run: the engines disagree")
-        return result.instructions, result.cycles, result.host_seconds
+        return result.instructions, result.cycles, result.host_seconds, _settled(soc)
 
     warm: dict[str, float] = {}
+    warm_runs: dict[str, int] = {}
     for name in engines:
         start = time.perf_counter()
-        one_run(name)
+        warm_runs[name] = 1
+        while not one_run(name)[3] and time.perf_counter() - start < WARMUP_MAX_SECONDS:
+            warm_runs[name] += 1
         warm[name] = time.perf_counter() - start
 
     rows: dict[str, list[tuple[int, int, float]]] = {name: [] for name in engines}
@@ -76,12 +88,12 @@ def run_core_benchmark(
         task = progress.add_task("timed runs", total=runs * len(engines))
         for _ in range(runs):
             for name in engines:
-                rows[name].append(one_run(name))
+                rows[name].append(one_run(name)[:3])
                 progress.advance(task)
 
     medians: dict[str, float] = {}
     for name in engines:
-        medians[name] = _report(console, name, rows[name], mul, iterations, warm[name])
+        medians[name] = _report(console, name, rows[name], mul, iterations, warm[name], warm_runs[name])
     if engine != "interp":
         _report_translation(console)
     if len(engines) > 1:
@@ -93,8 +105,27 @@ def run_core_benchmark(
     return medians[engine]
 
 
+def _settled(soc: SingleCoreSoC) -> bool:
+    """Whether a run's translator (if any) may translate and entered, handed over or put off
+    nothing: the next runs will run what is translated now."""
+    from robosoc.jit.engine import NEVER_ASK
+
+    translator = soc.translator
+    if translator is None:
+        return True
+    s = translator.stats
+    new = s.regions or s.background or s.deferred or translator.compiling()
+    return not new and translator.ask_threshold() != NEVER_ASK
+
+
 def _report(
-    console: Console, engine: str, rows: list[tuple[int, int, float]], mul: bool, iterations: int, warm: float
+    console: Console,
+    engine: str,
+    rows: list[tuple[int, int, float]],
+    mul: bool,
+    iterations: int,
+    warm: float,
+    warm_runs: int,
 ) -> float:
     mips = [i / s / 1e6 for i, _, s in rows]
     mcps = [c / s / 1e6 for _, c, s in rows]
@@ -111,7 +142,8 @@ def _report(
     quartiles = statistics.quantiles(mips, n=4) if len(mips) >= 2 else [med, med, med]
     console.print(
         f"workload: matrix_bench.c x{iterations}, {instructions:,} instructions, {cycles:,} cycles "
-        f"(CPI {cycles / instructions:.2f}); first run incl. JIT/cache load {warm:.2f} s"
+        f"(CPI {cycles / instructions:.2f}); untimed first runs incl. JIT/cache load and translation: "
+        f"{warm_runs}, {warm:.2f} s"
     )
     console.print(
         f"{engine}: MIPS median {med:.1f}, min {min(mips):.1f}, max {max(mips):.1f}, "

@@ -23,7 +23,10 @@ Runs = Annotated[int, typer.Option(help=f"Timed runs, 1..{MAX_RUNS}.", callback=
 def bench_core(
     runs: Annotated[
         int,
-        typer.Option(help=f"Timed runs after the JIT warm-up, 1..{MAX_RUNS}.", callback=options.int_range(1, MAX_RUNS)),
+        typer.Option(
+            help=f"Timed runs after the warm-up (JIT load, translation), 1..{MAX_RUNS}.",
+            callback=options.int_range(1, MAX_RUNS),
+        ),
     ] = 7,
     mul: Annotated[bool, typer.Option("--mul/--no-mul", help="Build the workload with the multiplier.")] = True,
     engine: Annotated[
