@@ -378,3 +378,58 @@ def test_auto_makes_no_translator_for_a_chip_that_never_turns_busy_yet_counts_it
     stats = chip._jit.stats
     assert stats is not None and chip._jit.translators[chip.config.tile_index((1, 0))] is not None
     assert stats.run_seconds == chip._jit._run_seconds > before  # counted from the chip's start
+
+
+def test_the_tiles_holding_one_program_get_copies_of_the_first_tiles_tables(monkeypatch) -> None:
+    """A run's first look makes the first new tile's translator and copies its tables for every
+    tile holding the same code and build (``TranslatingCore.clones``): each copy equals what the
+    tile would make itself, its own wherever a core writes in place; a tile with other code makes
+    its own; the chip runs as on the interpreter."""
+    import numpy as np
+
+    import robosoc.jit.engine as engine
+    from robosoc.isa.table import OP_ENTRY
+    from robosoc.jit.engine import TranslatingCore
+
+    monkeypatch.setattr(engine, "_TRANSLATED", {})
+    monkeypatch.setattr(engine, "_FRESH_TABLES", {})
+
+    def counting(rounds: int) -> Program:
+        loop = [A.i("addi", A0, 0, 0), A.i("addi", T1, 0, rounds), A.i("addi", A0, A0, 1)]
+        return program([*loop, A.i("addi", T1, T1, -1), A.branch("bne", T1, 0, -8), *exit_with(A0)])
+
+    loads = {(1, 0): counting(50), (0, 1): counting(50), (1, 1): counting(70)}
+
+    def chip_with(engine_name: str) -> MPSoC:
+        chip = MPSoC(ChipConfig(), engine=engine_name)
+        for xy, prog in loads.items():
+            chip.load(xy, prog)
+        return chip
+
+    chip_with("jit").run(max_cycles=100_000)  # every region translated once in this process
+    adopted = []
+    adopt = TranslatingCore._adopt
+    monkeypatch.setattr(TranslatingCore, "_adopt", lambda self, other: (adopted.append(self.tile), adopt(self, other)))
+    chip = chip_with("jit")
+    chip._jit.prepare(chip)
+    tiles = {xy: chip.config.tile_index(xy) for xy in loads}
+    assert adopted == [tiles[(0, 1)]]  # the first new tile is (1, 0); (1, 1) holds other code
+    got = {t: [a.copy() for a in chip._jit.translators[t].tables()] for t in tiles.values()}
+    translators = {t: chip._jit.translators[t] for t in tiles.values()}
+    known = {t: (tr._known_seen, set(tr._known_starts_in), tr._nslots) for t, tr in translators.items() if tr}
+    marks = {t: chip.cores.dec[t] == OP_ENTRY for t in tiles.values()}
+    first, copy = (chip._jit.translators[tiles[xy]].tables() for xy in ((1, 0), (0, 1)))
+    for name in ("entry_fn", "entry_slot", "entry_blk", "hot", "tmap", "cnt", "ctx"):
+        assert not np.shares_memory(getattr(first, name), getattr(copy, name)), name
+    monkeypatch.setattr(engine, "_FRESH_TABLES", {})
+    for t in tiles.values():
+        afresh = TranslatingCore(chip.cores, tile=t, mode="jit")
+        want = afresh.tables()  # made afresh, marks again
+        assert known[t] == (afresh._known_seen, afresh._known_starts_in, afresh._nslots)
+        for name, a, b in zip(want._fields, got[t], want, strict=True):
+            assert np.array_equal(a, b), (t, name)
+        assert np.array_equal(marks[t], chip.cores.dec[t] == OP_ENTRY)
+        assert marks[t].any()
+    ran = outcome(chip_with("jit"), 100_000)
+    assert ran == outcome(chip_with("interp"), 100_000)
+    assert ran[0][2] == {(1, 0): 50, (0, 1): 50, (1, 1): 70}

@@ -82,7 +82,7 @@ class ChipTranslation:
                 self._set_threshold(live)
             return
         busy = self._busy(chip) if self.engine == "auto" else None
-        made = False
+        new: list[int] = []
         for t in range(len(self.on)):
             if self._stopped[t] or t not in chip.programs or int(chip.cores.st[t, S_CODE_SIZE]) == 0:
                 continue
@@ -92,13 +92,14 @@ class ChipTranslation:
                 continue
             self._watched.discard(t)
             if translator is None:
-                translator = self._translator(chip, t)
-                self.translators[t] = translator
-                made = True
-                self.on[t] = 1
+                new.append(t)  # made below, all at once
+                continue
             translator.finish_compiles()
             translator.install_known()  # what the other tiles' compiles gave
             self._give(t)
+        if new:
+            self._make_translators(chip, new)
+        made = bool(new)
         if busy is not None:
             self._look = AUTO_LOOK_CYCLES if made else min(2 * self._look, AUTO_LOOK_MAX_CYCLES)
         live = [tr for tr in self.translators if tr is not None]
@@ -119,6 +120,17 @@ class ChipTranslation:
 
             entered = entered_regions()
         return entered, self._changes, chip.cores.st[:, S_CODE_SIZE].tobytes()
+
+    def _make_translators(self, chip: MPSoC, tiles: list[int]) -> None:
+        """Translators for ``tiles``: the first made, the tiles holding the same code and build
+        copies of it (:meth:`TranslatingCore.clones`), any other made on its own."""
+        first = self._translator(chip, tiles[0])
+        made = {tiles[0]: first, **first.clones(tiles[1:])}
+        for t in tiles:
+            translator = made.get(t) or self._translator(chip, t)
+            self.translators[t] = translator
+            self.on[t] = 1
+            self._give(t)
 
     def _translator(self, chip: MPSoC, t: int) -> TranslatingCore:
         """A translator for tile ``t`` (the translating engine is imported only now: a short run of
