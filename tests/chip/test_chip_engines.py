@@ -382,9 +382,9 @@ def test_auto_makes_no_translator_for_a_chip_that_never_turns_busy_yet_counts_it
 
 def test_the_tiles_holding_one_program_get_copies_of_the_first_tiles_tables(monkeypatch) -> None:
     """A run's first look makes the first new tile's translator and copies its tables for every
-    tile holding the same code and build (``TranslatingCore.clones``): each copy equals what the
-    tile would make itself, its own wherever a core writes in place; a tile with other code makes
-    its own; the chip runs as on the interpreter."""
+    tile holding the same code and build (``TranslatingCore.clones``), then the same for the first
+    tile left: each copy equals what the tile would make itself, its own wherever a core writes in
+    place; the chip runs as on the interpreter."""
     import numpy as np
 
     import robosoc.jit.engine as engine
@@ -398,10 +398,10 @@ def test_the_tiles_holding_one_program_get_copies_of_the_first_tiles_tables(monk
         loop = [A.i("addi", A0, 0, 0), A.i("addi", T1, 0, rounds), A.i("addi", A0, A0, 1)]
         return program([*loop, A.i("addi", T1, T1, -1), A.branch("bne", T1, 0, -8), *exit_with(A0)])
 
-    loads = {(1, 0): counting(50), (0, 1): counting(50), (1, 1): counting(70)}
+    loads = {(1, 0): counting(50), (2, 0): counting(70), (0, 1): counting(50), (1, 1): counting(70)}
 
     def chip_with(engine_name: str) -> MPSoC:
-        chip = MPSoC(ChipConfig(), engine=engine_name)
+        chip = MPSoC(ChipConfig(width=3, height=2), engine=engine_name)
         for xy, prog in loads.items():
             chip.load(xy, prog)
         return chip
@@ -413,7 +413,9 @@ def test_the_tiles_holding_one_program_get_copies_of_the_first_tiles_tables(monk
     chip = chip_with("jit")
     chip._jit.prepare(chip)
     tiles = {xy: chip.config.tile_index(xy) for xy in loads}
-    assert adopted == [tiles[(0, 1)]]  # the first new tile is (1, 0); (1, 1) holds other code
+    # (1, 0) is made and (0, 1) copies it; then (2, 0), the first tile left, and (1, 1) copies it
+    assert adopted == [tiles[(0, 1)], tiles[(1, 1)]]
+    assert all(chip._jit.translators[t] is not None and chip._jit.on[t] for t in tiles.values())
     got = {t: [a.copy() for a in chip._jit.translators[t].tables()] for t in tiles.values()}
     translators = {t: chip._jit.translators[t] for t in tiles.values()}
     known = {t: (tr._known_seen, set(tr._known_starts_in), tr._nslots) for t, tr in translators.items() if tr}
@@ -432,4 +434,4 @@ def test_the_tiles_holding_one_program_get_copies_of_the_first_tiles_tables(monk
         assert marks[t].any()
     ran = outcome(chip_with("jit"), 100_000)
     assert ran == outcome(chip_with("interp"), 100_000)
-    assert ran[0][2] == {(1, 0): 50, (0, 1): 50, (1, 1): 70}
+    assert ran[0][2] == {(1, 0): 50, (2, 0): 70, (0, 1): 50, (1, 1): 70}

@@ -123,14 +123,17 @@ class ChipTranslation:
 
     def _make_translators(self, chip: MPSoC, tiles: list[int]) -> None:
         """Translators for ``tiles``: the first made, the tiles holding the same code and build
-        copies of it (:meth:`TranslatingCore.clones`), any other made on its own."""
-        first = self._translator(chip, tiles[0])
-        made = {tiles[0]: first, **first.clones(tiles[1:])}
-        for t in tiles:
-            translator = made.get(t) or self._translator(chip, t)
-            self.translators[t] = translator
-            self.on[t] = 1
-            self._give(t)
+        copies of it (:meth:`TranslatingCore.clones`); then the same for the first tile left, and
+        so on (one round per program loaded)."""
+        left = tiles
+        while left:
+            first = self._translator(chip, left[0])
+            made = {left[0]: first, **first.clones(left[1:])}
+            for t, translator in made.items():
+                self.translators[t] = translator
+                self.on[t] = 1
+                self._give(t)
+            left = [t for t in left if t not in made]
 
     def _translator(self, chip: MPSoC, t: int) -> TranslatingCore:
         """A translator for tile ``t`` (the translating engine is imported only now: a short run of
