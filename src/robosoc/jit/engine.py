@@ -370,7 +370,7 @@ class TranslatingCore:
         return True
 
     def clones(self, tiles: list[int]) -> dict[int, TranslatingCore]:
-        """Translators for other tiles of the same cores holding this core's code and build, their
+        """Translators for other tiles of this core's state holding its code and build, their
         tables copies of this core's (which must not have run yet: made in the same look), keyed
         by tile; tiles with other code or another build are left out.  The tiles of a chip load
         one program: made one by one, a translator and its tables cost about 35 µs in Python, 9-13
@@ -378,6 +378,7 @@ class TranslatingCore:
         marks and the arrays no core writes in place (``tpcs``, ``twords``, the slots' histograms)
         are done once for all."""
         jt = self._tables()
+        assert not jt.cnt.any(), "copying the tables of a core that has run would copy its counts"
         st, m32, dec = self.state.st, self.state.m32, self.state.dec
         idx = np.asarray(tiles, dtype=np.int64)
         words = self._code_size // 4
