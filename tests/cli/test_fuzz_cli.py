@@ -10,6 +10,7 @@ benchmark run), so that a bad value let through would still end quickly -- and f
 
 from __future__ import annotations
 
+import re
 import signal
 import string
 from collections.abc import Iterator
@@ -386,10 +387,12 @@ def bad_text(spec: Spec) -> st.SearchStrategy[str]:
     if spec.kind == "rates":
         out = st.one_of(st.floats(max_value=0.0), st.floats(min_value=1.0, exclude_min=True)).map(repr)
         return st.one_of(words, special, st.lists(out, min_size=1, max_size=3).map(",".join))
-    if spec.kind == "define":
+    if spec.kind == "define":  # anything but NAME[=VALUE] with NAME a C identifier ("_", "_1=" are)
         return st.one_of(
             st.sampled_from(["", "-x", "A B", "=1", "-DX"]),
-            st.text(alphabet=string.digits + string.punctuation + " ", min_size=1, max_size=6),
+            st.text(alphabet=string.digits + string.punctuation + " ", min_size=1, max_size=6).filter(
+                lambda v: re.fullmatch(r"[A-Za-z_]\w*(=.*)?", v) is None
+            ),
         )
     if spec.kind == "flag":
         return st.sampled_from(["=1", "=yes", "=", "=nan"])
