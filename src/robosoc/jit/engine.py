@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import time
 import weakref
-from collections.abc import Callable
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -197,6 +197,16 @@ def _wanted(key: tuple[Target, bool], pcs: np.ndarray, words: np.ndarray) -> Cal
     return wanted
 
 
+#: the tables a core writes in place (the dispatch loop, entering regions, forgetting them); the
+#: others are replaced whole when they change, so cores copying one core's tables share them
+_WRITTEN_IN_PLACE = ("entry_fn", "entry_slot", "entry_blk", "hot", "tmap", "cnt", "ctx")
+
+
+def _own_copy(jt: JitArrays) -> JitArrays:
+    """``jt`` with copies of the arrays written in place (for another core, or to keep)."""
+    return jt._replace(**{name: getattr(jt, name).copy() for name in _WRITTEN_IN_PLACE})
+
+
 _ENTERED = 0  # regions entered as translated in this process (any core): see entered_regions()
 
 
@@ -357,14 +367,8 @@ class TranslatingCore:
             return False
         if self.state.m32[self.tile, : len(made.code)].tobytes() != made.code_bytes:
             return False
-        self._jt = JitArrays(*(a.copy() for a in made.tables))
+        self._take(made.tables, made.slot_hist, made.slot_len, made.slot_next, made.nslots, made.seen, made.starts_in)
         self.state.dec[self.tile, made.mark_rows] = OP_ENTRY  # as _mark(): a 16x16 chip does it 255 times
-        self._slot_hist, self._slot_len = list(made.slot_hist), list(made.slot_len)
-        self._slot_next = list(made.slot_next)
-        self._nslots = made.nslots
-        self._known_seen = made.seen
-        self._known_starts_in = set(made.starts_in)
-        self.stats.reused += len(made.starts_in)
         if made.seen != len(done_list):
             self._install_new_known()  # translated since
         return True
@@ -374,9 +378,8 @@ class TranslatingCore:
         tables copies of this core's (which must not have run yet: made in the same look), keyed
         by tile; tiles with other code or another build are left out.  The tiles of a chip load
         one program: made one by one, a translator and its tables cost about 35 µs in Python, 9-13
-        ms for a 16x16 chip at the start of every run; copied here, the checks, the predecode
-        marks and the arrays no core writes in place (``tpcs``, ``twords``, the slots' histograms)
-        are done once for all."""
+        ms for a 16x16 chip at the start of every run; copied here, the checks and the predecode
+        marks are done once for all."""
         jt = self._tables()
         assert not jt.cnt.any(), "copying the tables of a core that has run would copy its counts"
         st, m32, dec = self.state.st, self.state.m32, self.state.dec
@@ -402,27 +405,32 @@ class TranslatingCore:
         """Take a copy of ``other``'s tables and what goes with them (:meth:`clones`)."""
         jt = other._jt
         assert jt is not None
-        self._jt = jt._replace(
-            entry_fn=jt.entry_fn.copy(),
-            entry_slot=jt.entry_slot.copy(),
-            entry_blk=jt.entry_blk.copy(),
-            hot=jt.hot.copy(),
-            tmap=jt.tmap.copy(),
-            cnt=jt.cnt.copy(),
-            ctx=jt.ctx.copy(),
-        )
+        slots = (other._slot_hist, other._slot_len, other._slot_next, other._nslots)
+        self._take(jt, *slots, other._known_seen, other._known_starts_in)
         self._code_size = other._code_size
         self._flushes_seen = 0
-        self._slot_hist, self._slot_len = list(other._slot_hist), list(other._slot_len)
-        self._slot_next = list(other._slot_next)
-        self._nslots = other._nslots
-        self._known_seen = other._known_seen
-        self._known_starts_in = set(other._known_starts_in)
         self._key_raw, self._key_made = other._key_raw, other._key_made
         self._manifest = other._manifest
         self._known_starts = set(other._known_starts)
         self._cached_starts = other._cached_starts
-        self.stats.reused += len(other._known_starts_in)
+
+    def _take(
+        self,
+        jt: JitArrays,
+        slot_hist: Sequence[np.ndarray],
+        slot_len: Sequence[np.ndarray],
+        slot_next: Sequence[np.ndarray],
+        nslots: int,
+        seen: int,
+        starts_in: Iterable[int],
+    ) -> None:
+        """Tables made by another core (or kept for the build) and their bookkeeping, as this core's."""
+        self._jt = _own_copy(jt)
+        self._slot_hist, self._slot_len, self._slot_next = list(slot_hist), list(slot_len), list(slot_next)
+        self._nslots = nslots
+        self._known_seen = seen
+        self._known_starts_in = set(starts_in)
+        self.stats.reused += len(self._known_starts_in)
 
     def _remember_install(self) -> None:
         """Keep the fresh tables just made, for the next core of the same build (:meth:`_install_as_before`)."""
@@ -437,7 +445,7 @@ class TranslatingCore:
             seen=self._known_seen,
             code=code,
             code_bytes=code.tobytes(),
-            tables=JitArrays(*(a.copy() for a in jt)),
+            tables=_own_copy(jt),
             mark_rows=2 * np.flatnonzero(jt.entry_fn),
             slot_hist=tuple(self._slot_hist),
             slot_len=tuple(self._slot_len),
