@@ -12,14 +12,17 @@ from pathlib import Path
 
 import numpy as np
 
-from robosoc.analysis.energy import EnergyModel
+from robosoc.chip.energy import EnergyModel
 from robosoc.config.firmware import FirmwareConfig
 from robosoc.config.scenario import ScenarioConfig
 from robosoc.config.vehicle import vehicle_preset
 from robosoc.control.flight import ROW_FIELDS, fly
 from robosoc.control.flight_log import CsvFlightLog
 from robosoc.control.host import HostController
-from robosoc.cosim.replay import FirmwareRun, ReplayResult, samples_from_rows, task_summary, write_jobs_csv
+from robosoc.cosim.firmware_run import FirmwareRun, ReplayResult
+from robosoc.cosim.replay import samples_from_rows
+from robosoc.outputs.run_folder import write_jobs_csv
+from robosoc.outputs.run_summary import task_summary
 
 HOST_SECONDS = 1.0
 CHIP_SECONDS = 0.3

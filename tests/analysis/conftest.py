@@ -37,7 +37,7 @@ def drawn(monkeypatch):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from robosoc.analysis import report
+    from robosoc.outputs import report
 
     plots: list[tuple] = []
 

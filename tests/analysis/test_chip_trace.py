@@ -15,9 +15,9 @@ from pathlib import Path
 import jsonschema
 import pytest
 
-from robosoc.analysis.chip_trace import run_trace, write_chip_trace
 from robosoc.cosim.chip_timeline import timeline_of
-from robosoc.firmware import flight_app, images
+from robosoc.host import flight_app, images
+from robosoc.outputs.chip_trace import run_trace, write_chip_trace
 from run_folders import ChipReplay
 
 _NUMBER = {"type": "number"}

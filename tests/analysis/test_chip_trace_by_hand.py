@@ -9,11 +9,11 @@ from pathlib import Path
 
 import pytest
 
-from robosoc.analysis import chip_trace as chip_trace_module
-from robosoc.analysis.chip_trace import chip_trace, write_chip_trace
 from robosoc.cosim.chip_timeline import ChipTimeline, Packet, Sleep, TaskSpan
-from robosoc.cosim.replay import JobRecord
-from robosoc.firmware.images import IDLE_TASK_ID, KERNEL_TASK_ID
+from robosoc.host.images import IDLE_TASK_ID, KERNEL_TASK_ID
+from robosoc.outputs import chip_trace as chip_trace_module
+from robosoc.outputs.chip_trace import chip_trace, write_chip_trace
+from robosoc.records import JobRecord
 
 A, B, IO = (1, 0), (0, 1), (0, 0)
 US = 0.004  # µs per cycle at 4 ns

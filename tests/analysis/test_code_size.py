@@ -8,7 +8,7 @@ from elftools.common.exceptions import ELFError
 
 import robosoc.analysis.code_size as code_size_module
 from robosoc.analysis.code_size import code_size
-from robosoc.chip.elf import ElfError, load_elf
+from robosoc.program.elf import ElfError, load_elf
 from robosoc.toolchain import build_elf
 
 PROGRAM = """

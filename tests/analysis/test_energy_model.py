@@ -6,7 +6,7 @@ from importlib import resources
 
 import pytest
 
-from robosoc.analysis.energy import INSTRUCTION_CLASSES, STALL_KINDS, EnergyModel
+from robosoc.chip.energy import INSTRUCTION_CLASSES, STALL_KINDS, EnergyModel
 from robosoc.config import ConfigError
 
 
@@ -98,7 +98,7 @@ def test_every_assumed_coefficient_follows_the_reasoning_of_its_note():
 
 
 def _default_data() -> dict:
-    return tomllib.loads(resources.files("robosoc.analysis").joinpath("energy_coefficients.toml").read_text())
+    return tomllib.loads(resources.files("robosoc.chip").joinpath("energy_coefficients.toml").read_text())
 
 
 def _dump(data: dict) -> str:
@@ -218,7 +218,7 @@ def test_edge_values_that_are_accepted(tmp_path):
     assert m.path == str(tmp_path / "coefficients.toml")
     defaulted = _load_edited(tmp_path, lambda d: d.pop("clock_ns"))
     assert defaulted.clock_ns == 4.0
-    assert EnergyModel.load().clock_ns == 4.0 and EnergyModel.load().path == "robosoc/analysis/energy_coefficients.toml"
+    assert EnergyModel.load().clock_ns == 4.0 and EnergyModel.load().path == "robosoc/chip/energy_coefficients.toml"
 
 
 def test_noc_energy_terms_by_hand():

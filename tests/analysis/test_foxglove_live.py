@@ -17,9 +17,9 @@ import pytest
 from mcap_ros2._dynamic import generate_dynamic
 from websockets.sync.client import connect
 
-from robosoc.analysis.foxglove_live import LiveFlight, LiveFlightError
-from robosoc.analysis.ros2_flight import TOPICS
 from robosoc.control.flight import ROW_FIELDS
+from robosoc.outputs.foxglove_live import LiveFlight, LiveFlightError
+from robosoc.outputs.ros2_flight import TOPICS
 
 SUBPROTOCOL = "foxglove.sdk.v1"
 MESSAGE_DATA = 0x01  # binary opcode of a message (Foxglove WebSocket protocol)
@@ -155,7 +155,7 @@ class _Clock:
 @pytest.mark.parametrize(("pace", "slept"), [(1.0, 1.0), (2.0, 0.5), (0.5, 2.0), (0.0, 0.0)])
 def test_publishing_is_held_back_to_the_pace(monkeypatch, host_flight: np.ndarray, pace: float, slept: float) -> None:
     """Rows 1 s apart in simulated time take 1/pace s of wall time; the first row is not held back."""
-    import robosoc.analysis.foxglove_live as live_module
+    import robosoc.outputs.foxglove_live as live_module
 
     clock = _Clock()
     monkeypatch.setattr(live_module.time, "monotonic", clock.monotonic)

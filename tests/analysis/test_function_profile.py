@@ -12,8 +12,8 @@ from pathlib import Path
 import pytest
 
 from headless_chromium import BROWSER, load
-from robosoc.analysis.energy import INSTRUCTION_CLASSES, STALL_KINDS, EnergyModel
-from robosoc.analysis.function_profile import (
+from robosoc.chip.energy import INSTRUCTION_CLASSES, STALL_KINDS, EnergyModel
+from robosoc.chip.function_profile import (
     COUNT_NAMES,
     CSV_FIELDS,
     NOC_ROW,
@@ -22,8 +22,6 @@ from robosoc.analysis.function_profile import (
     profile_totals,
     summary_mismatches,
 )
-from robosoc.analysis.report import write_report
-from robosoc.chip.elf import load_elf
 from robosoc.chip.single import SingleCoreSoC
 from robosoc.config.firmware import FirmwareConfig
 from robosoc.config.scenario import FlightPlan, ScenarioConfig
@@ -32,6 +30,8 @@ from robosoc.control.flight import fly
 from robosoc.control.host import HostController
 from robosoc.cosim.replay import replay
 from robosoc.kernels.core_layout import PIPELINE_FILL
+from robosoc.outputs.report import write_report
+from robosoc.program.elf import load_elf
 from robosoc.toolchain import build_elf
 
 MODEL = EnergyModel.load()
@@ -227,7 +227,7 @@ def test_a_bad_profile_json_is_noted_not_fatal(chip_run: Path) -> None:
 
 
 def test_top_ranks_one_task_on_one_tile_by_cycles_then_energy_then_name() -> None:
-    from robosoc.analysis.function_profile import FunctionProfile, ProfileRow
+    from robosoc.chip.function_profile import FunctionProfile, ProfileRow
 
     def row(tile, task, name, cycles, pj):
         return ProfileRow(tile, task, f"task{task}", name, cycles, cycles // 2, {}, pj)
@@ -249,7 +249,7 @@ def test_top_ranks_one_task_on_one_tile_by_cycles_then_energy_then_name() -> Non
 
 
 def test_profile_json_and_csv_of_a_hand_made_profile(tmp_path) -> None:
-    from robosoc.analysis.function_profile import COUNT_NAMES, CSV_FIELDS, NOC_ROW, FunctionProfile, ProfileRow
+    from robosoc.chip.function_profile import COUNT_NAMES, CSV_FIELDS, NOC_ROW, FunctionProfile, ProfileRow
 
     first, second = COUNT_NAMES[0], COUNT_NAMES[-1]
     rows = [

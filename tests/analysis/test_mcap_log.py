@@ -10,12 +10,12 @@ import pytest
 from mcap.reader import make_reader
 from mcap_ros2.decoder import DecoderFactory
 
-from robosoc.analysis.mcap_log import flight_csv_to_mcap, write_flight_mcap
 from robosoc.config.scenario import ScenarioConfig
 from robosoc.config.vehicle import vehicle_preset
 from robosoc.control.flight import ROW_FIELDS, fly
 from robosoc.control.flight_log import CsvFlightLog
 from robosoc.control.host import HostController
+from robosoc.outputs.mcap_log import flight_csv_to_mcap, write_flight_mcap
 
 SECONDS = 0.5
 

@@ -9,8 +9,8 @@ from pathlib import Path
 
 import pytest
 
-from robosoc.analysis.energy import EnergyModel
-from robosoc.analysis.function_profile import (
+from robosoc.chip.energy import EnergyModel
+from robosoc.chip.function_profile import (
     ENTRY_ROW,
     NOC_ROW,
     OTHER_ROWS,
@@ -23,9 +23,9 @@ from robosoc.analysis.function_profile import (
     summary_mismatches,
     tile_rows,
 )
-from robosoc.chip.elf import load_elf
 from robosoc.chip.single import SingleCoreSoC
 from robosoc.kernels.core_layout import PIPELINE_FILL
+from robosoc.program.elf import load_elf
 from robosoc.toolchain import build_elf
 
 MODEL = EnergyModel.load()

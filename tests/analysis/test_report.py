@@ -12,9 +12,9 @@ import numpy as np
 import pytest
 
 from headless_chromium import BROWSER, load
-from robosoc.analysis.report import write_report
-from robosoc.analysis.run_folder import RunFolderError, read_run_folder
 from robosoc.control.flight import ROW_FIELDS
+from robosoc.outputs.report import write_report
+from robosoc.outputs.run_folder import RunFolderError, read_run_folder
 
 needs_chromium = pytest.mark.skipif(BROWSER is None, reason="chromium is not installed (.ci/run installs it)")
 

@@ -13,9 +13,9 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pytest
 
-from robosoc.analysis import report
-from robosoc.analysis.run_folder import RunFolder
 from robosoc.control.flight import ROW_FIELDS
+from robosoc.outputs import report
+from robosoc.outputs.run_folder import RunFolder
 
 
 def flight(n: int = 5, estimate: bool = True) -> np.ndarray:

@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from robosoc.analysis import report
+from robosoc.outputs import report
 
 
 def jobs() -> dict[str, np.ndarray]:

@@ -10,7 +10,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from robosoc.analysis.run_folder import (
+from robosoc.control.flight import ROW_FIELDS
+from robosoc.outputs.run_folder import (
+    JOB_CSV_FIELDS,
     RunFolder,
     RunFolderError,
     finite,
@@ -18,8 +20,6 @@ from robosoc.analysis.run_folder import (
     read_jobs,
     read_run_folder,
 )
-from robosoc.control.flight import ROW_FIELDS
-from robosoc.cosim.replay import JOB_CSV_FIELDS
 
 PROFILE_KEYS = "tile, task, task_name, function, cycles, instructions, energy_nj"
 

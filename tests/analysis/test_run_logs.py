@@ -9,8 +9,8 @@ from types import SimpleNamespace
 
 from mcap.reader import make_reader
 
-from robosoc.analysis.run_folder import CHIP_TRACE_JSON, FLIGHT_MCAP, REPORT_HTML
-from robosoc.analysis.run_logs import write_run_logs
+from robosoc.outputs.run_folder import CHIP_TRACE_JSON, FLIGHT_MCAP, REPORT_HTML
+from robosoc.outputs.run_logs import write_run_logs
 from run_folders import chip_rows
 
 

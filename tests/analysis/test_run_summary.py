@@ -11,8 +11,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from robosoc.analysis import run_summary
-from robosoc.analysis.run_summary import (
+from robosoc.config.firmware import FirmwareConfig
+from robosoc.config.scenario import ScenarioConfig
+from robosoc.config.vehicle import vehicle_preset
+from robosoc.control.flight import ROW_FIELDS, flight_metrics
+from robosoc.cosim.firmware_run import ReplayResult
+from robosoc.outputs import run_summary
+from robosoc.outputs.run_summary import (
     HOST_TIMING_KEYS,
     SCHEMA,
     TASK_KEYS,
@@ -22,11 +27,7 @@ from robosoc.analysis.run_summary import (
     vehicle_summary,
     write_summary,
 )
-from robosoc.config.firmware import FirmwareConfig
-from robosoc.config.scenario import ScenarioConfig
-from robosoc.config.vehicle import vehicle_preset
-from robosoc.control.flight import ROW_FIELDS, flight_metrics
-from robosoc.cosim.replay import JobRecord, ReplayResult
+from robosoc.records import JobRecord
 from run_folders import host_rows
 
 CLOCK_NS = 4.0

@@ -15,7 +15,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pytest
 
-from robosoc.analysis.sweep_plots import metric_figure, pareto_figure, sweep_html, write_sweep_plots
+from robosoc.sweep.plots import metric_figure, pareto_figure, sweep_html, write_sweep_plots
 from robosoc.sweep.point import FAILED, OK
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"

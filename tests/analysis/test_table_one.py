@@ -9,17 +9,10 @@ from dataclasses import replace as dataclass_replace
 import numpy as np
 import pytest
 
-from robosoc.analysis import table_one
 from robosoc.analysis.accuracy import PwmAgreement, QuaternionError
-from robosoc.analysis.table_one import (
-    ENERGY_PARTS,
-    SEED_TABLE_I,
-    BuildRun,
-    TableSpec,
-    check_orderings,
-    task_row,
-)
-from robosoc.cosim.replay import JobRecord
+from robosoc.records import JobRecord
+from robosoc.sweep import table_one
+from robosoc.sweep.table_one import ENERGY_PARTS, SEED_TABLE_I, BuildRun, TableSpec, check_orderings, task_row
 
 
 def _job(k: int, parts: tuple[float, float, float, float], exec_cycles: int, response: int) -> JobRecord:
@@ -195,8 +188,9 @@ def _summarise_case(armed_from: int):
     """Eight samples 1000 cycles apart (at 4 ns), armed from ``armed_from``; measured over 4 iterations."""
     from robosoc.analysis.accuracy import GoldenRun
     from robosoc.control.flight import ROW_FIELDS
-    from robosoc.cosim.replay import PwmCommand, ReplayResult, SampleInput
-    from robosoc.firmware.flight_app import ChipEstimate
+    from robosoc.cosim.firmware_run import ReplayResult
+    from robosoc.host.flight_app import ChipEstimate
+    from robosoc.records import PwmCommand, SampleInput
 
     n = 8
     rows = np.zeros((n, len(ROW_FIELDS)))

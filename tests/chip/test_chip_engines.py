@@ -16,9 +16,9 @@ import pytest
 
 import rv32_asm as A
 from core_harness import exit_with
-from robosoc.chip.elf import Program, load_elf
 from robosoc.chip.mpsoc import ChipError, MPSoC
 from robosoc.config.chip import ChipConfig, NocConfig
+from robosoc.program.elf import Program, load_elf
 from robosoc.toolchain import build_elf
 
 TRAFFIC = Path(__file__).parent / "programs" / "traffic.c"

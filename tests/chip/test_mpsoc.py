@@ -13,9 +13,9 @@ import pytest
 
 import rv32_asm as A
 from core_harness import exit_with
-from robosoc.chip.elf import Program
 from robosoc.chip.mpsoc import ChipError, MPSoC
 from robosoc.config.chip import ChipConfig
+from robosoc.program.elf import Program
 
 SRAM = 0x40000000
 NI, IRQ, TIMER0 = 0xE1040000, 0xF0000000, 0xE1024000

@@ -4,9 +4,9 @@ import textwrap
 
 import pytest
 
-from robosoc.chip.elf import load_elf
 from robosoc.chip.profile import Profile, Sampler
 from robosoc.chip.single import SingleCoreSoC
+from robosoc.program.elf import load_elf
 from robosoc.toolchain import build_elf
 
 PROGRAM = textwrap.dedent(

@@ -14,10 +14,10 @@ from pathlib import Path
 
 import pytest
 
-from robosoc.chip.elf import load_elf
 from robosoc.chip.mpsoc import MPSoC
 from robosoc.config.chip import ChipConfig, NocConfig
 from robosoc.kernels import chip as kc
+from robosoc.program.elf import load_elf
 from robosoc.toolchain import build_elf
 
 TRAFFIC = Path(__file__).parent / "programs" / "traffic.c"
@@ -140,7 +140,7 @@ def test_where_the_host_stops_the_chip_changes_nothing():
     # inside a long single-core quantum and ran ahead of the packet sent to it).
     from robosoc.config.firmware import FirmwareConfig
     from robosoc.cosim.replay import built_in_rows, samples_from_rows
-    from robosoc.firmware import flight_app, images
+    from robosoc.host import flight_app, images
 
     fw = FirmwareConfig()
     program = load_elf(flight_app.build(fw))

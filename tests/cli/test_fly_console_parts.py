@@ -171,9 +171,9 @@ def test_samples_drive_a_bar_of_simulated_seconds_that_replaces_the_spinner(monk
 
 
 def test_the_live_server_option(monkeypatch: pytest.MonkeyPatch) -> None:
-    from robosoc.analysis import foxglove_live
     from robosoc.cli.errors import CliError
     from robosoc.cli.fly import _start_live
+    from robosoc.outputs import foxglove_live
 
     console = _console()
     assert _start_live(console, None) is None

@@ -20,8 +20,8 @@ from robosoc.config.firmware import FirmwareConfig
 from robosoc.config.link import LinkConfig, LinkFaults
 from robosoc.config.scenario import ScenarioConfig
 from robosoc.config.vehicle import vehicle_preset
-from robosoc.cosim import decoupled
-from robosoc.cosim.decoupled import DecoupledFlight, SideFailed
+from robosoc.outputs import decoupled_flight as decoupled
+from robosoc.outputs.decoupled_flight import DecoupledFlight, SideFailed
 
 SUMMARY: dict[str, Any] = {
     "flight": {

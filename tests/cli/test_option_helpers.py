@@ -605,7 +605,7 @@ def small_elf(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 def test_load_program_places_segments_in_the_regions_or_names_the_one_that_does_not_fit(small_elf: Path) -> None:
     from robosoc.chip.core_state import SRAM_BASE
-    from robosoc.chip.elf import Region
+    from robosoc.program.elf import Region
 
     program = files.load_program(small_elf)  # no regions: any address
     first = min(addr for addr, _ in program.segments)
@@ -638,7 +638,7 @@ def test_load_program_errors_name_the_file(tmp_path: Path, monkeypatch: pytest.M
     def parser_trips(path: object, regions: object = None) -> None:
         raise IndexError("index out of range")
 
-    monkeypatch.setattr("robosoc.chip.elf.load_elf", parser_trips)
+    monkeypatch.setattr("robosoc.program.elf.load_elf", parser_trips)
     with pytest.raises(CliError) as caught:
         files.load_program(text, "--program")
     assert caught.value.message == f"--program: {text}: malformed ELF file (IndexError: index out of range)"

@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 from rich.console import Console
 
-from robosoc.analysis.function_profile import FunctionProfile, ProfileRow
+from robosoc.chip.function_profile import FunctionProfile, ProfileRow
 from robosoc.cli.errors import CliError
 from robosoc.cli.profile import _read_summary, print_profile
 

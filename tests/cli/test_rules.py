@@ -259,13 +259,13 @@ def test_library_functions_check_their_arguments(elves: dict[str, Path]) -> None
     from robosoc.benchmarks.core import run_core_benchmark
     from robosoc.benchmarks.noc import run_noc_benchmark
     from robosoc.benchmarks.physics import run_physics_benchmark
-    from robosoc.chip.elf import load_elf
     from robosoc.chip.mpsoc import MPSoC
     from robosoc.chip.single import SingleCoreSoC, run_elf
     from robosoc.config.chip import ChipConfig
     from robosoc.config.scenario import ScenarioConfig
     from robosoc.config.vehicle import default_vehicle
     from robosoc.control.flight import fly
+    from robosoc.program.elf import load_elf
 
     soc = SingleCoreSoC()
     soc.load(load_elf(elves["loop"], soc.regions()))
@@ -300,7 +300,7 @@ def test_library_functions_check_their_arguments(elves: dict[str, Path]) -> None
 
 
 def test_library_config_readers_name_bad_files(bad_paths: dict[str, Path]) -> None:
-    from robosoc.analysis.energy import EnergyModel
+    from robosoc.chip.energy import EnergyModel
     from robosoc.config import ConfigError, load_toml
     from robosoc.config.scenario import ScenarioConfig
 

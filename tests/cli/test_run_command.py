@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 from typer.testing import CliRunner
 
-from robosoc.analysis.energy import EnergyModel
+from robosoc.chip.energy import EnergyModel
 from robosoc.cli import app
 from robosoc.toolchain import build_elf
 

@@ -85,7 +85,7 @@ def test_powered_off_tile_and_bad_mesh(elf: Path, tmp_path: Path):
 
 
 def test_each_tile_and_task_gets_its_energy_and_a_summary_line(elf: Path, tmp_path: Path):
-    from robosoc.analysis.energy import EnergyModel
+    from robosoc.chip.energy import EnergyModel
 
     model = EnergyModel.load()
     result, stats = run(elf, tmp_path)

@@ -6,8 +6,8 @@ from pathlib import Path
 
 from typer.testing import CliRunner
 
-from robosoc.analysis.table_one import CSV_FIELDS, ENERGY_PARTS
 from robosoc.cli import app
+from robosoc.sweep.table_one import CSV_FIELDS, ENERGY_PARTS
 
 
 def test_table_writes_csv_and_json(tmp_path: Path) -> None:

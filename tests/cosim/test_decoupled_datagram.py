@@ -27,7 +27,7 @@ from robosoc.cosim.datagram import (
     decode,
     encode,
 )
-from robosoc.firmware import packets
+from robosoc.host import packets
 
 
 def sensor_packet(k: int) -> bytes:

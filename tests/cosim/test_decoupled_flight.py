@@ -31,11 +31,11 @@ from robosoc.config.vehicle import vehicle_preset
 from robosoc.control.flight import ROW_FIELDS
 from robosoc.control.flight_log import read_flight_log
 from robosoc.cosim.datagram import Hello, Reading, SensorBatch
-from robosoc.cosim.decoupled import SideFailed, fly_decoupled
 from robosoc.cosim.decoupled_physics import sample_period_ns, scenario_digest
 from robosoc.cosim.link import Address, UdpLink
 from robosoc.cosim.lockstep import fly_chip
 from robosoc.cosim.replay import sensor_packet
+from robosoc.outputs.decoupled_flight import SideFailed, fly_decoupled
 
 SCENARIO_TOML = "duration_s = 1.2\n[flight]\ntakeoff_s = 0.3\nsteps = []\n"
 FAULTS = "loss=0.1,duplicate=0.05,reorder=0.05,truncate=0.05,garbage=0.05"
@@ -182,7 +182,7 @@ def test_a_side_whose_flight_ended_writes_its_record_through_its_ctrl_c(tmp_path
     is back afterwards."""
     import types
 
-    from robosoc.cosim import decoupled
+    from robosoc.outputs import decoupled_flight as decoupled
 
     class Interrupted(Exception):  # the test's own handler: a KeyboardInterrupt would stop pytest
         pass

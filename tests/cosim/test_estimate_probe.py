@@ -6,15 +6,15 @@ import numpy as np
 import pytest
 
 from robosoc.analysis.accuracy import golden_replay
-from robosoc.chip.dwarf import member_offset
-from robosoc.chip.elf import ElfError
 from robosoc.config.firmware import FirmwareConfig
 from robosoc.config.scenario import ScenarioConfig
 from robosoc.config.vehicle import vehicle_preset
 from robosoc.control.flight import ROW_FIELDS
 from robosoc.cosim.lockstep import fly_chip
 from robosoc.cosim.replay import built_in_rows, replay
-from robosoc.firmware import flight_app
+from robosoc.host import flight_app
+from robosoc.program.dwarf import member_offset
+from robosoc.program.elf import ElfError
 
 WINDOW = slice(280, 330)
 """0.2 s of calibration, then 0.3 s of flight (take-off at 3 s)."""

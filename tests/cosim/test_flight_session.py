@@ -12,7 +12,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from robosoc.analysis.run_summary import HOST_TIMING_KEYS, TASK_KEYS
 from robosoc.config.firmware import FirmwareConfig
 from robosoc.config.scenario import FlightPlan, ScenarioConfig, SetpointStep
 from robosoc.config.validate import from_mapping
@@ -20,8 +19,10 @@ from robosoc.config.vehicle import vehicle_preset
 from robosoc.control.flight import ROW_FIELDS, column, fly
 from robosoc.control.flight_log import read_flight_log
 from robosoc.control.host import HostController
-from robosoc.cosim.flight_session import SPACING_M, fly_scenario
-from robosoc.cosim.replay import ENERGY_PARTS, JOB_CSV_FIELDS
+from robosoc.outputs.flight_session import SPACING_M, fly_scenario
+from robosoc.outputs.run_folder import JOB_CSV_FIELDS
+from robosoc.outputs.run_summary import HOST_TIMING_KEYS, TASK_KEYS
+from robosoc.records import ENERGY_PARTS
 
 # calibrate until 1 s, climb to 1 m by 2.5 s, a 10° roll step at 2.6 s: 3.6 s in all
 SHORT = ScenarioConfig(

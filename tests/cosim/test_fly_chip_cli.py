@@ -15,7 +15,7 @@ from robosoc.config.scenario import ScenarioConfig
 from robosoc.config.validate import from_mapping
 from robosoc.control.flight import ROW_FIELDS
 from robosoc.control.flight_log import read_flight_log
-from robosoc.cosim.replay import JOB_CSV_FIELDS
+from robosoc.outputs.run_folder import JOB_CSV_FIELDS
 
 runner = CliRunner()
 

@@ -20,7 +20,7 @@ from robosoc.cosim.lockstep import (
     fly_lockstep,
 )
 from robosoc.cosim.replay import replay
-from robosoc.firmware import flight_app
+from robosoc.host import flight_app
 
 # calibration on the ground until 3 s, then the take-off climb (1 m in 1.5 s): 0.7 s of it
 TAKEOFF = ScenarioConfig(duration_s=3.7)

@@ -12,7 +12,7 @@ from robosoc.config.firmware import FirmwareConfig
 from robosoc.control.flight import ROW_FIELDS, column
 from robosoc.control.flight_log import CsvFlightLog, read_flight_log
 from robosoc.cosim.replay import built_in_rows, replay, samples_from_rows
-from robosoc.firmware import flight_app
+from robosoc.host import flight_app
 
 # 3.5 s of the default flight: 3 s calibrating on the ground, then take-off
 SECONDS = 3.5
@@ -109,8 +109,8 @@ def test_firmware_build_and_size_commands(tmp_path: Path):
 def test_job_stamps_are_placed_past_the_32_bit_wrap_of_timer0():
     # TIMER0 wraps every 2**32 cycles (17 s at 4 ns): a record read at chip cycle `now` lies less
     # than that before it
-    from robosoc.cosim.replay import _unwrapped
-    from robosoc.firmware.images import JobRecord
+    from robosoc.cosim.firmware_run import _unwrapped
+    from robosoc.host.images import JobRecord
 
     now = 5 * 2**32 + 1000
     record = JobRecord(task=2, job=7, release=100, deadline=2**32 - 5, start=150, completion=900, exec_cycles=600,

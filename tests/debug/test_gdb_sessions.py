@@ -16,9 +16,9 @@ import time
 from pathlib import Path
 
 from gdb_client import gdb_multiarch
-from robosoc.chip.elf import load_elf
 from robosoc.chip.single import SingleCoreSoC
 from robosoc.kernels.core_layout import RUN_BREAK
+from robosoc.program.elf import load_elf
 
 SECONDS = 300  # generous bounds that only keep a broken server from hanging the suite
 STEPS = 10

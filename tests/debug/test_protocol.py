@@ -16,7 +16,6 @@ import pytest
 from typer.testing import CliRunner
 
 from gdb_client import Background, Client, frame
-from robosoc.chip.elf import load_elf
 from robosoc.chip.mpsoc import MPSoC
 from robosoc.chip.single import SingleCoreSoC
 from robosoc.cli import app
@@ -24,6 +23,7 @@ from robosoc.config.chip import ChipConfig
 from robosoc.debug import ChipTarget, DebuggerKill, GdbServer, Listener, ListenError, SingleCoreTarget
 from robosoc.debug.rsp import MAX_PAYLOAD, BadChecksum, Interrupt, Packet, PacketReader, escape_binary
 from robosoc.debug.tdesc import target_xml
+from robosoc.program.elf import load_elf
 
 JOIN_SECONDS = 120.0  # bounded: a server that hangs fails the test instead of the suite
 

@@ -13,7 +13,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from robosoc.chip.elf import load_elf
 from robosoc.chip.mpsoc import MPSoC
 from robosoc.chip.single import SingleCoreSoC
 from robosoc.config.chip import ChipConfig
@@ -24,6 +23,7 @@ from robosoc.kernels.core_layout import S_IRQ_VECTOR, S_MAX_CYCLES
 from robosoc.kernels.dev_irq import IRQ_VECTOR
 from robosoc.kernels.dev_timer import TIMER0
 from robosoc.kernels.ni_registers import NI_BASE, NI_MESH, NI_TILE
+from robosoc.program.elf import load_elf
 
 pytestmark = pytest.mark.filterwarnings("ignore::robosoc.chip.single.IrqDuringMulErratum")
 

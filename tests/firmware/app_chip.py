@@ -7,12 +7,12 @@ from dataclasses import dataclass
 import numpy as np
 from app_data import SensorRecord
 
-from robosoc.chip.elf import load_elf
 from robosoc.chip.mpsoc import MPSoC
 from robosoc.config.firmware import FirmwareConfig
-from robosoc.firmware import images
-from robosoc.firmware.flight_app import build, read_app_stats, sample_cycle, sensor_payloads
-from robosoc.firmware.packets import PWM, PWM_PORT
+from robosoc.host import images
+from robosoc.host.flight_app import build, read_app_stats, sample_cycle, sensor_payloads
+from robosoc.host.packets import PWM, PWM_PORT
+from robosoc.program.elf import load_elf
 
 
 @dataclass

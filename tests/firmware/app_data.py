@@ -20,7 +20,7 @@ from robosoc.config.vehicle import vehicle_preset
 from robosoc.control.flight import fly
 from robosoc.control.host import HostController
 from robosoc.control.setpoint import Setpoint
-from robosoc.firmware.packets import FLAG_ARMED, Q16_ONE, SENSOR, q16, to_flits
+from robosoc.host.packets import FLAG_ARMED, Q16_ONE, SENSOR, q16, to_flits
 
 TAKEOFF_S = 3.0
 """The default flight plan arms at 3 s."""

@@ -4,7 +4,7 @@ float64 golden replay, and the harness's output parsed back.
 The host controller's EKF is wrapped so that every call of ``step`` records its inputs (the
 calibrated accelerometer, gyroscope, magnetometer, dt) and the first call also the state it
 starts from (the calibration's reset).  The sequence is carried to the firmware as sensor packets
-(:mod:`robosoc.firmware.packets`, Q16.16), and the golden model is replayed on exactly those
+(:mod:`robosoc.host.packets`, Q16.16), and the golden model is replayed on exactly those
 quantised values, so that every difference between the builds and float64 is arithmetic.
 """
 
@@ -22,7 +22,7 @@ from robosoc.control.ekf import AttitudeEkf
 from robosoc.control.flight import fly
 from robosoc.control.host import HostController
 from robosoc.firmware import APP_DIR, MATH_DIR, arith_defines, ekf_sources
-from robosoc.firmware.packets import FLAG_ARMED, Q16_ONE, SENSOR, q16, to_flits
+from robosoc.host.packets import FLAG_ARMED, Q16_ONE, SENSOR, q16, to_flits
 from robosoc.toolchain import build_elf, compile_native
 
 HARNESS = Path(__file__).resolve().parent / "ekf_harness.c"

@@ -31,7 +31,7 @@ from pid_data import (
 
 from robosoc.chip.single import run_elf
 from robosoc.firmware import ARITHS
-from robosoc.firmware.control_params import ALT_P_SHIFT
+from robosoc.host.control_params import ALT_P_SHIFT
 from robosoc.toolchain import run_native
 
 BUILDS = [(arith, mul) for arith in ARITHS for mul in (True, False)]

@@ -27,8 +27,8 @@ from robosoc.control.flight import fly
 from robosoc.control.host import HostController
 from robosoc.control.setpoint import Setpoint
 from robosoc.firmware import ALTITUDE_SOURCES, APP_DIR, MATH_DIR, arith_defines, pid_sources
-from robosoc.firmware.control_params import control_include_dir
-from robosoc.firmware.packets import ESTIMATE, FLAG_ARMED, Q16_ONE, q16, to_flits
+from robosoc.host.control_params import control_include_dir
+from robosoc.host.packets import ESTIMATE, FLAG_ARMED, Q16_ONE, q16, to_flits
 from robosoc.toolchain import build_elf, compile_native
 
 HARNESS = Path(__file__).resolve().parent / "pid_harness.c"

@@ -16,8 +16,8 @@ import pytest
 from app_data import Golden, SensorRecord, golden, record_flight, write_data_header
 
 from robosoc.firmware import APP_DIR, ARITHS, MATH_DIR, arith_defines, estimator_sources
-from robosoc.firmware.control_params import control_include_dir
-from robosoc.firmware.packets import Q16_ONE
+from robosoc.host.control_params import control_include_dir
+from robosoc.host.packets import Q16_ONE
 from robosoc.toolchain import build_elf, compile_native, run_native
 
 single = pytest.importorskip("robosoc.chip.single")

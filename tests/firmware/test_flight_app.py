@@ -14,9 +14,9 @@ from app_chip import ChipRun, run_app
 from app_data import Golden, SensorRecord, golden, record_flight
 
 from robosoc.config.firmware import FirmwareConfig
-from robosoc.firmware import images
-from robosoc.firmware.flight_app import FIRST_SAMPLE_CYCLE, read_app_stats, task_ids
-from robosoc.firmware.packets import PWM, SENSOR_PORT
+from robosoc.host import images
+from robosoc.host.flight_app import FIRST_SAMPLE_CYCLE, read_app_stats, task_ids
+from robosoc.host.packets import PWM, SENSOR_PORT
 
 MATCH_SHARE = 0.99
 WINDOW = (200, 400)

@@ -1,4 +1,4 @@
-"""The packet formats: one source (robosoc.firmware.packets), the C header generated from it and
+"""The packet formats: one source (robosoc.host.packets), the C header generated from it and
 up to date, C and Python agreeing on every field, and every packet fitting a NoC packet with room
 for the messaging header."""
 
@@ -6,8 +6,8 @@ from pathlib import Path
 
 import pytest
 
-from robosoc.firmware import packets
-from robosoc.firmware.packets import ESTIMATE, FORMATS, PWM, SENSOR, from_flits, to_flits
+from robosoc.host import packets
+from robosoc.host.packets import ESTIMATE, FORMATS, PWM, SENSOR, from_flits, to_flits
 from robosoc.toolchain import build_elf, compile_native, run_native
 
 single = pytest.importorskip("robosoc.chip.single")

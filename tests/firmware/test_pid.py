@@ -31,8 +31,8 @@ from robosoc.config.vehicle import MotorConfig, VehicleConfig, laser_vehicle, ve
 from robosoc.control.host import HostController
 from robosoc.control.mixer import Mixer
 from robosoc.firmware import APP_DIR, ARITHS, MATH_DIR, arith_defines, math_sources
-from robosoc.firmware.control_params import ALT_P_SHIFT, control_header, control_include_dir
-from robosoc.firmware.packets import Q16_ONE, q16
+from robosoc.host.control_params import ALT_P_SHIFT, control_header, control_include_dir
+from robosoc.host.packets import Q16_ONE, q16
 from robosoc.toolchain import compile_native, run_native
 
 single = pytest.importorskip("robosoc.chip.single")

@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 from program_list import PROGRAMS
 
-from robosoc.chip.elf import load_elf
 from robosoc.chip.single import SingleCoreSoC
 from robosoc.kernels.jit_dispatch import CTX_STEPS
+from robosoc.program.elf import load_elf
 from robosoc.toolchain import build_elf
 
 MAX_CYCLES = 2_000_000_000

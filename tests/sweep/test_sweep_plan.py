@@ -8,11 +8,11 @@ from pathlib import Path
 
 import pytest
 
-from robosoc.analysis.sweep_plots import pareto_front
 from robosoc.config.scenario import ScenarioConfig
 from robosoc.config.sweep import field_names, flatten, load_sweep, nest
 from robosoc.config.validate import ConfigError
 from robosoc.sweep.plan import plan, point_key
+from robosoc.sweep.plots import pareto_front
 
 
 def write(tmp_path: Path, text: str, name: str = "s.toml") -> Path:

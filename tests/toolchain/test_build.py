@@ -7,8 +7,8 @@ import pytest
 from typer.testing import CliRunner
 
 import robosoc.toolchain.build as build_module
-from robosoc.chip.elf import load_elf
 from robosoc.cli import app
+from robosoc.program.elf import load_elf
 from robosoc.toolchain import CompileError, FixedRegisterWarning, ToolchainError, build_elf
 from robosoc.toolchain.linker_script import render_linker_script
 from robosoc.toolchain.x27_check import find_x27_writes, writes_register

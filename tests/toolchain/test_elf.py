@@ -5,8 +5,8 @@ from pathlib import Path
 
 import pytest
 
-from robosoc.chip.elf import ElfError, Region, load_elf
 from robosoc.firmware import MATRIX_BENCH_SOURCE
+from robosoc.program.elf import ElfError, Region, load_elf
 from robosoc.toolchain import build_elf
 
 SRAM = Region(0x40000000, 2 * 1024 * 1024, "SRAM")

@@ -27,7 +27,7 @@ from robosoc.config.vehicle import VehicleConfig, vehicle_preset
 from robosoc.control.flight import ROW_FIELDS
 from robosoc.control.host import HostController
 from robosoc.control.setpoint import Setpoint
-from robosoc.firmware.packets import FLAG_ARMED, SENSOR
+from robosoc.host.packets import FLAG_ARMED, SENSOR
 
 TRUTH_QUATERNION = tuple(ROW_FIELDS.index(c) for c in ("qw", "qx", "qy", "qz"))
 """Columns of the true attitude in a flight row."""

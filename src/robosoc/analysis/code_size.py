@@ -15,7 +15,7 @@ from elftools.common.exceptions import ELFError
 from elftools.elf.constants import SH_FLAGS
 from elftools.elf.elffile import ELFFile
 
-from robosoc.chip.elf import ElfError, load_elf
+from robosoc.program.elf import ElfError, load_elf
 
 
 @dataclass(frozen=True)

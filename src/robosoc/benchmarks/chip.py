@@ -23,8 +23,8 @@ from rich.table import Table
 
 
 def _build(source: str, mul: bool, defines: dict[str, object]):
-    from robosoc.chip.elf import load_elf
     from robosoc.firmware import FIRMWARE_DIR
+    from robosoc.program.elf import load_elf
     from robosoc.toolchain import build_elf
 
     return load_elf(build_elf([FIRMWARE_DIR / "bench" / source], mul=mul, defines=defines))

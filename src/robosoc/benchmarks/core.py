@@ -43,11 +43,11 @@ def run_core_benchmark(
         ValueError: ``runs`` or ``iterations`` below 1, or an unknown engine.
         RuntimeError: the workload failed its self-check, or two engines disagreed.
     """
-    from robosoc.chip.elf import load_elf
     from robosoc.chip.single import SingleCoreSoC
     from robosoc.config.ranges import check_int
     from robosoc.firmware import MATRIX_BENCH_SOURCE
     from robosoc.jit import ENGINES
+    from robosoc.program.elf import load_elf
     from robosoc.toolchain import build_elf
 
     check_int("runs", runs, 1)

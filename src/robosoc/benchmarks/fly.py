@@ -1,6 +1,6 @@
 """``robosoc bench fly``: real-time factor of the lockstep co-simulation (physics + firmware on the chip).
 
-Flies the default scenario (shortened to ``duration_s``) with :func:`robosoc.cosim.flight_session.fly_scenario`,
+Flies the default scenario (shortened to ``duration_s``) with :func:`robosoc.outputs.flight_session.fly_scenario`,
 writing nothing, once per firmware build, after the host controller as the reference.  The firmware
 is built and the chip kernels compiled before the timed flights (a first run says so).  Prints per
 build the real-time factor (simulated seconds per host second; and per CPU second of this
@@ -23,7 +23,7 @@ from rich.table import Table
 from robosoc.config.firmware import FirmwareConfig
 from robosoc.config.scenario import ScenarioConfig
 from robosoc.control.flight import column
-from robosoc.cosim.flight_session import fly_scenario
+from robosoc.outputs.flight_session import fly_scenario
 
 #: The builds flown when none is chosen, the reference build (fixed + multiplier) last.
 ALL_BUILDS = (

@@ -136,7 +136,7 @@ class CoreState:
             self.st[:, S_PROF_STRIDE] = 0
             self.enable_profile(banks)
 
-    # --- the exact profile (robosoc.analysis.function_profile reads it) -------------------------------
+    # --- the exact profile (robosoc.chip.function_profile reads it) -------------------------------
     @property
     def profiling(self) -> bool:
         return bool(self.st[0, S_PROF_STRIDE] != 0)

@@ -19,7 +19,6 @@ import numpy as np
 
 from robosoc.chip.core_state import SRAM_BASE, CoreState
 from robosoc.chip.counters import counters_dict
-from robosoc.chip.elf import Program, Region
 from robosoc.chip.single import (
     ERRATUM_WARNINGS,
     check_budget,
@@ -51,6 +50,7 @@ from robosoc.kernels.core_layout import (
     S_PROF_BASE,
     S_RUN,
 )
+from robosoc.program.elf import Program, Region
 
 XOUT_CAPACITY = 1 << 20
 IO_ROWS = 4096
@@ -501,7 +501,7 @@ class MPSoC:
 
     def enable_profile(self) -> None:
         """Count every instruction per tile, task and word of code from here on (the exact profile,
-        :mod:`robosoc.analysis.function_profile`; load the programs first, enable it before the run)."""
+        :mod:`robosoc.chip.function_profile`; load the programs first, enable it before the run)."""
         self.cores.enable_profile(kc.NTASKS)
         self._jit.stop_all()  # translated code does not count per word: the cores interpret from here on
         stride = self.cores.profile_stride

@@ -18,7 +18,6 @@ import numpy as np
 
 from robosoc.chip.core_state import DEFAULT_SRAM_SIZE, SRAM_BASE, CoreState
 from robosoc.chip.counters import counters_dict
-from robosoc.chip.elf import Program, Region, load_elf
 from robosoc.config.ranges import DEVICE_MAP_BASE, MAX_CYCLES, check_int
 from robosoc.isa.disasm import disassemble
 from robosoc.jit import DEFAULT_ENGINE, ENGINES
@@ -46,6 +45,7 @@ from robosoc.kernels.core_layout import (
     S_PC,
     S_RUN,
 )
+from robosoc.program.elf import Program, Region, load_elf
 
 if TYPE_CHECKING:
     from robosoc.chip.profile import Sampler
@@ -252,7 +252,7 @@ class SingleCoreSoC:
 
     def enable_profile(self) -> None:
         """Count every instruction's executions and extra cycles per word of code from here on (the
-        exact profile, :func:`robosoc.analysis.function_profile.core_profile`; load the program
+        exact profile, :func:`robosoc.chip.function_profile.core_profile`; load the program
         first).  Translated code does not count: the core runs on the interpreter from here on."""
         self.forget_translations()
         self.translator = None

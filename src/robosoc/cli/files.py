@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING, Any, TypeVar
 from robosoc.cli.errors import CliError
 
 if TYPE_CHECKING:
-    from robosoc.chip.elf import Program, Region
+    from robosoc.program.elf import Program, Region
 
 T = TypeVar("T")
 
@@ -116,8 +116,8 @@ def load_toml(cls: type[T], path: Path | str, label: str | None = None) -> tuple
 
 
 def load_program(path: Path | str, label: str | None = None, regions: Sequence[Region] | None = None) -> Program:
-    """An RV32 executable (:func:`robosoc.chip.elf.load_elf`) whose segments fit ``regions``."""
-    from robosoc.chip.elf import ElfError, load_elf
+    """An RV32 executable (:func:`robosoc.program.elf.load_elf`) whose segments fit ``regions``."""
+    from robosoc.program.elf import ElfError, load_elf
 
     p = input_file(path, label, "ELF file")
     try:

@@ -15,7 +15,7 @@ from robosoc.cli.errors import CliError
 from robosoc.config.firmware import ARITH_CHOICES, FirmwareConfig
 
 if TYPE_CHECKING:
-    from robosoc.cosim.replay import ReplayResult
+    from robosoc.cosim.firmware_run import ReplayResult
 
 Arith = Annotated[
     str | None,
@@ -40,7 +40,7 @@ def _firmware(ctx: typer.Context, config: Path | None, arith: str | None, mul: b
 
 
 def _build(fw: FirmwareConfig) -> Path:
-    from robosoc.firmware import flight_app
+    from robosoc.host import flight_app
 
     return flight_app.build(fw)
 
@@ -81,7 +81,7 @@ def firmware_size(
 ) -> None:
     """Code and data size of the firmware per section and per function (largest first)."""
     from robosoc.analysis.code_size import code_size
-    from robosoc.chip.elf import ElfError
+    from robosoc.program.elf import ElfError
 
     if elf is not None:
         for name, on in (("--arith", arith is not None), ("--mul/--no-mul", options.given(ctx, "mul")),
@@ -165,7 +165,8 @@ def _report(result: ReplayResult, folder: Path | None) -> None:
         f"{result.deadline_misses} deadline misses, {result.cycles} cycles "
         f"({result.cycles * ns * 1e-9:.2f} s simulated in {result.host_seconds:.1f} s)",
     )
-    from robosoc.cosim.replay import task_summary, write_jobs_csv
+    from robosoc.outputs.run_folder import write_jobs_csv
+    from robosoc.outputs.run_summary import task_summary
 
     summary = task_summary(result.jobs, ns)
     for name, s in summary.items():

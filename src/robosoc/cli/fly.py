@@ -1,6 +1,6 @@
 """``robosoc fly [SCENARIO.toml]``: fly a scenario closed-loop (by default the firmware on the chip, in
 lockstep), write the run folder and print a summary table (the run itself is
-:func:`robosoc.cosim.flight_session.fly_scenario`)."""
+:func:`robosoc.outputs.flight_session.fly_scenario`)."""
 
 from __future__ import annotations
 
@@ -112,7 +112,7 @@ def fly_command(
 
     from robosoc.chip.mpsoc import ChipError
     from robosoc.chip.single import CoreError
-    from robosoc.cosim.flight_session import fly_scenario
+    from robosoc.outputs.flight_session import fly_scenario
 
     console = make_console()
     # --- decoupled mode: its options, and the chip controller it implies ---
@@ -433,7 +433,7 @@ def print_summary(console, summary: dict[str, Any]) -> None:
 def _start_live(console, port: int | None):
     if port is None:
         return None
-    from robosoc.analysis.foxglove_live import LiveFlight, LiveFlightError
+    from robosoc.outputs.foxglove_live import LiveFlight, LiveFlightError
 
     try:
         live = LiveFlight(port)

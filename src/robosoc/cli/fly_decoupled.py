@@ -1,7 +1,7 @@
 """``robosoc fly --decoupled``: the flight with the physics and the chip in two processes over UDP.
 
 Called from :mod:`robosoc.cli.fly` once the scenario, firmware and run folder are resolved; thin
-over :func:`robosoc.cosim.decoupled.fly_decoupled` (docs/decoupled.md).
+over :func:`robosoc.outputs.decoupled_flight.fly_decoupled` (docs/decoupled.md).
 """
 
 from __future__ import annotations
@@ -55,7 +55,7 @@ def fly_decoupled_run(
 
     from robosoc.control.flight_log import read_flight_log
     from robosoc.control.flight_plot import plot_flight
-    from robosoc.cosim.decoupled import SideFailed, fly_decoupled
+    from robosoc.outputs.decoupled_flight import SideFailed, fly_decoupled
 
     samples = round(scenario.duration_s * scenario.sensors.rate_hz)
     console.print(

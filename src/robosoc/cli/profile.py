@@ -22,7 +22,7 @@ from robosoc.cli.errors import CliError
 if TYPE_CHECKING:
     from rich.console import Console
 
-    from robosoc.analysis.function_profile import FunctionProfile
+    from robosoc.chip.function_profile import FunctionProfile
 
 MAX_TOP = 1000
 RunDir = Annotated[Path, typer.Argument(help="A run folder of robosoc fly (scenario.toml, summary.json ...).")]
@@ -35,7 +35,7 @@ def print_profile(console: Console, profile: FunctionProfile, top: int = 10, tit
     """Per tile and task, its ``top`` functions: cycles, share of the task's cycles, instructions, energy."""
     from rich.table import Table
 
-    from robosoc.analysis.function_profile import profile_totals
+    from robosoc.chip.function_profile import profile_totals
 
     totals = profile_totals(profile)
     for xy in profile.tiles():
@@ -84,12 +84,12 @@ def profile_command(run_dir: RunDir, top: Top = 10) -> None:
     """Cycles, instructions and energy per firmware function, per tile and task, exactly (not
     sampled): flies the run folder's scenario again with profiling on and writes profile.json and
     profile.csv into it."""
-    from robosoc.analysis.function_profile import summary_mismatches
+    from robosoc.chip.function_profile import summary_mismatches
     from robosoc.chip.mpsoc import ChipError
     from robosoc.chip.single import CoreError
     from robosoc.cli.fly import FlightProgress
     from robosoc.cli.scenario import load_scenario
-    from robosoc.cosim.flight_session import fly_scenario, vehicle_folder
+    from robosoc.outputs.flight_session import fly_scenario, vehicle_folder
 
     folder = files.input_dir(run_dir, None)
     for name in ("scenario.toml", "summary.json"):

@@ -20,7 +20,7 @@ Mcap = Annotated[bool, typer.Option("--mcap", help="Also write RUN_DIR/flight.mc
 @app.command("report", epilog=exit_codes.EPILOG)
 def report_command(run_dir: RunDir, out: Out = None, mcap: Mcap = False) -> None:
     """Write one self-contained HTML page (no network needed) with the run's plots, figures and config."""
-    from robosoc.analysis.run_folder import FLIGHT_CSV, FLIGHT_MCAP, REPORT_HTML, RunFolderError
+    from robosoc.outputs.run_folder import FLIGHT_CSV, FLIGHT_MCAP, REPORT_HTML, RunFolderError
 
     folder = files.input_dir(run_dir, None)
     inputs = [folder / name for name in (FLIGHT_CSV, "jobs.csv", "summary.json", "scenario.toml")]
@@ -29,8 +29,8 @@ def report_command(run_dir: RunDir, out: Out = None, mcap: Mcap = False) -> None
     )
     if mcap and not (folder / FLIGHT_CSV).is_file():
         raise CliError(f"--mcap: {run_dir}: has no {FLIGHT_CSV} to convert")
-    from robosoc.analysis.mcap_log import flight_csv_to_mcap
-    from robosoc.analysis.report import write_report
+    from robosoc.outputs.mcap_log import flight_csv_to_mcap
+    from robosoc.outputs.report import write_report
 
     console = make_console()
     try:

@@ -19,7 +19,7 @@ from robosoc.config.ranges import MAX_CYCLES
 from robosoc.jit import DEFAULT_ENGINE
 
 if TYPE_CHECKING:
-    from robosoc.analysis.energy import EnergyModel
+    from robosoc.chip.energy import EnergyModel
 
 ERRATA_CHOICES = ("spec", "rtl")
 EXIT_CODE_CHOICES = (exit_codes.EXIT_CODE_STATUS, exit_codes.EXIT_CODE_PROGRAM)
@@ -134,7 +134,7 @@ def run(
     tile: Annotated[str | None, typer.Option("--tile", help=TILE_HELP)] = None,
 ) -> None:
     """``robosoc run`` (help: :data:`RUN_HELP`)."""
-    from robosoc.analysis.energy import EnergyModel
+    from robosoc.chip.energy import EnergyModel
     from robosoc.config import ConfigError
 
     on_chip = mesh is not None or chip is not None or bool(off)

@@ -1,7 +1,7 @@
 """``robosoc serve physics`` and ``robosoc serve chip``: the two sides of the decoupled mode.
 
-Thin over :func:`robosoc.cosim.decoupled.run_physics_side` and
-:func:`robosoc.cosim.decoupled.run_chip_side` (docs/decoupled.md).  Start the physics side first;
+Thin over :func:`robosoc.outputs.decoupled_flight.run_physics_side` and
+:func:`robosoc.outputs.decoupled_flight.run_chip_side` (docs/decoupled.md).  Start the physics side first;
 both sides take the same scenario options (the physics side refuses a chip built for another).
 """
 
@@ -122,8 +122,8 @@ def serve_physics_command(
     from rich.markup import escape
     from rich.progress import BarColumn, Progress, TextColumn
 
-    from robosoc.cosim.decoupled import run_physics_side
     from robosoc.cosim.link import LinkError, parse_address
+    from robosoc.outputs.decoupled_flight import run_physics_side
 
     console = make_console()
     config, craft, scenario = resolve_scenario(scenario, scenario_file, duration, seconds, vehicle, seed)
@@ -205,8 +205,8 @@ def serve_chip_command(
     connect_timeout: ConnectTimeout = 300.0,
 ) -> None:
     """The chip side: run the firmware on the chip for a physics side, over UDP."""
-    from robosoc.cosim.decoupled import run_chip_side
     from robosoc.cosim.link import LinkError, parse_address
+    from robosoc.outputs.decoupled_flight import run_chip_side
 
     console = make_console()
     config, craft, scenario = resolve_scenario(scenario, scenario_file, duration, seconds, vehicle, seed)

@@ -69,9 +69,9 @@ def sweep_command(
     from rich.markup import escape
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 
-    from robosoc.analysis.sweep_plots import sweep_html, write_sweep_plots
     from robosoc.config.sweep import sweep_from_mapping
     from robosoc.config.validate import ConfigError
+    from robosoc.sweep.plots import sweep_html, write_sweep_plots
     from robosoc.sweep.point import OK
     from robosoc.sweep.runner import run_sweep
 

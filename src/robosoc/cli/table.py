@@ -20,7 +20,7 @@ MAX_WORKERS = 64
 
 
 def _workers() -> int:
-    from robosoc.analysis.table_one import default_workers
+    from robosoc.sweep.table_one import default_workers
 
     return default_workers()
 
@@ -61,7 +61,7 @@ def table(
     """
     from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
-    from robosoc.analysis import table_one
+    from robosoc.sweep import table_one
 
     folder = files.output_dir(out, "--out") if out is not None else None
     spec = table_one.TableSpec(

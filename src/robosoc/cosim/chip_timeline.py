@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from robosoc.chip.mpsoc import MPSoC
-from robosoc.firmware import images
+from robosoc.host import images
 from robosoc.kernels import chip as kc
 
 Tile = tuple[int, int]

@@ -78,8 +78,8 @@ PARENT_KERNELS = (
 def throwaway_chip(chip: ChipConfig) -> MPSoC:
     """An MPSoC of ``chip`` whose first core spins (building it compiles nothing)."""
     from robosoc.chip.core_state import SRAM_BASE
-    from robosoc.chip.elf import Program, Segment
     from robosoc.chip.mpsoc import MPSoC
+    from robosoc.program.elf import Program, Segment
 
     mpsoc = MPSoC(chip)
     spin = Program(Path("<spin>"), SRAM_BASE, [(SRAM_BASE, SPIN)], segment_info=[Segment(SRAM_BASE, SPIN, True, False)])

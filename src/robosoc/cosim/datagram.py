@@ -38,7 +38,7 @@ import struct
 import zlib
 from dataclasses import dataclass
 
-from robosoc.firmware import packets
+from robosoc.host import packets
 
 __all__ = [
     "HEADER",

@@ -1,6 +1,6 @@
 """The chip side of the decoupled mode (``robosoc serve chip``): the firmware on the chip, over UDP.
 
-:func:`serve_chip` runs the flight firmware (:class:`robosoc.cosim.replay.FirmwareRun`) against
+:func:`serve_chip` runs the flight firmware (:class:`robosoc.cosim.firmware_run.FirmwareRun`) against
 the readings the physics side sends (docs/decoupled.md):
 
 * it boots the chip (to the cycle of flight time 0), then says hello to the physics side every
@@ -42,9 +42,10 @@ from robosoc.config.scenario import ScenarioConfig
 from robosoc.config.vehicle import VehicleConfig
 from robosoc.cosim.datagram import MAX_COMMANDS, Bye, ByeReason, Command, CommandBatch, Hello, Reading, SensorBatch
 from robosoc.cosim.decoupled_physics import Ended, sample_period_ns, scenario_digest
+from robosoc.cosim.firmware_run import DEFAULT_FIRST_CYCLE, FirmwareRun, ReplayResult
 from robosoc.cosim.link import Address, LinkLog, UdpLink
 from robosoc.cosim.lockstep import NS_PER_S
-from robosoc.cosim.replay import DEFAULT_FIRST_CYCLE, FirmwareRun, ReplayResult, SampleInput
+from robosoc.records import SampleInput
 
 __all__ = ["SLICE_NS", "ChipOutcome", "serve_chip"]
 

@@ -38,7 +38,7 @@ from typing import Protocol
 
 import numpy as np
 
-from robosoc.analysis.energy import EnergyModel
+from robosoc.chip.energy import EnergyModel
 from robosoc.config.chip import ChipConfig
 from robosoc.config.firmware import FirmwareConfig
 from robosoc.config.ranges import check_seed
@@ -48,16 +48,11 @@ from robosoc.control import quaternion
 from robosoc.control.flight import ROW_FIELDS, flight_row
 from robosoc.control.host import Estimate, HostController
 from robosoc.control.setpoint import Setpoint, setpoint_at
-from robosoc.cosim.replay import (
-    DEFAULT_FIRST_CYCLE,
-    FirmwareRun,
-    PwmCommand,
-    ReplayResult,
-    SampleInput,
-    sensor_packet,
-)
-from robosoc.firmware import flight_app
+from robosoc.cosim.firmware_run import DEFAULT_FIRST_CYCLE, FirmwareRun, ReplayResult
+from robosoc.cosim.replay import sensor_packet
+from robosoc.host import flight_app
 from robosoc.physics import SensorSample, World
+from robosoc.records import PwmCommand, SampleInput
 
 NS_PER_S = 1_000_000_000
 PHYSICS_STEP_NS = round(PHYSICS_DT_S * NS_PER_S)
@@ -94,7 +89,7 @@ UNKNOWN_ESTIMATE = Estimate(np.full(4, math.nan), np.full(3, math.nan), math.nan
 
 
 class ChipController:
-    """The flight firmware on the chip (:mod:`robosoc.firmware.flight_app`) as a lockstep controller.
+    """The flight firmware on the chip (:mod:`robosoc.host.flight_app`) as a lockstep controller.
 
     Args:
         scenario, vehicle: what is flown (the firmware's control parameters come from them).

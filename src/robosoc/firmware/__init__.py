@@ -18,18 +18,18 @@ Layout (all plain files inside the package):
   (:func:`estimator_sources`).
 - ``app/estimator.[ch]``: the estimator task's work: calibration while disarmed, then EKF and
   altitude filter per sample, sensor packet in, estimate packet out (:func:`estimator_sources`).
-- ``app/flight_app.c``: the flight application's ``main`` (:mod:`robosoc.firmware.flight_app`).
+- ``app/flight_app.c``: the flight application's ``main`` (:mod:`robosoc.host.flight_app`).
 - ``app/pid.[ch]``, ``app/mixer.[ch]``: the PID task's control law and mixer (:func:`pid_sources`).
   They and the altitude filter include ``robosoc_control.h``, generated from the Python configs by
-  :mod:`robosoc.firmware.control_params` (pass :func:`~robosoc.firmware.control_params.control_include_dir`
+  :mod:`robosoc.host.control_params` (pass :func:`~robosoc.host.control_params.control_include_dir`
   as an include folder).
-- ``include/robosoc_packets.h``: the application packets, generated from :mod:`robosoc.firmware.packets`.
+- ``include/robosoc_packets.h``: the application packets, generated from :mod:`robosoc.host.packets`.
 
 Builds choose the arithmetic with :func:`arith_defines`: ``float`` (soft-float) or ``fixed`` (Q16.16).
 - ``kernel/``: the portable real-time kernel (``os.h``, ``os_config.h``, tasks, messaging).
 - ``port/``: its HF-RISCV port (context switch and interrupt entry, tick timer, NI driver).
   Kernel images link these instead of ``crt/irq_entry.S`` and ``crt/irq_default.c``
-  (:mod:`robosoc.firmware.images`).
+  (:mod:`robosoc.host.images`).
 """
 
 from pathlib import Path

@@ -24,7 +24,7 @@ from pathlib import Path
 import llvmlite.binding as llvm
 from numba.core.compiler_lock import global_compiler_lock
 
-from robosoc.toolchain.cache import cache_root
+from robosoc.cache import cache_root
 
 #: Bumped whenever the pipeline or the IR conventions change, to invalidate old objects.
 PIPELINE_VERSION = 4

@@ -14,6 +14,8 @@ from pathlib import Path
 
 import numba
 
+from robosoc.cache import cache_root
+
 _SOURCES = [*sorted(Path(__file__).parent.glob("*.py")), Path(__file__).parent.parent / "isa" / "table.py"]
 
 
@@ -27,9 +29,7 @@ def kernel_digest() -> str:
 
 
 def _numba_cache_dir() -> Path:
-    env = os.environ.get("ROBOSOC_CACHE")
-    root = Path(env) if env else Path.home() / ".cache" / "robosoc"
-    return root.expanduser() / "numba" / kernel_digest()
+    return cache_root() / "numba" / kernel_digest()
 
 
 if not os.environ.get("NUMBA_CACHE_DIR"):

@@ -71,7 +71,7 @@ def run_point(base: ScenarioConfig, point: Point, source: str) -> PointResult:
 
 def fly_point(scenario: ScenarioConfig, seed: int, folder: Path) -> dict[str, Any]:
     """Fly ``scenario`` with ``seed``, writing its run folder into ``folder``; its summary."""
-    from robosoc.cosim.flight_session import fly_scenario
+    from robosoc.outputs.flight_session import fly_scenario
 
     return fly_scenario(scenario, folder, seed=seed, plot=False, logs=False).summary
 

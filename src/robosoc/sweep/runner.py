@@ -72,7 +72,7 @@ Progress = Callable[[Point, dict[str, Any]], None]
 def warm_worker() -> None:
     """Import what a point needs once per worker process; Ctrl-C belongs to the driving process."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
-    import robosoc.cosim.flight_session  # noqa: F401  (physics, chip and firmware: once per process)
+    import robosoc.outputs.flight_session  # noqa: F401  (physics, chip and firmware: once per process)
 
 
 def prepare(config: SweepConfig, points: list[Point], on_status: Callable[[str], None]) -> None:
@@ -81,7 +81,7 @@ def prepare(config: SweepConfig, points: list[Point], on_status: Callable[[str],
     from robosoc.config.validate import ConfigError, from_mapping
     from robosoc.config.vehicle import vehicle_preset
     from robosoc.cosim.chip_warmup import prepare_chip
-    from robosoc.firmware import flight_app
+    from robosoc.host import flight_app
 
     seen: set[str] = set()
     for point in points:

@@ -23,7 +23,7 @@ import shutil
 from pathlib import Path
 from typing import Any
 
-from robosoc.analysis.run_summary import json_safe
+from robosoc.outputs.run_summary import json_safe
 from robosoc.sweep.plan import Point
 from robosoc.sweep.point import PointResult, metric
 

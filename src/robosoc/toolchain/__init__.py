@@ -9,8 +9,8 @@ Public API:
 - :class:`CompileError`, :class:`ToolchainError`, :class:`FixedRegisterWarning`, :class:`CompilerWarning`.
 """
 
+from robosoc.cache import cache_root
 from robosoc.toolchain.build import build_elf
-from robosoc.toolchain.cache import cache_root
 from robosoc.toolchain.errors import CompileError, CompilerWarning, FixedRegisterWarning, ToolchainError
 from robosoc.toolchain.linker_script import DEFAULT_SRAM_SIZE, SRAM_BASE, render_linker_script
 from robosoc.toolchain.native import compile_native, run_native

@@ -1,6 +1,6 @@
 """Where builds are cached, and the content hash that keys them.
 
-The root is ``$ROBOSOC_CACHE`` when set, else ``~/.cache/robosoc``.  Below it:
+The root is :func:`robosoc.cache.cache_root`.  Below it:
 ``zig/`` holds zig's own caches, ``elf/`` the RISC-V builds, ``native/`` the host builds.
 A key is the SHA-256 of a JSON description of everything that decides the output:
 the toolchain version, the options, and the contents of every source and of every header
@@ -9,21 +9,15 @@ in the include directories and in the sources' own directories.
 
 import hashlib
 import json
-import os
 from collections.abc import Iterable
 from pathlib import Path
+
+from robosoc.cache import cache_root
 
 #: Bumped whenever the way robosoc drives the compiler changes, to invalidate old entries.
 CACHE_SCHEMA = 1
 
 HEADER_SUFFIXES = (".h", ".inc")
-
-
-def cache_root() -> Path:
-    """The project cache folder (``$ROBOSOC_CACHE`` or ``~/.cache/robosoc``)."""
-    env = os.environ.get("ROBOSOC_CACHE")
-    root = Path(env) if env else Path.home() / ".cache" / "robosoc"
-    return root.expanduser().resolve()
 
 
 def zig_cache_dir() -> Path:

@@ -11,10 +11,10 @@ encodings write ``rd`` = bits 11:7).
 from dataclasses import dataclass
 from pathlib import Path
 
-from robosoc.chip.elf import Program, load_elf
 from robosoc.firmware import IRQ_ENTRY_SYMBOL
 from robosoc.isa.table import lookup
 from robosoc.isa.table import writes_rd as _row_writes_rd
+from robosoc.program.elf import Program, load_elf
 
 X27 = 27
 #: Registers the runtime owns: s11 holds the return address of the interrupt return sequence and

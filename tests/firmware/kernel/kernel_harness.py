@@ -7,10 +7,10 @@ from pathlib import Path
 
 import pytest
 
-from robosoc.chip.elf import load_elf
 from robosoc.chip.mpsoc import ChipResult, MPSoC
 from robosoc.config.chip import ChipConfig
-from robosoc.firmware import images
+from robosoc.host import images
+from robosoc.program.elf import load_elf
 
 PROGRAMS = Path(__file__).parent / "programs"
 #: every kernel test runs in both builds

@@ -14,14 +14,7 @@ import statistics
 from kernel_harness import build, packet_visible, run  # the script's folder is on sys.path
 
 from robosoc.config.chip import ChipConfig
-from robosoc.firmware.images import (
-    FIRST_TASK_ID,
-    IDLE_TASK_ID,
-    KERNEL_TASK_ID,
-    message_packets,
-    read_job_log,
-    read_stats,
-)
+from robosoc.host.images import FIRST_TASK_ID, IDLE_TASK_ID, KERNEL_TASK_ID, message_packets, read_job_log, read_stats
 
 A, B = (1, 0), (0, 1)
 TICK = 65536

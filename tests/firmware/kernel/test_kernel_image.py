@@ -4,8 +4,8 @@ import pytest
 from kernel_harness import BUILDS, build
 from measure_overhead import measure
 
-from robosoc.chip.elf import load_elf
 from robosoc.isa.disasm import disassemble
+from robosoc.program.elf import load_elf
 from robosoc.toolchain import find_x27_writes
 
 KERNEL_PREFIXES = ("os_", "port_", "_irq_entry")

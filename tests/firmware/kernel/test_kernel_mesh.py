@@ -7,7 +7,7 @@ from kernel_harness import BUILDS, build, run
 
 from robosoc.chip.mpsoc import ChipError
 from robosoc.config.chip import ChipConfig
-from robosoc.firmware.images import read_stats, reassemble, tile_address
+from robosoc.host.images import read_stats, reassemble, tile_address
 
 MESH = ChipConfig(width=3, height=3)  # I/O tile (0, 0), eight core tiles
 NMSG, MAXLEN, BIG, BIG_FROM = 6, 900, 2000, (2, 2)

@@ -13,7 +13,7 @@ import struct
 import pytest
 from kernel_harness import BUILDS, CORE, build, packet_visible, run
 
-from robosoc.firmware.images import (
+from robosoc.host.images import (
     FIRST_TASK_ID,
     IDLE_TASK_ID,
     c_header_constants,

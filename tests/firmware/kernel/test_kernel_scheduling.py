@@ -11,7 +11,7 @@ import itertools
 import pytest
 from kernel_harness import BUILDS, CORE, build, run
 
-from robosoc.firmware.images import FIRST_TASK_ID, read_job_log, read_stats
+from robosoc.host.images import FIRST_TASK_ID, read_job_log, read_stats
 from robosoc.toolchain import CompileError
 
 #: tick length -> (prescaler, CTC + 1) as os_config.h must choose them: the smallest prescaler of

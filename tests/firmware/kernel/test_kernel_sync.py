@@ -3,7 +3,7 @@
 import pytest
 from kernel_harness import BUILDS, CORE, build, run
 
-from robosoc.firmware.images import read_stats
+from robosoc.host.images import read_stats
 
 TICK = 262_144  # the default
 DELAY = 3

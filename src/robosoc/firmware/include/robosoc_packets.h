@@ -1,7 +1,7 @@
 /*
  * robosoc_packets.h - the application packets' layout and units.
  *
- * GENERATED from src/robosoc/firmware/packets.py (python -m robosoc.firmware.packets): edit
+ * GENERATED from src/robosoc/host/packets.py (python -m robosoc.host.packets): edit
  * that file, not this one.  Little-endian structs without padding; q16 fields are Q16.16
  * (int32 holding value * 65536).  On the NoC a packet's bytes are 16-bit flits in memory order.
  * The asserts make every build check the layout the Python side uses.

@@ -1,6 +1,6 @@
 """A flight as an MCAP file with ROS 2 messages (``flight.mcap``), readable by Foxglove and rosbag2.
 
-The topics, types and units are :data:`robosoc.analysis.ros2_flight.TOPICS`; messages are CDR
+The topics, types and units are :data:`robosoc.outputs.ros2_flight.TOPICS`; messages are CDR
 encoded by ``mcap-ros2-support`` with the ``ros2msg`` schema text of each type stored in the file,
 log time and header stamp the row's simulated time.  The file is written under a temporary name and
 renamed, so an interrupted write leaves no truncated ``flight.mcap``.
@@ -14,9 +14,9 @@ from pathlib import Path
 import numpy as np
 from mcap_ros2.writer import Writer
 
-from robosoc.analysis.ros2_flight import message_definition, row_messages
 from robosoc.control.flight import ROW_FIELDS
 from robosoc.control.flight_log import read_flight_log
+from robosoc.outputs.ros2_flight import message_definition, row_messages
 
 
 def write_flight_mcap(rows: np.ndarray, path: Path) -> int:

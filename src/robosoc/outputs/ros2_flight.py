@@ -1,7 +1,7 @@
 """A flight row as ROS 2 messages: the topics, their message definitions and how columns fill them.
 
-Shared by the MCAP log (:mod:`robosoc.analysis.mcap_log`) and the live Foxglove server
-(:mod:`robosoc.analysis.foxglove_live`), so a recorded flight and a live one look the same.
+Shared by the MCAP log (:mod:`robosoc.outputs.mcap_log`) and the live Foxglove server
+(:mod:`robosoc.outputs.foxglove_live`), so a recorded flight and a live one look the same.
 
 Every column of :data:`robosoc.control.flight.ROW_FIELDS` lands in exactly one message field
 (:data:`TOPICS`), with the ROS unit where it differs (pressure hPa → Pa).  Frames: ``world``

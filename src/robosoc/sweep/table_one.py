@@ -4,7 +4,7 @@
     runs = measure_table(TableSpec(iterations=100, releases=("event", "periodic")))
     for line in format_table(runs): print(line)
 
-Each build is the flight firmware (:mod:`robosoc.firmware.flight_app`) on the seed's 2×2 chip, fed
+Each build is the flight firmware (:mod:`robosoc.host.flight_app`) on the seed's 2×2 chip, fed
 either the built-in sensor stream (:func:`robosoc.cosim.replay.built_in_rows`, replayed: every build
 gets the same samples) or flown closed-loop (:func:`robosoc.cosim.lockstep.fly_chip`).  The stream
 starts with the flight plan's calibration on the ground; the measured window is the ``iterations``
@@ -203,7 +203,7 @@ class TableResult:
 
 
 def task_row(jobs: Sequence, task: str, build: str, release: str, clock_ns: float) -> TaskRow:
-    """The means of ``jobs`` (:class:`robosoc.cosim.replay.JobRecord`, all of ``task``)."""
+    """The means of ``jobs`` (:class:`robosoc.records.JobRecord`, all of ``task``)."""
     n = len(jobs)
     if n == 0:
         nan = math.nan
@@ -231,7 +231,7 @@ def first_armed(rows: np.ndarray) -> int:
 def summarise(
     result, rows: np.ndarray, golden: GoldenRun, iterations: int, source: str
 ) -> BuildRun:  # fmt: skip
-    """A replay's or flight's :class:`robosoc.cosim.replay.ReplayResult` as a :class:`BuildRun`."""
+    """A replay's or flight's :class:`robosoc.cosim.firmware_run.ReplayResult` as a :class:`BuildRun`."""
     fw: FirmwareConfig = result.firmware
     k0 = first_armed(rows)
     window = range(k0, min(len(rows), k0 + iterations))
@@ -362,7 +362,7 @@ def measure_table(spec: TableSpec, on_progress: Callable[[str, int, int], None] 
         robosoc.chip.mpsoc.ChipError / CoreError: a build's firmware faulted.
         CompileError: a build failed to compile.
     """
-    from robosoc.firmware import flight_app
+    from robosoc.host import flight_app
 
     configs = [build_config(arith, mul, release) for release in spec.releases for arith, mul in BUILDS]
     for fw in configs:

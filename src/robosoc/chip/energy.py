@@ -45,8 +45,8 @@ class EnergyModel:
             ConfigError: naming the file and the missing or malformed key.
         """
         if path is None:
-            ref = resources.files("robosoc.analysis").joinpath("energy_coefficients.toml")
-            text, where = ref.read_text(), "robosoc/analysis/energy_coefficients.toml"
+            ref = resources.files("robosoc.chip").joinpath("energy_coefficients.toml")
+            text, where = ref.read_text(), "robosoc/chip/energy_coefficients.toml"
         else:
             where = str(path)
             try:

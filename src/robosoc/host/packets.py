@@ -8,7 +8,7 @@ message ports they travel to (:data:`PORTS`):
 - ``pwm``: four PWM values and the sample's sequence number, PID task → I/O tile.
 
 ``include/robosoc_packets.h`` (the C structs) is generated from it (``python -m
-robosoc.firmware.packets``); a test checks the file is up to date, and the header's own
+robosoc.host.packets``); a test checks the file is up to date, and the header's own
 ``_Static_assert`` lines make every C build check each offset and size.
 
 **Encoding.**  A packet is a little-endian C struct without padding: ``u16`` and ``u32`` are
@@ -27,8 +27,9 @@ import struct
 import sys
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Literal
+
+from robosoc.firmware import INCLUDE_DIR
 
 FieldType = Literal["u16", "u32", "q16"]
 
@@ -262,7 +263,7 @@ PORTS: tuple[Port, ...] = (
     Port("pwm", PWM_PORT, "I/O tile", "PWM packets, PID task -> I/O tile"),
 )
 
-HEADER_PATH = Path(__file__).resolve().parent / "include" / "robosoc_packets.h"
+HEADER_PATH = INCLUDE_DIR / "robosoc_packets.h"
 
 
 def c_header() -> str:
@@ -271,7 +272,7 @@ def c_header() -> str:
         "/*",
         " * robosoc_packets.h - the application packets' layout and units.",
         " *",
-        " * GENERATED from src/robosoc/firmware/packets.py (python -m robosoc.firmware.packets): edit",
+        " * GENERATED from src/robosoc/host/packets.py (python -m robosoc.host.packets): edit",
         " * that file, not this one.  Little-endian structs without padding; q16 fields are Q16.16",
         " * (int32 holding value * 65536).  On the NoC a packet's bytes are 16-bit flits in memory order.",
         " * The asserts make every build check the layout the Python side uses.",
@@ -342,7 +343,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args == ["--check"]:
         current = HEADER_PATH.read_text() if HEADER_PATH.is_file() else ""
         if current != text:
-            print(f"{HEADER_PATH} is out of date: run python -m robosoc.firmware.packets", file=sys.stderr)
+            print(f"{HEADER_PATH} is out of date: run python -m robosoc.host.packets", file=sys.stderr)
             return 1
         return 0
     HEADER_PATH.write_text(text)

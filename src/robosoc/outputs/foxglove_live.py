@@ -1,6 +1,6 @@
 """A flight served live over Foxglove's WebSocket protocol (``robosoc fly --foxglove PORT``).
 
-The same topics and ROS 2 messages as ``flight.mcap`` (:mod:`robosoc.analysis.ros2_flight`),
+The same topics and ROS 2 messages as ``flight.mcap`` (:mod:`robosoc.outputs.ros2_flight`),
 CDR-encoded, through the ``foxglove-sdk`` server on loopback: in Foxglove, *Open connection* →
 ``ws://127.0.0.1:PORT``.  Message times are the flight's simulated time.  A flight faster than
 real time is held back to real time (``pace``) so that it can be watched; a slower one (the chip)
@@ -15,7 +15,7 @@ import foxglove
 import numpy as np
 from mcap_ros2._dynamic import serialize_dynamic
 
-from robosoc.analysis.ros2_flight import TOPICS, message_definition, row_messages
+from robosoc.outputs.ros2_flight import TOPICS, message_definition, row_messages
 
 HOST = "127.0.0.1"
 SERVER_NAME = "robosoc"

@@ -27,7 +27,6 @@ from multiprocessing.connection import Connection, wait
 from pathlib import Path
 from typing import Any
 
-from robosoc.analysis.run_summary import write_summary
 from robosoc.config.chip import ChipConfig
 from robosoc.config.firmware import FirmwareConfig
 from robosoc.config.link import LinkConfig
@@ -36,9 +35,10 @@ from robosoc.config.vehicle import VehicleConfig
 from robosoc.control.flight_log import CsvFlightLog
 from robosoc.cosim.decoupled_chip import ChipOutcome, serve_chip
 from robosoc.cosim.decoupled_physics import Ended, PhysicsOutcome, serve_physics
-from robosoc.cosim.decoupled_summary import chip_record, decoupled_summary, physics_record
 from robosoc.cosim.link import Address, LinkError
-from robosoc.cosim.replay import write_jobs_csv
+from robosoc.outputs.decoupled_summary import chip_record, decoupled_summary, physics_record
+from robosoc.outputs.run_folder import write_jobs_csv
+from robosoc.outputs.run_summary import write_summary
 
 __all__ = ["DecoupledFlight", "SideFailed", "fly_decoupled", "run_chip_side", "run_physics_side"]
 

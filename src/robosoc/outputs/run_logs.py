@@ -10,11 +10,11 @@ from pathlib import Path
 
 import numpy as np
 
-from robosoc.analysis.chip_trace import run_trace, write_chip_trace
-from robosoc.analysis.mcap_log import write_flight_mcap
-from robosoc.analysis.report import write_report
-from robosoc.analysis.run_folder import CHIP_TRACE_JSON, FLIGHT_MCAP
-from robosoc.cosim.replay import FirmwareRun, ReplayResult
+from robosoc.cosim.firmware_run import FirmwareRun, ReplayResult
+from robosoc.outputs.chip_trace import run_trace, write_chip_trace
+from robosoc.outputs.mcap_log import write_flight_mcap
+from robosoc.outputs.report import write_report
+from robosoc.outputs.run_folder import CHIP_TRACE_JSON, FLIGHT_MCAP
 
 
 def write_run_logs(
@@ -28,7 +28,7 @@ def write_run_logs(
     timeline) and the report into ``folder``; the paths written, by kind.
 
     Raises:
-        robosoc.analysis.run_folder.RunFolderError: a run file in ``folder`` is malformed.
+        robosoc.outputs.run_folder.RunFolderError: a run file in ``folder`` is malformed.
     """
     written = {"mcap": folder / FLIGHT_MCAP}
     write_flight_mcap(rows, written["mcap"])

@@ -35,10 +35,10 @@ from robosoc.firmware import (
     MATH_SOURCES,
     PID_SOURCES,
     arith_defines,
-    images,
 )
-from robosoc.firmware.control_params import control_include_dir
-from robosoc.firmware.packets import ESTIMATE_PORT, PWM_PORT, SENSOR_PORT
+from robosoc.host import images
+from robosoc.host.control_params import control_include_dir
+from robosoc.host.packets import ESTIMATE_PORT, PWM_PORT, SENSOR_PORT
 
 if TYPE_CHECKING:
     from robosoc.chip.mpsoc import MPSoC
@@ -168,7 +168,7 @@ def read_estimate(chip: MPSoC, fw: FirmwareConfig, sample: int = -1) -> ChipEsti
     Raises:
         ValueError: no flight application on the estimator tile, or main has not run.
     """
-    from robosoc.chip.dwarf import member_offset
+    from robosoc.program.dwarf import member_offset
 
     xy = tuple(fw.ekf_tile)
     t = chip.config.tile_index(xy)  # type: ignore[arg-type]

@@ -1,4 +1,5 @@
-"""Reading a run folder (what ``robosoc fly`` writes) back, tolerating whatever is missing.
+"""A run folder (what ``robosoc fly`` writes): its file names, ``jobs.csv`` written, and the folder
+read back, tolerating whatever is missing.
 
 A fly run folder holds ``scenario.toml``, ``flight.csv``, ``jobs.csv`` (chip controller only),
 ``summary.json`` and, with several vehicles, ``vehicle-N/`` sub-folders each with their own.  Any
@@ -13,13 +14,14 @@ import csv
 import json
 import math
 import re
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from robosoc.control.flight import ROW_FIELDS
-from robosoc.cosim.replay import JOB_CSV_FIELDS
+from robosoc.records import JobRecord
 
 FLIGHT_CSV = "flight.csv"
 JOBS_CSV = "jobs.csv"
@@ -28,8 +30,31 @@ SCENARIO_TOML = "scenario.toml"
 FLIGHT_MCAP = "flight.mcap"
 CHIP_TRACE_JSON = "chip-trace.json"
 REPORT_HTML = "report.html"
-PROFILE_JSON = "profile.json"  # written by robosoc profile / fly --profile (analysis/function_profile.py)
+PROFILE_JSON = "profile.json"  # written by robosoc profile / fly --profile (chip/function_profile.py)
 VEHICLE_FOLDER = re.compile(r"vehicle-(\d+)")
+
+JOB_CSV_FIELDS = (
+    "task", "tile", "job", "release_cycle", "start_cycle", "completion_cycle", "response_cycles", "exec_cycles",
+    "instructions", "task_pj", "kernel_pj", "noc_pj", "idle_pj", "deadline_met",
+)  # fmt: skip
+"""Columns of ``jobs.csv`` (one job a row; tile as "x,y", energies in pJ, deadline_met 0/1)."""
+
+
+def write_jobs_csv(jobs: Sequence[JobRecord], path: Path) -> None:
+    """Write ``jobs`` to ``path`` with the columns :data:`JOB_CSV_FIELDS`."""
+    with path.open("w", newline="") as handle:
+        writer = csv.writer(handle)
+        writer.writerow(JOB_CSV_FIELDS)
+        for j in jobs:
+            writer.writerow(
+                [
+                    j.task, f"{j.tile[0]},{j.tile[1]}", j.job, j.release_cycle, j.start_cycle, j.completion_cycle,
+                    j.response_cycles, j.exec_cycles, j.instructions, f"{j.energy_pj['task']:.3f}",
+                    f"{j.energy_pj['kernel']:.3f}", f"{j.energy_pj['noc']:.3f}", f"{j.energy_pj['idle']:.3f}",
+                    int(j.deadline_met),
+                ]
+            )  # fmt: skip
+
 
 _TEXT_JOB_FIELDS = ("task", "tile")
 

@@ -23,8 +23,9 @@ from collections.abc import Iterable, Sequence
 from pathlib import Path
 
 from robosoc.cosim.chip_timeline import ChipTimeline, timeline_of
-from robosoc.cosim.replay import FirmwareRun, JobRecord, ReplayResult
-from robosoc.firmware import images
+from robosoc.cosim.firmware_run import FirmwareRun, ReplayResult
+from robosoc.host import images
+from robosoc.records import JobRecord
 
 Tile = tuple[int, int]
 

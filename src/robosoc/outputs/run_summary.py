@@ -16,7 +16,7 @@ key names, NaN written as ``null``)::
 ``complete`` is false for a flight that was interrupted or crashed: the figures are those of the
 rows flown so far, and ``"stopped"`` says why.  The flight figures are
 :func:`robosoc.control.flight.flight_metrics` of the rows; the task figures are
-:func:`robosoc.cosim.replay.task_summary` of the job records (the same records ``jobs.csv`` holds);
+:func:`robosoc.outputs.run_summary.task_summary` of the job records (the same records ``jobs.csv`` holds);
 ``cycles`` holds the chip's last cycle and each application tile's core cycles (what its energy
 and a profile's rows add up to, docs/profile.md); the estimate figures are NaN (null) while the
 controller's estimate is not visible in the rows.
@@ -39,7 +39,8 @@ from robosoc.config.chip import ChipConfig
 from robosoc.config.firmware import FirmwareConfig
 from robosoc.config.scenario import ScenarioConfig
 from robosoc.control.flight import ROW_FIELDS, column, flight_metrics
-from robosoc.cosim.replay import ENERGY_PARTS, ReplayResult, task_summary
+from robosoc.cosim.firmware_run import TASK_NAMES, ReplayResult
+from robosoc.records import ENERGY_PARTS, JobRecord
 
 SCHEMA = 1
 MODE_LOCKSTEP = "lockstep"
@@ -90,6 +91,35 @@ def flight_summary(rows: np.ndarray, scenario: ScenarioConfig, rest_height: floa
         "attitude_estimate_rms_deg": m.ekf_rms if seen else math.nan,
         "height_estimate_rms_m": m.height_estimate_rms,
     }
+
+
+def task_summary(jobs: Sequence[JobRecord], clock_ns: float) -> dict[str, dict[str, float]]:
+    """Per task (of :data:`TASK_NAMES` that has jobs): job count, mean/max execution cycles and
+    response time [us], mean energy per job [nJ] in all and per part (:data:`ENERGY_PARTS`), the
+    kernel's share of it, deadline misses."""
+    summary: dict[str, dict[str, float]] = {}
+    for name in TASK_NAMES:
+        mine = [j for j in jobs if j.task == name]
+        if not mine:
+            continue
+        exec_c = [j.exec_cycles for j in mine]
+        resp = [j.response_cycles for j in mine]
+        energy = [j.energy_total_pj for j in mine]
+        summary[name] = {
+            "jobs": len(mine),
+            "exec_cycles_mean": sum(exec_c) / len(mine),
+            "exec_cycles_max": max(exec_c),
+            "response_us_mean": sum(resp) / len(mine) * clock_ns / 1000,
+            "response_us_max": max(resp) * clock_ns / 1000,
+            "energy_nj_mean": sum(energy) / len(mine) / 1000,
+            **{
+                f"energy_nj_{part}_mean": sum(j.energy_pj[part] for j in mine) / len(mine) / 1000
+                for part in ENERGY_PARTS
+            },
+            "kernel_energy_share": sum(j.energy_pj["kernel"] for j in mine) / max(1e-12, sum(energy)),
+            "deadline_misses": sum(not j.deadline_met for j in mine),
+        }
+    return summary
 
 
 def task_figures(result: ReplayResult) -> dict[str, dict[str, float]]:

@@ -10,12 +10,12 @@ host controller (``"host"``).  The run folder (``out``) gets, as the flight goes
 
 and at the end (or when the flight is interrupted or crashes, with ``"complete": false``):
 
-* ``summary.json`` (:mod:`robosoc.analysis.run_summary`), ``jobs.csv`` (chip: the job records,
-  :func:`robosoc.cosim.replay.write_jobs_csv`) and ``flight.png``.
+* ``summary.json`` (:mod:`robosoc.outputs.run_summary`), ``jobs.csv`` (chip: the job records,
+  :func:`robosoc.outputs.run_folder.write_jobs_csv`) and ``flight.png``.
 
 With several vehicles each has a sub-folder ``vehicle-1/``, ``vehicle-2/``, ... holding its own
 ``flight.csv``, ``jobs.csv``, ``summary.json`` and ``flight.png``, and the top-level
-``summary.json`` lists them all (:func:`robosoc.analysis.run_summary.fleet_summary`).
+``summary.json`` lists them all (:func:`robosoc.outputs.run_summary.fleet_summary`).
 
 Vehicles: vehicle i (from 0) is the scenario's preset named ``quad`` (one vehicle) or
 ``quad<i+1>``, spawned on a square grid :data:`SPACING_M` apart, vehicle 1 at the origin.  One
@@ -35,12 +35,12 @@ from typing import Any
 
 import numpy as np
 
-from robosoc.analysis.run_summary import fleet_summary, vehicle_summary, write_summary
 from robosoc.config.scenario import ScenarioConfig, scenario_toml
 from robosoc.config.vehicle import VehicleConfig, vehicle_preset
 from robosoc.control.flight import ROW_FIELDS
 from robosoc.control.flight_log import CsvFlightLog
 from robosoc.control.host import HostController
+from robosoc.cosim.firmware_run import ReplayResult
 from robosoc.cosim.lockstep import (
     NS_PER_S,
     PHYSICS_STEP_NS,
@@ -49,7 +49,8 @@ from robosoc.cosim.lockstep import (
     LockstepController,
     fly_lockstep_fleet,
 )
-from robosoc.cosim.replay import ReplayResult, write_jobs_csv
+from robosoc.outputs.run_folder import write_jobs_csv
+from robosoc.outputs.run_summary import fleet_summary, vehicle_summary, write_summary
 from robosoc.physics import World
 
 SPACING_M = 3.0
@@ -104,7 +105,7 @@ def _controllers(scenario: ScenarioConfig, on_status: Callable[[str], None], pro
         ]
     on_status(f"building the firmware ({scenario.firmware.label}; cached after the first build) ...")
     from robosoc.cosim.chip_warmup import prepare_chip
-    from robosoc.firmware import flight_app
+    from robosoc.host import flight_app
 
     prepare_chip(scenario.chip, lambda: flight_app.build(scenario.firmware, canonical, scenario), on_status)
     fw, chip = scenario.firmware, scenario.chip
@@ -145,7 +146,7 @@ def fly_scenario(
         on_row: called with the vehicle index and each row as soon as it is complete (a live view).
         plot: also write ``flight.png`` per vehicle.
         logs: also write ``flight.mcap``, ``chip-trace.json`` (chip) and ``report.html`` per vehicle
-            (:func:`robosoc.analysis.run_logs.write_run_logs`; docs/results-logs.md).
+            (:func:`robosoc.outputs.run_logs.write_run_logs`; docs/results-logs.md).
         profile: count every instruction per firmware function, tile and task (chip controller) and
             write ``profile.json`` and ``profile.csv`` per vehicle (docs/profile.md); the results'
             ``profile`` holds it.
@@ -241,7 +242,7 @@ def _conclude(
             title = f"{scenario.name}, seed {scenario.seed}" + (f", vehicle {i + 1}" if len(vehicles) > 1 else "")
             plot_flight(rows[i], folder / "flight.png", title=title)
         if logs and len(rows[i]):
-            from robosoc.analysis.run_logs import write_run_logs
+            from robosoc.outputs.run_logs import write_run_logs
 
             run = controller.run if isinstance(controller, ChipController) else None
             metadata = {"scenario": scenario.name, "seed": scenario.seed, "vehicle": i + 1}

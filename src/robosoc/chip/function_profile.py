@@ -6,7 +6,7 @@ and word of code, how often the instruction there executed and the dynamic extra
 become cycles and energy by the rules the run's own counters use: an instruction costs one cycle
 plus the fixed extra cycles of its timing class plus its dynamic ones (:mod:`robosoc.isa.table`,
 :func:`robosoc.chip.counters.counters_dict`), and energy is Σ count × coefficient of the same
-:class:`robosoc.analysis.energy.EnergyModel`.  Nothing is sampled.
+:class:`robosoc.chip.energy.EnergyModel`.  Nothing is sampled.
 
 Cycles no instruction takes get rows of their own, so that a tile's rows add up to its cycles and
 energy exactly (:func:`profile_totals`):
@@ -33,13 +33,13 @@ from typing import Any
 
 import numpy as np
 
-from robosoc.analysis.energy import INSTRUCTION_CLASSES, STALL_KINDS, EnergyModel
 from robosoc.chip.core_state import CoreState
-from robosoc.chip.elf import Program
+from robosoc.chip.energy import INSTRUCTION_CLASSES, STALL_KINDS, EnergyModel
 from robosoc.chip.mpsoc import MPSoC
 from robosoc.chip.single import SingleCoreSoC
 from robosoc.isa.table import CLASS_NAMES, FIXED_EXTRA_CYCLES, STALL_KIND, lookup
 from robosoc.kernels.core_layout import PIPELINE_FILL
+from robosoc.program.elf import Program
 
 PROFILE_JSON = "profile.json"
 PROFILE_CSV = "profile.csv"

@@ -16,7 +16,7 @@ from pathlib import Path
 from elftools.dwarf.die import DIE
 from elftools.elf.elffile import ELFFile
 
-from robosoc.chip.elf import ElfError
+from robosoc.program.elf import ElfError
 
 _STRUCT_TAGS = ("DW_TAG_structure_type", "DW_TAG_union_type")
 _QUALIFIERS = ("DW_TAG_typedef", "DW_TAG_const_type", "DW_TAG_volatile_type")

@@ -14,7 +14,13 @@ from typing import Any
 
 import numpy as np
 
-from robosoc.analysis.run_summary import (
+from robosoc.config.chip import ChipConfig
+from robosoc.config.firmware import FirmwareConfig
+from robosoc.config.link import LinkConfig
+from robosoc.config.scenario import ScenarioConfig
+from robosoc.config.vehicle import VehicleConfig
+from robosoc.cosim.firmware_run import ReplayResult
+from robosoc.outputs.run_summary import (
     SCHEMA,
     chip_figures,
     energy_figures,
@@ -22,12 +28,6 @@ from robosoc.analysis.run_summary import (
     flight_summary,
     task_figures,
 )
-from robosoc.config.chip import ChipConfig
-from robosoc.config.firmware import FirmwareConfig
-from robosoc.config.link import LinkConfig
-from robosoc.config.scenario import ScenarioConfig
-from robosoc.config.vehicle import VehicleConfig
-from robosoc.cosim.replay import ReplayResult
 
 __all__ = [
     "SCHEMA",

@@ -2,7 +2,7 @@
 
 Plots are matplotlib figures inlined as SVG, styles inline, no script or font fetched from
 anywhere: the page opens without a network.  It shows what the folder holds (see
-:mod:`robosoc.analysis.run_folder`): trajectory and setpoints, estimated against true attitude,
+:mod:`robosoc.outputs.run_folder`): trajectory and setpoints, estimated against true attitude,
 motor PWM (``flight.csv``); per-task response-time histograms and energy per task split into its
 parts (``jobs.csv``); energy by tile and any other breakdown of ``summary.json``'s ``energy``
 (by instruction class, ``classes_uj``, when present); where cycles and energy go per firmware
@@ -27,8 +27,8 @@ from pathlib import Path
 
 import numpy as np
 
-from robosoc.analysis.run_folder import REPORT_HTML, RunFolder, finite, read_run_folder
 from robosoc.control.flight import ROW_FIELDS
+from robosoc.outputs.run_folder import REPORT_HTML, RunFolder, finite, read_run_folder
 
 MAX_POINTS = 5000
 """Most points drawn per line (longer flights are thinned evenly; the CSV keeps every row)."""
@@ -406,7 +406,7 @@ def write_report(run_dir: Path, out: Path | None = None) -> Path:
     The page is written to a temporary name and renamed.
 
     Raises:
-        robosoc.analysis.run_folder.RunFolderError: ``run_dir`` is not a run folder, or a file in it
+        robosoc.outputs.run_folder.RunFolderError: ``run_dir`` is not a run folder, or a file in it
             is malformed (the message names it).
     """
     run = read_run_folder(run_dir)

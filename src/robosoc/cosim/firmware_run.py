@@ -1,0 +1,290 @@
+"""The control firmware on the chip, driven one sensor sample at a time (:class:`FirmwareRun`).
+
+The half of a co-simulation that does not need the physics, shared by the replay of a log
+(:mod:`robosoc.cosim.replay`), the lockstep flight and the decoupled chip side: every sensor sample
+becomes a message from the I/O tile, injected at the cycle of its timestamp; the chip runs the
+firmware (the estimator and PID tasks of :mod:`robosoc.host.flight_app`); what comes back is the PWM
+command of each sample with the cycle it reached the I/O tile, and one record per job of each task.
+
+Time: sample k (timestamp t_k seconds) is injected in cycle ``first_cycle + round(t_k / clock)``;
+``first_cycle`` leaves the firmware time to boot (the kernel's start-up takes a few ten thousand
+cycles).  The chip is stepped from one injection to the next, and at each step the per-task
+counters of every tile and the router counters are read, so each job's instructions and energy are
+those of its task in the sample period in which it was released:
+
+* ``task``: the job's own task (its TASK_ID on its tile) in that period;
+* ``kernel``: the kernel's TASK_ID on the job's tile in that period (interrupt entry and exit,
+  scheduling, messaging), shared equally by the jobs of that tile in the period;
+* ``idle``: the idle task's on that tile (it sleeps: clock-gated cycles), shared likewise;
+* ``noc``: what the routers spent in that period beyond idling (the flits' share: active buffers
+  and switch control), shared equally by every job of the period; the routers' idle and leakage
+  energy is the chip's whether or not a job runs, and is in the run's totals only.
+
+With event release every job starts and ends within its sample period at 100 Hz (the issue's
+budget), so the split is exact; a job that runs past the next sample is still charged only its
+release period's counters, and the record says so (``spans_periods``).
+"""
+
+from __future__ import annotations
+
+import bisect
+import dataclasses
+import time
+from collections import Counter
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+from robosoc.chip.energy import EnergyModel
+from robosoc.chip.function_profile import FunctionProfile, chip_profile
+from robosoc.chip.mpsoc import MPSoC
+from robosoc.config.chip import ChipConfig
+from robosoc.config.firmware import FirmwareConfig
+from robosoc.config.scenario import ScenarioConfig
+from robosoc.config.vehicle import VehicleConfig
+from robosoc.host import flight_app, images, packets
+from robosoc.program.elf import load_elf
+from robosoc.records import JobRecord, PwmCommand, SampleInput
+
+#: Cycle of the first sample's injection: the firmware has booted by then.
+DEFAULT_FIRST_CYCLE = flight_app.FIRST_SAMPLE_CYCLE
+
+TASK_NAMES = ("estimator", "pid")
+
+
+@dataclass
+class ReplayResult:
+    firmware: FirmwareConfig
+    clock_ns: float
+    samples: list[SampleInput]
+    commands: list[PwmCommand]
+    jobs: list[JobRecord]
+    kernel_stats: dict[tuple[int, int], images.KernelStats]
+    counters: dict[tuple[int, int], dict[str, int]]
+    #: energy of each (tile, TASK_ID) over the whole replay (the jobs' ``task`` parts add up to these)
+    task_energy_pj: dict[tuple[tuple[int, int], int], float]
+    energy_pj: dict[str, float]
+    cycles: int
+    host_seconds: float
+    dropped: list[str] = field(default_factory=list)
+    #: the estimator's state at the close of each sample period in which no estimator job was mid-way
+    estimates: list[flight_app.ChipEstimate] = field(default_factory=list)
+    #: the exact per-function profile (a run made with ``profile=True``)
+    profile: FunctionProfile | None = None
+
+    def jobs_of(self, task: str) -> list[JobRecord]:
+        return [j for j in self.jobs if j.task == task]
+
+    @property
+    def deadline_misses(self) -> int:
+        return sum(not j.deadline_met for j in self.jobs)
+
+
+class FirmwareRun:
+    """The firmware on the chip, driven one sensor sample at a time: the part of :func:`replay`
+    that the lockstep co-simulation (:mod:`robosoc.cosim.lockstep`) shares.
+
+    Use: for each sample, :meth:`inject` it, :meth:`run_to` the chip (in one go or in pieces) up
+    to the next sample's cycle, then :meth:`close_period`; :meth:`result` at the end.  Job records
+    are charged to the sample period they were released in, from counter snapshots taken at
+    :meth:`close_period`.
+
+    Raises:
+        ValueError: the mapping does not fit the chip.
+    """
+
+    def __init__(
+        self,
+        fw: FirmwareConfig | None = None,
+        *,
+        vehicle: VehicleConfig | None = None,
+        scenario: ScenarioConfig | None = None,
+        chip: ChipConfig | None = None,
+        energy: EnergyModel | None = None,
+        first_cycle: int = DEFAULT_FIRST_CYCLE,
+        profile: bool = False,
+    ) -> None:
+        self.fw = fw or FirmwareConfig()
+        self.chip_config = chip or self.fw.seed_chip()
+        self.fw.check_chip(self.chip_config)
+        self.model = energy or EnergyModel.load()
+        self.first_cycle = first_cycle
+        elf = flight_app.build(self.fw, vehicle=vehicle, scenario=scenario)
+        self.chip = MPSoC(self.chip_config)
+        self.chip.record_timeline()  # for the chip trace (cosim/chip_timeline.py)
+        program = load_elf(elf, self.chip.regions())
+        self.tiles = flight_app.app_tiles(self.fw)
+        for xy in self.tiles:
+            self.chip.load(xy, program)
+        if profile:
+            self.chip.enable_profile()  # exact counts per function: function_profile() reads them
+        self.names = {(xy, tid): name for xy in self.tiles for name, tid in flight_app.task_ids(self.fw, xy).items()}
+        self.samples: list[SampleInput] = []
+        self._sample_cycles: list[int] = []  # of the samples, for finding a job's period
+        self.commands: list[PwmCommand] = []
+        self._periods: list[dict] = []  # per sample period: counter deltas per (tile, task) and NoC energy
+        self._previous = _snapshot(self.chip, self.tiles, self.model)
+        self._seen = dict.fromkeys(self.tiles, 0)
+        self._logged: list[tuple[tuple[int, int], images.JobRecord, int]] = []  # (tile, record, period)
+        self.estimates: list[flight_app.ChipEstimate] = []
+        self._start = time.perf_counter()
+
+    @property
+    def clock_ns(self) -> float:
+        return self.chip.clock_ns
+
+    @property
+    def cycle(self) -> int:
+        return self.chip.cycle
+
+    @property
+    def period_open(self) -> bool:
+        """Whether the last injected sample's period has not been closed yet."""
+        return len(self._periods) < len(self.samples)
+
+    def inject(self, sample: SampleInput) -> None:
+        """Send ``sample`` from the I/O tile to the estimator at ``sample.cycle``."""
+        for payload in flight_app.sensor_payloads(sample.payload, self.fw, self.chip_config, seq=sample.seq):
+            self.chip.inject(tuple(self.fw.ekf_tile), payload, sample.cycle)  # type: ignore[arg-type]
+        self.samples.append(sample)
+        self._sample_cycles.append(sample.cycle)
+
+    def run_to(self, cycle: int) -> list[PwmCommand]:
+        """Run the chip to ``cycle``; the PWM commands that reached the I/O tile meanwhile.
+
+        Raises:
+            robosoc.chip.mpsoc.ChipError / CoreError: the firmware faulted (names tile, pc, symbol).
+        """
+        self.chip.step(cycle)
+        fresh = []
+        # a PWM message fits one NoC packet, so no message straddles two calls
+        for message in images.reassemble(self.chip.received()):
+            if message.port != packets.PWM_PORT:
+                continue
+            values = packets.PWM.unpack(message.data)
+            pwm = tuple(int(v) for v in values["pwm"])  # type: ignore[union-attr]
+            fresh.append(PwmCommand(int(values["seq"]), pwm, message.cycle))  # type: ignore[arg-type]
+        self.commands += fresh
+        return fresh
+
+    def close_period(self) -> None:
+        """End the period of the last injected sample (the chip is at the next sample's cycle):
+        snapshot the counters, collect the jobs the kernels logged, and read the estimator's state
+        (:func:`flight_app.read_estimate`, a host read: no cycle) unless a job is mid-way.
+
+        Raises:
+            RuntimeError: a tile's job log overflowed since the last call.
+        """
+        current = _snapshot(self.chip, self.tiles, self.model)
+        estimate = flight_app.read_estimate(self.chip, self.fw, len(self.samples) - 1)
+        # consistent unless a job is mid-way: every sample estimated, or the tile asleep
+        if estimate.jobs >= len(self.samples) or self.chip.state(tuple(self.fw.ekf_tile)) == "sleeping":  # type: ignore[arg-type]
+            self.estimates.append(estimate)
+        self._periods.append(_delta(self._previous, current))
+        self._previous = current
+        for xy in self.tiles:
+            try:
+                fresh, count = images.read_new_jobs(self.chip, xy, self._seen[xy])
+            except ValueError as exc:
+                raise RuntimeError(f"{exc} (between two samples)") from exc
+            for r in fresh:
+                r = _unwrapped(r, self.chip.cycle)
+                self._logged.append((xy, r, _period_of(self._sample_cycles, r.release)))
+            self._seen[xy] = count
+
+    def function_profile(self) -> FunctionProfile:
+        """The exact profile so far: cycles, instructions and energy per function, tile and task.
+
+        Raises:
+            RuntimeError: the run was made without ``profile=True``.
+        """
+        names = dict(self.names)
+        for xy in self.tiles:
+            names.setdefault((xy, images.KERNEL_TASK_ID), "kernel")
+            names.setdefault((xy, images.IDLE_TASK_ID), "idle")
+        return chip_profile(self.chip, self.tiles, self.model, names)
+
+    def result(self) -> ReplayResult:
+        """Job records with their energy, the PWM commands, and the run's totals."""
+        seconds = time.perf_counter() - self._start
+        model, chip_, samples = self.model, self.chip, self.samples
+        per_period = Counter(p for _, _, p in self._logged)
+        per_tile_period = Counter((xy, p) for xy, _, p in self._logged)
+        jobs = []
+        for xy, r, p in self._logged:
+            name = self.names.get((xy, r.task))
+            if name is None:
+                continue
+            delta = self._periods[p]
+            counters = delta["tasks"].get((xy, r.task), {})
+            shared = per_tile_period[(xy, p)]
+            energy_pj = {
+                "task": _pj(model, counters),
+                "kernel": _pj(model, delta["tasks"].get((xy, images.KERNEL_TASK_ID), {})) / shared,
+                "idle": _pj(model, delta["tasks"].get((xy, images.IDLE_TASK_ID), {})) / shared,
+                "noc": delta["noc_pj"] / per_period[p],
+            }
+            jobs.append(
+                JobRecord(
+                    task=name, tile=xy, job=r.job, release_cycle=r.release, start_cycle=r.start,
+                    completion_cycle=r.completion, exec_cycles=r.exec_cycles, deadline_met=r.met,
+                    instructions=int(counters.get("instructions", 0)), energy_pj=energy_pj,
+                    spans_periods=p + 1 < len(samples) and r.completion > samples[p + 1].cycle,
+                )
+            )  # fmt: skip
+        chip_.finish_accounting()
+        counters = {xy: chip_.counters(xy) for xy in self.tiles}
+        task_energy = {(xy, task): _pj(model, c) for xy in self.tiles for task, c in chip_.task_counters(xy).items()}
+        total = {f"tile {xy}": _pj(model, c) for xy, c in counters.items()}
+        total["noc"] = sum(model.noc_pj(chip_.noc_counters()).values())
+        return ReplayResult(
+            firmware=self.fw, clock_ns=chip_.clock_ns, samples=list(samples), commands=list(self.commands),
+            jobs=jobs, kernel_stats={xy: images.read_stats(chip_, xy) for xy in self.tiles}, counters=counters,
+            task_energy_pj=task_energy, energy_pj=total, cycles=chip_.cycle, host_seconds=seconds,
+            estimates=list(self.estimates), profile=self.function_profile() if chip_.cores.profiling else None,
+        )  # fmt: skip
+
+
+def _unwrapped(record: images.JobRecord, now: int) -> images.JobRecord:
+    """The record with its 32-bit TIMER0 stamps placed on the chip's 64-bit timeline (they are at
+    most 2**32 cycles, 17 s at 4 ns, before ``now``)."""
+
+    def full(value: int) -> int:
+        return now - ((now - value) & 0xFFFFFFFF)
+
+    return dataclasses.replace(
+        record, release=full(record.release), start=full(record.start), completion=full(record.completion),
+        deadline=full(record.deadline),
+    )  # fmt: skip
+
+
+def _period_of(sample_cycles: Sequence[int], cycle: int) -> int:
+    """Index of the sample period [cycle_k, cycle_k+1) holding ``cycle`` (0 before the first), given
+    the samples' injection cycles."""
+    return max(0, bisect.bisect_right(sample_cycles, cycle) - 1)
+
+
+def _pj(model: EnergyModel, counters: dict[str, int]) -> float:
+    return sum(model.breakdown_pj(counters).values()) if counters else 0.0
+
+
+def noc_traffic_pj(model: EnergyModel, noc: dict[str, int]) -> float:
+    """Router energy of ``noc`` counters beyond what the same routers spend idle for as long."""
+    idle = dict(noc)
+    idle["port_idle_cycles"] = noc["port_idle_cycles"] + noc["port_busy_cycles"]
+    idle["port_busy_cycles"] = 0
+    idle["router_busy_cycles"] = 0
+    return sum(model.noc_pj(noc).values()) - sum(model.noc_pj(idle).values())
+
+
+def _snapshot(chip: MPSoC, tiles: Sequence[tuple[int, int]], model: EnergyModel) -> dict:
+    chip.finish_accounting()
+    tasks = {(xy, task): c for xy in tiles for task, c in chip.task_counters(xy).items()}
+    return {"tasks": tasks, "noc_pj": noc_traffic_pj(model, chip.noc_counters())}
+
+
+def _delta(before: dict, after: dict) -> dict:
+    tasks = {}
+    for key, c in after["tasks"].items():
+        old = before["tasks"].get(key, {})
+        tasks[key] = {name: value - old.get(name, 0) for name, value in c.items()}
+    return {"tasks": tasks, "noc_pj": after["noc_pj"] - before["noc_pj"]}
