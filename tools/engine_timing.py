@@ -48,7 +48,7 @@ def _builds(iterations: list[int]) -> list[tuple[str, Path]]:
 
 
 def _run(elf: Path, engine: str, no_mul: bool) -> float:
-    from robosoc.toolchain.cache import cache_root
+    from robosoc.cache import cache_root
 
     shutil.rmtree(cache_root() / "jit", ignore_errors=True)
     command = [sys.executable, "-m", "robosoc", "run", str(elf), "--engine", engine, "--max-cycles", str(10**11)]
