@@ -21,6 +21,7 @@ from robosoc.control.flight_log import CsvFlightLog
 from robosoc.control.host import HostController
 from robosoc.cosim.firmware_run import FirmwareRun, ReplayResult
 from robosoc.cosim.replay import samples_from_rows
+from robosoc.host import flight_app
 from robosoc.outputs.run_folder import write_jobs_csv
 from robosoc.outputs.run_summary import task_summary
 
@@ -29,9 +30,9 @@ CHIP_SECONDS = 0.3
 
 
 def host_rows(seconds: float = HOST_SECONDS, seed: int = 5) -> np.ndarray:
-    scenario = ScenarioConfig(duration_s=seconds)
+    scenario = ScenarioConfig(duration_s=seconds, seed=seed)
     vehicle = vehicle_preset(scenario.vehicle)
-    return fly(scenario, vehicle, HostController.for_scenario(scenario, vehicle), seed)
+    return fly(scenario, vehicle, HostController.for_scenario(scenario, vehicle))
 
 
 def _write_rows(folder: Path, rows: np.ndarray) -> None:
@@ -77,7 +78,8 @@ def chip_replay(seconds: float = CHIP_SECONDS) -> ChipReplay:
     """The host flight's samples replayed into the fixed+mul firmware, step by step as
     :func:`robosoc.cosim.replay.replay` does it, keeping the firmware run for its timeline."""
     rows = host_rows(seconds, seed=6)
-    run = FirmwareRun(FirmwareConfig())
+    fw = FirmwareConfig()
+    run = FirmwareRun(fw, flight_app.build(fw))
     samples = samples_from_rows(rows, run.clock_ns)
     period = samples[1].cycle - samples[0].cycle
     for k, sample in enumerate(samples):

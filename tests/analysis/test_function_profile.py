@@ -31,6 +31,7 @@ from robosoc.control.host import HostController
 from robosoc.cosim.replay import replay
 from robosoc.kernels.core_layout import PIPELINE_FILL
 from robosoc.outputs.report import write_report
+from robosoc.outputs.run_folder import write_profile
 from robosoc.program.elf import load_elf
 from robosoc.toolchain import build_elf
 
@@ -43,7 +44,7 @@ def replays() -> tuple:
     then the EKF from take-off at 0.3 s), with and without the profile."""
     scenario = ScenarioConfig(duration_s=0.8, flight=FlightPlan(takeoff_s=0.3, steps=()))
     vehicle = vehicle_preset(scenario.vehicle)
-    rows = fly(scenario, vehicle, HostController.for_scenario(scenario, vehicle), 1)
+    rows = fly(scenario, vehicle, HostController.for_scenario(scenario, vehicle))
     return tuple(replay(rows, scenario=scenario, vehicle=vehicle, profile=p) for p in (True, False))
 
 
@@ -181,7 +182,7 @@ def test_a_tiny_program_gives_the_hand_derived_counts(tmp_path: Path) -> None:
 def test_files_round_trip_and_summary_check(replays, tmp_path: Path) -> None:
     result, _ = replays
     profile = result.profile
-    json_path, csv_path = profile.write(tmp_path)
+    json_path, csv_path = write_profile(profile, tmp_path)
     data = json.loads(json_path.read_text())
     with csv_path.open(newline="") as handle:
         table = list(csv.DictReader(handle))
@@ -207,7 +208,7 @@ def test_files_round_trip_and_summary_check(replays, tmp_path: Path) -> None:
 
 
 def test_the_report_shows_the_profile_and_renders(replays, chip_run: Path, tmp_path: Path) -> None:
-    replays[0].profile.write(chip_run)
+    write_profile(replays[0].profile, chip_run)
     text = write_report(chip_run).read_text()
     assert re.findall(r'<figure class="plot" data-plot="([^"]+)"', text).count("profile") == 1
     for name in ("estimator", "pid"):  # the table names each task's costliest function
@@ -284,7 +285,7 @@ def test_profile_json_and_csv_of_a_hand_made_profile(tmp_path) -> None:
     assert table[4][7:] == ["0"] * len(COUNT_NAMES)
     assert profile.csv_text().endswith("\n") and "\r" not in profile.csv_text()
 
-    json_path, csv_path = profile.write(tmp_path)
+    json_path, csv_path = write_profile(profile, tmp_path)
     assert (json_path.name, csv_path.name) == ("profile.json", "profile.csv")
     text = json_path.read_text(encoding="utf-8")
     assert text.endswith("}\n") and '\n "schema": 1,' in text  # indented by one space

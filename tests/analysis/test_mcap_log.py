@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from pathlib import Path
 
@@ -24,7 +25,8 @@ SECONDS = 0.5
 def rows() -> np.ndarray:
     scenario = ScenarioConfig(duration_s=SECONDS)
     vehicle = vehicle_preset(scenario.vehicle)
-    return fly(scenario, vehicle, HostController.for_scenario(scenario, vehicle), seed=4)
+    scenario = dataclasses.replace(scenario, seed=4)
+    return fly(scenario, vehicle, HostController.for_scenario(scenario, vehicle))
 
 
 def _decoded(path: Path) -> dict[str, list]:

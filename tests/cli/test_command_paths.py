@@ -247,15 +247,15 @@ def test_serve_checks_the_flight_length(side: str, tmp_path: Path) -> None:
     result = invoke("serve", side, "--seconds", "0.005", "--no-out")
     assert result.exit_code == exit_codes.USAGE
     assert result.stderr == (
-        f"robosoc serve {side}: --seconds: a flight lasts at least one sensor period, got 0.005 s\n"
+        f"robosoc serve {side}: --seconds: a flight lasts at least one sensor period (0.01 s at 100 Hz), got 0.005 s\n"
     )
     scenario = tmp_path / "short.toml"
     scenario.write_text("duration_s = 0.005\n")
     result = invoke("serve", side, "--scenario", scenario, "--no-out")
     assert result.exit_code == exit_codes.USAGE
     assert result.stderr == (
-        f"robosoc serve {side}: --scenario: {scenario}: duration_s: a flight lasts at least one sensor period, "
-        "got 0.005 s\n"
+        f"robosoc serve {side}: --scenario: {scenario}: duration_s: a flight lasts at least one sensor period "
+        "(0.01 s at 100 Hz), got 0.005 s\n"
     )
 
 
@@ -340,7 +340,7 @@ def test_fly_names_a_scenario_too_short_to_sample(tmp_path: Path) -> None:
     assert result.exit_code == exit_codes.USAGE
     assert result.stderr == (
         f"robosoc fly: {scenario}: duration_s: a flight lasts at least one sensor period (0.01 s at 100 Hz), "
-        "got 0.005\n"
+        "got 0.005 s\n"
     )
     result = invoke("fly", "--duration", "0.005", "--no-out")
     assert result.stderr.startswith("robosoc fly: --duration: a flight lasts at least one sensor period")

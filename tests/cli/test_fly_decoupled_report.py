@@ -6,6 +6,7 @@ Every expected line is written by hand from the canned summary below.
 
 from __future__ import annotations
 
+import dataclasses
 import io
 from pathlib import Path
 from typing import Any
@@ -19,7 +20,6 @@ from robosoc.cli.fly_decoupled import fly_decoupled_run
 from robosoc.config.firmware import FirmwareConfig
 from robosoc.config.link import LinkConfig, LinkFaults
 from robosoc.config.scenario import ScenarioConfig
-from robosoc.config.vehicle import vehicle_preset
 from robosoc.outputs import decoupled_flight as decoupled
 from robosoc.outputs.decoupled_flight import DecoupledFlight, SideFailed
 
@@ -47,8 +47,8 @@ class _Fake:
     def __init__(self, flight: DecoupledFlight | None = None, error: SideFailed | None = None) -> None:
         self.flight, self.error, self.calls = flight, error, []
 
-    def __call__(self, scenario, vehicle, fw, seed, link, folder, *, bind=None, on_status=None, on_progress=None):
-        self.calls.append((scenario, seed, link, Path(folder), bind, Path(folder).is_dir()))
+    def __call__(self, scenario, vehicle, link, folder, *, bind=None, on_status=None, on_progress=None):
+        self.calls.append((scenario, scenario.seed, link, Path(folder), bind, Path(folder).is_dir()))
         on_status("both sides are up")
         on_progress(50, 100)
         if self.error is not None:
@@ -63,9 +63,9 @@ def _console() -> Console:
 def _run(monkeypatch, fake: _Fake, out: Path | None, faults: LinkFaults | None = None) -> list[str]:
     monkeypatch.setattr(decoupled, "fly_decoupled", fake)
     console = _console()
-    scenario = ScenarioConfig(name="hop", duration_s=1.0)
+    scenario = ScenarioConfig(name="hop", duration_s=1.0, seed=7)
     link = LinkConfig(pace="fast", resend=1, faults=faults or LinkFaults())
-    fly_decoupled_run(console, scenario, vehicle_preset("default"), FirmwareConfig(), 7, out, link, None)
+    fly_decoupled_run(console, scenario, out, link, None)
     return [" ".join(line.split()) for line in console.export_text().splitlines()]
 
 
@@ -118,8 +118,7 @@ def test_a_side_that_ended_early_is_noted_and_ends_the_command(monkeypatch: pyte
     monkeypatch.setattr(decoupled, "fly_decoupled", _Fake(flight))
     console = _console()
     with pytest.raises(CliError) as caught:
-        fly_decoupled_run(console, ScenarioConfig(name="hop", duration_s=1.0), vehicle_preset("default"),
-                          FirmwareConfig(), 7, tmp_path, LinkConfig(), None)  # fmt: skip
+        fly_decoupled_run(console, ScenarioConfig(name="hop", duration_s=1.0, seed=7), tmp_path, LinkConfig(), None)
     assert console.export_text().splitlines()[-1] == "physics side: no datagram for 5 s"
     assert caught.value.message == f"physics side: no datagram for 5 s; what was done is in {tmp_path}"
     assert caught.value.code == exit_codes.PEER_LOST
@@ -171,7 +170,7 @@ def test_the_progress_bar_counts_samples_and_status_lines_are_dim(
     monkeypatch.setattr(decoupled, "fly_decoupled", _Fake(flight))
     console = Console(file=io.StringIO(), width=200, record=True, color_system="standard", force_terminal=True)
     scenario = ScenarioConfig(name="hop", duration_s=1.0)
-    fly_decoupled_run(console, scenario, vehicle_preset("default"), FirmwareConfig(), 7, tmp_path, LinkConfig(), None)
+    fly_decoupled_run(console, dataclasses.replace(scenario, seed=7), tmp_path, LinkConfig(), None)
     (bar,) = made
     (task,) = bar.tasks
     assert (task.description, task.total, task.completed) == ("fly", 100, 50)  # 1 s at 100 Hz; the fake's 50

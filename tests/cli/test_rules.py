@@ -40,7 +40,7 @@ def lines(result) -> list[str]:
         ),
         (
             ["fly", "--seconds", "0.005", "--no-out"],
-            "robosoc fly: --seconds: a flight lasts at least one sensor period (0.01 s at 100 Hz), got 0.005",
+            "robosoc fly: --seconds: a flight lasts at least one sensor period (0.01 s at 100 Hz), got 0.005 s",
         ),
         (["fly", "--out", "x", "--no-out"], "robosoc fly: --out: cannot be combined with --no-out"),
         (
@@ -263,8 +263,6 @@ def test_library_functions_check_their_arguments(elves: dict[str, Path]) -> None
     from robosoc.chip.single import SingleCoreSoC, run_elf
     from robosoc.config.chip import ChipConfig
     from robosoc.config.scenario import ScenarioConfig
-    from robosoc.config.vehicle import default_vehicle
-    from robosoc.control.flight import fly
     from robosoc.program.elf import load_elf
 
     soc = SingleCoreSoC()
@@ -292,7 +290,7 @@ def test_library_functions_check_their_arguments(elves: dict[str, Path]) -> None
     with pytest.raises(ValueError, match=r"rates: must be in \(0, 1\]"):
         run_noc_benchmark(rates=(2.0,))
     with pytest.raises(ValueError, match="seed: must be between 0"):
-        fly(ScenarioConfig(), default_vehicle(), None, -1)  # type: ignore[arg-type]
+        ScenarioConfig(seed=-1)
     assert run_elf(elves["word"]).exit_code == 0xD114CE5A  # the exit word, unsigned
     chip = MPSoC(ChipConfig())
     chip.load_all(load_elf(elves["word"], chip.regions()))

@@ -20,7 +20,8 @@ def _fly(
     scenario: ScenarioConfig = SCENARIO, seed: int = 1, variant: str = "default", vehicle: VehicleConfig | None = None
 ) -> np.ndarray:
     vehicle = vehicle or vehicle_preset(variant)
-    return fly(scenario, vehicle, HostController.for_scenario(scenario, vehicle), seed)
+    scenario = dataclasses.replace(scenario, seed=seed)
+    return fly(scenario, vehicle, HostController.for_scenario(scenario, vehicle))
 
 
 def _metrics(rows: np.ndarray, scenario: ScenarioConfig = SCENARIO) -> FlightMetrics:
@@ -104,7 +105,7 @@ def test_log_survives_an_interrupted_flight(tmp_path: Path) -> None:
                 raise Crash
 
         with pytest.raises(Crash):
-            fly(SCENARIO, vehicle, HostController(vehicle, 0.01), 1, on_row=on_row)
+            fly(SCENARIO, vehicle, HostController(vehicle, 0.01), on_row=on_row)
         # Before closing: every row is already flushed to the file.
         rows = read_flight_log(path)
     assert rows.shape == (50, len(written[0]))
@@ -182,7 +183,7 @@ def test_a_flight_row_holds_the_sample_and_setpoint_the_controller_was_given() -
         def estimate(self):
             return host.estimate
 
-    rows = fly(scenario, vehicle, Recording(), seed=4)
+    rows = fly(dataclasses.replace(scenario, seed=4), vehicle, Recording())
     assert len(given) == len(rows) == 50
     for row, (sample, setpoint) in zip(rows, given, strict=True):
         by_name = dict(zip(ROW_FIELDS, row, strict=True))

@@ -7,6 +7,7 @@ must be the lockstep flight row for row, whatever the link loses, repeats or reo
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
 import queue
@@ -23,19 +24,19 @@ import pytest
 from typer.testing import CliRunner
 
 from robosoc.cli import app, exit_codes
-from robosoc.config.chip import ChipConfig
-from robosoc.config.firmware import FirmwareConfig
+from robosoc.config.chip import TileConfig
 from robosoc.config.link import LinkConfig
 from robosoc.config.scenario import FlightPlan, ScenarioConfig
 from robosoc.config.vehicle import vehicle_preset
 from robosoc.control.flight import ROW_FIELDS
 from robosoc.control.flight_log import read_flight_log
 from robosoc.cosim.datagram import Hello, Reading, SensorBatch
-from robosoc.cosim.decoupled_physics import sample_period_ns, scenario_digest
+from robosoc.cosim.decoupled_physics import scenario_digest
 from robosoc.cosim.link import Address, UdpLink
 from robosoc.cosim.lockstep import fly_chip
 from robosoc.cosim.replay import sensor_packet
 from robosoc.outputs.decoupled_flight import SideFailed, fly_decoupled
+from robosoc.physics.clock import FlightClock
 
 SCENARIO_TOML = "duration_s = 1.2\n[flight]\ntakeoff_s = 0.3\nsteps = []\n"
 FAULTS = "loss=0.1,duplicate=0.05,reorder=0.05,truncate=0.05,garbage=0.05"
@@ -65,7 +66,7 @@ def test_fly_decoupled_survives_every_fault_and_equals_lockstep(tmp_path: Path) 
     assert link["commands"] == {"received": 120, "late": 0, "missed": 0}
     rows = read_flight_log(out / "flight.csv")
     config = ScenarioConfig(duration_s=1.2, flight=FlightPlan(takeoff_s=0.3, steps=()))
-    reference = fly_chip(config, vehicle_preset(config.vehicle), 5).rows
+    reference = fly_chip(dataclasses.replace(config, seed=5), vehicle_preset(config.vehicle)).rows
     pwm = [ROW_FIELDS.index(f"pwm{i}") for i in range(4)]
     assert reference[-1, pwm].min() > 0, "the reference flight has taken off"
     # the estimate stays with the chip side (lockstep reads it by a memory probe): every other column equal
@@ -111,7 +112,9 @@ def test_the_physics_side_ends_when_the_chip_goes_silent(tmp_path: Path) -> None
     port = int(line.rsplit(":", 1)[1])
     config = ScenarioConfig(duration_s=3.0)
     chip = UdpLink(Address("127.0.0.1", 0), "chip", peer=Address("127.0.0.1", port))
-    chip.send_control(Hello(scenario_digest(config, vehicle_preset(config.vehicle)), sample_period_ns(config)))
+    chip.send_control(
+        Hello(scenario_digest(config, vehicle_preset(config.vehicle)), FlightClock.of(config).sample_period_ns)
+    )
     got = []
     while not got:
         got = chip.receive(5.0)
@@ -134,7 +137,9 @@ def test_the_chip_side_ends_when_the_physics_goes_silent(tmp_path: Path) -> None
     while not hello:
         assert chip.poll() is None, chip.stderr.read()  # type: ignore[union-attr]
         hello = physics.receive(5.0)
-    assert hello[0].body == Hello(scenario_digest(config, vehicle_preset(config.vehicle)), sample_period_ns(config))
+    assert hello[0].body == Hello(
+        scenario_digest(config, vehicle_preset(config.vehicle)), FlightClock.of(config).sample_period_ns
+    )
     row = np.zeros(len(ROW_FIELDS))
     readings = []
     for k in range(3):
@@ -203,9 +208,9 @@ def test_a_side_whose_flight_ended_writes_its_record_through_its_ctrl_c(tmp_path
     previous = signal.signal(signal.SIGINT, handler)
     try:
         if side == "chip":
-            _, got = decoupled.run_chip_side(config, vehicle, FirmwareConfig(), 1, LinkConfig(), local, None, tmp_path)
+            _, got = decoupled.run_chip_side(config, vehicle, LinkConfig(), local, None, tmp_path)
         else:
-            _, got = decoupled.run_physics_side(config, vehicle, 1, LinkConfig(), local, tmp_path)
+            _, got = decoupled.run_physics_side(config, vehicle, LinkConfig(), local, tmp_path)
         assert signal.getsignal(signal.SIGINT) is handler
     finally:
         signal.signal(signal.SIGINT, previous)
@@ -266,12 +271,13 @@ def test_addresses_in_use_and_bad_addresses_are_usage_errors(tmp_path: Path) -> 
 
 
 def test_a_side_that_fails_to_start_stops_the_other(tmp_path: Path) -> None:
-    """The chip side cannot load its firmware (its tile is powered off): the physics side, waiting
-    for a hello that will never come, is interrupted instead of waiting out --connect-timeout."""
+    """The chip side cannot load its firmware (its tiles' SRAM is too small for it): the physics
+    side, waiting for a hello that will never come, is interrupted instead of waiting out
+    --connect-timeout."""
     config = ScenarioConfig(duration_s=0.5)
-    chip = ChipConfig(width=2, height=2, io_tile=(0, 0), powered_off=((0, 1),))  # the estimator's tile
-    with pytest.raises(SideFailed, match="ekf_tile: \\[0, 1\\] is powered off") as failure:
-        fly_decoupled(config, vehicle_preset(config.vehicle), FirmwareConfig(), 1, LinkConfig(), tmp_path, chip=chip)
+    chip = dataclasses.replace(config.chip, tile=TileConfig(sram_bytes=4096))
+    with pytest.raises(SideFailed, match="4096") as failure:
+        fly_decoupled(dataclasses.replace(config, chip=chip), vehicle_preset(config.vehicle), LinkConfig(), tmp_path)
     assert failure.value.side == "chip"
     physics = json.loads((tmp_path / "physics.json").read_text())
     assert physics["ended"] == "interrupted" and physics["rows"] == 0

@@ -71,7 +71,7 @@ def test_the_probe_costs_no_cycle(rows: np.ndarray, monkeypatch: pytest.MonkeyPa
 
 def test_lockstep_rows_carry_the_chips_estimate() -> None:
     scenario = ScenarioConfig(duration_s=0.05)
-    flight = fly_chip(scenario, vehicle_preset(scenario.vehicle), 1, FirmwareConfig())
+    flight = fly_chip(scenario, vehicle_preset(scenario.vehicle))
     cols = [ROW_FIELDS.index(c) for c in ("est_qw", "est_qx", "est_qy", "est_qz", "est_height")]
     est = flight.rows[:, cols]
     assert np.isnan(est[0]).all()  # nothing read before the first sample's period closed

@@ -69,7 +69,7 @@ def two_runs(tmp_path_factory) -> list[Path]:
     folders = []
     for n in range(2):
         out = tmp_path_factory.mktemp(f"run{n}")
-        fly_scenario(scenario, out, seed=7, plot=False)
+        fly_scenario(dataclasses.replace(scenario, seed=7), out, plot=False)
         folders.append(out)
     return folders
 
@@ -133,7 +133,7 @@ def test_the_host_controller_flies_as_the_host_loop() -> None:
     scenario = dataclasses.replace(SHORT, controller="host", duration_s=2.0)
     flight = fly_scenario(scenario, None, plot=False)
     vehicle = vehicle_preset(scenario.vehicle)
-    expected = fly(scenario, vehicle, HostController.for_scenario(scenario, vehicle), scenario.seed)
+    expected = fly(scenario, vehicle, HostController.for_scenario(scenario, vehicle))
     assert flight.rows[0].tobytes() == expected.tobytes()
     summary = flight.summary
     assert summary["firmware"] is None and summary["chip"] is None and summary["tasks"] is None

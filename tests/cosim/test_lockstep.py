@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -12,7 +14,6 @@ from robosoc.control.flight import ROW_FIELDS, column, fly
 from robosoc.control.flight_log import CsvFlightLog
 from robosoc.control.host import HostController
 from robosoc.cosim.lockstep import (
-    PHYSICS_STEP_NS,
     UNKNOWN_ESTIMATE,
     ChipFlight,
     arrival_step,
@@ -21,6 +22,7 @@ from robosoc.cosim.lockstep import (
 )
 from robosoc.cosim.replay import replay
 from robosoc.host import flight_app
+from robosoc.physics.clock import PHYSICS_STEP_NS
 
 # calibration on the ground until 3 s, then the take-off climb (1 m in 1.5 s): 0.7 s of it
 TAKEOFF = ScenarioConfig(duration_s=3.7)
@@ -30,7 +32,7 @@ CYCLES_PER_SAMPLE = 2_500_000  # 10 ms at the seed's 250 MHz
 
 @pytest.fixture(scope="module")
 def flight() -> ChipFlight:
-    return fly_chip(TAKEOFF, VEHICLE, seed=3, fw=FirmwareConfig())
+    return fly_chip(dataclasses.replace(TAKEOFF, seed=3), VEHICLE)
 
 
 def test_fixed_mul_firmware_takes_off_and_follows_the_climb(flight: ChipFlight) -> None:
@@ -95,7 +97,7 @@ def test_two_flights_are_identical_byte_for_byte(tmp_path) -> None:
     for n in range(2):
         log = CsvFlightLog(tmp_path / f"{n}.csv")
         try:
-            result = fly_chip(short, VEHICLE, seed=5, on_row=log.write)
+            result = fly_chip(dataclasses.replace(short, seed=5), VEHICLE, on_row=log.write)
         finally:
             log.close()
         logs.append((tmp_path / f"{n}.csv").read_bytes())
@@ -142,8 +144,8 @@ SHORT_HOST = ScenarioConfig(duration_s=4.0)
 
 
 def test_a_command_arriving_in_the_first_step_flies_like_the_host_loop() -> None:
-    host = fly(SHORT_HOST, VEHICLE, HostController.for_scenario(SHORT_HOST, VEHICLE), seed=2)
-    lockstep = fly_lockstep(SHORT_HOST, VEHICLE, HostInLockstep(delay_steps=0), seed=2)
+    host = fly(SHORT_HOST, VEHICLE, HostController.for_scenario(SHORT_HOST, VEHICLE))
+    lockstep = fly_lockstep(SHORT_HOST, VEHICLE, HostInLockstep(delay_steps=0))
     assert lockstep.tobytes() == host.tobytes()
 
 
@@ -151,7 +153,7 @@ def test_a_late_command_is_held_from_the_step_it_arrives_in() -> None:
     # ready 12 ms after its sample, command k arrives in the third physics step of period k + 1, so
     # the first step of period k + 1 still runs on command k - 1: row j holds command j - 2
     controller = HostInLockstep(delay_steps=12)
-    rows = fly_lockstep(SHORT_HOST, VEHICLE, controller, seed=2)
+    rows = fly_lockstep(SHORT_HOST, VEHICLE, controller)
     pwm = rows[:, [ROW_FIELDS.index(f"pwm{i}") for i in range(4)]]
     issued = np.array(controller.issued)
     assert (pwm[:2] == 0).all()

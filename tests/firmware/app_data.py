@@ -9,6 +9,7 @@ so that every difference between the firmware and float64 is arithmetic.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from pathlib import Path
 from types import SimpleNamespace
@@ -93,7 +94,7 @@ def record_flight(seconds: float, seed: int = 1) -> SensorRecord:
     scenario = _scenario(seconds)
     recorder = _Recorder.for_scenario(scenario, vehicle_preset(scenario.vehicle))
     assert isinstance(recorder, _Recorder)
-    fly(scenario, vehicle_preset(scenario.vehicle), recorder, seed)
+    fly(dataclasses.replace(scenario, seed=seed), vehicle_preset(scenario.vehicle), recorder)
     sensors = np.array([[q16(v) for v in row[0]] for row in recorder.rows], dtype=np.int64)
     setpoints = np.array([[q16(v) for v in row[1]] for row in recorder.rows], dtype=np.int64)
     armed = np.array([row[2] for row in recorder.rows], dtype=bool)

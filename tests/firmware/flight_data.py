@@ -10,6 +10,7 @@ quantised values, so that every difference between the builds and float64 is ari
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -67,7 +68,7 @@ def record_flight(ekf_seconds: float, seed: int = 1) -> EkfRecord:
     controller = HostController(vehicle, scenario.sensors.period_steps * 0.001)
     recorder = _RecordingEkf()
     controller.ekf = recorder
-    fly(scenario, vehicle, controller, seed)
+    fly(dataclasses.replace(scenario, seed=seed), vehicle, controller)
     assert recorder.start is not None
     x0, p0 = recorder.start
     init = [q16(v) for v in x0] + [q16(math.sqrt(p0[0, 0])), q16(math.sqrt(p0[4, 4]))]

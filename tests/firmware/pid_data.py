@@ -13,6 +13,7 @@ every difference between the builds and float64 is arithmetic.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from pathlib import Path
 from types import SimpleNamespace
@@ -109,7 +110,7 @@ def record_flight(seconds: float, seed: int = 1) -> PidRecord:
     scenario = ScenarioConfig(duration_s=TAKEOFF_S + seconds)
     vehicle = vehicle_preset(scenario.vehicle)
     recorder = _RecordingController(vehicle, scenario.sensors.period_steps * 0.001)
-    fly(scenario, vehicle, recorder, seed)
+    fly(dataclasses.replace(scenario, seed=seed), vehicle, recorder)
     assert recorder.alt_reset_args is not None
     ground, rest, samples = recorder.alt_reset_args
 

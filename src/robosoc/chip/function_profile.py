@@ -25,10 +25,8 @@ import csv
 import io
 import json
 import math
-import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -41,8 +39,6 @@ from robosoc.isa.table import CLASS_NAMES, FIXED_EXTRA_CYCLES, STALL_KIND, looku
 from robosoc.kernels.core_layout import PIPELINE_FILL
 from robosoc.program.elf import Program
 
-PROFILE_JSON = "profile.json"
-PROFILE_CSV = "profile.csv"
 SCHEMA = 1
 
 ENTRY_ROW = "(interrupt entry)"
@@ -138,16 +134,8 @@ class FunctionProfile:
             ])  # fmt: skip
         return out.getvalue()
 
-    def write(self, folder: Path) -> tuple[Path, Path]:
-        """Write ``profile.json`` and ``profile.csv`` into ``folder``, each to a temporary name first
-        and then renamed, so an interruption never leaves half a file."""
-        paths = folder / PROFILE_JSON, folder / PROFILE_CSV
-        texts = json.dumps(self.to_json(), indent=1) + "\n", self.csv_text()
-        for path, text in zip(paths, texts, strict=True):
-            tmp = path.with_name(path.name + ".tmp")
-            tmp.write_text(text, encoding="utf-8")
-            os.replace(tmp, path)
-        return paths
+    def json_text(self) -> str:
+        return json.dumps(self.to_json(), indent=1) + "\n"
 
 
 def _text(xy: tuple[int, int]) -> str:
@@ -342,8 +330,6 @@ def summary_mismatches(profile: FunctionProfile, summary: Mapping[str, Any], rel
 __all__ = [
     "CSV_FIELDS",
     "OTHER_ROWS",
-    "PROFILE_CSV",
-    "PROFILE_JSON",
     "FunctionProfile",
     "ProfileRow",
     "chip_profile",

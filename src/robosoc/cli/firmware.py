@@ -12,31 +12,19 @@ from robosoc.cli import exit_codes, files, options
 from robosoc.cli.app import firmware_app
 from robosoc.cli.console import make_console, plain
 from robosoc.cli.errors import CliError
-from robosoc.config.firmware import ARITH_CHOICES, FirmwareConfig
+from robosoc.cli.scenario_flags import FIRMWARE, ScenarioFlags, resolve_section, takes_scenario
+from robosoc.config.firmware import FirmwareConfig
 
 if TYPE_CHECKING:
     from robosoc.cosim.firmware_run import ReplayResult
 
-Arith = Annotated[
-    str | None,
-    typer.Option(
-        help="float (soft-float) or fixed (Q16.16); default: the config's (fixed).",
-        callback=options.choice(*ARITH_CHOICES),
-    ),
-]
-Mul = Annotated[bool | None, typer.Option("--mul/--no-mul", help="For cores with or without the multiplier.")]
 Config = Annotated[Path | None, typer.Option("--config", help="Firmware configuration (TOML, docs/firmware-app.md).")]
 
 
-def _firmware(ctx: typer.Context, config: Path | None, arith: str | None, mul: bool | None) -> FirmwareConfig:
+def _firmware(flags: ScenarioFlags, config: Path | None) -> FirmwareConfig:
     """The configuration: defaults, the file's fields, then the options the user gave."""
     fw = files.load_toml(FirmwareConfig, config, "--config")[0] if config is not None else FirmwareConfig()
-    changes = {}
-    if arith is not None:
-        changes["--arith"] = ("arith", arith)
-    if mul is not None and options.given(ctx, "mul"):
-        changes["--mul/--no-mul"] = ("multiplier", mul)
-    return options.override(fw, changes)
+    return resolve_section(flags, fw, "firmware")
 
 
 def _build(fw: FirmwareConfig) -> Path:
@@ -46,10 +34,10 @@ def _build(fw: FirmwareConfig) -> Path:
 
 
 @firmware_app.command("build", epilog=exit_codes.EPILOG)
+@takes_scenario(FIRMWARE, scenario_file=False)
 def firmware_build(
     ctx: typer.Context,
-    arith: Arith = None,
-    mul: Mul = None,
+    flags: ScenarioFlags,
     config: Config = None,
     output: Annotated[Path | None, typer.Option("--output", "-o", help="Copy the ELF here.")] = None,
 ) -> None:
@@ -60,7 +48,7 @@ def firmware_build(
     import shutil
 
     out = files.output_file(output, "--output") if output is not None else None
-    fw = _firmware(ctx, config, arith, mul)
+    fw = _firmware(flags, config)
     elf = _build(fw)
     if out is not None:
         shutil.copyfile(elf, out)
@@ -69,11 +57,11 @@ def firmware_build(
 
 
 @firmware_app.command("size", epilog=exit_codes.EPILOG)
+@takes_scenario(FIRMWARE, scenario_file=False)
 def firmware_size(
     ctx: typer.Context,
+    flags: ScenarioFlags,
     elf: Annotated[Path | None, typer.Argument(help="An ELF to measure (default: build the firmware).")] = None,
-    arith: Arith = None,
-    mul: Mul = None,
     config: Config = None,
     top: Annotated[
         int, typer.Option(help="Functions and objects to list, 1..10000.", callback=options.int_range(1, 10_000))
@@ -84,14 +72,12 @@ def firmware_size(
     from robosoc.program.elf import ElfError
 
     if elf is not None:
-        for name, on in (("--arith", arith is not None), ("--mul/--no-mul", options.given(ctx, "mul")),
-                         ("--config", config is not None)):  # fmt: skip
-            if on:
-                raise options.fail(name, f"chooses a build: it cannot be combined with an ELF ({elf})")
+        for name in [flag.option for flag in flags.given()] + (["--config"] if config is not None else []):
+            raise options.fail(name, f"chooses a build: it cannot be combined with an ELF ({elf})")
         path = files.input_file(elf, None, "ELF file")
         label = str(path)
     else:
-        fw = _firmware(ctx, config, arith, mul)
+        fw = _firmware(flags, config)
         path, label = _build(fw), fw.label
     try:
         size = code_size(path)
@@ -107,13 +93,13 @@ def firmware_size(
 
 
 @firmware_app.command("replay", epilog=exit_codes.EPILOG)
+@takes_scenario(FIRMWARE, scenario_file=False)
 def firmware_replay(
     ctx: typer.Context,
+    flags: ScenarioFlags,
     log: Annotated[
         Path | None, typer.Argument(help="A flight log (flight.csv of robosoc fly); default: built in.")
     ] = None,
-    arith: Arith = None,
-    mul: Mul = None,
     config: Config = None,
     seconds: Annotated[
         float,
@@ -136,7 +122,7 @@ def firmware_replay(
     from robosoc.cosim.replay import built_in_rows, replay
 
     folder = files.output_dir(out, "--out") if out is not None else None
-    fw = _firmware(ctx, config, arith, mul)
+    fw = _firmware(flags, config)
     if log is not None:
         options.exclusive(
             LOG=True, **{"--seconds": options.given(ctx, "seconds"), "--seed": options.given(ctx, "seed")}
@@ -165,7 +151,7 @@ def _report(result: ReplayResult, folder: Path | None) -> None:
         f"{result.deadline_misses} deadline misses, {result.cycles} cycles "
         f"({result.cycles * ns * 1e-9:.2f} s simulated in {result.host_seconds:.1f} s)",
     )
-    from robosoc.outputs.run_folder import write_jobs_csv
+    from robosoc.outputs.run_folder import JOBS_CSV, SUMMARY_JSON, write_jobs_csv
     from robosoc.outputs.run_summary import task_summary
 
     summary = task_summary(result.jobs, ns)
@@ -179,7 +165,7 @@ def _report(result: ReplayResult, folder: Path | None) -> None:
         )
     if folder is None:
         return
-    write_jobs_csv(result.jobs, folder / "jobs.csv")
+    write_jobs_csv(result.jobs, folder / JOBS_CSV)
     record = {
         "firmware": result.firmware.label,
         "samples": len(result.samples),
@@ -189,5 +175,5 @@ def _report(result: ReplayResult, folder: Path | None) -> None:
         "tasks": summary,
         "energy_pj": result.energy_pj,
     }
-    (folder / "summary.json").write_text(json.dumps(record, indent=2) + "\n")
+    (folder / SUMMARY_JSON).write_text(json.dumps(record, indent=2) + "\n")
     plain(console, f"wrote {folder / 'jobs.csv'} and {folder / 'summary.json'}")

@@ -4,6 +4,7 @@ lockstep), write the run folder and print a summary table (the run itself is
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from pathlib import Path
@@ -14,40 +15,12 @@ import typer
 from robosoc.cli import exit_codes, files, link_options, options
 from robosoc.cli.app import app
 from robosoc.cli.console import make_console, note, plain
-from robosoc.cli.engine_option import Engine
 from robosoc.cli.errors import CliError
-from robosoc.cli.scenario import load_scenario
-from robosoc.cli.scenario_options import (
-    Arith,
-    Duration,
-    Mul,
-    ScenarioArg,
-    ScenarioOpt,
-    Seed,
-    Vehicle,
-    duration_change,
-    scenario_source,
-)
-from robosoc.cli.scenario_options import SecondsAlias as Seconds
-from robosoc.config.scenario import CONTROLLERS, MAX_VEHICLES
+from robosoc.cli.scenario_flags import FLY, ResolvedScenario, ScenarioFlags, resolve, takes_scenario
+from robosoc.config.scenario import ScenarioConfig
 
 VIDEO_FPS = 25.0
 
-Controller = Annotated[
-    str | None,
-    typer.Option(
-        help="Who flies: chip (the firmware on the chip, in lockstep) or host (float64 Python) "
-        "(default: the scenario's, chip).",
-        callback=options.choice(*CONTROLLERS),
-    ),
-]
-Vehicles = Annotated[
-    int | None,
-    typer.Option(
-        help=f"Quadrotors in one world, 1..{MAX_VEHICLES}, each with its own chip (default: the scenario's, 1).",
-        callback=options.int_range(1, MAX_VEHICLES),
-    ),
-]
 Out = Annotated[
     Path | None,
     typer.Option(help="Run folder: scenario.toml, flight.csv, jobs.csv, summary.json, flight.png "
@@ -63,42 +36,35 @@ Foxglove = Annotated[
         callback=options.int_range(0, 65535),
     ),
 ]
+Profile = Annotated[
+    bool,
+    typer.Option(
+        "--profile",
+        help="Count every instruction: cycles, instructions and energy per firmware function, tile and task "
+        "(profile.json, profile.csv; docs/profile.md).",
+    ),
+]
+Decoupled = Annotated[
+    bool,
+    typer.Option(
+        "--decoupled",
+        help="The physics and the chip as two processes over UDP on loopback (exit code 5 if a side goes silent).",
+    ),
+]
 
 
 @app.command("fly", epilog=exit_codes.FLY_EPILOG)
+@takes_scenario(FLY)
 def fly_command(
     ctx: typer.Context,
-    scenario_file: ScenarioArg = None,
-    controller: Controller = None,
-    duration: Duration = None,
-    seconds: Seconds = None,
-    seed: Seed = None,
-    scenario: ScenarioOpt = None,
-    vehicle: Vehicle = None,
-    vehicles: Vehicles = None,
+    flags: ScenarioFlags,
     out: Out = None,
     no_out: NoOut = False,
     video: Video = None,
-    arith: Arith = None,
-    mul: Mul = None,
     foxglove: Foxglove = None,
-    engine: Engine = None,
-    profile: Annotated[
-        bool,
-        typer.Option(
-            "--profile",
-            help="Count every instruction: cycles, instructions and energy per firmware function, tile and task "
-            "(profile.json, profile.csv; docs/profile.md).",
-        ),
-    ] = False,
+    profile: Profile = False,
     # --- decoupled mode (robosoc.cli.fly_decoupled, docs/decoupled.md) ---
-    decoupled: Annotated[
-        bool,
-        typer.Option(
-            "--decoupled",
-            help="The physics and the chip as two processes over UDP on loopback (exit code 5 if a side goes silent).",
-        ),
-    ] = False,
+    decoupled: Decoupled = False,
     pace: link_options.Pace = "realtime",
     hold: link_options.Hold = "zoh",
     faults: link_options.Faults = None,
@@ -108,112 +74,73 @@ def fly_command(
 ) -> None:
     """Fly a scenario: by default the firmware (fixed point, multiplier) on the seed's 2x2 chip in
     lockstep with the physics: take off to 1 m, hover, 10° roll/pitch/yaw steps, a gust; 10 s."""
-    from rich.markup import escape
-
-    from robosoc.chip.mpsoc import ChipError
-    from robosoc.chip.single import CoreError
-    from robosoc.outputs.flight_session import fly_scenario
+    from robosoc.cli import fly_decoupled
 
     console = make_console()
-    # --- decoupled mode: its options, and the chip controller it implies ---
-    from robosoc.cli.fly_decoupled import LINK_OPTIONS
-
-    for option, name in LINK_OPTIONS.items():
-        if options.given(ctx, name) and not decoupled:
-            raise options.fail(option, "only with --decoupled")
-    if decoupled:
-        if controller is not None and controller != "chip":
-            raise options.fail(
-                "--decoupled", "the decoupled mode flies the firmware on the chip (drop --controller host)"
-            )
-        if video is not None:
-            raise options.fail("--video", "not with --decoupled (the physics runs in another process)")
-        if foxglove is not None:
-            raise options.fail("--foxglove", "not with --decoupled (the physics runs in another process)")
-        if profile:
-            raise options.fail("--profile", "not with --decoupled (profile its run folder with robosoc profile)")
-        controller = "chip"
-        link = link_options.link_config(pace, hold, faults, resend, peer_timeout)
-    # --- end of the decoupled mode's checks ---
-    path, label = scenario_source(scenario, scenario_file)
-    length = duration_change(duration, seconds)
+    link = fly_decoupled.link_of(ctx, decoupled, flags, video=video, foxglove=foxglove, profile=profile)
+    resolved = resolve(flags)
+    config = resolved.config if link is None else dataclasses.replace(resolved.config, controller="chip")
+    _check_controller(resolved, config, profile)
     options.exclusive(out=out is not None, no_out=no_out)
-    config, named = load_scenario(path, label)
-    sources: list[tuple[str, tuple[str, ...]]] = [(str(path), named)] if path is not None else []
-    files_used = [str(path)] if path is not None else []
-
-    duration_option, duration_s = length if length is not None else ("--duration", None)
-    changes: dict[str, tuple[str, Any]] = {}
-    for option, field, value in (
-        ("--controller", "controller", controller),
-        (duration_option, "duration_s", duration_s),
-        ("--seed", "seed", seed),
-        ("--vehicle", "vehicle", vehicle),
-        ("--vehicles", "vehicles", vehicles),
-    ):
-        if value is not None:
-            changes[option] = (field, value)
-    fw_changes: dict[str, tuple[str, Any]] = {}
-    if arith is not None:
-        fw_changes["--arith"] = ("arith", arith)
-    if mul is not None and options.given(ctx, "mul"):
-        fw_changes["--mul/--no-mul"] = ("multiplier", mul)
-    if fw_changes:
-        firmware = options.override(config.firmware, fw_changes, files_used)
-        changes[next(iter(fw_changes))] = ("firmware", firmware)
-    if engine is not None:
-        changes["--engine"] = ("chip", options.override(config.chip, {"--engine": ("engine", engine)}, files_used))
-    config = options.override(config, changes, files_used)
-    if config.controller == "host":
-        if profile:
-            raise options.fail("--profile", "only with the chip controller (the host controller has no firmware)")
-        for option in fw_changes:
-            raise options.fail(option, "only with the chip controller (the host controller has no firmware)")
-        if engine is not None:
-            raise options.fail("--engine", "only with the chip controller (the host controller runs no code)")
-    sources.extend((option, (field,)) for option, (field, _) in changes.items() if field not in ("firmware", "chip"))
-    sources.extend((option, (f"firmware.{field}",)) for option, (field, _) in fw_changes.items())
-    if engine is not None:
-        sources.append(("--engine", ("chip.engine",)))
-    if round(config.duration_s * config.sensors.rate_hz) < 1:
-        where = next((o for o in ("--duration", "--seconds") if o in changes), f"{path}: duration_s")
-        raise options.fail(
-            where,
-            f"a flight lasts at least one sensor period ({1 / config.sensors.rate_hz:g} s at "
-            f"{config.sensors.rate_hz:g} Hz), got {config.duration_s:g}",
-        )
-
-    inputs = [path] if path is not None else []
     if out is None and not no_out:
         out = Path("runs") / f"fly-{config.name}-s{config.seed}"
     if out is not None:
-        out = files.output_dir(out, "--out", inputs=inputs)
-    if decoupled:  # --- decoupled mode ---
-        from robosoc.cli.fly_decoupled import fly_decoupled_run
-        from robosoc.config.vehicle import vehicle_preset
-
-        if config.vehicles != 1:
-            raise options.fail("--decoupled", f"flies one vehicle, the scenario has {config.vehicles}")
-        fly_decoupled_run(
-            console, config, vehicle_preset(config.vehicle), config.firmware, config.seed, out, link, bind
-        )
+        out = files.output_dir(out, "--out", inputs=resolved.inputs)
+    if link is not None:
+        fly_decoupled.fly_decoupled_run(console, config, out, link, bind)
         return
     if video is not None:
-        if video.suffix.lower() == ".mp4":
-            video = files.output_file(video, "--video", inputs=inputs)
-        else:
-            video = files.output_dir(video, "--video")
+        video = files.output_file(video, "--video", inputs=resolved.inputs) if video.suffix.lower() == ".mp4" else (
+            files.output_dir(video, "--video"))  # fmt: skip
+    _announce(console, resolved, config)
+    flight = _fly(console, config, out, video, foxglove, profile)
+    print_summary(console, flight.summary)
+    if profile:
+        from robosoc.cli.profile import print_profile
 
-    fw = config.firmware
-    flier = f"chip ({fw.label}, lockstep)" if config.controller == "chip" else "host"
+        for i, result in enumerate(flight.results):
+            if result is not None and result.profile is not None:
+                print_profile(console, result.profile, title=f"vehicle {i + 1}, " if len(flight.results) > 1 else "")
+    if out is not None:
+        plain(console, f"run folder: {out} (scenario.toml, flight.csv, summary.json, flight.png, flight.mcap, "
+              + ("jobs.csv, chip-trace.json, " if config.controller == "chip" else "")
+              + ("profile.json, profile.csv, " if profile else "") + "report.html)")  # fmt: skip
+
+
+def _check_controller(resolved: ResolvedScenario, config: ScenarioConfig, profile: bool) -> None:
+    """The host controller runs no firmware on no chip: the options for them are refused."""
+    if config.controller != "host":
+        return
+    if profile:
+        raise options.fail("--profile", "only with the chip controller (the host controller has no firmware)")
+    for flag in resolved.given:
+        if flag.section == "firmware":
+            raise options.fail(flag.option, "only with the chip controller (the host controller has no firmware)")
+        if flag.section == "chip":
+            raise options.fail(flag.option, "only with the chip controller (the host controller runs no code)")
+
+
+def _announce(console, resolved: ResolvedScenario, config: ScenarioConfig) -> None:
+    """What is flown, and where each part of the scenario came from."""
+    from rich.markup import escape
+
+    flier = f"chip ({config.firmware.label}, lockstep)" if config.controller == "chip" else "host"
     fleet = f"{config.vehicles} vehicles ({config.vehicle})" if config.vehicles > 1 else f"vehicle {config.vehicle}"
     console.print(
         f"flying scenario [bold]{escape(config.name)}[/bold] for {config.duration_s:g} s, {fleet}, "
         f"controller {flier}, seed {config.seed}, sensors at {config.sensors.rate_hz:g} Hz"
     )
-    for source, fields in sources:
+    for source, fields in resolved.sources:
         console.print(escape(f"from {source}: {', '.join(fields) if fields else '(no fields)'}"))
-    console.print("every other field: built-in default" if sources else "all fields: built-in defaults")
+    console.print("every other field: built-in default" if resolved.sources else "all fields: built-in defaults")
+
+
+def _fly(console, config: ScenarioConfig, out: Path | None, video: Path | None, foxglove: int | None, profile: bool):
+    """The flight with its progress bar, video and live server; an interrupt or a firmware fault ends
+    the command with the flight so far in ``out``."""
+    from robosoc.chip.mpsoc import ChipError
+    from robosoc.chip.single import CoreError
+    from robosoc.outputs.flight_session import fly_scenario
 
     video_state = _VideoState(console, video) if video is not None else None
     live = _start_live(console, foxglove)  # --foxglove (docs/results-logs.md)
@@ -245,19 +172,9 @@ def fly_command(
             video_state.close()
         if live is not None:
             live.close()
-    print_summary(console, flight.summary)
-    if profile:
-        from robosoc.cli.profile import print_profile
-
-        for i, result in enumerate(flight.results):
-            if result is not None and result.profile is not None:
-                print_profile(console, result.profile, title=f"vehicle {i + 1}, " if len(flight.results) > 1 else "")
-    if out is not None:
-        plain(console, f"run folder: {out} (scenario.toml, flight.csv, summary.json, flight.png, flight.mcap, "
-              + ("jobs.csv, chip-trace.json, " if config.controller == "chip" else "")
-              + ("profile.json, profile.csv, " if profile else "") + "report.html)")  # fmt: skip
     if video_state is not None and video_state.sink is not None and video_state.sink.frames:
         plain(console, f"video: {video_state.sink.path} ({video_state.sink.frames} frames at {VIDEO_FPS:g} fps)")
+    return flight
 
 
 class FlightProgress:

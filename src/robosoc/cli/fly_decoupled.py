@@ -10,19 +10,19 @@ import math
 import tempfile
 from pathlib import Path
 
+import typer
 from rich.console import Console
 
-from robosoc.cli import exit_codes, options
+from robosoc.cli import exit_codes, link_options, options
 from robosoc.cli.console import note, plain
 from robosoc.cli.errors import CliError
 from robosoc.cli.link_report import end_of_side, print_link_counts
-from robosoc.config.firmware import FirmwareConfig
+from robosoc.cli.scenario_flags import ScenarioFlags
 from robosoc.config.link import LinkConfig
 from robosoc.config.scenario import ScenarioConfig
-from robosoc.config.vehicle import VehicleConfig
 from robosoc.cosim.link import Address
 
-__all__ = ["LINK_OPTIONS", "fly_decoupled_run"]
+__all__ = ["LINK_OPTIONS", "fly_decoupled_run", "link_of"]
 
 #: fly's options that only the decoupled mode takes (option -> parameter name).
 LINK_OPTIONS = {
@@ -35,29 +35,61 @@ LINK_OPTIONS = {
 }
 
 
+def link_of(
+    ctx: typer.Context,
+    decoupled: bool,
+    flags: ScenarioFlags,
+    *,
+    video: Path | None,
+    foxglove: int | None,
+    profile: bool,
+) -> LinkConfig | None:
+    """The link of ``fly --decoupled`` from fly's link options (None without ``--decoupled``, when
+    those options are refused), and the options the decoupled mode cannot take refused."""
+    given = {name: options.given(ctx, name) for name in LINK_OPTIONS.values()}
+    if not decoupled:
+        for option, name in LINK_OPTIONS.items():
+            if given[name]:
+                raise options.fail(option, "only with --decoupled")
+        return None
+    controller = flags.values.get("controller")
+    if controller is not None and controller != "chip":
+        raise options.fail("--decoupled", "the decoupled mode flies the firmware on the chip (drop --controller host)")
+    for option, on in (("--video", video is not None), ("--foxglove", foxglove is not None)):
+        if on:
+            raise options.fail(option, "not with --decoupled (the physics runs in another process)")
+    if profile:
+        raise options.fail("--profile", "not with --decoupled (profile its run folder with robosoc profile)")
+    p = ctx.params
+    return link_options.link_config(p["pace"], p["hold"], p["faults"], p["resend"], p["peer_timeout"])
+
+
 def _number(value: float | None, scale: float, unit: str) -> str:
     return "n/a" if value is None or not math.isfinite(value) else f"{value * scale:.2f} {unit}"
 
 
 def fly_decoupled_run(
-    console: Console,
-    scenario: ScenarioConfig,
-    vehicle: VehicleConfig,
-    fw: FirmwareConfig,
-    seed: int,
-    out: Path | None,
-    link: LinkConfig,
-    bind: Address | None,
+    console: Console, scenario: ScenarioConfig, out: Path | None, link: LinkConfig, bind: Address | None
 ) -> None:
-    """Fly, print the flight figures and the datagram counts, write the run folder (or a temporary one)."""
+    """Fly, print the flight figures and the datagram counts, write the run folder (or a temporary one).
+
+    Raises:
+        CliError: the scenario has more than one vehicle, or a side failed.
+    """
+    from robosoc.config.vehicle import vehicle_preset
+
+    if scenario.vehicles != 1:
+        raise options.fail("--decoupled", f"flies one vehicle, the scenario has {scenario.vehicles}")
+    vehicle, fw, seed = vehicle_preset(scenario.vehicle), scenario.firmware, scenario.seed
     from rich.markup import escape
     from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
 
     from robosoc.control.flight_log import read_flight_log
     from robosoc.control.flight_plot import plot_flight
     from robosoc.outputs.decoupled_flight import SideFailed, fly_decoupled
+    from robosoc.outputs.run_folder import FLIGHT_CSV, FLIGHT_PNG
 
-    samples = round(scenario.duration_s * scenario.sensors.rate_hz)
+    samples = scenario.samples
     console.print(
         f"flying scenario [bold]{escape(scenario.name)}[/bold] for {scenario.duration_s:g} s, "
         f"vehicle {scenario.vehicle}, "
@@ -83,7 +115,7 @@ def fly_decoupled_run(
     try:
         with progress:
             flight = fly_decoupled(
-                scenario, vehicle, fw, seed, link, folder, bind=bind,
+                scenario, vehicle, link, folder, bind=bind,
                 on_status=lambda text: progress.console.print(escape(text), style="dim"),
                 on_progress=lambda done, total: progress.update(task, completed=done),
             )  # fmt: skip
@@ -128,11 +160,11 @@ def fly_decoupled_run(
         )
     print_link_counts(console, {"to chip": lk["to_chip"], "to physics": lk["to_physics"]})
     if out is not None:
-        rows_path = out / "flight.csv"
+        rows_path = out / FLIGHT_CSV
         if rows_path.exists():
             rows = read_flight_log(rows_path)
             if len(rows):
-                plot_flight(rows, out / "flight.png", title=f"{scenario.name}, seed {seed}, decoupled")
+                plot_flight(rows, out / FLIGHT_PNG, title=f"{scenario.name}, seed {seed}, decoupled")
         plain(console, f"run folder: {out} (flight.csv, jobs.csv, summary.json, link-*.log)")
     else:
         temporary.cleanup()  # type: ignore[union-attr]

@@ -90,17 +90,18 @@ def profile_command(run_dir: RunDir, top: Top = 10) -> None:
     from robosoc.cli.fly import FlightProgress
     from robosoc.cli.scenario import load_scenario
     from robosoc.outputs.flight_session import fly_scenario, vehicle_folder
+    from robosoc.outputs.run_folder import SCENARIO_TOML, SUMMARY_JSON, write_profile
 
     folder = files.input_dir(run_dir, None)
-    for name in ("scenario.toml", "summary.json"):
+    for name in (SCENARIO_TOML, SUMMARY_JSON):
         if not (folder / name).exists():
             raise CliError(f"{run_dir}: has no {name}: not a robosoc fly run folder")
-    config, _ = load_scenario(folder / "scenario.toml", None)
+    config, _ = load_scenario(folder / SCENARIO_TOML, None)
     if config.controller != "chip":
         raise CliError(f"{run_dir}: flown with controller = {config.controller!r}: no firmware to profile")
     count = config.vehicles
     folders = [vehicle_folder(folder, i, count) for i in range(count)]
-    summaries = [_read_summary(f / "summary.json") for f in folders]
+    summaries = [_read_summary(f / SUMMARY_JSON) for f in folders]
     console = make_console()
     console.print(
         f"profiling {run_dir}: flying scenario {config.name} again for {config.duration_s:g} s "
@@ -137,5 +138,5 @@ def profile_command(run_dir: RunDir, top: Top = 10) -> None:
             plain(console, f"the profile's totals equal {where / 'summary.json'}'s ({compared})")
         if summary.get("cycles") is None:
             note(console, f"{where / 'summary.json'} has no per-tile cycles (an older robosoc): cycles not compared")
-        json_path, csv_path = result.profile.write(where)
+        json_path, csv_path = write_profile(result.profile, where)
         plain(console, f"profile: {json_path}, {csv_path}")

@@ -20,10 +20,18 @@ Mcap = Annotated[bool, typer.Option("--mcap", help="Also write RUN_DIR/flight.mc
 @app.command("report", epilog=exit_codes.EPILOG)
 def report_command(run_dir: RunDir, out: Out = None, mcap: Mcap = False) -> None:
     """Write one self-contained HTML page (no network needed) with the run's plots, figures and config."""
-    from robosoc.outputs.run_folder import FLIGHT_CSV, FLIGHT_MCAP, REPORT_HTML, RunFolderError
+    from robosoc.outputs.run_folder import (
+        FLIGHT_CSV,
+        FLIGHT_MCAP,
+        JOBS_CSV,
+        REPORT_HTML,
+        SCENARIO_TOML,
+        SUMMARY_JSON,
+        RunFolderError,
+    )
 
     folder = files.input_dir(run_dir, None)
-    inputs = [folder / name for name in (FLIGHT_CSV, "jobs.csv", "summary.json", "scenario.toml")]
+    inputs = [folder / name for name in (FLIGHT_CSV, JOBS_CSV, SUMMARY_JSON, SCENARIO_TOML)]
     target = files.output_file(
         out if out is not None else folder / REPORT_HTML, "--out" if out else None, inputs=inputs
     )

@@ -19,21 +19,16 @@ from robosoc.cli.console import make_console, note, plain
 from robosoc.cli.errors import CliError
 from robosoc.cli.link_options import DEFAULT_BIND, Bind, ConnectTimeout, Faults, Hold, Pace, PeerTimeout, Resend
 from robosoc.cli.link_report import end_of_side, print_link_counts
-from robosoc.cli.scenario_options import (
-    Arith,
-    Duration,
-    Mul,
-    ScenarioAlias,
-    ScenarioArg,
-    SecondsAlias,
-    Seed,
-    Vehicle,
-    duration_change,
-    scenario_source,
+from robosoc.cli.scenario_flags import (
+    SERVE_CHIP,
+    SERVE_PHYSICS,
+    ResolvedScenario,
+    ScenarioFlags,
+    resolve,
+    takes_scenario,
 )
 
 if TYPE_CHECKING:
-    from robosoc.config.scenario import ScenarioConfig
     from robosoc.config.vehicle import VehicleConfig
 
 serve_app = typer.Typer(
@@ -56,34 +51,12 @@ Peer = Annotated[
 ]
 
 
-def resolve_scenario(
-    scenario: Path | None,
-    scenario_file: Path | None,
-    duration: float | None,
-    seconds: float | None,
-    vehicle: str | None,
-    seed: int | None,
-) -> tuple[ScenarioConfig, VehicleConfig, Path | None]:
-    """The scenario of the options and its file, as ``robosoc fly`` resolves them (SCENARIO or
-    ``--scenario``, ``--duration`` or ``--seconds``; errors name the option or field)."""
-    from robosoc.cli.scenario import load_scenario
+def resolve_side(flags: ScenarioFlags) -> tuple[ResolvedScenario, VehicleConfig]:
+    """The scenario of a side, resolved as ``robosoc fly`` resolves it, and its vehicle."""
     from robosoc.config.vehicle import vehicle_preset
 
-    path, label = scenario_source(scenario, scenario_file)
-    length = duration_change(duration, seconds)
-    config, _ = load_scenario(path, label)
-    changes = {}
-    if length is not None:
-        changes[length[0]] = ("duration_s", length[1])
-    if vehicle is not None:
-        changes["--vehicle"] = ("vehicle", vehicle)
-    if seed is not None:
-        changes["--seed"] = ("seed", seed)
-    config = options.override(config, changes, [str(path)] if path is not None else ())
-    if round(config.duration_s * config.sensors.rate_hz) < 1:
-        where = length[0] if length is not None else f"{label + ': ' if label else ''}{path}: duration_s"
-        raise options.fail(where, f"a flight lasts at least one sensor period, got {config.duration_s:g} s")
-    return config, vehicle_preset(config.vehicle), path
+    resolved = resolve(flags)
+    return resolved, vehicle_preset(resolved.config.vehicle)
 
 
 def _out(out: Path | None, no_out: bool, side: str, name: str, seed: int, scenario: Path | None) -> Path | None:
@@ -96,13 +69,9 @@ def _out(out: Path | None, no_out: bool, side: str, name: str, seed: int, scenar
 
 
 @serve_app.command("physics", epilog=exit_codes.SERVE_EPILOG)
+@takes_scenario(SERVE_PHYSICS, scenario_option_hidden=True)
 def serve_physics_command(
-    scenario_file: ScenarioArg = None,
-    duration: Duration = None,
-    seconds: SecondsAlias = None,
-    seed: Seed = None,
-    scenario: ScenarioAlias = None,
-    vehicle: Vehicle = None,
+    flags: ScenarioFlags,
     out: Annotated[
         Path | None,
         typer.Option(
@@ -126,12 +95,12 @@ def serve_physics_command(
     from robosoc.outputs.decoupled_flight import run_physics_side
 
     console = make_console()
-    config, craft, scenario = resolve_scenario(scenario, scenario_file, duration, seconds, vehicle, seed)
-    seed = config.seed
+    resolved, craft = resolve_side(flags)
+    config, seed = resolved.config, resolved.config.seed
     link = link_options.link_config(pace, hold, faults, resend, peer_timeout, connect_timeout)
-    folder = _out(out, no_out, "physics", config.name, seed, scenario)
+    folder = _out(out, no_out, "physics", config.name, seed, resolved.path)
     address = bind or parse_address(DEFAULT_BIND, any_port=True)
-    samples = round(config.duration_s * config.sensors.rate_hz)
+    samples = config.samples
     progress = Progress(
         TextColumn("{task.description}"), BarColumn(), TextColumn("{task.fields[t]}"), console=console, transient=True
     )
@@ -150,7 +119,7 @@ def serve_physics_command(
     try:
         try:
             outcome, record = run_physics_side(
-                config, craft, seed, link, address, folder, on_listen=on_listen, on_sample=on_sample
+                config, craft, link, address, folder, on_listen=on_listen, on_sample=on_sample
             )  # fmt: skip
         finally:
             progress.stop()
@@ -175,15 +144,9 @@ def serve_physics_command(
 
 
 @serve_app.command("chip", epilog=exit_codes.SERVE_EPILOG)
+@takes_scenario(SERVE_CHIP, scenario_option_hidden=True)
 def serve_chip_command(
-    scenario_file: ScenarioArg = None,
-    duration: Duration = None,
-    seconds: SecondsAlias = None,
-    seed: Seed = None,
-    scenario: ScenarioAlias = None,
-    vehicle: Vehicle = None,
-    arith: Arith = None,
-    mul: Mul = None,
+    flags: ScenarioFlags,
     peer: Peer = None,
     bind: Annotated[
         link_options.Address | None,
@@ -209,19 +172,16 @@ def serve_chip_command(
     from robosoc.outputs.decoupled_flight import run_chip_side
 
     console = make_console()
-    config, craft, scenario = resolve_scenario(scenario, scenario_file, duration, seconds, vehicle, seed)
-    seed = config.seed
+    resolved, craft = resolve_side(flags)
+    config, seed = resolved.config, resolved.config.seed
     link = link_options.link_config(
         faults=faults, resend=resend, peer_timeout=peer_timeout, connect_timeout=connect_timeout
     )
-    changes = {option: (field, value) for option, field, value in (
-        ("--arith", "arith", arith), ("--mul/--no-mul", "multiplier", mul)) if value is not None}  # fmt: skip
-    fw = options.override(config.firmware, changes, [str(scenario)] if scenario is not None else ())
-    folder = _out(out, no_out, "chip", config.name, seed, scenario)
+    folder = _out(out, no_out, "chip", config.name, seed, resolved.path)
     target = peer or parse_address(DEFAULT_BIND, any_port=False)
     try:
         outcome, record = run_chip_side(
-            config, craft, fw, seed, link, target, bind, folder, on_status=lambda text: note(console, f"chip: {text}")
+            config, craft, link, target, bind, folder, on_status=lambda text: note(console, f"chip: {text}")
         )  # fmt: skip
     except LinkError as exc:
         raise options.fail("--bind" if bind is not None and str(bind) in str(exc) else "--peer", str(exc)) from None

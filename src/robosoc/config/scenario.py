@@ -440,6 +440,12 @@ class ScenarioConfig:
             "duration_s",
             f"must be a whole number of {PHYSICS_DT_S * 1000:g} ms physics steps, got {self.duration_s}",
         )
+        _require(
+            self.samples >= 1,
+            "duration_s",
+            f"a flight lasts at least one sensor period ({1 / self.sensors.rate_hz:g} s at "
+            f"{self.sensors.rate_hz:g} Hz), got {self.duration_s:g} s",
+        )
         moves = self.flight.height_moves(VEHICLE_PRESETS[self.vehicle]().rest_height)
         height_steps = sorted(
             (i for i, s in enumerate(self.flight.steps) if s.axis == "height"),
@@ -452,6 +458,11 @@ class ScenarioConfig:
                 f"a height step must not come before the previous height move ends ({previous.end_s:g} s), "
                 f"got {self.flight.steps[i].time_s}",
             )
+
+    @property
+    def samples(self) -> int:
+        """Sensor samples of the flight: one per sensor period in ``duration_s`` (at least one)."""
+        return round(self.duration_s * self.sensors.rate_hz)
 
 
 SCENARIO_HEADER = """\

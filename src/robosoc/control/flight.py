@@ -17,13 +17,13 @@ from typing import Protocol
 
 import numpy as np
 
-from robosoc.config.ranges import check_seed
 from robosoc.config.scenario import FlightPlan, ScenarioConfig
 from robosoc.config.vehicle import VehicleConfig
 from robosoc.control import quaternion as quat
 from robosoc.control.host import Estimate
 from robosoc.control.setpoint import Setpoint, setpoint_at
 from robosoc.physics import SensorSample, Truth, World
+from robosoc.physics.clock import FlightClock
 
 SAMPLE_FIELDS = (
     "gyro_x", "gyro_y", "gyro_z", "accel_x", "accel_y", "accel_z", "mag_x", "mag_y", "mag_z",
@@ -95,7 +95,6 @@ def fly(
     scenario: ScenarioConfig,
     vehicle: VehicleConfig,
     controller: Controller,
-    seed: int,
     on_row: Callable[[np.ndarray], None] | None = None,
     on_sample: Callable[[World, int], None] | None = None,
 ) -> np.ndarray:
@@ -105,25 +104,18 @@ def fly(
         scenario: duration, sensors, wind and flight plan.
         vehicle: the vehicle flown (its spawn pose is used as is).
         controller: the flight controller.
-        seed: seeds every random number of the physics.
         on_row: called with each row as soon as it is computed (logging).
         on_sample: called with the world and the sample index after each row (progress, video).
 
-    Raises:
-        ValueError: a negative seed, or a flight shorter than one sensor period.
     """
-    check_seed("seed", seed)
-    if round(scenario.duration_s * scenario.sensors.rate_hz) < 1:
-        raise ValueError(f"duration_s: a flight lasts at least one sensor period, got {scenario.duration_s:g} s")
+    clock = FlightClock.of(scenario)
     world = World([vehicle], scenario.sensors, scenario.wind)
-    world.reset(seed)
+    world.reset(scenario.seed)
     quad = world.quadrotors[0]
     controller.reset()
-    period = world.sensor_period
-    samples = round(scenario.duration_s / period)
-    rows = np.empty((samples, len(ROW_FIELDS)))
+    rows = np.empty((clock.sample_count, len(ROW_FIELDS)))
     rest = vehicle.rest_height
-    for k in range(samples):
+    for k in clock.samples():
         sample = quad.sensors()
         t = sample.time
         setpoint = setpoint_at(scenario.flight, rest, t)
@@ -135,7 +127,8 @@ def fly(
             on_row(row)
         if on_sample is not None:
             on_sample(world, k)
-        world.advance((k + 1) * period)
+        for _ in clock.steps(k):
+            world.step()
     return rows
 
 

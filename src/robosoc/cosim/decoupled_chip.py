@@ -35,16 +35,15 @@ from pathlib import Path
 
 from robosoc.chip.mpsoc import ChipError
 from robosoc.chip.single import CoreError
-from robosoc.config.chip import ChipConfig
-from robosoc.config.firmware import FirmwareConfig
 from robosoc.config.link import LinkConfig
 from robosoc.config.scenario import ScenarioConfig
 from robosoc.config.vehicle import VehicleConfig
 from robosoc.cosim.datagram import MAX_COMMANDS, Bye, ByeReason, Command, CommandBatch, Hello, Reading, SensorBatch
-from robosoc.cosim.decoupled_physics import Ended, sample_period_ns, scenario_digest
+from robosoc.cosim.decoupled_physics import Ended, scenario_digest
 from robosoc.cosim.firmware_run import DEFAULT_FIRST_CYCLE, FirmwareRun, ReplayResult
 from robosoc.cosim.link import Address, LinkLog, UdpLink
-from robosoc.cosim.lockstep import NS_PER_S
+from robosoc.host import flight_app
+from robosoc.physics.clock import NS_PER_S, FlightClock
 from robosoc.records import SampleInput
 
 __all__ = ["SLICE_NS", "ChipOutcome", "serve_chip"]
@@ -189,23 +188,19 @@ class _Chip:
 def serve_chip(
     scenario: ScenarioConfig,
     vehicle: VehicleConfig,
-    fw: FirmwareConfig,
-    seed: int,
     config: LinkConfig,
     peer: Address,
     bind: Address | None = None,
     *,
-    chip: ChipConfig | None = None,
     log_path: Path | None = None,
     on_status: Callable[[str], None] | None = None,
 ) -> ChipOutcome:
-    """Run the firmware ``fw`` on the chip for the physics side at ``peer``; see the module docstring.
+    """Run the scenario's firmware on its chip for the physics side at ``peer``; see the module docstring.
 
     Args:
         scenario, vehicle: what the physics side flies (the firmware's control parameters come
-            from them; the physics side refuses a chip built for another).
-        fw, chip: the firmware build and mapping, and the chip (default: the seed's 2×2).
-        seed: drives the faults injected on the command datagrams.
+            from them; the physics side refuses a chip built for another); the scenario's seed
+            drives the faults injected on the command datagrams.
         config: timeouts, redundancy and faults (pace and hold are the physics side's).
         peer: the physics side's address.
         bind: where to listen (default: any free port on the loopback interface of ``peer``'s family).
@@ -222,14 +217,14 @@ def serve_chip(
         CompileError: the firmware failed to build.
     """
     say = on_status or (lambda _text: None)
-    period_ns = sample_period_ns(scenario)
+    period_ns = FlightClock.of(scenario).sample_period_ns
     log = LinkLog(log_path)
     try:
         if bind is None:
             bind = Address("::1" if ":" in peer.host else "127.0.0.1", 0)
             if peer.host not in ("127.0.0.1", "::1", "localhost"):
                 bind = Address("::" if ":" in peer.host else "0.0.0.0", 0)
-        link = UdpLink(bind, "chip", config.faults, seed, log, peer=peer)
+        link = UdpLink(bind, "chip", config.faults, scenario.seed, log, peer=peer)
     except BaseException:
         log.close()
         raise
@@ -240,8 +235,10 @@ def serve_chip(
     result: ReplayResult | None = None
     ended, message = Ended.DONE, "flown"
     try:
+        fw = scenario.firmware
         say(f"building the firmware ({fw.label}) and loading the chip ...")
-        run = FirmwareRun(fw, vehicle=vehicle, scenario=scenario, chip=chip, first_cycle=DEFAULT_FIRST_CYCLE)
+        elf = flight_app.build(fw, vehicle=vehicle, scenario=scenario)
+        run = FirmwareRun(fw, elf, chip=scenario.chip, first_cycle=DEFAULT_FIRST_CYCLE)
         say("booting the chip (compiling the chip kernels on a fresh install) ...")
         run.run_to(DEFAULT_FIRST_CYCLE)
         state = _Chip(run, link, config, period_ns, log)

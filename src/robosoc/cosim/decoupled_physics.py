@@ -34,7 +34,6 @@ from pathlib import Path
 import numpy as np
 
 from robosoc.config.link import LinkConfig
-from robosoc.config.ranges import check_seed
 from robosoc.config.scenario import ScenarioConfig
 from robosoc.config.vehicle import VehicleConfig
 from robosoc.control.flight import ROW_FIELDS, flight_row
@@ -42,9 +41,10 @@ from robosoc.control.setpoint import setpoint_at
 from robosoc.cosim.actuator_hold import ActuatorHold
 from robosoc.cosim.datagram import MAX_READINGS, Bye, ByeReason, CommandBatch, Hello, Reading, SensorBatch
 from robosoc.cosim.link import Address, LinkLog, UdpLink
-from robosoc.cosim.lockstep import NS_PER_S, PHYSICS_STEP_NS, PWM_COLUMNS, UNKNOWN_ESTIMATE
+from robosoc.cosim.lockstep import PWM_COLUMNS, UNKNOWN_ESTIMATE
 from robosoc.cosim.replay import sensor_packet
 from robosoc.physics import World
+from robosoc.physics.clock import NS_PER_S, PHYSICS_STEP_NS, FlightClock
 
 __all__ = ["Ended", "PhysicsOutcome", "scenario_digest", "serve_physics"]
 
@@ -63,10 +63,6 @@ class Ended:
 def scenario_digest(scenario: ScenarioConfig, vehicle: VehicleConfig) -> bytes:
     """8 bytes naming what is flown: both sides must have it equal."""
     return hashlib.blake2b(repr((scenario, vehicle)).encode(), digest_size=8).digest()
-
-
-def sample_period_ns(scenario: ScenarioConfig) -> int:
-    return scenario.sensors.period_steps * PHYSICS_STEP_NS
 
 
 @dataclass
@@ -214,7 +210,6 @@ def _wait_for_hello(link: UdpLink, config: LinkConfig, digest: bytes, period_ns:
 def serve_physics(
     scenario: ScenarioConfig,
     vehicle: VehicleConfig,
-    seed: int,
     config: LinkConfig,
     bind: Address,
     *,
@@ -227,8 +222,8 @@ def serve_physics(
     """Fly ``scenario`` with the chip at the other end of a UDP link; see the module docstring.
 
     Args:
-        scenario, vehicle, seed: what is flown (as :func:`robosoc.cosim.lockstep.fly_lockstep`);
-            the seed also drives the faults injected on the sensor batches.
+        scenario, vehicle: what is flown (as :func:`robosoc.cosim.lockstep.fly_lockstep`); the
+            scenario's seed also drives the faults injected on the sensor batches.
         config: pacing, hold, timeouts, redundancy and faults.
         bind: the address to listen on (port 0: a free port, given to ``on_listen``).
         log_path: the side's link log (``link-physics.log``), or None.
@@ -243,16 +238,12 @@ def serve_physics(
 
     Raises:
         LinkError: ``bind`` cannot be bound.
-        ValueError: a negative seed, a flight shorter than one sensor period.
     """
-    check_seed("seed", seed)
-    samples = round(scenario.duration_s * scenario.sensors.rate_hz)
-    if samples < 1:
-        raise ValueError(f"duration_s: a flight lasts at least one sensor period, got {scenario.duration_s:g} s")
-    period_ns = sample_period_ns(scenario)
+    clock = FlightClock.of(scenario)
+    samples, period_ns = clock.sample_count, clock.sample_period_ns
     log = LinkLog(log_path)
     try:
-        link = UdpLink(bind, "physics", config.faults, seed, log)
+        link = UdpLink(bind, "physics", config.faults, scenario.seed, log)
     except BaseException:
         log.close()
         raise
@@ -271,22 +262,22 @@ def serve_physics(
         if on_start is not None:
             on_start()
         world = World([vehicle], scenario.sensors, scenario.wind)
-        world.reset(seed)
+        world.reset(scenario.seed)
         quad = world.quadrotors[0]
         flight = _Flight(link, config, ActuatorHold(config.hold, quad.pwm), log)
-        steps = world.sensor_steps
+        steps = clock.steps_per_sample
         rest = vehicle.rest_height
         start = flight.start = time.monotonic()
         cpu_start = time.process_time()
-        for k in range(samples):
-            t_ns = k * period_ns
+        for k in clock.samples():
+            t_ns = clock.sample_ns(k)
             sample = quad.sensors()
             setpoint = setpoint_at(scenario.flight, rest, sample.time)
             row = flight_row(sample, quad.truth(), UNKNOWN_ESTIMATE, setpoint, quad.pwm, world.wind.velocity)
             flight.send(t_ns, [Reading(k, t_ns, sensor_packet(row, k, period_ns // 1000))])
-            max_lag = max(max_lag, flight.wait_for_period(k * steps, steps))
-            for s in range(steps):
-                quad.apply_pwm(flight.hold.at(k * steps + s))
+            max_lag = max(max_lag, flight.wait_for_period(clock.first_step(k), steps))
+            for s, _ in clock.steps(k):
+                quad.apply_pwm(flight.hold.at(clock.first_step(k) + s))
                 if s == 0:
                     row[PWM_COLUMNS] = quad.pwm
                     rows[k] = row

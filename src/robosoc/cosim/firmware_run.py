@@ -33,14 +33,13 @@ import time
 from collections import Counter
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 
 from robosoc.chip.energy import EnergyModel
 from robosoc.chip.function_profile import FunctionProfile, chip_profile
 from robosoc.chip.mpsoc import MPSoC
 from robosoc.config.chip import ChipConfig
 from robosoc.config.firmware import FirmwareConfig
-from robosoc.config.scenario import ScenarioConfig
-from robosoc.config.vehicle import VehicleConfig
 from robosoc.host import flight_app, images, packets
 from robosoc.program.elf import load_elf
 from robosoc.records import JobRecord, PwmCommand, SampleInput
@@ -88,27 +87,33 @@ class FirmwareRun:
     are charged to the sample period they were released in, from counter snapshots taken at
     :meth:`close_period`.
 
+    Args:
+        fw: the firmware build and task mapping.
+        elf: its image (:func:`robosoc.host.flight_app.build`), built once by the caller.
+        chip: the chip (default: the seed's 2×2 for the mapping, :meth:`FirmwareConfig.seed_chip`).
+        energy: the energy model (default: the packaged coefficients).
+        first_cycle: cycle of the first sample's injection.
+        profile: count every instruction per function, tile and task (:meth:`function_profile`).
+
     Raises:
         ValueError: the mapping does not fit the chip.
     """
 
     def __init__(
         self,
-        fw: FirmwareConfig | None = None,
+        fw: FirmwareConfig,
+        elf: Path,
         *,
-        vehicle: VehicleConfig | None = None,
-        scenario: ScenarioConfig | None = None,
         chip: ChipConfig | None = None,
         energy: EnergyModel | None = None,
         first_cycle: int = DEFAULT_FIRST_CYCLE,
         profile: bool = False,
     ) -> None:
-        self.fw = fw or FirmwareConfig()
+        self.fw = fw
         self.chip_config = chip or self.fw.seed_chip()
         self.fw.check_chip(self.chip_config)
         self.model = energy or EnergyModel.load()
         self.first_cycle = first_cycle
-        elf = flight_app.build(self.fw, vehicle=vehicle, scenario=scenario)
         self.chip = MPSoC(self.chip_config)
         self.chip.record_timeline()  # for the chip trace (cosim/chip_timeline.py)
         program = load_elf(elf, self.chip.regions())

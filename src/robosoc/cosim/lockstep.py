@@ -34,15 +34,13 @@ import math
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Protocol
 
 import numpy as np
 
 from robosoc.chip.energy import EnergyModel
-from robosoc.config.chip import ChipConfig
-from robosoc.config.firmware import FirmwareConfig
-from robosoc.config.ranges import check_seed
-from robosoc.config.scenario import PHYSICS_DT_S, ScenarioConfig
+from robosoc.config.scenario import ScenarioConfig
 from robosoc.config.vehicle import VehicleConfig
 from robosoc.control import quaternion
 from robosoc.control.flight import ROW_FIELDS, flight_row
@@ -52,10 +50,9 @@ from robosoc.cosim.firmware_run import DEFAULT_FIRST_CYCLE, FirmwareRun, ReplayR
 from robosoc.cosim.replay import sensor_packet
 from robosoc.host import flight_app
 from robosoc.physics import SensorSample, World
+from robosoc.physics.clock import PHYSICS_STEP_NS, FlightClock
 from robosoc.records import PwmCommand, SampleInput
 
-NS_PER_S = 1_000_000_000
-PHYSICS_STEP_NS = round(PHYSICS_DT_S * NS_PER_S)
 """The physics step in nanoseconds (1 ms)."""
 
 PWM_COLUMNS = [ROW_FIELDS.index(f"pwm{i}") for i in range(4)]
@@ -92,9 +89,9 @@ class ChipController:
     """The flight firmware on the chip (:mod:`robosoc.host.flight_app`) as a lockstep controller.
 
     Args:
-        scenario, vehicle: what is flown (the firmware's control parameters come from them).
-        fw: the firmware build and task mapping (default: fixed point with the multiplier).
-        chip: the chip (default: the seed's 2×2 for the mapping).
+        scenario, vehicle: what is flown (the firmware's control parameters come from them), by
+            the scenario's firmware on its chip.
+        elf: the firmware's image, built once per flight by the caller (default: built here).
         energy: the energy model for the job records (default: the packaged coefficients).
         first_cycle: the cycle of simulated time 0 (the firmware boots before it).
         profile: count every instruction per function, tile and task (``result.profile``).
@@ -108,9 +105,8 @@ class ChipController:
         self,
         scenario: ScenarioConfig,
         vehicle: VehicleConfig,
-        fw: FirmwareConfig | None = None,
         *,
-        chip: ChipConfig | None = None,
+        elf: Path | None = None,
         energy: EnergyModel | None = None,
         first_cycle: int = DEFAULT_FIRST_CYCLE,
         profile: bool = False,
@@ -118,12 +114,12 @@ class ChipController:
         self.scenario = scenario
         self.profile = profile
         self.vehicle = vehicle
-        self.fw = fw or FirmwareConfig()
-        self.chip = chip
+        self.fw = scenario.firmware
+        self.chip = scenario.chip
         self.energy = energy or EnergyModel.load()
         self.first_cycle = first_cycle
-        self.sample_period_us = scenario.sensors.period_steps * PHYSICS_STEP_NS // 1000
-        flight_app.build(self.fw, vehicle=vehicle, scenario=scenario)  # compile (or hit the cache) now
+        self.sample_period_us = FlightClock.of(scenario).sample_period_ns // 1000
+        self.elf = elf if elf is not None else flight_app.build(self.fw, vehicle=vehicle, scenario=scenario)
         self.run: FirmwareRun | None = None
         self.result: ReplayResult | None = None
 
@@ -131,8 +127,7 @@ class ChipController:
         """A freshly booted chip with the firmware loaded."""
         self.run = FirmwareRun(
             self.fw,
-            vehicle=self.vehicle,
-            scenario=self.scenario,
+            self.elf,
             chip=self.chip,
             energy=self.energy,
             first_cycle=self.first_cycle,
@@ -205,30 +200,25 @@ def fly_lockstep(
     scenario: ScenarioConfig,
     vehicle: VehicleConfig,
     controller: LockstepController,
-    seed: int,
     on_row: Callable[[np.ndarray], None] | None = None,
     on_sample: Callable[[World, int], None] | None = None,
 ) -> np.ndarray:
     """Fly ``scenario`` with ``controller`` in lockstep; the flight with the columns :data:`ROW_FIELDS`.
 
     Args:
-        scenario, vehicle, seed: as :func:`robosoc.control.flight.fly`.
+        scenario, vehicle: as :func:`robosoc.control.flight.fly`.
         controller: the controller, run in simulated time.
         on_row: called with each row as soon as it is complete (logging).
         on_sample: called with the world (at the sample's time) and the sample index (progress, video).
-
-    Raises:
-        ValueError: a negative seed, or a flight shorter than one sensor period.
     """
     rows_of = None if on_row is None else (lambda _i, row: on_row(row))
-    return fly_lockstep_fleet(scenario, [vehicle], [controller], seed, on_row=rows_of, on_sample=on_sample)[0]
+    return fly_lockstep_fleet(scenario, [vehicle], [controller], on_row=rows_of, on_sample=on_sample)[0]
 
 
 def fly_lockstep_fleet(
     scenario: ScenarioConfig,
     vehicles: Sequence[VehicleConfig],
     controllers: Sequence[LockstepController],
-    seed: int,
     on_row: Callable[[int, np.ndarray], None] | None = None,
     on_sample: Callable[[World, int], None] | None = None,
 ) -> list[np.ndarray]:
@@ -244,29 +234,23 @@ def fly_lockstep_fleet(
         on_sample: called once per sample with the world and the sample index.
 
     Raises:
-        ValueError: a negative seed, a flight shorter than one sensor period, or not one controller
-            per vehicle.
+        ValueError: not one controller per vehicle.
     """
-    check_seed("seed", seed)
     if len(controllers) != len(vehicles):
         raise ValueError(f"controllers: one per vehicle, got {len(controllers)} for {len(vehicles)} vehicles")
-    if round(scenario.duration_s * scenario.sensors.rate_hz) < 1:
-        raise ValueError(f"duration_s: a flight lasts at least one sensor period, got {scenario.duration_s:g} s")
+    clock = FlightClock.of(scenario)
     world = World(list(vehicles), scenario.sensors, scenario.wind)
-    world.reset(seed)
+    world.reset(scenario.seed)
     quads = world.quadrotors
     for controller in controllers:
         controller.reset()
-    steps_per_sample = world.sensor_steps
-    samples = round(scenario.duration_s * scenario.sensors.rate_hz)
-    flights = [np.empty((samples, len(ROW_FIELDS))) for _ in vehicles]
+    flights = [np.empty((clock.sample_count, len(ROW_FIELDS))) for _ in vehicles]
     rests = [v.rest_height for v in vehicles]
     pending: list[np.ndarray] = []
-    for k in range(samples):
-        first_step = k * steps_per_sample
-        if world.steps != first_step:
+    for k in clock.samples():
+        if world.steps != clock.first_step(k):
             raise AssertionError("the world is not at the sample's step")
-        t_ns = first_step * PHYSICS_STEP_NS
+        t_ns = clock.sample_ns(k)
         wind = world.wind.velocity
         pending.clear()
         for quad, controller, rest in zip(quads, controllers, rests, strict=True):
@@ -276,8 +260,7 @@ def fly_lockstep_fleet(
             given = flight_row(sample, truth, UNKNOWN_ESTIMATE, setpoint, quad.pwm, wind)
             controller.sense(k, t_ns, sample, setpoint, given)
             pending.append(flight_row(sample, truth, controller.estimate, setpoint, quad.pwm, wind))
-        for s in range(steps_per_sample):
-            t_end = t_ns + (s + 1) * PHYSICS_STEP_NS
+        for s, t_end in clock.steps(k):
             for quad, controller in zip(quads, controllers, strict=True):
                 pwm = controller.advance(t_end)
                 if pwm is not None:
@@ -342,21 +325,18 @@ class ChipFlight:
 def fly_chip(
     scenario: ScenarioConfig,
     vehicle: VehicleConfig,
-    seed: int,
-    fw: FirmwareConfig | None = None,
     *,
-    chip: ChipConfig | None = None,
     on_row: Callable[[np.ndarray], None] | None = None,
     on_sample: Callable[[World, int], None] | None = None,
 ) -> ChipFlight:
-    """Fly ``scenario`` with the firmware ``fw`` on the chip in lockstep (the firmware is built first,
+    """Fly ``scenario`` with its firmware on its chip in lockstep (the firmware is built first,
     outside the timed flight)."""
-    controller = ChipController(scenario, vehicle, fw, chip=chip)
+    controller = ChipController(scenario, vehicle)
     start = time.perf_counter()
-    rows = fly_lockstep(scenario, vehicle, controller, seed, on_row=on_row, on_sample=on_sample)
+    rows = fly_lockstep(scenario, vehicle, controller, on_row=on_row, on_sample=on_sample)
     host_s = time.perf_counter() - start
     assert controller.result is not None
-    simulated = len(rows) * scenario.sensors.period_steps * PHYSICS_STEP_NS / NS_PER_S
+    simulated = FlightClock.of(scenario).simulated_s(len(rows))
     return ChipFlight(rows, controller.result, simulated, host_s)
 
 
@@ -366,7 +346,6 @@ def arrival_step(cycle: int, first_cycle: int, clock_ns: float) -> int:
 
 
 __all__ = [
-    "PHYSICS_STEP_NS",
     "UNKNOWN_ESTIMATE",
     "ChipController",
     "ChipFlight",

@@ -21,7 +21,7 @@ from robosoc.config.vehicle import VehicleConfig, vehicle_preset
 from robosoc.control.flight import ROW_FIELDS, fly
 from robosoc.control.host import HostController
 from robosoc.cosim.firmware_run import DEFAULT_FIRST_CYCLE, FirmwareRun, ReplayResult
-from robosoc.host import packets
+from robosoc.host import flight_app, packets
 from robosoc.records import SampleInput
 
 # --- the sensor stream --------------------------------------------------------------------------
@@ -68,9 +68,9 @@ def samples_from_rows(rows: np.ndarray, clock_ns: float, first_cycle: int = DEFA
 
 def built_in_rows(seconds: float = 10.0, seed: int = 1) -> np.ndarray:
     """The built-in sensor stream: the default scenario flown by the host controller."""
-    scenario = ScenarioConfig(duration_s=seconds)
+    scenario = ScenarioConfig(duration_s=seconds, seed=seed)
     vehicle = vehicle_preset(scenario.vehicle)
-    return fly(scenario, vehicle, HostController.for_scenario(scenario, vehicle), seed)
+    return fly(scenario, vehicle, HostController.for_scenario(scenario, vehicle))
 
 
 def replay(
@@ -101,9 +101,9 @@ def replay(
         ValueError: the mapping does not fit the chip, or the rows are not a flight.
         robosoc.chip.mpsoc.ChipError / CoreError: the firmware faulted (names tile, pc, symbol).
     """
-    run = FirmwareRun(
-        fw, vehicle=vehicle, scenario=scenario, chip=chip, energy=energy, first_cycle=first_cycle, profile=profile
-    )
+    fw = fw or FirmwareConfig()
+    elf = flight_app.build(fw, vehicle=vehicle, scenario=scenario)
+    run = FirmwareRun(fw, elf, chip=chip, energy=energy, first_cycle=first_cycle, profile=profile)
     samples = samples_from_rows(rows, run.clock_ns, first_cycle)
     period = samples[1].cycle - samples[0].cycle if len(samples) > 1 else round(10e6 / run.clock_ns)
     for k, sample in enumerate(samples):

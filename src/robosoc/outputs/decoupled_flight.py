@@ -27,8 +27,6 @@ from multiprocessing.connection import Connection, wait
 from pathlib import Path
 from typing import Any
 
-from robosoc.config.chip import ChipConfig
-from robosoc.config.firmware import FirmwareConfig
 from robosoc.config.link import LinkConfig
 from robosoc.config.scenario import ScenarioConfig
 from robosoc.config.vehicle import VehicleConfig
@@ -37,7 +35,16 @@ from robosoc.cosim.decoupled_chip import ChipOutcome, serve_chip
 from robosoc.cosim.decoupled_physics import Ended, PhysicsOutcome, serve_physics
 from robosoc.cosim.link import Address, LinkError
 from robosoc.outputs.decoupled_summary import chip_record, decoupled_summary, physics_record
-from robosoc.outputs.run_folder import write_jobs_csv
+from robosoc.outputs.run_folder import (
+    CHIP_JSON,
+    FLIGHT_CSV,
+    JOBS_CSV,
+    LINK_CHIP_LOG,
+    LINK_PHYSICS_LOG,
+    PHYSICS_JSON,
+    SUMMARY_JSON,
+    write_jobs_csv,
+)
 from robosoc.outputs.run_summary import write_summary
 
 __all__ = ["DecoupledFlight", "SideFailed", "fly_decoupled", "run_chip_side", "run_physics_side"]
@@ -67,7 +74,6 @@ def _interrupts_held() -> Iterator[None]:
 def run_physics_side(
     scenario: ScenarioConfig,
     vehicle: VehicleConfig,
-    seed: int,
     config: LinkConfig,
     bind: Address,
     out: Path | None,
@@ -75,11 +81,11 @@ def run_physics_side(
 ) -> tuple[PhysicsOutcome, dict[str, Any]]:
     """:func:`serve_physics` writing ``flight.csv``, ``link-physics.log`` and ``physics.json`` in
     ``out`` (nothing if None); the outcome and the ``physics.json`` record."""
-    log = CsvFlightLog(out / "flight.csv") if out is not None else None
+    log = CsvFlightLog(out / FLIGHT_CSV) if out is not None else None
     try:
         outcome = serve_physics(
-            scenario, vehicle, seed, config, bind,
-            log_path=out / "link-physics.log" if out is not None else None,
+            scenario, vehicle, config, bind,
+            log_path=out / LINK_PHYSICS_LOG if out is not None else None,
             on_row=log.write if log is not None else None,
             **callbacks,
         )  # fmt: skip
@@ -89,34 +95,31 @@ def run_physics_side(
     with _interrupts_held():
         record = physics_record(outcome, scenario, vehicle)
         if out is not None:
-            write_summary(record, out / "physics.json")
+            write_summary(record, out / PHYSICS_JSON)
     return outcome, record
 
 
 def run_chip_side(
     scenario: ScenarioConfig,
     vehicle: VehicleConfig,
-    fw: FirmwareConfig,
-    seed: int,
     config: LinkConfig,
     peer: Address,
     bind: Address | None,
     out: Path | None,
     *,
-    chip: ChipConfig | None = None,
     on_status: Callable[[str], None] | None = None,
 ) -> tuple[ChipOutcome, dict[str, Any]]:
     """:func:`serve_chip` writing ``jobs.csv``, ``link-chip.log`` and ``chip.json`` in ``out``."""
     outcome = serve_chip(
-        scenario, vehicle, fw, seed, config, peer, bind, chip=chip,
-        log_path=out / "link-chip.log" if out is not None else None, on_status=on_status,
+        scenario, vehicle, config, peer, bind,
+        log_path=out / LINK_CHIP_LOG if out is not None else None, on_status=on_status,
     )  # fmt: skip
     with _interrupts_held():
-        record = chip_record(outcome, fw, chip or fw.seed_chip())
+        record = chip_record(outcome, scenario.firmware, scenario.chip)
         if out is not None:
             if outcome.result is not None:
-                write_jobs_csv(outcome.result.jobs, out / "jobs.csv")
-            write_summary(record, out / "chip.json")
+                write_jobs_csv(outcome.result.jobs, out / JOBS_CSV)
+            write_summary(record, out / CHIP_JSON)
     return outcome, record
 
 
@@ -160,13 +163,13 @@ def _physics_process(conn: Connection, args: tuple) -> None:
     )
 
 
-def _chip_process(conn: Connection, args: tuple, chip: ChipConfig | None) -> None:
+def _chip_process(conn: Connection, args: tuple) -> None:
     _interrupt_once()
 
     def status(text: str) -> None:
         _send(conn, "status", f"chip: {text}")
 
-    _report(conn, lambda: run_chip_side(*args, chip=chip, on_status=status))
+    _report(conn, lambda: run_chip_side(*args, on_status=status))
 
 
 def _report(conn: Connection, side: Callable[[], tuple[Any, dict]]) -> None:
@@ -242,17 +245,15 @@ class _Side:
 def fly_decoupled(
     scenario: ScenarioConfig,
     vehicle: VehicleConfig,
-    fw: FirmwareConfig,
-    seed: int,
     config: LinkConfig,
     out: Path,
     *,
     bind: Address | None = None,
-    chip: ChipConfig | None = None,
     on_status: Callable[[str], None] | None = None,
     on_progress: Callable[[int, int], None] | None = None,
 ) -> DecoupledFlight:
-    """Fly ``scenario`` with the physics and the chip in two processes talking UDP; files in ``out``.
+    """Fly ``scenario`` (its firmware on its chip) with the physics and the chip in two processes
+    talking UDP; files in ``out``.
 
     Args:
         bind: the physics side's address (default: a free port on 127.0.0.1).
@@ -273,10 +274,10 @@ def fly_decoupled(
     sides: list[_Side] = []
     interrupted = False
     try:
-        physics = _Side("physics", ctx, _physics_process, ((scenario, vehicle, seed, config, bind, out),))
+        physics = _Side("physics", ctx, _physics_process, ((scenario, vehicle, config, bind, out),))
         sides.append(physics)
         address = _await_listening(physics, config.connect_timeout_s, say)
-        chip_side = _Side("chip", ctx, _chip_process, ((scenario, vehicle, fw, seed, config, address, None, out), chip))
+        chip_side = _Side("chip", ctx, _chip_process, ((scenario, vehicle, config, address, None, out),))
         sides.append(chip_side)
         _collect(sides, say, on_progress, deadline=None)
     except KeyboardInterrupt:
@@ -298,8 +299,8 @@ def fly_decoupled(
         chip=records.get("chip") or {},
         interrupted=interrupted or any(s.error is not None and s.error[0] == "interrupted" for s in sides),
     )
-    result.summary = decoupled_summary(result.physics, result.chip, scenario=scenario, seed=seed, config=config)
-    write_summary(result.summary, out / "summary.json")
+    result.summary = decoupled_summary(result.physics, result.chip, scenario=scenario, config=config)
+    write_summary(result.summary, out / SUMMARY_JSON)
     if failed and not interrupted:
         side = failed[0]
         assert side.error is not None

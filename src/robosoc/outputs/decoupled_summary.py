@@ -83,7 +83,6 @@ def decoupled_summary(
     chip: Mapping[str, Any],
     *,
     scenario: ScenarioConfig,
-    seed: int,
     config: LinkConfig,
 ) -> dict[str, Any]:
     """``summary.json`` of a decoupled flight from the two sides' parts (``physics.json``, ``chip.json``)."""
@@ -93,7 +92,7 @@ def decoupled_summary(
         "schema": SCHEMA,
         "complete": bool(physics.get("complete")) and bool(chip.get("complete")),
         "scenario": scenario.name,
-        "seed": seed,
+        "seed": scenario.seed,
         "controller": "chip",
         "mode": "decoupled",
         "firmware": chip.get("firmware"),

@@ -42,16 +42,23 @@ from robosoc.control.flight_log import CsvFlightLog
 from robosoc.control.host import HostController
 from robosoc.cosim.firmware_run import ReplayResult
 from robosoc.cosim.lockstep import (
-    NS_PER_S,
-    PHYSICS_STEP_NS,
     ChipController,
     HostLockstepController,
     LockstepController,
     fly_lockstep_fleet,
 )
-from robosoc.outputs.run_folder import write_jobs_csv
+from robosoc.outputs.run_folder import (
+    FLIGHT_CSV,
+    FLIGHT_PNG,
+    JOBS_CSV,
+    SCENARIO_TOML,
+    SUMMARY_JSON,
+    write_jobs_csv,
+    write_profile,
+)
 from robosoc.outputs.run_summary import fleet_summary, vehicle_summary, write_summary
 from robosoc.physics import World
+from robosoc.physics.clock import FlightClock
 
 SPACING_M = 3.0
 """Distance between neighbouring spawn points of a fleet [m]: the vehicles fly the same plan, so
@@ -107,9 +114,8 @@ def _controllers(scenario: ScenarioConfig, on_status: Callable[[str], None], pro
     from robosoc.cosim.chip_warmup import prepare_chip
     from robosoc.host import flight_app
 
-    prepare_chip(scenario.chip, lambda: flight_app.build(scenario.firmware, canonical, scenario), on_status)
-    fw, chip = scenario.firmware, scenario.chip
-    return [ChipController(scenario, canonical, fw, chip=chip, profile=profile) for _ in range(scenario.vehicles)]
+    elf = prepare_chip(scenario.chip, lambda: flight_app.build(scenario.firmware, canonical, scenario), on_status)
+    return [ChipController(scenario, canonical, elf=elf, profile=profile) for _ in range(scenario.vehicles)]
 
 
 def _min_separation(rows: list[np.ndarray]) -> float:
@@ -126,7 +132,6 @@ def fly_scenario(
     scenario: ScenarioConfig,
     out: Path | None = None,
     *,
-    seed: int | None = None,
     on_sample: Callable[[World, int], None] | None = None,
     on_status: Callable[[str], None] | None = None,
     on_row: Callable[[int, np.ndarray], None] | None = None,
@@ -134,12 +139,11 @@ def fly_scenario(
     logs: bool = True,
     profile: bool = False,
 ) -> ScenarioFlight:
-    """Fly ``scenario`` (with ``seed`` in place of its own, if given) and write the run folder ``out``.
+    """Fly ``scenario`` and write the run folder ``out``.
 
     Args:
         scenario: the resolved scenario.
         out: the run folder (created); None writes nothing.
-        seed: overrides ``scenario.seed``.
         on_sample: called once per sensor sample with the world and the sample index (progress, video).
         on_status: told what is being done before the flight (building, compiling), for a newcomer
             who would otherwise watch a silent terminal.
@@ -155,8 +159,6 @@ def fly_scenario(
         KeyboardInterrupt, or whatever stopped the flight (a firmware fault: ChipError, CoreError),
         after ``summary.json`` with ``"complete": false`` has been written next to the rows flown.
     """
-    if seed is not None:
-        scenario = dataclasses.replace(scenario, seed=seed)
     say = on_status or (lambda _text: None)
     vehicles = fleet_vehicles(scenario)
     count = len(vehicles)
@@ -165,8 +167,8 @@ def fly_scenario(
     csv_logs: list[CsvFlightLog] = []
     if out is not None:
         out.mkdir(parents=True, exist_ok=True)
-        (out / "scenario.toml").write_text(scenario_toml(scenario), encoding="utf-8")
-        csv_logs = [CsvFlightLog(folder / "flight.csv") for folder in folders]
+        (out / SCENARIO_TOML).write_text(scenario_toml(scenario), encoding="utf-8")
+        csv_logs = [CsvFlightLog(folder / FLIGHT_CSV) for folder in folders]
     flown: list[list[np.ndarray]] = [[] for _ in vehicles]
 
     def keep_row(i: int, row: np.ndarray) -> None:
@@ -178,7 +180,7 @@ def fly_scenario(
 
     start = time.perf_counter()
     try:
-        fly_lockstep_fleet(scenario, vehicles, controllers, scenario.seed, on_row=keep_row, on_sample=on_sample)
+        fly_lockstep_fleet(scenario, vehicles, controllers, on_row=keep_row, on_sample=on_sample)
     except BaseException as exc:
         host_s = time.perf_counter() - start
         for log in csv_logs:
@@ -212,7 +214,7 @@ def _conclude(
     complete = stopped is None
     rows = [np.array(r).reshape(-1, len(ROW_FIELDS)) for r in flown]
     samples = min(len(r) for r in rows)
-    simulated_s = samples * scenario.sensors.period_steps * PHYSICS_STEP_NS / NS_PER_S
+    simulated_s = FlightClock.of(scenario).simulated_s(samples)
     results: list[ReplayResult | None] = []
     summaries = []
     for i, (vehicle, controller) in enumerate(zip(vehicles, controllers, strict=True)):
@@ -232,15 +234,15 @@ def _conclude(
             continue
         folder = folders[i]
         if result is not None:
-            write_jobs_csv(result.jobs, folder / "jobs.csv")
+            write_jobs_csv(result.jobs, folder / JOBS_CSV)
             if result.profile is not None:
-                result.profile.write(folder)  # before the report, which shows it
-        write_summary(summary, folder / "summary.json")
+                write_profile(result.profile, folder)  # before the report, which shows it
+        write_summary(summary, folder / SUMMARY_JSON)
         if plot and len(rows[i]):
             from robosoc.control.flight_plot import plot_flight
 
             title = f"{scenario.name}, seed {scenario.seed}" + (f", vehicle {i + 1}" if len(vehicles) > 1 else "")
-            plot_flight(rows[i], folder / "flight.png", title=title)
+            plot_flight(rows[i], folder / FLIGHT_PNG, title=title)
         if logs and len(rows[i]):
             from robosoc.outputs.run_logs import write_run_logs
 
@@ -260,5 +262,5 @@ def _conclude(
             stopped=stopped,
         )
         if out is not None:
-            write_summary(top, out / "summary.json")
+            write_summary(top, out / SUMMARY_JSON)
     return ScenarioFlight(top, rows, results, out)

@@ -13,6 +13,7 @@ from __future__ import annotations
 import csv
 import json
 import math
+import os
 import re
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -20,6 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
+from robosoc.chip.function_profile import FunctionProfile
 from robosoc.control.flight import ROW_FIELDS
 from robosoc.records import JobRecord
 
@@ -30,7 +32,13 @@ SCENARIO_TOML = "scenario.toml"
 FLIGHT_MCAP = "flight.mcap"
 CHIP_TRACE_JSON = "chip-trace.json"
 REPORT_HTML = "report.html"
-PROFILE_JSON = "profile.json"  # written by robosoc profile / fly --profile (chip/function_profile.py)
+PROFILE_JSON = "profile.json"  # written by robosoc profile / fly --profile (write_profile)
+PROFILE_CSV = "profile.csv"
+FLIGHT_PNG = "flight.png"
+PHYSICS_JSON = "physics.json"  # the decoupled mode's physics side
+CHIP_JSON = "chip.json"  # the decoupled mode's chip side
+LINK_PHYSICS_LOG = "link-physics.log"
+LINK_CHIP_LOG = "link-chip.log"
 VEHICLE_FOLDER = re.compile(r"vehicle-(\d+)")
 
 JOB_CSV_FIELDS = (
@@ -54,6 +62,17 @@ def write_jobs_csv(jobs: Sequence[JobRecord], path: Path) -> None:
                     int(j.deadline_met),
                 ]
             )  # fmt: skip
+
+
+def write_profile(profile: FunctionProfile, folder: Path) -> tuple[Path, Path]:
+    """Write ``profile.json`` and ``profile.csv`` into ``folder``, each to a temporary name first
+    and then renamed, so an interruption never leaves half a file."""
+    paths = folder / PROFILE_JSON, folder / PROFILE_CSV
+    for path, text in zip(paths, (profile.json_text(), profile.csv_text()), strict=True):
+        tmp = path.with_name(path.name + ".tmp")
+        tmp.write_text(text, encoding="utf-8")
+        os.replace(tmp, path)
+    return paths
 
 
 _TEXT_JOB_FIELDS = ("task", "tile")
@@ -208,10 +227,17 @@ def finite(value: object) -> float | None:
 
 
 __all__ = [
+    "CHIP_JSON",
     "CHIP_TRACE_JSON",
     "FLIGHT_CSV",
     "FLIGHT_MCAP",
+    "FLIGHT_PNG",
     "JOBS_CSV",
+    "JOB_CSV_FIELDS",
+    "LINK_CHIP_LOG",
+    "LINK_PHYSICS_LOG",
+    "PHYSICS_JSON",
+    "PROFILE_CSV",
     "PROFILE_JSON",
     "REPORT_HTML",
     "SCENARIO_TOML",
@@ -222,4 +248,6 @@ __all__ = [
     "read_flight_rows",
     "read_jobs",
     "read_run_folder",
+    "write_jobs_csv",
+    "write_profile",
 ]

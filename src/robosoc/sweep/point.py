@@ -8,6 +8,7 @@ so the worker needs no file system in common with the machine that stores the sw
 
 from __future__ import annotations
 
+import dataclasses
 import tempfile
 import time
 import traceback
@@ -50,12 +51,13 @@ def run_point(base: ScenarioConfig, point: Point, source: str) -> PointResult:
     start = time.perf_counter()
     try:
         scenario = from_mapping(ScenarioConfig, point.changes(), f"{source}: {point.label}", base=base)
+        scenario = dataclasses.replace(scenario, seed=point.seed)
     except ConfigError as exc:
         return PointResult(point.key, FAILED, f"invalid combination: {exc}", worker_s=time.perf_counter() - start)
     with tempfile.TemporaryDirectory(prefix="robosoc-point-") as tmp:
         folder = Path(tmp)
         try:
-            summary = fly_point(scenario, point.seed, folder)
+            summary = fly_point(scenario, folder)
             status, error = OK, ""
             misses = summary.get("deadline_misses") or 0
             if misses:
@@ -69,11 +71,11 @@ def run_point(base: ScenarioConfig, point: Point, source: str) -> PointResult:
     return PointResult(point.key, status, error, summary, files, time.perf_counter() - start)
 
 
-def fly_point(scenario: ScenarioConfig, seed: int, folder: Path) -> dict[str, Any]:
-    """Fly ``scenario`` with ``seed``, writing its run folder into ``folder``; its summary."""
+def fly_point(scenario: ScenarioConfig, folder: Path) -> dict[str, Any]:
+    """Fly ``scenario``, writing its run folder into ``folder``; its summary."""
     from robosoc.outputs.flight_session import fly_scenario
 
-    return fly_scenario(scenario, folder, seed=seed, plot=False, logs=False).summary
+    return fly_scenario(scenario, folder, plot=False, logs=False).summary
 
 
 __all__ = ["FAILED", "OK", "PointResult", "fly_point", "metric", "run_point"]

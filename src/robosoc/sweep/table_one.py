@@ -21,6 +21,7 @@ The builds run in parallel worker processes (``workers``), each reporting its sa
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import multiprocessing
 import os
@@ -127,7 +128,7 @@ class TableSpec:
         """The default scenario, long enough for the calibration and the measured window."""
         base = ScenarioConfig()
         period = 1.0 / base.sensors.rate_hz
-        return ScenarioConfig(duration_s=round(base.flight.takeoff_s + self.iterations * period, 9))
+        return ScenarioConfig(duration_s=round(base.flight.takeoff_s + self.iterations * period, 9), seed=self.seed)
 
 
 @dataclass(frozen=True)
@@ -295,9 +296,9 @@ def measure_build(
             _progress.put((key, done, total))
 
     if rows is None:
-        scenario = spec.scenario()
-        total = round(scenario.duration_s * scenario.sensors.rate_hz)
-        flight = fly_chip(scenario, _vehicle(scenario), spec.seed, fw, on_sample=lambda _w, k: report(k + 1, total))
+        scenario = dataclasses.replace(spec.scenario(), firmware=fw, chip=fw.seed_chip())
+        total = scenario.samples
+        flight = fly_chip(scenario, _vehicle(scenario), on_sample=lambda _w, k: report(k + 1, total))
         rows, result = flight.rows, flight.run
         golden = golden_replay(rows, scenario)
         return summarise(result, rows, golden, spec.iterations, "closed-loop")

@@ -1,0 +1,151 @@
+"""The scenario flags (``robosoc.cli.scenario_flags``): one table from option to scenario field, one
+resolver for every command; and ``robosoc serve``'s out folder and ``fly --decoupled``'s summary
+numbers, called as library functions (no process, no socket).
+
+Expectations from docs/cli.md: SCENARIO or ``--scenario`` (not both), ``--duration`` or its alias
+``--seconds`` (not both), overrides named by the option as typed, a flight of at least one sensor
+period, and an ``--out`` folder that is not an input file.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+from typing import Any
+
+import pytest
+import typer
+from typer.testing import CliRunner
+
+from robosoc.cli.errors import CliError
+from robosoc.cli.scenario_flags import FLAGS, FLY, SERVE_CHIP, ScenarioFlags, flags_of, resolve, takes_scenario
+from robosoc.cli.serve import _out
+from robosoc.config.scenario import ScenarioConfig
+
+SCENARIO = 'name = "hop"\nduration_s = 1.5\nseed = 11\n[flight]\ntakeoff_s = 0.3\nsteps = []\n'
+
+
+@pytest.fixture
+def scenario(tmp_path: Path) -> Path:
+    path = tmp_path / "hop.toml"
+    path.write_text(SCENARIO)
+    return path
+
+
+def resolved(option: Path | None = None, argument: Path | None = None, **values: Any) -> ScenarioConfig:
+    return resolve(ScenarioFlags.of(option, argument, values)).config
+
+
+def test_every_row_names_a_field_of_the_scenario_and_a_known_command() -> None:
+    config = ScenarioConfig()
+    for flag in FLAGS:
+        node: Any = config
+        for part in flag.field.split("."):
+            assert dataclasses.is_dataclass(node) and part in {f.name for f in dataclasses.fields(node)}, flag
+            node = getattr(node, part)
+        assert flag.commands and set(flag.commands) <= {"fly", "serve physics", "serve chip", "firmware"}, flag
+        assert "firmware" not in flag.commands or flag.section == "firmware", flag  # firmware commands: no scenario
+    assert len({f.param for f in FLAGS}) == len(FLAGS) and len({f.option for f in FLAGS}) == len(FLAGS)
+
+
+def test_a_row_of_the_table_reaches_the_command_as_an_option_and_sets_its_field() -> None:
+    """A command decorated with ``takes_scenario`` gets every row of its command as an option, and
+    the resolver sets the row's field: what adding a row to the table gives every such command."""
+    app = typer.Typer()
+    seen: list[ScenarioConfig] = []
+
+    @app.command()
+    @takes_scenario(SERVE_CHIP)
+    def cmd(flags: ScenarioFlags, other: int = 0) -> None:
+        seen.append(resolve(flags).config)
+        assert other == 3
+
+    args = ["--other", "3", "--arith", "float", "--no-mul", "--duration", "0.5", "--seed", "8", "--vehicle", "laser"]
+    result = CliRunner().invoke(app, args)
+    assert result.exit_code == 0, result.output
+    got = seen[0]
+    assert (got.firmware.arith, got.firmware.multiplier, got.duration_s, got.seed, got.vehicle) == (
+        "float",
+        False,
+        0.5,
+        8,
+        "laser",
+    )
+    assert CliRunner().invoke(app, ["--engine", "jit"]).exit_code != 0  # an option of fly, not of serve chip
+    assert {f.option for f in flags_of(SERVE_CHIP)} < {f.option for f in flags_of(FLY)}
+
+
+def test_the_file_alone_gives_its_fields(scenario: Path) -> None:
+    flight = resolve(ScenarioFlags.of(None, scenario, {}))
+    assert (flight.config.name, flight.config.duration_s, flight.config.seed, flight.path) == ("hop", 1.5, 11, scenario)
+    assert flight.sources == ((str(scenario), ("name", "duration_s", "seed", "flight.takeoff_s", "flight.steps")),)
+
+
+def test_the_option_and_the_argument_name_the_same_file(scenario: Path) -> None:
+    assert resolved(option=scenario) == resolved(argument=scenario)
+    with pytest.raises(CliError, match="--scenario"):
+        ScenarioFlags.of(scenario, scenario, {})
+
+
+def test_overrides_are_taken_named_as_sources_and_each_duration_option_works(scenario: Path) -> None:
+    flight = resolve(ScenarioFlags.of(None, scenario, {"duration": 0.5, "vehicle": "laser", "seed": 4}))
+    assert (flight.config.duration_s, flight.config.vehicle, flight.config.seed) == (0.5, "laser", 4)
+    assert [source for source, _ in flight.sources] == [str(scenario), "--duration", "--seed", "--vehicle"]
+    assert resolved(argument=scenario, seconds=0.25).duration_s == 0.25
+    with pytest.raises(CliError, match=r"^--duration: cannot be combined with --seconds"):
+        resolved(argument=scenario, duration=0.5, seconds=0.25)
+    assert resolved(duration=0.75).duration_s == 0.75
+    nested = resolved(arith="float", mul=False, engine="interp")
+    assert (nested.firmware.arith, nested.firmware.multiplier, nested.chip.engine) == ("float", False, "interp")
+
+
+@pytest.mark.parametrize(("option", "param"), [("--duration", "duration"), ("--seconds", "seconds")])
+def test_a_flight_shorter_than_a_sensor_period_names_the_option(scenario: Path, option: str, param: str) -> None:
+    with pytest.raises(CliError) as caught:
+        resolved(argument=scenario, **{param: 0.001})
+    assert caught.value.message == (
+        f"{option}: a flight lasts at least one sensor period (0.01 s at 100 Hz), got 0.001 s (with {scenario})"
+    )
+
+
+def test_a_short_file_names_the_file_and_field(tmp_path: Path) -> None:
+    short = tmp_path / "short.toml"
+    short.write_text(SCENARIO.replace("duration_s = 1.5", "duration_s = 0.001"))
+    with pytest.raises(CliError) as caught:
+        resolved(argument=short)
+    assert caught.value.message == (
+        f"{short}: duration_s: a flight lasts at least one sensor period (0.01 s at 100 Hz), got 0.001 s"
+    )
+    with pytest.raises(CliError) as caught:
+        resolved(option=short)
+    assert caught.value.message.startswith(f"--scenario: {short}: duration_s: ")
+
+
+def test_a_bad_value_is_named_by_its_option(scenario: Path) -> None:
+    with pytest.raises(CliError, match=r"^--vehicle: "):
+        resolved(argument=scenario, vehicle="blimp")
+    with pytest.raises(CliError, match=r"^--arith: "):
+        resolved(arith="double")
+    with pytest.raises(CliError, match=r"^--engine: "):
+        resolved(engine="fast")
+
+
+def test_out_folder_default_and_rules(scenario: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.chdir(tmp_path)
+    assert _out(None, True, "chip", "hop", 11, scenario) is None
+    made = _out(None, False, "chip", "hop", 11, scenario)
+    assert made is not None and made.resolve() == (tmp_path / "runs" / "serve-chip-hop-s11").resolve()
+    with pytest.raises(CliError, match="--out"):
+        _out(tmp_path / "x", True, "physics", "hop", 11, scenario)
+    with pytest.raises(CliError, match=r"^--out: "):
+        _out(scenario, False, "physics", "hop", 11, scenario)  # the input file itself
+
+
+def test_decoupled_summary_numbers() -> None:
+    from robosoc.cli.fly_decoupled import _number
+
+    assert _number(0.0234, 100, "cm") == "2.34 cm"
+    assert _number(-1.5, 1, "deg") == "-1.50 deg"
+    assert _number(None, 100, "cm") == "n/a"
+    assert _number(float("nan"), 100, "cm") == "n/a"
+    assert _number(float("inf"), 1, "deg") == "n/a"
