@@ -131,6 +131,10 @@ MUTANTS = [
     Mutant("send-does-not-shrink-quantum", K + "chip.py",
            "                    H = s0 + look_idle",
            "                    H = H", CHIP_TESTS),
+    # per-task accounting (kernels/chip.py): the last tile's time since its last TASK_ID store unattributed
+    Mutant("account-all-skips-last-tile", K + "chip.py",
+           "    for t in range(cst.shape[0]):",
+           "    for t in range(cst.shape[0] - 1):", ("tests/chip/test_chip_totals.py",)),
 ]  # fmt: skip
 
 #: Open: mutants the tests do not catch yet (``--open`` runs them).  Each is a quantum longer than the

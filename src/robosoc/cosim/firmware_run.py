@@ -12,7 +12,8 @@ cycles).  The chip is stepped from one injection to the next, and at each step t
 counters of every tile and the router counters are read, so each job's instructions and energy are
 those of its task in the sample period in which it was released:
 
-* ``task``: the job's own task (its TASK_ID on its tile) in that period;
+* ``task``: the job's own task (its TASK_ID on its tile) in that period, shared equally by the
+  task's jobs released in it (periodic release can put two in one period), instructions too;
 * ``kernel``: the kernel's TASK_ID on the job's tile in that period (interrupt entry and exit,
   scheduling, messaging), shared equally by the jobs of that tile in the period;
 * ``idle``: the idle task's on that tile (it sleeps: clock-gated cycles), shared likewise;
@@ -214,6 +215,8 @@ class FirmwareRun:
         model, chip_, samples = self.model, self.chip, self.samples
         per_period = Counter(p for _, _, p in self._logged)
         per_tile_period = Counter((xy, p) for xy, _, p in self._logged)
+        per_task_period = Counter((xy, r.task, p) for xy, r, p in self._logged)
+        seen: Counter[tuple] = Counter()  # jobs of each (tile, task, period) charged so far
         jobs = []
         for xy, r, p in self._logged:
             name = self.names.get((xy, r.task))
@@ -222,8 +225,12 @@ class FirmwareRun:
             delta = self._periods[p]
             counters = delta["tasks"].get((xy, r.task), {})
             shared = per_tile_period[(xy, p)]
+            # jobs of one task released in one period (periodic release) share its counters
+            alike, k = per_task_period[(xy, r.task, p)], seen[(xy, r.task, p)]
+            seen[(xy, r.task, p)] += 1
+            quotient, remainder = divmod(int(counters.get("instructions", 0)), alike)
             energy_pj = {
-                "task": _pj(model, counters),
+                "task": _pj(model, counters) / alike,
                 "kernel": _pj(model, delta["tasks"].get((xy, images.KERNEL_TASK_ID), {})) / shared,
                 "idle": _pj(model, delta["tasks"].get((xy, images.IDLE_TASK_ID), {})) / shared,
                 "noc": delta["noc_pj"] / per_period[p],
@@ -232,7 +239,7 @@ class FirmwareRun:
                 JobRecord(
                     task=name, tile=xy, job=r.job, release_cycle=r.release, start_cycle=r.start,
                     completion_cycle=r.completion, exec_cycles=r.exec_cycles, deadline_met=r.met,
-                    instructions=int(counters.get("instructions", 0)), energy_pj=energy_pj,
+                    instructions=quotient + int(k < remainder), energy_pj=energy_pj,
                     spans_periods=p + 1 < len(samples) and r.completion > samples[p + 1].cycle,
                 )
             )  # fmt: skip
