@@ -113,7 +113,9 @@ def test_bad_sweep_files_name_file_and_field(tmp_path, text, field, reason):
 
 def test_invalid_combination_is_not_refused_up_front(tmp_path):
     # each value alone is valid; together they may not be: that is a failed point, not a bad file
-    path = write(tmp_path, "[grid]\nduration_s = [0.001, 1.0]\n")
+    # (4 ms is one sample at the base's 250 Hz, none at 100 Hz)
+    text = '[base.sensors]\nrate_hz = 250.0\n[grid]\nduration_s = [0.004, 1.0]\n"sensors.rate_hz" = [100.0]\n'
+    path = write(tmp_path, text)
     assert len(plan(load_sweep(path))) == 2
 
 

@@ -103,20 +103,20 @@ def test_interrupted_sweep_resumes_with_only_the_missing_points(tmp_path):
 
 def test_failed_points_are_recorded_and_do_not_stop_the_sweep(tmp_path):
     sweep = tmp_path / "s.toml"
-    # 0.001 s is a valid duration but shorter than a sensor period: that point's flight fails;
-    # the listed point maps the PID to a tile outside the 2x2 chip: an invalid combination
+    # 4 ms is one sensor period at the base's 250 Hz but none at 100 Hz: that point is an invalid
+    # combination; the other listed point maps the PID to a tile outside the 2x2 chip
     sweep.write_text(
-        "[base]\nduration_s = 0.03\n[grid]\nduration_s = [0.001, 0.03]\n"
-        '[[points]]\n"sensors.noise" = false\n'
+        "[base]\nduration_s = 0.03\n[base.sensors]\nrate_hz = 250.0\n[grid]\nduration_s = [0.004, 0.03]\n"
+        '[[points]]\n"sensors.rate_hz" = 100.0\n'
         '[[points]]\n"firmware.pid_tile" = [3, 0]\n'
     )
     config = load_sweep(sweep)
     outcome = run_sweep(config, tmp_path / "out", workers=1)
     status = {json.dumps(r["values"]): (r["status"], r["error"]) for r in outcome.records.values()}
-    assert status[json.dumps({"duration_s": 0.03, "sensors.noise": False})][0] == OK
-    short = status[json.dumps({"duration_s": 0.001, "sensors.noise": False})]
-    assert short[0] == FAILED and "sensor period" in short[1]
-    for duration in (0.001, 0.03):
+    assert status[json.dumps({"duration_s": 0.03, "sensors.rate_hz": 100.0})][0] == OK
+    short = status[json.dumps({"duration_s": 0.004, "sensors.rate_hz": 100.0})]
+    assert short[0] == FAILED and short[1].startswith("invalid combination") and "sensor period" in short[1]
+    for duration in (0.004, 0.03):
         bad = status[json.dumps({"duration_s": duration, "firmware.pid_tile": [3, 0]})]
         assert bad[0] == FAILED and bad[1].startswith("invalid combination") and "pid_tile" in bad[1]
     assert len(outcome.failures) == 3
