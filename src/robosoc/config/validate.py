@@ -124,10 +124,11 @@ def _build(cls: type[T], data: dict[str, Any], path: str, where: str, base: T | 
 
 
 def _defaults(cls: type[T]) -> T | None:
-    """``cls()``, or ``None`` if ``cls`` has required fields."""
+    """``cls()``, or ``None`` if ``cls`` has required fields (or its defaults alone are no valid
+    instance, as a project file without tasks)."""
     try:
         return cls()
-    except TypeError:
+    except (TypeError, ValueError):
         return None
 
 

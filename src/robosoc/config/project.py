@@ -1,0 +1,299 @@
+"""A firmware project: the project file (``robosoc.toml``) that describes a user's firmware as data.
+
+A project is a folder with C sources and a ``robosoc.toml``::
+
+    [project]
+    name = "pingpong"
+    sources = ["tasks.c"]            # relative to the project folder
+    include_dirs = ["include"]       # the project folder itself is always searched
+    defines = ["LOOPS=3"]            # NAME or NAME=VALUE, for every build
+    arith = ["float", "fixed"]       # the builds the project supports (real_t soft-float / Q16.16)
+    multiplier = [true, false]
+
+    [[tasks]]                        # one table per task; created in this order on their tiles
+    name = "ping"                    # a C identifier: how tables and reports name the task
+    tile = [0, 1]
+    release = "event"                # "event": a job per message on ``port``; "periodic"
+    port = 1                         # event: the port whose messages release a job
+    deadline_ticks = 10              # relative deadline in kernel ticks
+    stack_bytes = 2048
+    init = "ping_init"               # optional: called on the task's tile before the kernel starts
+    on_message = "ping_on_message"   # event release: void f(const os_msg_t *msg, void *arg)
+    on_period = ""                   # periodic release: void f(void *arg)
+    period_ticks = 10                # periodic release: period (and capacity_ticks <= deadline)
+    capacity_ticks = 10
+
+    [[messages]]                     # what travels between tasks and the I/O tile
+    name = "sensor"
+    port = 1                         # the destination port
+    source = "io"                    # "io" (the host's I/O tile) or a task's name
+    destination = "ping"             # "io" or a task's name
+
+The firmware's ``main`` is generated from the task table (:mod:`robosoc.host.project_main`): on
+each tile it calls the ``init`` of the tasks mapped there and creates them with the kernel, in
+the order of the file.  Errors name the file and the dotted key (``tasks[1].port``).
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Literal
+
+from robosoc.config.chip import ChipConfig
+from robosoc.config.firmware import ARITH_CHOICES
+from robosoc.config.validate import ConfigError, from_mapping, read_toml_mapping
+
+__all__ = ["IO", "PROJECT_FILE", "FirmwareProject", "MessageSpec", "ProjectInfo", "TaskSpec", "load_project"]
+
+PROJECT_FILE = "robosoc.toml"
+IO = "io"
+"""The name of the I/O tile (the host's side) as a message's source or destination."""
+MAX_TASKS = 14
+"""Tasks per tile the kernel can hold at most (TASK_IDs 2..15; 0 is the kernel, 1 the idle task:
+``OS_MAX_TASKS`` in firmware/kernel/os_config.h, which a build sets when a tile has more than its
+default)."""
+MAX_PORT = 255
+
+_IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+_DEFINE = re.compile(r"[A-Za-z_][A-Za-z0-9_]*(=.*)?", re.DOTALL)
+_C_KEYWORDS = frozenset(
+    (
+        "auto", "break", "case", "char", "const", "continue", "default", "do", "double", "else", "enum", "extern",
+        "float", "for", "goto", "if", "inline", "int", "long", "register", "restrict", "return", "short", "signed",
+        "sizeof", "static", "struct", "switch", "typedef", "union", "unsigned", "void", "volatile", "while", "main",
+    )
+)  # fmt: skip
+
+
+def _identifier(name: str, value: str, what: str) -> None:
+    if not _IDENTIFIER.fullmatch(value) or value in _C_KEYWORDS:
+        raise ValueError(f"{name}: must be a C identifier ({what}), got {value!r}")
+
+
+@dataclass(frozen=True)
+class TaskSpec:
+    """One task of a project and where it runs (see the module docstring for each key)."""
+
+    name: str
+    tile: tuple[int, int]
+    release: Literal["event", "periodic"] = "event"
+    port: int | None = None
+    deadline_ticks: int = 10
+    period_ticks: int | None = None
+    capacity_ticks: int | None = None
+    stack_bytes: int = 2048
+    init: str = ""
+    on_message: str = ""
+    on_period: str = ""
+
+    def __post_init__(self) -> None:
+        _identifier("name", self.name, "it names the task in C and in reports")
+        if self.name == IO:
+            raise ValueError(f"name: {IO!r} is the I/O tile's name")
+        if len(self.tile) != 2 or min(self.tile) < 0:
+            raise ValueError(f"tile: must be [x, y] with x, y >= 0, got {list(self.tile)}")
+        for key in ("init", "on_message", "on_period"):
+            value = getattr(self, key)
+            if value:
+                _identifier(key, value, "a C function of the project")
+        if not 1 <= self.deadline_ticks <= 1_000_000:
+            raise ValueError(f"deadline_ticks: must be between 1 and 1000000, got {self.deadline_ticks}")
+        if not 256 <= self.stack_bytes <= 1 << 20 or self.stack_bytes % 16:
+            raise ValueError(f"stack_bytes: must be a multiple of 16 from 256 to 1048576, got {self.stack_bytes}")
+        if self.port is not None and not 1 <= self.port <= MAX_PORT:
+            raise ValueError(f"port: must be between 1 and {MAX_PORT}, got {self.port}")
+        if self.release == "event":
+            if self.port is None:
+                raise ValueError("port: an event-released task needs the port whose messages release it")
+            if not self.on_message:
+                raise ValueError("on_message: an event-released task needs its job function")
+            for key in ("period_ticks", "capacity_ticks"):
+                if getattr(self, key) is not None:
+                    raise ValueError(f"{key}: only for periodic release (release = 'periodic')")
+        else:
+            if not self.on_period:
+                raise ValueError("on_period: a periodic task needs its job function")
+            if self.period_ticks is None:
+                raise ValueError("period_ticks: a periodic task needs its period")
+            capacity = self.capacity
+            if not 1 <= capacity <= self.deadline_ticks <= self.period_ticks:
+                raise ValueError(
+                    "capacity_ticks: 1 <= capacity_ticks <= deadline_ticks <= period_ticks, got "
+                    f"{capacity}, {self.deadline_ticks}, {self.period_ticks}"
+                )
+
+    @property
+    def capacity(self) -> int:
+        """Execution ticks per period (periodic release; default: the deadline)."""
+        return self.capacity_ticks if self.capacity_ticks is not None else self.deadline_ticks
+
+
+@dataclass(frozen=True)
+class MessageSpec:
+    """A message between two tasks, or between a task and the I/O tile, on the destination's port."""
+
+    name: str
+    port: int
+    source: str
+    destination: str
+
+    def __post_init__(self) -> None:
+        _identifier("name", self.name, "it names the message in the generated header")
+        if not 1 <= self.port <= MAX_PORT:
+            raise ValueError(f"port: must be between 1 and {MAX_PORT}, got {self.port}")
+        if self.source == self.destination:
+            raise ValueError(f"destination: the same as the source ({self.source!r})")
+
+
+@dataclass(frozen=True)
+class ProjectInfo:
+    """The ``[project]`` table: name, sources and the builds the project supports."""
+
+    name: str = "project"
+    sources: tuple[str, ...] = ()
+    include_dirs: tuple[str, ...] = ()
+    defines: tuple[str, ...] = ()
+    arith: tuple[str, ...] = ARITH_CHOICES
+    multiplier: tuple[bool, ...] = (True, False)
+
+    def __post_init__(self) -> None:
+        if not self.name or not re.fullmatch(r"[A-Za-z0-9_.-]+", self.name):
+            raise ValueError(f"name: letters, digits, '_', '-' or '.', got {self.name!r}")
+        if not self.sources:
+            raise ValueError("sources: a project needs at least one C or assembly source")
+        for i, source in enumerate(self.sources):
+            if Path(source).suffix not in (".c", ".S", ".s"):
+                raise ValueError(f"sources[{i}]: expected a .c, .S or .s file, got {source!r}")
+        for i, define in enumerate(self.defines):
+            if not _DEFINE.fullmatch(define):
+                raise ValueError(f"defines[{i}]: expected NAME or NAME=VALUE, got {define!r}")
+        if not self.arith or any(a not in ARITH_CHOICES for a in self.arith):
+            raise ValueError(f"arith: each one of {', '.join(map(repr, ARITH_CHOICES))}, got {list(self.arith)}")
+        if not self.multiplier:
+            raise ValueError("multiplier: at least one of true, false")
+
+
+@dataclass(frozen=True)
+class FirmwareProject:
+    """A whole project file, checked as a whole (tasks, ports, messages); ``folder`` is where its
+    relative paths start."""
+
+    project: ProjectInfo = field(default_factory=ProjectInfo)
+    tasks: tuple[TaskSpec, ...] = ()
+    messages: tuple[MessageSpec, ...] = ()
+    folder: str = "."
+
+    def __post_init__(self) -> None:
+        if not self.tasks:
+            raise ValueError("tasks: a project needs at least one task ([[tasks]] tables)")
+        names: dict[str, int] = {}
+        for i, task in enumerate(self.tasks):
+            if task.name in names:
+                raise ValueError(f"tasks[{i}].name: {task.name!r} is also tasks[{names[task.name]}]")
+            names[task.name] = i
+        ports: dict[tuple[tuple[int, int], int], int] = {}
+        per_tile: dict[tuple[int, int], int] = {}
+        for i, task in enumerate(self.tasks):
+            tile = tuple(task.tile)
+            per_tile[tile] = per_tile.get(tile, 0) + 1  # type: ignore[index]
+            if per_tile[tile] > MAX_TASKS:  # type: ignore[index]
+                raise ValueError(f"tasks[{i}].tile: more than {MAX_TASKS} tasks on tile {list(tile)}")
+            if task.port is None:
+                continue
+            key = (tile, task.port)
+            if key in ports:
+                other = self.tasks[ports[key]].name  # type: ignore[index]
+                raise ValueError(f"tasks[{i}].port: port {task.port} of tile {list(tile)} is taken by task {other!r}")
+            ports[key] = i  # type: ignore[index]
+        seen: dict[str, int] = {}
+        for i, message in enumerate(self.messages):
+            if message.name in seen:
+                raise ValueError(f"messages[{i}].name: {message.name!r} is also messages[{seen[message.name]}]")
+            seen[message.name] = i
+            for key in ("source", "destination"):
+                end = getattr(message, key)
+                if end != IO and end not in names:
+                    raise ValueError(f"messages[{i}].{key}: no task {end!r} (tasks: {', '.join(names)}, or {IO!r})")
+            if message.destination != IO:
+                task = self.tasks[names[message.destination]]
+                if task.port != message.port:
+                    raise ValueError(
+                        f"messages[{i}].port: {message.destination!r} takes its messages on port {task.port}, "
+                        f"got {message.port}"
+                    )
+
+    @property
+    def task_names(self) -> tuple[str, ...]:
+        return tuple(task.name for task in self.tasks)
+
+    def task(self, name: str) -> TaskSpec:
+        """The task called ``name``.
+
+        Raises:
+            KeyError: no such task.
+        """
+        for task in self.tasks:
+            if task.name == name:
+                return task
+        raise KeyError(name)
+
+    def tiles(self, mapping: Mapping[str, tuple[int, int]] | None = None) -> list[tuple[int, int]]:
+        """The tiles that run a task (with ``mapping`` moving some), in the order of their first task."""
+        out: list[tuple[int, int]] = []
+        for task in self.tasks:
+            tile = tuple((mapping or {}).get(task.name, task.tile))
+            tile = (int(tile[0]), int(tile[1]))
+            if tile not in out:
+                out.append(tile)
+        return out
+
+    def inputs(self) -> list[MessageSpec]:
+        """The messages the I/O tile sends (what the host feeds the firmware)."""
+        return [m for m in self.messages if m.source == IO]
+
+    def outputs(self) -> list[MessageSpec]:
+        """The messages the firmware sends to the I/O tile (actuator commands, telemetry)."""
+        return [m for m in self.messages if m.destination == IO]
+
+    def path(self, relative: str) -> Path:
+        """A path of the project file, relative to the project folder."""
+        return Path(self.folder) / relative
+
+    def check_chip(self, chip: ChipConfig) -> None:
+        """Raise ValueError unless every task's tile is a powered core tile of ``chip``."""
+        for i, task in enumerate(self.tasks):
+            xy = (int(task.tile[0]), int(task.tile[1]))
+            where = f"tasks[{i}].tile"
+            if not chip.contains(xy):
+                raise ValueError(f"{where}: {list(xy)} ({task.name}) is outside the {chip.width}x{chip.height} mesh")
+            if xy == tuple(chip.io_tile):
+                raise ValueError(f"{where}: {list(xy)} ({task.name}) is the I/O tile, which has no core")
+            if not chip.is_powered(xy):
+                raise ValueError(f"{where}: {list(xy)} ({task.name}) is powered off in the chip configuration")
+
+
+def load_project(folder: str | Path) -> FirmwareProject:
+    """The project in ``folder`` (its ``robosoc.toml``), or the project file itself.
+
+    Raises:
+        ConfigError: naming the file and the key: a missing file, unknown keys, wrong types, values
+            out of range, two tasks on one port, a message to no task, a source that is not there.
+    """
+    path = Path(folder)
+    if path.is_dir():
+        path = path / PROJECT_FILE
+    data = read_toml_mapping(path, "project file")
+    if "folder" in data:
+        raise ConfigError(str(path), "folder", "unknown field (the project's folder is where its file is)")
+    data["folder"] = str(path.parent)
+    project = from_mapping(FirmwareProject, data, str(path))
+    for i, source in enumerate(project.project.sources):
+        if not project.path(source).is_file():
+            raise ConfigError(str(path), f"project.sources[{i}]", f"no such file: {project.path(source)}")
+    for i, include in enumerate(project.project.include_dirs):
+        if not project.path(include).is_dir():
+            raise ConfigError(str(path), f"project.include_dirs[{i}]", f"no such folder: {project.path(include)}")
+    return project
