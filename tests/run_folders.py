@@ -79,7 +79,7 @@ def chip_replay(seconds: float = CHIP_SECONDS) -> ChipReplay:
     :func:`robosoc.cosim.replay.replay` does it, keeping the firmware run for its timeline."""
     rows = host_rows(seconds, seed=6)
     fw = FirmwareConfig()
-    run = FirmwareRun(fw, flight_app.build(fw))
+    run = FirmwareRun(fw, flight_app.image(fw))
     samples = samples_from_rows(rows, run.clock_ns)
     period = samples[1].cycle - samples[0].cycle
     for k, sample in enumerate(samples):

@@ -68,7 +68,7 @@ def tile_counts(run: FirmwareRun, xy: tuple[int, int]) -> dict[str, int]:
 def replay(fw: FirmwareConfig, arbiter: str = "hermes", profile: bool = False) -> tuple[FirmwareRun, ReplayResult]:
     """Ten samples into the firmware, as :func:`robosoc.cosim.replay.replay` feeds them."""
     chip = dataclasses.replace(fw.seed_chip(), noc=NocConfig(arbiter=arbiter))
-    run = FirmwareRun(fw, flight_app.build(fw), chip=chip, profile=profile)
+    run = FirmwareRun(fw, flight_app.image(fw), chip=chip, profile=profile)
     samples = samples_from_rows(host_rows(SECONDS, seed=6), run.clock_ns)
     period = samples[1].cycle - samples[0].cycle
     for k, sample in enumerate(samples):

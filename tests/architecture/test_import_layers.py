@@ -20,7 +20,8 @@ PACKAGE = ROOT / "src" / "robosoc"
 
 #: Bottom to top.  A package (or top-level module) may import those of the layers below its own.
 LAYERS: tuple[tuple[str, ...], ...] = (
-    ("cache", "config", "isa", "records", "program", "firmware"),
+    ("cache", "isa", "records", "program", "firmware"),
+    ("config",),
     ("kernels", "physics"),
     ("toolchain",),
     ("jit",),

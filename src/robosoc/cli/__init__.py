@@ -4,7 +4,21 @@ The rules every command follows (option checks, files, exit codes, errors) and t
 implement them are described in docs/cli.md.
 """
 
-from robosoc.cli import bench, cc, exit_codes, firmware, fly, profile, report, run, scenario, serve, sweep, table  # noqa: F401  (modules register their commands)
+from robosoc.cli import (  # noqa: F401  (modules register their commands)
+    bench,
+    cc,
+    exit_codes,
+    firmware,
+    fly,
+    new,
+    profile,
+    report,
+    run,
+    scenario,
+    serve,
+    sweep,
+    table,
+)  # fmt: skip
 from robosoc.cli.app import app
 
 

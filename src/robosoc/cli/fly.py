@@ -16,6 +16,7 @@ from robosoc.cli import exit_codes, files, link_options, options
 from robosoc.cli.app import app
 from robosoc.cli.console import make_console, note, plain
 from robosoc.cli.errors import CliError
+from robosoc.cli.project_check import check_project
 from robosoc.cli.scenario_flags import FLY, ResolvedScenario, ScenarioFlags, resolve, takes_scenario
 from robosoc.config.scenario import ScenarioConfig
 
@@ -81,6 +82,7 @@ def fly_command(
     resolved = resolve(flags)
     config = resolved.config if link is None else dataclasses.replace(resolved.config, controller="chip")
     _check_controller(resolved, config, profile)
+    check_project(config)
     options.exclusive(out=out is not None, no_out=no_out)
     if out is None and not no_out:
         out = Path("runs") / f"fly-{config.name}-s{config.seed}"
@@ -141,6 +143,7 @@ def _fly(console, config: ScenarioConfig, out: Path | None, video: Path | None, 
     from robosoc.chip.mpsoc import ChipError
     from robosoc.chip.single import CoreError
     from robosoc.outputs.flight_session import fly_scenario
+    from robosoc.toolchain import CompileError
 
     video_state = _VideoState(console, video) if video is not None else None
     live = _start_live(console, foxglove)  # --foxglove (docs/results-logs.md)
@@ -162,6 +165,9 @@ def _fly(console, config: ScenarioConfig, out: Path | None, video: Path | None, 
             console, "interrupted" + (f"; the flight so far is in {out} (summary.json: complete false)" if out else "")
         )
         raise typer.Exit(exit_codes.INTERRUPTED) from None
+    except CompileError as exc:
+        progress.stop()
+        raise CliError(f"the firmware does not build: {exc}") from exc
     except (ChipError, CoreError) as exc:
         progress.stop()
         where = f" (the flight so far is in {out})" if out else ""

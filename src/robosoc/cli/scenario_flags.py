@@ -11,6 +11,7 @@ row here, and nothing else.
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import inspect
 import re
@@ -115,6 +116,22 @@ Mul = Annotated[
         help="Firmware built for cores with the multiplier or without (default: the scenario's or --config's, with).",
     ),
 ]
+
+
+def _folder(ctx: typer.Context, param: typer.CallbackParam, value: str | None) -> str | None:
+    """A folder given on the command line, made absolute (it is kept in the run's scenario.toml)."""
+    return None if value is None else str(Path(value).expanduser().absolute())
+
+
+Firmware = Annotated[
+    str | None,
+    typer.Option(
+        metavar="DIR",
+        help="Fly the firmware project in DIR (its robosoc.toml: robosoc new DIR makes one) instead of the "
+        "built-in application (default: the scenario's [firmware] project).",
+        callback=_folder,
+    ),
+]
 ScenarioArg = Annotated[Path | None, typer.Argument(metavar="SCENARIO", help=SCENARIO_HELP, show_default=False)]
 
 FLAGS: tuple[ScenarioFlag, ...] = (
@@ -127,6 +144,7 @@ FLAGS: tuple[ScenarioFlag, ...] = (
     ScenarioFlag("--arith", "arith", "firmware.arith", Arith, (FLY, SERVE_CHIP, FIRMWARE)),
     ScenarioFlag("--mul/--no-mul", "mul", "firmware.multiplier", Mul, (FLY, SERVE_CHIP, FIRMWARE)),
     ScenarioFlag("--engine", "engine", "chip.engine", Engine, (FLY,)),
+    ScenarioFlag("--firmware", "firmware", "firmware.project", Firmware, (FLY, SERVE_CHIP)),
 )
 """Every flag that sets a scenario field."""
 
@@ -201,6 +219,10 @@ def resolve(flags: ScenarioFlags) -> ResolvedScenario:
         config, named = ScenarioConfig(), ()
     else:
         config, named = files.load_toml(ScenarioConfig, flags.path, flags.label)
+        project = config.firmware.project
+        if project and not Path(project).is_absolute():  # a project named by a file: from the file's folder
+            absolute = str((flags.path.parent / project).absolute())
+            config = dataclasses.replace(config, firmware=dataclasses.replace(config.firmware, project=absolute))
     sources = [(str(flags.path), named)] if flags.path is not None else []
     file_names = [str(flags.path)] if flags.path is not None else []
     config = override(config, {flag.option: (flag.field, flags.values[flag.param]) for flag in given}, file_names)

@@ -11,6 +11,8 @@ loadable from TOML with :func:`load_firmware_config`, whose errors name the file
     period_ticks = 10        # periodic release: the tasks' period (and relative deadline) in ticks
     ekf_tile = [0, 1]
     pid_tile = [1, 0]
+    project = ""             # a firmware project's folder (its robosoc.toml names the tasks and
+                             # their tiles; ekf_tile, pid_tile and release are the built-in's)
 
 The defaults are the seed's case study on its 2×2 chip: the I/O tile at (0, 0), the estimator
 (EKF and altitude filter) on (0, 1), the PID controller on (1, 0), the fourth tile powered off
@@ -54,6 +56,8 @@ class FirmwareConfig:
             relative deadline of event-released jobs too.
         ekf_tile: the tile of the estimator task.
         pid_tile: the tile of the PID task (may equal ``ekf_tile``).
+        project: the folder of a firmware project to fly instead of the built-in application
+            (docs/firmware-projects.md); in a scenario file, relative to the file's folder.
     """
 
     arith: str = "fixed"
@@ -64,6 +68,7 @@ class FirmwareConfig:
     period_ticks: int = 10
     ekf_tile: tuple[int, int] = (0, 1)
     pid_tile: tuple[int, int] = (1, 0)
+    project: str = ""
 
     def __post_init__(self) -> None:
         _choice("arith", self.arith, ARITH_CHOICES)

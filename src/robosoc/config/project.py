@@ -7,6 +7,7 @@ A project is a folder with C sources and a ``robosoc.toml``::
     sources = ["tasks.c"]            # relative to the project folder
     include_dirs = ["include"]       # the project folder itself is always searched
     defines = ["LOOPS=3"]            # NAME or NAME=VALUE, for every build
+    libraries = ["estimator", "pid"] # robosoc's C libraries to link (math is always linked)
     arith = ["float", "fixed"]       # the builds the project supports (real_t soft-float / Q16.16)
     multiplier = [true, false]
 
@@ -45,6 +46,7 @@ from typing import Literal
 from robosoc.config.chip import ChipConfig
 from robosoc.config.firmware import ARITH_CHOICES
 from robosoc.config.validate import ConfigError, from_mapping, read_toml_mapping
+from robosoc.firmware import LIBRARIES
 
 __all__ = ["IO", "PROJECT_FILE", "FirmwareProject", "MessageSpec", "ProjectInfo", "TaskSpec", "load_project"]
 
@@ -156,6 +158,7 @@ class ProjectInfo:
     sources: tuple[str, ...] = ()
     include_dirs: tuple[str, ...] = ()
     defines: tuple[str, ...] = ()
+    libraries: tuple[str, ...] = ()
     arith: tuple[str, ...] = ARITH_CHOICES
     multiplier: tuple[bool, ...] = (True, False)
 
@@ -170,6 +173,9 @@ class ProjectInfo:
         for i, define in enumerate(self.defines):
             if not _DEFINE.fullmatch(define):
                 raise ValueError(f"defines[{i}]: expected NAME or NAME=VALUE, got {define!r}")
+        for i, library in enumerate(self.libraries):
+            if library not in LIBRARIES:
+                raise ValueError(f"libraries[{i}]: no library {library!r} (robosoc ships {', '.join(LIBRARIES)})")
         if not self.arith or any(a not in ARITH_CHOICES for a in self.arith):
             raise ValueError(f"arith: each one of {', '.join(map(repr, ARITH_CHOICES))}, got {list(self.arith)}")
         if not self.multiplier:

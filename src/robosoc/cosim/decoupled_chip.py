@@ -42,7 +42,7 @@ from robosoc.cosim.datagram import MAX_COMMANDS, Bye, ByeReason, Command, Comman
 from robosoc.cosim.decoupled_physics import Ended, scenario_digest
 from robosoc.cosim.firmware_run import DEFAULT_FIRST_CYCLE, FirmwareRun, ReplayResult
 from robosoc.cosim.link import Address, LinkLog, UdpLink
-from robosoc.host import flight_app
+from robosoc.host.scenario_image import scenario_image
 from robosoc.physics.clock import NS_PER_S, FlightClock
 from robosoc.records import SampleInput
 
@@ -237,8 +237,7 @@ def serve_chip(
     try:
         fw = scenario.firmware
         say(f"building the firmware ({fw.label}) and loading the chip ...")
-        elf = flight_app.build(fw, vehicle=vehicle, scenario=scenario)
-        run = FirmwareRun(fw, elf, chip=scenario.chip, first_cycle=DEFAULT_FIRST_CYCLE)
+        run = FirmwareRun(fw, scenario_image(scenario, vehicle), chip=scenario.chip, first_cycle=DEFAULT_FIRST_CYCLE)
         say("booting the chip (compiling the chip kernels on a fresh install) ...")
         run.run_to(DEFAULT_FIRST_CYCLE)
         state = _Chip(run, link, config, period_ns, log)

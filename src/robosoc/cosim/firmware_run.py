@@ -34,7 +34,6 @@ import time
 from collections import Counter
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from pathlib import Path
 
 from robosoc.chip.energy import EnergyModel
 from robosoc.chip.function_profile import FunctionProfile, chip_profile
@@ -42,13 +41,12 @@ from robosoc.chip.mpsoc import MPSoC
 from robosoc.config.chip import ChipConfig
 from robosoc.config.firmware import FirmwareConfig
 from robosoc.host import flight_app, images, packets
+from robosoc.host.firmware_image import FirmwareImage
 from robosoc.program.elf import load_elf
 from robosoc.records import JobRecord, PwmCommand, SampleInput
 
 #: Cycle of the first sample's injection: the firmware has booted by then.
 DEFAULT_FIRST_CYCLE = flight_app.FIRST_SAMPLE_CYCLE
-
-TASK_NAMES = ("estimator", "pid")
 
 
 @dataclass
@@ -103,7 +101,7 @@ class FirmwareRun:
     def __init__(
         self,
         fw: FirmwareConfig,
-        elf: Path,
+        image: FirmwareImage,
         *,
         chip: ChipConfig | None = None,
         energy: EnergyModel | None = None,
@@ -111,19 +109,21 @@ class FirmwareRun:
         profile: bool = False,
     ) -> None:
         self.fw = fw
+        self.image = image
         self.chip_config = chip or self.fw.seed_chip()
-        self.fw.check_chip(self.chip_config)
+        if not image.project:
+            self.fw.check_chip(self.chip_config)  # a project's tiles are checked when it is loaded
         self.model = energy or EnergyModel.load()
         self.first_cycle = first_cycle
         self.chip = MPSoC(self.chip_config)
         self.chip.record_timeline()  # for the chip trace (cosim/chip_timeline.py)
-        program = load_elf(elf, self.chip.regions())
-        self.tiles = flight_app.app_tiles(self.fw)
+        program = load_elf(image.elf, self.chip.regions())
+        self.tiles = image.tiles
         for xy in self.tiles:
             self.chip.load(xy, program)
         if profile:
             self.chip.enable_profile()  # exact counts per function: function_profile() reads them
-        self.names = {(xy, tid): name for xy in self.tiles for name, tid in flight_app.task_ids(self.fw, xy).items()}
+        self.names = {(xy, tid): name for xy, ids in image.tasks.items() for name, tid in ids.items()}
         self.samples: list[SampleInput] = []
         self._sample_cycles: list[int] = []  # of the samples, for finding a job's period
         self.commands: list[PwmCommand] = []
@@ -148,9 +148,11 @@ class FirmwareRun:
         return len(self._periods) < len(self.samples)
 
     def inject(self, sample: SampleInput) -> None:
-        """Send ``sample`` from the I/O tile to the estimator at ``sample.cycle``."""
-        for payload in flight_app.sensor_payloads(sample.payload, self.fw, self.chip_config, seq=sample.seq):
-            self.chip.inject(tuple(self.fw.ekf_tile), payload, sample.cycle)  # type: ignore[arg-type]
+        """Send ``sample`` from the I/O tile to the firmware's sensor input at ``sample.cycle``."""
+        tile, port = self.image.sensor
+        io = images.tile_address(tuple(self.chip_config.io_tile))  # type: ignore[arg-type]
+        for payload in images.message_packets(sample.payload, port, src_tile=io, src_port=port, seq=sample.seq):
+            self.chip.inject(tile, payload, sample.cycle)
         self.samples.append(sample)
         self._sample_cycles.append(sample.cycle)
 
@@ -164,7 +166,7 @@ class FirmwareRun:
         fresh = []
         # a PWM message fits one NoC packet, so no message straddles two calls
         for message in images.reassemble(self.chip.received()):
-            if message.port != packets.PWM_PORT:
+            if message.port != self.image.actuator_port:
                 continue
             values = packets.PWM.unpack(message.data)
             pwm = tuple(int(v) for v in values["pwm"])  # type: ignore[union-attr]
@@ -181,10 +183,11 @@ class FirmwareRun:
             RuntimeError: a tile's job log overflowed since the last call.
         """
         current = _snapshot(self.chip, self.tiles, self.model)
-        estimate = flight_app.read_estimate(self.chip, self.fw, len(self.samples) - 1)
-        # consistent unless a job is mid-way: every sample estimated, or the tile asleep
-        if estimate.jobs >= len(self.samples) or self.chip.state(tuple(self.fw.ekf_tile)) == "sleeping":  # type: ignore[arg-type]
-            self.estimates.append(estimate)
+        if self.image.estimator is not None:
+            estimate = flight_app.read_estimate(self.chip, self.fw, len(self.samples) - 1)
+            # consistent unless a job is mid-way: every sample estimated, or the tile asleep
+            if estimate.jobs >= len(self.samples) or self.chip.state(self.image.estimator) == "sleeping":
+                self.estimates.append(estimate)
         self._periods.append(_delta(self._previous, current))
         self._previous = current
         for xy in self.tiles:

@@ -34,7 +34,6 @@ import math
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Protocol
 
 import numpy as np
@@ -48,7 +47,8 @@ from robosoc.control.host import Estimate, HostController
 from robosoc.control.setpoint import Setpoint, setpoint_at
 from robosoc.cosim.firmware_run import DEFAULT_FIRST_CYCLE, FirmwareRun, ReplayResult
 from robosoc.cosim.replay import sensor_packet
-from robosoc.host import flight_app
+from robosoc.host.firmware_image import FirmwareImage
+from robosoc.host.scenario_image import scenario_image
 from robosoc.physics import SensorSample, World
 from robosoc.physics.clock import PHYSICS_STEP_NS, FlightClock
 from robosoc.records import PwmCommand, SampleInput
@@ -91,7 +91,8 @@ class ChipController:
     Args:
         scenario, vehicle: what is flown (the firmware's control parameters come from them), by
             the scenario's firmware on its chip.
-        elf: the firmware's image, built once per flight by the caller (default: built here).
+        image: the firmware, built once per flight by the caller (default: built here,
+            :func:`robosoc.host.scenario_image.scenario_image`).
         energy: the energy model for the job records (default: the packaged coefficients).
         first_cycle: the cycle of simulated time 0 (the firmware boots before it).
         profile: count every instruction per function, tile and task (``result.profile``).
@@ -106,7 +107,7 @@ class ChipController:
         scenario: ScenarioConfig,
         vehicle: VehicleConfig,
         *,
-        elf: Path | None = None,
+        image: FirmwareImage | None = None,
         energy: EnergyModel | None = None,
         first_cycle: int = DEFAULT_FIRST_CYCLE,
         profile: bool = False,
@@ -119,7 +120,7 @@ class ChipController:
         self.energy = energy or EnergyModel.load()
         self.first_cycle = first_cycle
         self.sample_period_us = FlightClock.of(scenario).sample_period_ns // 1000
-        self.elf = elf if elf is not None else flight_app.build(self.fw, vehicle=vehicle, scenario=scenario)
+        self.image = image if image is not None else scenario_image(scenario, vehicle)
         self.run: FirmwareRun | None = None
         self.result: ReplayResult | None = None
 
@@ -127,7 +128,7 @@ class ChipController:
         """A freshly booted chip with the firmware loaded."""
         self.run = FirmwareRun(
             self.fw,
-            self.elf,
+            self.image,
             chip=self.chip,
             energy=self.energy,
             first_cycle=self.first_cycle,

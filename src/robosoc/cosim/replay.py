@@ -102,8 +102,9 @@ def replay(
         robosoc.chip.mpsoc.ChipError / CoreError: the firmware faulted (names tile, pc, symbol).
     """
     fw = fw or FirmwareConfig()
-    elf = flight_app.build(fw, vehicle=vehicle, scenario=scenario)
-    run = FirmwareRun(fw, elf, chip=chip, energy=energy, first_cycle=first_cycle, profile=profile)
+    run = FirmwareRun(
+        fw, flight_app.image(fw, vehicle, scenario), chip=chip, energy=energy, first_cycle=first_cycle, profile=profile
+    )
     samples = samples_from_rows(rows, run.clock_ns, first_cycle)
     period = samples[1].cycle - samples[0].cycle if len(samples) > 1 else round(10e6 / run.clock_ns)
     for k, sample in enumerate(samples):

@@ -64,6 +64,8 @@ PID_SOURCES: tuple[Path, ...] = (APP_DIR / "pid.c", APP_DIR / "mixer.c")
 #: The two number formats of real_t (lib/real.h).
 ARITHS = ("float", "fixed")
 KERNEL_DIR = FIRMWARE_DIR / "kernel"
+#: Firmware projects to start from (``robosoc new --template NAME``): one folder each.
+TEMPLATES_DIR = FIRMWARE_DIR / "templates"
 PORT_DIR = FIRMWARE_DIR / "port"
 KERNEL_SOURCES: tuple[Path, ...] = (KERNEL_DIR / "os_task.c", KERNEL_DIR / "os_msg.c")
 PORT_SOURCES: tuple[Path, ...] = (PORT_DIR / "port_asm.S", PORT_DIR / "port_hfriscv.c")
@@ -108,6 +110,16 @@ def pid_sources() -> tuple[Path, ...]:
     """The PID task's modules (PID loops and mixer) and the libraries they need (include folders
     :data:`MATH_DIR`, :data:`APP_DIR` and the control header's)."""
     return PID_SOURCES + MATH_SOURCES
+
+
+#: The shipped C libraries a firmware project may link by name (``libraries`` in its robosoc.toml):
+#: their sources (the math libraries are always linked) and the include folder they need.  The
+#: estimator and the PID include the control header generated from the vehicle and scenario.
+LIBRARIES: dict[str, tuple[Path, ...]] = {
+    "ekf": EKF_SOURCES,
+    "estimator": ESTIMATOR_SOURCES + EKF_SOURCES + ALTITUDE_SOURCES,
+    "pid": PID_SOURCES,
+}
 
 
 def arith_defines(arith: str) -> dict[str, str | int | None]:

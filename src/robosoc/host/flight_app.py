@@ -38,6 +38,7 @@ from robosoc.firmware import (
 )
 from robosoc.host import images
 from robosoc.host.control_params import control_include_dir
+from robosoc.host.firmware_image import FirmwareImage
 from robosoc.host.packets import ESTIMATE_PORT, PWM_PORT, SENSOR_PORT
 
 if TYPE_CHECKING:
@@ -90,6 +91,21 @@ def build(fw: FirmwareConfig, vehicle: VehicleConfig | None = None, scenario: Sc
         mul=fw.multiplier,
         defines=defines(fw),
         include_dirs=[MATH_DIR, APP_DIR, control_include_dir(vehicle, scenario)],
+    )
+
+
+def image(
+    fw: FirmwareConfig, vehicle: VehicleConfig | None = None, scenario: ScenarioConfig | None = None
+) -> FirmwareImage:
+    """The flight application built for ``fw`` (:func:`build`) with its tasks, sensor input and
+    actuator port: what the host needs to fly it."""
+    estimator = (int(fw.ekf_tile[0]), int(fw.ekf_tile[1]))
+    return FirmwareImage(
+        elf=build(fw, vehicle, scenario),
+        tasks={xy: task_ids(fw, xy) for xy in app_tiles(fw)},
+        sensor=(estimator, SENSOR_PORT),
+        actuator_port=PWM_PORT,
+        estimator=estimator,
     )
 
 
@@ -225,6 +241,7 @@ __all__ = [
     "app_tiles",
     "build",
     "defines",
+    "image",
     "read_app_stats",
     "read_estimate",
     "sample_cycle",

@@ -14,7 +14,7 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 from robosoc.config.project import FirmwareProject
-from robosoc.firmware import MATH_DIR, MATH_SOURCES, arith_defines
+from robosoc.firmware import APP_DIR, LIBRARIES, MATH_DIR, MATH_SOURCES, arith_defines
 from robosoc.host import images
 from robosoc.host.project_main import MAIN_NAME, Tile, generated_dir, task_ids
 
@@ -61,13 +61,15 @@ def build_project(
         raise ValueError(f"multiplier: the project {info.name!r} has no build {with_or_not} the multiplier")
     generated = generated_dir(project, mapping)
     busiest = max(len(task_ids(project, xy, mapping)) for xy in project.tiles(mapping))
-    sources = [*(project.path(s) for s in info.sources), generated / MAIN_NAME, *MATH_SOURCES]
+    libraries = dict.fromkeys(path for name in info.libraries for path in LIBRARIES[name])  # once each
+    sources = [*(project.path(s) for s in info.sources), generated / MAIN_NAME, *libraries, *MATH_SOURCES]
     folders = [
         Path(project.folder),
         *(project.path(d) for d in info.include_dirs),
         *include_dirs,
         generated,
         MATH_DIR,
+        *([APP_DIR] if info.libraries else []),
     ]
     all_defines = project_defines(project, arith, tick_cycles, defines)
     all_defines.setdefault("OS_MAX_TASKS", busiest)  # task slots: as many as the busiest tile needs

@@ -112,10 +112,10 @@ def _controllers(scenario: ScenarioConfig, on_status: Callable[[str], None], pro
         ]
     on_status(f"building the firmware ({scenario.firmware.label}; cached after the first build) ...")
     from robosoc.cosim.chip_warmup import prepare_chip
-    from robosoc.host import flight_app
+    from robosoc.host.scenario_image import scenario_image
 
-    elf = prepare_chip(scenario.chip, lambda: flight_app.build(scenario.firmware, canonical, scenario), on_status)
-    return [ChipController(scenario, canonical, elf=elf, profile=profile) for _ in range(scenario.vehicles)]
+    image = prepare_chip(scenario.chip, lambda: scenario_image(scenario, canonical), on_status)
+    return [ChipController(scenario, canonical, image=image, profile=profile) for _ in range(scenario.vehicles)]
 
 
 def _min_separation(rows: list[np.ndarray]) -> float:

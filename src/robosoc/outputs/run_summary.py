@@ -39,7 +39,7 @@ from robosoc.config.chip import ChipConfig
 from robosoc.config.firmware import FirmwareConfig
 from robosoc.config.scenario import ScenarioConfig
 from robosoc.control.flight import ROW_FIELDS, column, flight_metrics
-from robosoc.cosim.firmware_run import TASK_NAMES, ReplayResult
+from robosoc.cosim.firmware_run import ReplayResult
 from robosoc.records import ENERGY_PARTS, JobRecord
 
 SCHEMA = 1
@@ -94,11 +94,11 @@ def flight_summary(rows: np.ndarray, scenario: ScenarioConfig, rest_height: floa
 
 
 def task_summary(jobs: Sequence[JobRecord], clock_ns: float) -> dict[str, dict[str, float]]:
-    """Per task (of :data:`TASK_NAMES` that has jobs): job count, mean/max execution cycles and
+    """Per task that has jobs, in the order of their first job: job count, mean/max execution cycles and
     response time [us], mean energy per job [nJ] in all and per part (:data:`ENERGY_PARTS`), the
     kernel's share of it, deadline misses."""
     summary: dict[str, dict[str, float]] = {}
-    for name in TASK_NAMES:
+    for name in dict.fromkeys(j.task for j in jobs):
         mine = [j for j in jobs if j.task == name]
         if not mine:
             continue
@@ -129,16 +129,13 @@ def task_figures(result: ReplayResult) -> dict[str, dict[str, float]]:
 
 
 def firmware_figures(fw: FirmwareConfig) -> dict[str, Any]:
-    """The ``firmware`` object: the build and its task mapping."""
-    return {
-        "build": fw.label,
-        "arith": fw.arith,
-        "multiplier": fw.multiplier,
-        "release": fw.release,
-        "scheduler": fw.scheduler,
-        "ekf_tile": list(fw.ekf_tile),
-        "pid_tile": list(fw.pid_tile),
-    }
+    """The ``firmware`` object: the build and its task mapping (a project's folder instead of the
+    built-in application's mapping)."""
+    common = {"build": fw.label, "arith": fw.arith, "multiplier": fw.multiplier}
+    if fw.project:
+        return {**common, "scheduler": fw.scheduler, "project": fw.project}
+    return {**common, "release": fw.release, "scheduler": fw.scheduler, "ekf_tile": list(fw.ekf_tile),
+            "pid_tile": list(fw.pid_tile)}  # fmt: skip
 
 
 def chip_figures(chip: ChipConfig, result: ReplayResult | None) -> dict[str, Any]:

@@ -1,0 +1,95 @@
+"""A firmware built for the chip, with what the host needs to fly it: the I/O tile's contract.
+
+Every sensor period the I/O tile sends one sensor packet (``robosoc_packets.h``: readings, the
+setpoint, the sample's sequence number and time stamp) to ``sensor`` (a tile and port); the
+firmware answers with one PWM packet carrying the same sequence number on ``actuator_port`` of the
+I/O tile.  Until a command arrives the motors hold the last one.  :class:`FirmwareImage` holds the
+ELF, the tiles to load it on, each tile's task ids by name (how job records are named), and that
+contract; the built-in flight application makes one (:func:`robosoc.host.flight_app.image`), and
+so does any firmware project (:func:`project_image`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+
+from robosoc.config.firmware import FirmwareConfig
+from robosoc.config.project import IO, FirmwareProject
+from robosoc.config.scenario import ScenarioConfig
+from robosoc.config.vehicle import VehicleConfig
+from robosoc.host.control_params import control_include_dir
+from robosoc.host.project_build import build_project
+from robosoc.host.project_main import Tile, task_ids
+
+__all__ = ["FirmwareImage", "project_image"]
+
+
+@dataclass(frozen=True)
+class FirmwareImage:
+    """A built firmware and how the host drives it.
+
+    Attributes:
+        elf: the image, loaded on every tile of ``tasks``.
+        tasks: per tile (in load order), the TASK_ID of each task by name.
+        sensor: (tile, port) the I/O tile sends each sensor packet to.
+        actuator_port: the I/O tile's port the PWM packets arrive on.
+        estimator: the tile whose estimator state the host reads after each period (the built-in
+            application's), or None: the flight's estimate columns stay empty.
+        project: the project's name, or "" for the built-in application.
+    """
+
+    elf: Path
+    tasks: Mapping[Tile, Mapping[str, int]]
+    sensor: tuple[Tile, int]
+    actuator_port: int
+    estimator: Tile | None = None
+    project: str = ""
+
+    @property
+    def tiles(self) -> list[Tile]:
+        return list(self.tasks)
+
+    @property
+    def task_names(self) -> list[str]:
+        """Every task's name, tile by tile in load order, each tile's in creation order."""
+        return [name for names in self.tasks.values() for name in names]
+
+
+def project_image(
+    project: FirmwareProject,
+    fw: FirmwareConfig,
+    vehicle: VehicleConfig | None = None,
+    scenario: ScenarioConfig | None = None,
+) -> FirmwareImage:
+    """Build ``project`` for ``fw``'s build (arithmetic, multiplier, kernel tick), with the control
+    parameters of ``vehicle`` flying ``scenario`` in reach of its C (``robosoc_control.h``).
+
+    Raises:
+        ValueError: the project has no single message from the I/O tile (the sensor packets) and to
+            it (the PWM commands), or does not support the build (the key named).
+        CompileError: the compiler failed.
+    """
+    inputs, outputs = project.inputs(), project.outputs()
+    if len(inputs) != 1 or len(outputs) != 1:
+        raise ValueError(
+            f"messages: a flying project has one message from {IO!r} (the sensor packets) and one to {IO!r} "
+            f"(the PWM commands), got {len(inputs)} and {len(outputs)}"
+        )
+    sensor = project.task(inputs[0].destination)
+    elf = build_project(
+        project,
+        arith=fw.arith,
+        multiplier=fw.multiplier,
+        tick_cycles=fw.tick_cycles,
+        include_dirs=[control_include_dir(vehicle, scenario)],
+    )
+    tiles = project.tiles()
+    return FirmwareImage(
+        elf=elf,
+        tasks={xy: task_ids(project, xy) for xy in tiles},
+        sensor=((int(sensor.tile[0]), int(sensor.tile[1])), inputs[0].port),
+        actuator_port=outputs[0].port,
+        project=project.project.name,
+    )
