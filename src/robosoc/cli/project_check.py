@@ -26,6 +26,7 @@ def check_project(config: ScenarioConfig) -> None:
     try:
         project = load_project(folder)
         project.check_chip(config.chip)
+        project.check_build(config.firmware.arith, config.firmware.multiplier)
     except ConfigError as exc:
         raise CliError(f"the firmware project: {exc}") from exc
     except ValueError as exc:

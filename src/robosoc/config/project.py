@@ -268,6 +268,15 @@ class FirmwareProject:
         """A path of the project file, relative to the project folder."""
         return Path(self.folder) / relative
 
+    def check_build(self, arith: str, multiplier: bool) -> None:
+        """Raise ValueError unless the project supports this build (its ``[project]`` lists)."""
+        info = self.project
+        if arith not in info.arith:
+            raise ValueError(f"arith: the project {info.name!r} supports {', '.join(info.arith)}, not {arith!r}")
+        if multiplier not in info.multiplier:
+            with_or_not = "with" if multiplier else "without"
+            raise ValueError(f"multiplier: the project {info.name!r} has no build {with_or_not} the multiplier")
+
     def check_chip(self, chip: ChipConfig) -> None:
         """Raise ValueError unless every task's tile is a powered core tile of ``chip``."""
         for i, task in enumerate(self.tasks):

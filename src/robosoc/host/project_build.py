@@ -54,11 +54,7 @@ def build_project(
         CompileError: the compiler failed (its message names file and line).
     """
     info = project.project
-    if arith not in info.arith:
-        raise ValueError(f"arith: the project {info.name!r} supports {', '.join(info.arith)}, not {arith!r}")
-    if multiplier not in info.multiplier:
-        with_or_not = "with" if multiplier else "without"
-        raise ValueError(f"multiplier: the project {info.name!r} has no build {with_or_not} the multiplier")
+    project.check_build(arith, multiplier)
     generated = generated_dir(project, mapping)
     busiest = max(len(task_ids(project, xy, mapping)) for xy in project.tiles(mapping))
     libraries = dict.fromkeys(path for name in info.libraries for path in LIBRARIES[name])  # once each

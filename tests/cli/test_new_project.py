@@ -1,0 +1,123 @@
+"""``robosoc new`` and ``robosoc fly --firmware`` (issue 32): every shipped template scaffolded, built
+in the four builds and flown; the blank one takes off and hovers; the errors a firmware author
+makes end the command with a message naming the cause, and nothing half-made."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from robosoc.cli import app, exit_codes
+from robosoc.cli.new import TEMPLATES
+from robosoc.config.firmware import FirmwareConfig
+from robosoc.config.project import load_project
+from robosoc.config.scenario import ScenarioConfig
+from robosoc.control.flight import ROW_FIELDS
+
+BUILDS = [("fixed", True), ("fixed", False), ("float", True), ("float", False)]
+
+
+def invoke(*args: object):
+    return CliRunner().invoke(app, [str(a) for a in args])
+
+
+def test_the_templates_are_the_shipped_projects() -> None:
+    assert set(TEMPLATES) == {"blank", "quadrotor"}
+
+
+@pytest.mark.parametrize("template", ["blank", "quadrotor"])
+def test_new_makes_a_project_that_loads(tmp_path: Path, template: str) -> None:
+    result = invoke("new", tmp_path / "mine", "--template", template)
+    assert result.exit_code == 0, result.output
+    project = load_project(tmp_path / "mine")
+    assert project.project.name == template
+    assert f"robosoc fly --firmware {tmp_path / 'mine'}" in result.output
+    assert len(project.inputs()) == 1 and len(project.outputs()) == 1
+
+
+def test_new_refuses_a_folder_that_holds_something(tmp_path: Path) -> None:
+    (tmp_path / "mine").mkdir()
+    (tmp_path / "mine" / "notes.txt").write_text("mine")
+    result = invoke("new", tmp_path / "mine")
+    assert result.exit_code == exit_codes.USAGE and "is not empty" in result.output
+    assert sorted(p.name for p in (tmp_path / "mine").iterdir()) == ["notes.txt"]
+    (tmp_path / "file").write_text("x")
+    assert invoke("new", tmp_path / "file").exit_code == exit_codes.USAGE
+    assert invoke("new", tmp_path / "x", "--template", "nope").exit_code == exit_codes.USAGE
+
+
+@pytest.mark.parametrize("template", ["blank", "quadrotor"])
+@pytest.mark.parametrize(("arith", "multiplier"), BUILDS)
+def test_every_template_flies_in_every_build(tmp_path: Path, template: str, arith: str, multiplier: bool) -> None:
+    from robosoc.outputs.flight_session import fly_scenario
+
+    assert invoke("new", tmp_path / "p", "--template", template).exit_code == 0
+    project = load_project(tmp_path / "p")
+    fw = FirmwareConfig(arith=arith, multiplier=multiplier, project=str(tmp_path / "p"))
+    flight = fly_scenario(ScenarioConfig(duration_s=0.2, firmware=fw), None, plot=False, logs=False)
+    tasks = flight.summary["tasks"]
+    assert list(tasks) == list(project.task_names)
+    assert all(t["jobs"] == 20 and t["deadline_misses"] == 0 for t in tasks.values())
+    assert flight.summary["firmware"]["project"] == str(tmp_path / "p")
+    pwm = [ROW_FIELDS.index(f"pwm{i}") for i in range(4)]
+    assert (flight.rows[0][:, pwm] == 0).all()  # disarmed on the ground: calibrating
+
+
+def test_the_blank_project_takes_off_and_holds_its_height(tmp_path: Path) -> None:
+    assert invoke("new", tmp_path / "mine").exit_code == 0
+    out = tmp_path / "run"
+    result = invoke("fly", "--firmware", tmp_path / "mine", "--duration", "5.5", "--out", out)
+    assert result.exit_code == 0, result.output
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["tasks"]["controller"]["jobs"] == 550 and summary["deadline_misses"] == 0
+    rows = np.loadtxt(out / "flight.csv", delimiter=",", skiprows=1)
+    z, sp = rows[:, ROW_FIELDS.index("z")], rows[:, ROW_FIELDS.index("sp_height")]
+    last = slice(-50, None)  # the last half second: climbed to the 1 m setpoint, holding it
+    assert np.abs(z[last] - sp[last]).max() < 0.1 and sp[-1] == pytest.approx(1.0)
+    assert "from --firmware: firmware.project" in result.output
+
+
+def test_a_scenario_names_its_project_relative_to_its_own_folder(tmp_path: Path) -> None:
+    from robosoc.cli.scenario_flags import ScenarioFlags, resolve
+
+    assert invoke("new", tmp_path / "sc" / "fw").exit_code == 0
+    scenario = tmp_path / "sc" / "flight.toml"
+    scenario.write_text('duration_s = 0.1\n[firmware]\nproject = "fw"\n')
+    config = resolve(ScenarioFlags.of(None, scenario, {})).config
+    assert config.firmware.project == str(tmp_path / "sc" / "fw")
+
+
+def test_project_errors_end_the_flight_before_it_starts(tmp_path: Path) -> None:
+    missing = invoke("fly", "--firmware", tmp_path / "none", "--no-out")
+    assert missing.exit_code == exit_codes.USAGE and f"no folder {tmp_path / 'none'}" in missing.output
+    assert invoke("new", tmp_path / "p").exit_code == 0
+    toml = tmp_path / "p" / "robosoc.toml"
+    toml.write_text(toml.read_text().replace("tile = [0, 1]", "tile = [1, 1]"))  # powered off on the seed's chip
+    off = invoke("fly", "--firmware", tmp_path / "p", "--no-out")
+    assert off.exit_code == exit_codes.USAGE
+    assert "tasks[0].tile: [1, 1] (controller) is powered off" in off.output
+    toml.write_text(toml.read_text().replace("stack_bytes = 8192", "stack_bytes = 8192\ncolour = 3"))
+    bad = invoke("fly", "--firmware", tmp_path / "p", "--no-out")
+    assert bad.exit_code == exit_codes.USAGE and f"{toml}: tasks[0].colour: unknown field" in bad.output
+
+
+def test_a_compile_error_names_file_and_line_and_leaves_no_run(tmp_path: Path) -> None:
+    assert invoke("new", tmp_path / "p").exit_code == 0
+    source = tmp_path / "p" / "controller.c"
+    source.write_text(source.read_text().replace("pid_init(&pid);", "pid_init(&pid)"))  # a missing ;
+    result = invoke("fly", "--firmware", tmp_path / "p", "--duration", "0.1", "--out", tmp_path / "run")
+    assert result.exit_code == exit_codes.USAGE
+    assert "the firmware does not build" in result.output and "controller.c:" in result.output
+    assert "Traceback" not in result.output
+
+
+def test_an_unsupported_build_is_refused_with_the_key(tmp_path: Path) -> None:
+    assert invoke("new", tmp_path / "p").exit_code == 0
+    toml = tmp_path / "p" / "robosoc.toml"
+    toml.write_text(toml.read_text().replace('arith = ["float", "fixed"]', 'arith = ["fixed"]'))
+    result = invoke("fly", "--firmware", tmp_path / "p", "--arith", "float", "--duration", "0.1", "--no-out")
+    assert result.exit_code == exit_codes.USAGE and "supports fixed, not 'float'" in result.output
