@@ -37,8 +37,8 @@ def table(
     release: Annotated[
         str,
         typer.Option(
-            help="event (a job per sensor message, robosoc's default), periodic (the seed's periodic tasks "
-            "on the ~1 ms tick) or both.",
+            help="event (a job per sensor message, as in the seed; the default), periodic (both tasks periodic "
+            "on the ~1 ms tick: robosoc's option) or both.",
             callback=options.choice(*RELEASES),
         ),
     ] = "event",

@@ -5,7 +5,7 @@ loadable from TOML with :func:`load_firmware_config`, whose errors name the file
 
     arith = "fixed"          # "float" (soft-float) or "fixed" (Q16.16)
     multiplier = true        # build for cores with the iterative multiplier
-    release = "event"        # "event": a job per sensor message; "periodic": the seed's periodic tasks
+    release = "event"        # "event": a job per sensor message, as in the seed; "periodic": robosoc's option
     scheduler = "edf"        # "edf" or "rm"
     tick_cycles = 262144     # the kernel's tick (the seed's 1 ms at 250 MHz)
     period_ticks = 10        # periodic release: the tasks' period (and relative deadline) in ticks
@@ -49,7 +49,8 @@ class FirmwareConfig:
         arith: ``"float"`` (soft-float, compiler-rt) or ``"fixed"`` (Q16.16).
         multiplier: compile for cores with the iterative multiplier (RV32I+Zmmul) or without.
         release: ``"event"`` (each sensor message releases an estimator job, whose estimate
-            releases a PID job) or ``"periodic"`` (both tasks periodic, the seed's setup).
+            releases a PID job: the seed's "every sensor message triggers a complete EKF and PID
+            iteration") or ``"periodic"`` (both tasks periodic on the kernel tick: robosoc's option).
         scheduler: the kernel's real-time policy, ``"edf"`` or ``"rm"``.
         tick_cycles: the kernel's tick in core cycles.
         period_ticks: period and relative deadline of the tasks in ticks (periodic release); the

@@ -9,7 +9,7 @@
  *   PID task --pwm (same seq)--> (I/O tile, ROBOSOC_PWM_PORT)
  *
  * Release (APP_PERIODIC): 0, event release (default): each task is an event task on its port,
- * one job per message, relative deadline APP_PERIOD_TICKS.  1, the seed's periodic release: both
+ * one job per message, relative deadline APP_PERIOD_TICKS.  1, periodic release (robosoc's option): both
  * tasks periodic with period and deadline APP_PERIOD_TICKS; a job takes the newest waiting
  * message (older ones are counted stale and dropped) and does nothing if none waited (counted).
  *
