@@ -121,3 +121,25 @@ def test_an_unsupported_build_is_refused_with_the_key(tmp_path: Path) -> None:
     toml.write_text(toml.read_text().replace('arith = ["float", "fixed"]', 'arith = ["fixed"]'))
     result = invoke("fly", "--firmware", tmp_path / "p", "--arith", "float", "--duration", "0.1", "--no-out")
     assert result.exit_code == exit_codes.USAGE and "supports fixed, not 'float'" in result.output
+
+
+def test_table_measures_a_projects_tasks_in_the_builds_it_supports(tmp_path: Path) -> None:
+    import csv
+
+    assert invoke("new", tmp_path / "p", "--template", "quadrotor").exit_code == 0
+    toml = tmp_path / "p" / "robosoc.toml"
+    toml.write_text(toml.read_text().replace("multiplier = [true, false]", "multiplier = [true]"))
+    result = invoke(
+        "table", "--firmware", tmp_path / "p", "--iterations", "5", "--workers", "1", "--out", tmp_path / "t"
+    )
+    assert result.exit_code == 0, result.output
+    rows = list(csv.DictReader((tmp_path / "t" / "table.csv").open()))
+    assert [(r["build"], r["task"]) for r in rows] == [
+        (b, t) for b in ("float+mul", "fixed+mul") for t in ("estimator", "pid")
+    ]  # the builds it lists, a row per task of its robosoc.toml
+    assert all(r["jobs"] == "5" and r["seed_response_ms"] in ("", "nan") for r in rows)
+    data = json.loads((tmp_path / "t" / "table.json").read_text())
+    assert data["orderings"] == [] and data["spec"]["project"] == str(tmp_path / "p")
+    assert all(t["seed_response_ms"] is None for run in data["runs"] for t in run["tasks"].values())
+    assert "fixed-no-mul" in result.output  # its column, empty
+    assert invoke("table", "--firmware", tmp_path / "p", "--release", "both").exit_code == exit_codes.USAGE

@@ -1,33 +1,52 @@
-"""The firmware project a scenario names, checked before anything is built or flown."""
+"""The firmware project a command names, checked before anything is built or flown."""
 
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from robosoc.cli.errors import CliError
 from robosoc.config.scenario import ScenarioConfig
 
+if TYPE_CHECKING:
+    from robosoc.config.chip import ChipConfig
+    from robosoc.config.project import FirmwareProject
 
-def check_project(config: ScenarioConfig) -> None:
-    """Load ``config``'s firmware project (if it names one) and check its tasks against the chip.
+
+def load_checked(folder: str, chip: ChipConfig) -> FirmwareProject:
+    """The project in ``folder``, its tasks checked against ``chip``.
 
     Raises:
-        CliError: the project file is missing or wrong (file and key named), or a task sits on a
-            tile with no powered core (the task and tile named).
+        CliError: no such folder, the project file is missing or wrong (file and key named), or a
+            task sits on a tile with no powered core (the task and tile named).
     """
     from robosoc.config.project import PROJECT_FILE, load_project
     from robosoc.config.validate import ConfigError
 
-    folder = config.firmware.project
-    if not folder:
-        return
     if not Path(folder).is_dir():
         raise CliError(f"the firmware project: no folder {folder} (robosoc new DIR makes a project)")
     try:
         project = load_project(folder)
-        project.check_chip(config.chip)
-        project.check_build(config.firmware.arith, config.firmware.multiplier)
+        project.check_chip(chip)
     except ConfigError as exc:
         raise CliError(f"the firmware project: {exc}") from exc
     except ValueError as exc:
-        raise CliError(f"the firmware project: {folder}/{PROJECT_FILE}: {exc}") from exc
+        raise CliError(f"the firmware project: {Path(folder) / PROJECT_FILE}: {exc}") from exc
+    return project
+
+
+def check_project(config: ScenarioConfig) -> None:
+    """Load ``config``'s firmware project (if it names one), check its tasks against the scenario's
+    chip and that it supports the scenario's build.
+
+    Raises:
+        CliError: as :func:`load_checked`, or a build the project does not list (the key named).
+    """
+    folder = config.firmware.project
+    if not folder:
+        return
+    project = load_checked(folder, config.chip)
+    try:
+        project.check_build(config.firmware.arith, config.firmware.multiplier)
+    except ValueError as exc:
+        raise CliError(f"the firmware project: {Path(folder) / 'robosoc.toml'}: {exc}") from exc

@@ -13,6 +13,8 @@ import typer
 from robosoc.cli import exit_codes, files, options
 from robosoc.cli.app import app
 from robosoc.cli.console import make_console, plain
+from robosoc.cli.project_check import load_checked
+from robosoc.config.firmware import FirmwareConfig
 
 RELEASES = ("event", "periodic", "both")
 MAX_ITERATIONS = 10_000
@@ -54,6 +56,14 @@ def table(
         ),
     ] = None,
     out: Annotated[Path | None, typer.Option("--out", help="Folder for table.csv and table.json.")] = None,
+    firmware: Annotated[
+        Path | None,
+        typer.Option(
+            metavar="DIR",
+            help="Measure the firmware project in DIR (one row per task of its robosoc.toml, the builds it "
+            "supports) instead of the built-in application (docs/firmware-projects.md).",
+        ),
+    ] = None,
 ) -> None:
     """Table I: response time, execution time and energy per job of the EKF and PID tasks in the four
     builds (soft-float / Q16.16, with / without multiplier) beside the seed's figures, the seed's
@@ -64,12 +74,19 @@ def table(
     from robosoc.sweep import table_one
 
     folder = files.output_dir(out, "--out") if out is not None else None
+    project = ""
+    if firmware is not None:
+        if release != "event":
+            raise options.fail("--release", "a project's tasks have their own release (its robosoc.toml)")
+        project = str(firmware.absolute())
+        load_checked(project, FirmwareConfig(project=project).default_chip())
     spec = table_one.TableSpec(
         iterations=iterations,
         releases=("event", "periodic") if release == "both" else (release,),
         closed_loop=closed_loop,
         seed=seed,
         workers=workers if workers is not None else _workers(),
+        project=project,
     )
     console = make_console(stderr=True)
     builds = 4 * len(spec.releases)

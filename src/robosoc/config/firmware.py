@@ -101,6 +101,11 @@ class FirmwareConfig:
             if not chip.is_powered(xy):
                 raise ValueError(f"{name}: {list(xy)} is powered off in the chip configuration")
 
+    def default_chip(self) -> ChipConfig:
+        """The chip a replay runs on when none is given: the seed's for the built-in application
+        (:meth:`seed_chip`), the seed's 2×2 with every core tile powered for a project."""
+        return ChipConfig(width=2, height=2, io_tile=(0, 0)) if self.project else self.seed_chip()
+
     def seed_chip(self) -> ChipConfig:
         """The seed's 2×2 chip for this mapping: I/O tile (0, 0), every unused core tile powered off."""
         used = {tuple(self.ekf_tile), tuple(self.pid_tile)}

@@ -89,7 +89,7 @@ class FirmwareRun:
     Args:
         fw: the firmware build and task mapping.
         elf: its image (:func:`robosoc.host.flight_app.build`), built once by the caller.
-        chip: the chip (default: the seed's 2×2 for the mapping, :meth:`FirmwareConfig.seed_chip`).
+        chip: the chip (default: :meth:`FirmwareConfig.default_chip`).
         energy: the energy model (default: the packaged coefficients).
         first_cycle: cycle of the first sample's injection.
         profile: count every instruction per function, tile and task (:meth:`function_profile`).
@@ -110,7 +110,7 @@ class FirmwareRun:
     ) -> None:
         self.fw = fw
         self.image = image
-        self.chip_config = chip or self.fw.seed_chip()
+        self.chip_config = chip or self.fw.default_chip()
         if not image.project:
             self.fw.check_chip(self.chip_config)  # a project's tiles are checked when it is loaded
         self.model = energy or EnergyModel.load()

@@ -21,7 +21,8 @@ from robosoc.config.vehicle import VehicleConfig, vehicle_preset
 from robosoc.control.flight import ROW_FIELDS, fly
 from robosoc.control.host import HostController
 from robosoc.cosim.firmware_run import DEFAULT_FIRST_CYCLE, FirmwareRun, ReplayResult
-from robosoc.host import flight_app, packets
+from robosoc.host import packets
+from robosoc.host.scenario_image import firmware_image
 from robosoc.records import SampleInput
 
 # --- the sensor stream --------------------------------------------------------------------------
@@ -102,9 +103,8 @@ def replay(
         robosoc.chip.mpsoc.ChipError / CoreError: the firmware faulted (names tile, pc, symbol).
     """
     fw = fw or FirmwareConfig()
-    run = FirmwareRun(
-        fw, flight_app.image(fw, vehicle, scenario), chip=chip, energy=energy, first_cycle=first_cycle, profile=profile
-    )
+    image = firmware_image(fw, vehicle, scenario, chip or fw.default_chip())
+    run = FirmwareRun(fw, image, chip=chip, energy=energy, first_cycle=first_cycle, profile=profile)
     samples = samples_from_rows(rows, run.clock_ns, first_cycle)
     period = samples[1].cycle - samples[0].cycle if len(samples) > 1 else round(10e6 / run.clock_ns)
     for k, sample in enumerate(samples):

@@ -1,20 +1,27 @@
-"""The firmware a scenario flies: the built-in flight application, or the project its
+"""The firmware a flight runs: the built-in flight application, or the firmware project that
 ``[firmware] project`` names (a folder with a robosoc.toml), built once for the flight."""
 
 from __future__ import annotations
 
+from robosoc.config.chip import ChipConfig
+from robosoc.config.firmware import FirmwareConfig
 from robosoc.config.project import load_project
 from robosoc.config.scenario import ScenarioConfig
 from robosoc.config.vehicle import VehicleConfig
 from robosoc.host import flight_app
 from robosoc.host.firmware_image import FirmwareImage, project_image
 
-__all__ = ["scenario_image"]
+__all__ = ["firmware_image", "scenario_image"]
 
 
-def scenario_image(scenario: ScenarioConfig, vehicle: VehicleConfig) -> FirmwareImage:
-    """Build the scenario's firmware for its build options, with the controller parameters of
-    ``vehicle`` flying ``scenario``.
+def firmware_image(
+    fw: FirmwareConfig,
+    vehicle: VehicleConfig | None = None,
+    scenario: ScenarioConfig | None = None,
+    chip: ChipConfig | None = None,
+) -> FirmwareImage:
+    """Build ``fw``'s firmware (its project's, or the built-in application) with the controller
+    parameters of ``vehicle`` flying ``scenario``; a project's tasks are checked against ``chip``.
 
     Raises:
         ConfigError: the project file is wrong (file and key named).
@@ -22,9 +29,14 @@ def scenario_image(scenario: ScenarioConfig, vehicle: VehicleConfig) -> Firmware
             not support.
         CompileError: the compiler failed (file and line named).
     """
-    fw = scenario.firmware
     if not fw.project:
         return flight_app.image(fw, vehicle, scenario)
     project = load_project(fw.project)
-    project.check_chip(scenario.chip)
+    if chip is not None:
+        project.check_chip(chip)
     return project_image(project, fw, vehicle, scenario)
+
+
+def scenario_image(scenario: ScenarioConfig, vehicle: VehicleConfig) -> FirmwareImage:
+    """The firmware of ``scenario`` (:func:`firmware_image` of its firmware, vehicle and chip)."""
+    return firmware_image(scenario.firmware, vehicle, scenario, scenario.chip)

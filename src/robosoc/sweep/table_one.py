@@ -90,10 +90,10 @@ METRICS = (("response", "response_us_mean", "response_ms"), ("energy", "energy_n
 ENERGY_PARTS = ("task", "kernel", "noc", "idle")
 
 
-def build_config(arith: str, multiplier: bool, release: str) -> FirmwareConfig:
+def build_config(arith: str, multiplier: bool, release: str, project: str = "") -> FirmwareConfig:
     """One of the four builds, with the default mapping, tick (262,144 cycles, 1.05 ms at 4 ns:
-    ORCA's HellfireOS tick) and period (10 ticks)."""
-    return FirmwareConfig(arith=arith, multiplier=multiplier, release=release)
+    ORCA's HellfireOS tick) and period (10 ticks); of the firmware project in ``project`` if given."""
+    return FirmwareConfig(arith=arith, multiplier=multiplier, release=release, project=project)
 
 
 @dataclass(frozen=True)
@@ -106,6 +106,8 @@ class TableSpec:
         closed_loop: fly each build closed-loop instead of replaying the built-in stream.
         seed: the flight's seed.
         workers: processes running builds at once (1: in this process).
+        project: a firmware project's folder (docs/firmware-projects.md): its tasks, in the builds
+            it supports, instead of the built-in application's (no seed figures then).
     """
 
     iterations: int = 100
@@ -113,8 +115,11 @@ class TableSpec:
     closed_loop: bool = False
     seed: int = 1
     workers: int = 2
+    project: str = ""
 
     def __post_init__(self) -> None:
+        if self.project and self.releases != ("event",):
+            raise ValueError("releases: a project's tasks have their own release (its robosoc.toml)")
         if not 1 <= self.iterations <= 10_000:
             raise ValueError(f"iterations: must be between 1 and 10000, got {self.iterations}")
         if not self.releases or any(r not in RELEASE_CHOICES for r in self.releases):
@@ -238,7 +243,7 @@ def summarise(
     window = range(k0, min(len(rows), k0 + iterations))
     start = result.samples[k0].cycle if k0 < len(result.samples) else result.cycles
     tasks = {}
-    for name in TASKS:
+    for name in dict.fromkeys(j.task for j in result.jobs):  # the tasks that ran, in order of their first job
         mine = sorted((j for j in result.jobs if j.task == name and j.release_cycle >= start),
                       key=lambda j: j.release_cycle)[:iterations]  # fmt: skip
         tasks[name] = task_row(mine, name, fw.label, fw.release, result.clock_ns)
@@ -296,7 +301,7 @@ def measure_build(
             _progress.put((key, done, total))
 
     if rows is None:
-        scenario = dataclasses.replace(spec.scenario(), firmware=fw, chip=fw.seed_chip())
+        scenario = dataclasses.replace(spec.scenario(), firmware=fw, chip=fw.default_chip())
         total = scenario.samples
         flight = fly_chip(scenario, _vehicle(scenario), on_sample=lambda _w, k: report(k + 1, total))
         rows, result = flight.rows, flight.run
@@ -321,7 +326,8 @@ def check_orderings(runs: Sequence[BuildRun]) -> list[OrderingCheck]:
     out = []
     for release in dict.fromkeys(r.release for r in runs):
         by_build = {r.build: r for r in runs if r.release == release}
-        for task in TASKS:
+        measured = {task for r in by_build.values() for task in r.tasks}
+        for task in [t for t in TASKS if t in measured]:
             for metric, ours, theirs in METRICS:
                 for name, lower, higher in ORDERINGS:
                     seed = getattr(SEED_TABLE_I[(task, lower)], theirs) < getattr(SEED_TABLE_I[(task, higher)], theirs)
@@ -363,11 +369,16 @@ def measure_table(spec: TableSpec, on_progress: Callable[[str, int, int], None] 
         robosoc.chip.mpsoc.ChipError / CoreError: a build's firmware faulted.
         CompileError: a build failed to compile.
     """
-    from robosoc.host import flight_app
+    from robosoc.host.scenario_image import firmware_image
 
-    configs = [build_config(arith, mul, release) for release in spec.releases for arith, mul in BUILDS]
+    configs = [build_config(arith, mul, release, spec.project) for release in spec.releases for arith, mul in BUILDS]
+    if spec.project:  # the builds the project supports
+        from robosoc.config.project import load_project
+
+        info = load_project(spec.project).project
+        configs = [fw for fw in configs if fw.arith in info.arith and fw.multiplier in info.multiplier]
     for fw in configs:
-        flight_app.build(fw)  # compile (or hit the cache) before the workers start
+        firmware_image(fw)  # compile (or hit the cache) before the workers start
     rows = golden = None
     if not spec.closed_loop:
         from robosoc.cosim.replay import built_in_rows
@@ -379,6 +390,8 @@ def measure_table(spec: TableSpec, on_progress: Callable[[str, int, int], None] 
         runs = [measure_build(fw, spec, rows, golden, on_progress) for fw in configs]
     else:
         runs = _in_workers(configs, spec, rows, golden, on_progress)
+    if spec.project:  # a project's tasks have no seed figures, nor an estimate the host reads
+        return TableResult(spec, runs, [], {})
     return TableResult(spec, runs, check_orderings(runs), fixed_against_float(runs))
 
 
@@ -448,14 +461,14 @@ def to_json(result: TableResult) -> dict:
         d["estimator_vs_golden"]["mean_percent"] = run.estimator_vs_golden.mean_percent
         d["estimator_vs_truth"]["mean_percent"] = run.estimator_vs_truth.mean_percent
         for task in run.tasks:
-            seed = SEED_TABLE_I[(task, run.build)]
-            d["tasks"][task]["seed_response_ms"] = seed.response_ms
-            d["tasks"][task]["seed_energy_nj"] = seed.energy_nj
+            seed = _seed(result, task, run.build)
+            d["tasks"][task]["seed_response_ms"] = seed.response_ms if seed else None
+            d["tasks"][task]["seed_energy_nj"] = seed.energy_nj if seed else None
         runs.append(d)
     return clean(  # type: ignore[return-value]
         {
             "schema": 1,
-            "spec": asdict(result.spec),
+            "spec": {k: v for k, v in asdict(result.spec).items() if k != "project" or v},  # the built-in: no key
             "clock_ns": 4.0,
             "runs": runs,
             "orderings": [asdict(o) for o in result.orderings],
@@ -485,7 +498,7 @@ def csv_rows(result: TableResult) -> list[list[object]]:
     out = []
     for run in result.runs:
         for task, row in run.tasks.items():
-            seed = SEED_TABLE_I[(task, run.build)]
+            seed = _seed(result, task, run.build) or SeedFigure(math.nan, math.nan)
             out.append(
                 [
                     run.release, run.source, run.build, task, row.jobs, row.response_us_mean, row.response_us_max,
@@ -496,6 +509,11 @@ def csv_rows(result: TableResult) -> list[list[object]]:
                 ]
             )  # fmt: skip
     return out
+
+
+def _seed(result: TableResult, task: str, build: str) -> SeedFigure | None:
+    """The seed's figure for a task and build, or None (a firmware project's task)."""
+    return None if result.spec.project else SEED_TABLE_I.get((task, build))
 
 
 def _num(value: float, digits: int = 1) -> str:
@@ -519,17 +537,20 @@ _TASK_LINES: tuple[tuple[str, Callable[[TaskRow], float], Callable[[SeedFigure],
 """Table I's lines per task: label, our figure, the seed's (if it has one), decimals."""
 
 
-def _task_lines(task: str, runs: dict[str, BuildRun], labels: Sequence[str]) -> list[str]:
+def _task_lines(result: TableResult, task: str, runs: dict[str, BuildRun], labels: Sequence[str]) -> list[str]:
     out = []
+    name = task if result.spec.project else SEED_TASK_NAMES.get(task, task)
     for label, ours, seed_of, digits in _TASK_LINES:
         cells = []
         for b in labels:
             run = runs.get(b)
-            text = _num(ours(run.tasks[task]) if run is not None else math.nan, digits)
-            if seed_of is not None:
-                text += f" [{_num(seed_of(SEED_TABLE_I[(task, b)]), digits)}]"
+            row = run.tasks.get(task) if run is not None else None
+            text = _num(ours(row) if row is not None else math.nan, digits)
+            seed = _seed(result, task, b)
+            if seed_of is not None and seed is not None:
+                text += f" [{_num(seed_of(seed), digits)}]"
             cells.append(f"{text:>{_CELL}}")
-        out.append(f"{SEED_TASK_NAMES[task] + ' ' + label:<{_LABEL}}" + "".join(cells))
+        out.append(f"{name + ' ' + label:<{_LABEL}}" + "".join(cells))
     return out
 
 
@@ -543,18 +564,21 @@ def format_table(result: TableResult) -> list[str]:
         if not runs:
             continue
         any_run = next(iter(runs.values()))
+        whose = f"project {result.spec.project}, " if result.spec.project else ""
+        brackets = "" if result.spec.project else " (seed's figure in brackets)"
         lines.append(
-            f"Table I — {release} release, {any_run.source}, {any_run.samples} samples from take-off per build "
-            f"(seed's figure in brackets)"
+            f"Table I — {whose}{release} release, {any_run.source}, {any_run.samples} samples from take-off per "
+            f"build{brackets}"
         )
         lines.append(f"{'':<{_LABEL}}" + "".join(f"{b:>{width}}" for b in labels))
-        for task in TASKS:
-            lines += _task_lines(task, runs, labels)
+        for task in dict.fromkeys(t for r in runs.values() for t in r.tasks):
+            lines += _task_lines(result, task, runs, labels)
         cells = "".join(f"{_num(runs[b].latency_us_mean) if b in runs else '-':>{width}}" for b in labels)
         lines.append(f"{'sample -> PWM mean (us)':<30}" + cells)
         cells = "".join(f"{runs[b].samples_without_command if b in runs else '-':>{width}}" for b in labels)
         lines.append(f"{'samples without a command':<30}" + cells)
-        lines.append("orderings (lower is better; seed: holds in the seed's Table I; ours: holds here):")
+        if any(o.release == release for o in result.orderings):
+            lines.append("orderings (lower is better; seed: holds in the seed's Table I; ours: holds here):")
         for o in result.orderings:
             if o.release != release:
                 continue
@@ -563,6 +587,16 @@ def format_table(result: TableResult) -> list[str]:
                 f"  {SEED_TASK_NAMES[o.task]} {o.metric:<8} {o.name:<44} seed {'yes' if o.seed_holds else 'NO':<4}"
                 f" ours {ours}"
             )
+        if result.spec.project:
+            lines.append("PWM commands against the float64 golden model (the built-in estimator and PID):")
+            for b in labels:
+                if b in runs:
+                    pwm = runs[b].pwm
+                    lines.append(
+                        f"  {b:<13} within 1 count {_num(100 * pwm.within_one, 1)} % (max diff {pwm.max_diff})"
+                    )
+            lines.append("")
+            continue
         lines.append("accuracy (mean error per quaternion component in %, the seed's terms; mean / max angle):")
         for b in labels:
             run = runs.get(b)
