@@ -196,6 +196,11 @@ OPTIONS: dict[tuple[str, str], Spec] = {
     ("table", "--seed"): Spec("int", 0, 2**63 - 1),
     ("table", "--workers"): Spec("int", 1, 64),
     ("table", "--out"): Spec("out_dir"),
+    ("table", "--firmware"): Spec("in_dir"),
+    ("fly", "--firmware"): Spec("in_dir"),
+    ("serve chip", "--firmware"): Spec("in_dir"),
+    ("new", "DIR"): Spec("out_dir"),
+    ("new", "--template"): Spec("choice", choices=("blank", "quadrotor")),
 }
 
 PATH = "\0"  # "\0dir": one of the bad_paths fixture's paths
@@ -281,6 +286,7 @@ def base_command(command: str, option: str, elves: dict[str, Path], tmp: Path) -
         "bench noc": ["bench", "noc", "--size", "2x2", "--cycles", "10", "--rates", "0.1", "--arbiter", "hermes"],
         "bench chip": ["bench", "chip", "--runs", "1", "--cycles", "10", "--ticks", "1", "--no-noc"],
         "firmware build": ["firmware", "build"],
+        "new": ["new", *([] if option == "DIR" else [str(tmp / "new-project")])],
         "scenario show": ["scenario", "show"],
         "firmware size": ["firmware", "size"],
         "firmware replay": ["firmware", "replay", *([] if option in ("LOG", "--seconds") else ["--seconds", "0.02"])],

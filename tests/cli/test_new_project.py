@@ -93,7 +93,7 @@ def test_a_scenario_names_its_project_relative_to_its_own_folder(tmp_path: Path)
 
 def test_project_errors_end_the_flight_before_it_starts(tmp_path: Path) -> None:
     missing = invoke("fly", "--firmware", tmp_path / "none", "--no-out")
-    assert missing.exit_code == exit_codes.USAGE and f"no folder {tmp_path / 'none'}" in missing.output
+    assert missing.exit_code == exit_codes.USAGE and f"--firmware: no folder {tmp_path / 'none'}" in missing.output
     assert invoke("new", tmp_path / "p").exit_code == 0
     toml = tmp_path / "p" / "robosoc.toml"
     toml.write_text(toml.read_text().replace("tile = [0, 1]", "tile = [1, 1]"))  # powered off on the seed's chip

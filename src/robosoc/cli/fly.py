@@ -82,7 +82,7 @@ def fly_command(
     resolved = resolve(flags)
     config = resolved.config if link is None else dataclasses.replace(resolved.config, controller="chip")
     _check_controller(resolved, config, profile)
-    check_project(config)
+    check_project(config, resolved.source_of("firmware.project"))
     options.exclusive(out=out is not None, no_out=no_out)
     if out is None and not no_out:
         out = Path("runs") / f"fly-{config.name}-s{config.seed}"

@@ -13,8 +13,9 @@ if TYPE_CHECKING:
     from robosoc.config.project import FirmwareProject
 
 
-def load_checked(folder: str, chip: ChipConfig) -> FirmwareProject:
-    """The project in ``folder``, its tasks checked against ``chip``.
+def load_checked(folder: str, chip: ChipConfig, source: str) -> FirmwareProject:
+    """The project in ``folder``, its tasks checked against ``chip``; errors start with ``source``
+    (the option or the scenario field that named the folder).
 
     Raises:
         CliError: no such folder, the project file is missing or wrong (file and key named), or a
@@ -24,18 +25,18 @@ def load_checked(folder: str, chip: ChipConfig) -> FirmwareProject:
     from robosoc.config.validate import ConfigError
 
     if not Path(folder).is_dir():
-        raise CliError(f"the firmware project: no folder {folder} (robosoc new DIR makes a project)")
+        raise CliError(f"{source}: no folder {folder} (robosoc new DIR makes a project)")
     try:
         project = load_project(folder)
         project.check_chip(chip)
     except ConfigError as exc:
-        raise CliError(f"the firmware project: {exc}") from exc
+        raise CliError(f"{source}: {exc}") from exc
     except ValueError as exc:
-        raise CliError(f"the firmware project: {Path(folder) / PROJECT_FILE}: {exc}") from exc
+        raise CliError(f"{source}: {Path(folder) / PROJECT_FILE}: {exc}") from exc
     return project
 
 
-def check_project(config: ScenarioConfig) -> None:
+def check_project(config: ScenarioConfig, source: str) -> None:
     """Load ``config``'s firmware project (if it names one), check its tasks against the scenario's
     chip and that it supports the scenario's build.
 
@@ -45,8 +46,8 @@ def check_project(config: ScenarioConfig) -> None:
     folder = config.firmware.project
     if not folder:
         return
-    project = load_checked(folder, config.chip)
+    project = load_checked(folder, config.chip, source)
     try:
         project.check_build(config.firmware.arith, config.firmware.multiplier)
     except ValueError as exc:
-        raise CliError(f"the firmware project: {Path(folder) / 'robosoc.toml'}: {exc}") from exc
+        raise CliError(f"{source}: {Path(folder) / 'robosoc.toml'}: {exc}") from exc

@@ -188,6 +188,14 @@ class ResolvedScenario:
     given: tuple[ScenarioFlag, ...]
     sources: tuple[tuple[str, tuple[str, ...]], ...]
 
+    def source_of(self, field: str) -> str:
+        """Who set a dotted field, for an error about its value: the option as typed, else the
+        scenario file and the field, else the field (a default)."""
+        for flag in self.given:
+            if flag.field == field:
+                return flag.option
+        return f"{self.path}: {field}" if self.path is not None else field
+
     @property
     def inputs(self) -> list[Path]:
         """Files the command reads (an output must not overwrite them)."""

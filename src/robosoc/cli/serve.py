@@ -19,6 +19,7 @@ from robosoc.cli.console import make_console, note, plain
 from robosoc.cli.errors import CliError
 from robosoc.cli.link_options import DEFAULT_BIND, Bind, ConnectTimeout, Faults, Hold, Pace, PeerTimeout, Resend
 from robosoc.cli.link_report import end_of_side, print_link_counts
+from robosoc.cli.project_check import check_project
 from robosoc.cli.scenario_flags import (
     SERVE_CHIP,
     SERVE_PHYSICS,
@@ -174,6 +175,7 @@ def serve_chip_command(
     console = make_console()
     resolved, craft = resolve_side(flags)
     config, seed = resolved.config, resolved.config.seed
+    check_project(config, resolved.source_of("firmware.project"))
     link = link_options.link_config(
         faults=faults, resend=resend, peer_timeout=peer_timeout, connect_timeout=connect_timeout
     )

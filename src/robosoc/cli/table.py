@@ -79,7 +79,7 @@ def table(
         if release != "event":
             raise options.fail("--release", "a project's tasks have their own release (its robosoc.toml)")
         project = str(firmware.absolute())
-        load_checked(project, FirmwareConfig(project=project).default_chip())
+        load_checked(project, FirmwareConfig(project=project).default_chip(), "--firmware")
     spec = table_one.TableSpec(
         iterations=iterations,
         releases=("event", "periodic") if release == "both" else (release,),
