@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
+from robosoc import output_files
 from robosoc.cli import exit_codes, files, options
 from robosoc.cli.app import app
 from robosoc.cli.engine_option import Engine
@@ -83,10 +84,8 @@ ExitCode = Annotated[
 
 
 def _write_json(path: Path, record: dict) -> None:
-    tmp = path.with_name(path.name + ".tmp")
     try:
-        tmp.write_text(json.dumps(record, indent=2) + "\n")
-        tmp.replace(path)
+        output_files.write_atomic(path, json.dumps(record, indent=2) + "\n")
     except OSError as exc:  # checked at the start; the disk may still fill up or the folder vanish
         raise CliError(f"--stats: {path}: cannot write: {exc.strerror or exc}") from exc
 

@@ -37,6 +37,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Literal, get_args
 
+from robosoc.config.ranges import CLOCK_PERIOD_NS
 from robosoc.config.validate import load_toml
 
 __all__ = [
@@ -81,8 +82,7 @@ def _check_sram(name: str, value: int) -> None:
 
 
 def _check_period(name: str, value: float) -> None:
-    if not value > 0.0:
-        raise ValueError(f"{name}: must be > 0 ns, got {value}")
+    CLOCK_PERIOD_NS.check(name, value)
 
 
 @dataclass(frozen=True)

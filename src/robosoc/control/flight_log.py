@@ -12,6 +12,7 @@ from types import TracebackType
 import numpy as np
 
 from robosoc.control.flight import ROW_FIELDS
+from robosoc.output_files import open_in_place
 
 
 class CsvFlightLog:
@@ -20,7 +21,7 @@ class CsvFlightLog:
     def __init__(self, path: Path) -> None:
         self.path = path
         path.parent.mkdir(parents=True, exist_ok=True)
-        self._file = path.open("w", encoding="utf-8", newline="\n")
+        self._file = open_in_place(path, "w", encoding="utf-8", newline="\n")
         self._file.write(",".join(ROW_FIELDS) + "\n")
         self._file.flush()
         self.rows = 0

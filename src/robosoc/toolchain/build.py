@@ -3,12 +3,12 @@
 import json
 import os
 import re
-import shutil
 import tempfile
 import warnings
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
+from robosoc import output_files
 from robosoc.firmware import INCLUDE_DIR, LIBC_INCLUDE_DIR, runtime_sources
 from robosoc.toolchain.cache import build_key, entry_dir, file_digest, header_digests, zig_cache_dir
 from robosoc.toolchain.errors import CompileError, CompilerWarning, FixedRegisterWarning, ToolchainError
@@ -131,7 +131,7 @@ def build_elf(
         return cached
     out_path = Path(out).expanduser().resolve()
     out_path.parent.mkdir(parents=True, exist_ok=True)
-    shutil.copyfile(cached, out_path)
+    output_files.write_atomic(out_path, cached.read_bytes())
     return out_path
 
 
