@@ -295,7 +295,10 @@ def _chip_config(ctx: typer.Context, mul: bool, sram_size: int, mesh: str | None
         config, _ = files.load_toml(ChipConfig, chip_file, "--chip")
     else:
         w, h = options.parse_mesh("--mesh", "2x2" if mesh is None else mesh)
-        config = ChipConfig(width=w, height=h, tile=TileConfig(multiplier=mul, sram_bytes=sram_size))
+        try:
+            config = ChipConfig(width=w, height=h, tile=TileConfig(multiplier=mul, sram_bytes=sram_size))
+        except ValueError as exc:  # the only rule across the two: the SRAM of all tiles together
+            raise options.fail("--sram-size", f"{exc.args[0].partition(': ')[2]} (with --mesh {w}x{h})") from exc
     changes = {}
     if off:
         changes["--off"] = ("powered_off", tuple(options.parse_tile("--off", t) for t in off))

@@ -96,7 +96,7 @@ def sweep_command(
     where = f"Dask at {dask}" if dask and dask != "local" else ("a Dask LocalCluster" if dask else "a local pool")
     console.print(
         f"sweep [bold]{escape(config.name)}[/bold]: {total} runs "
-        f"({len(config.assignments())} points × {len(config.seeds)} seeds) on {where} of {workers} workers"
+        f"({config.point_count()} points × {len(config.seeds)} seeds) on {where} of {workers} workers"
         + ("" if not dask or dask == "local" else " (the cluster's own workers)")
     )
     state = {"failed": 0}

@@ -15,12 +15,14 @@ from __future__ import annotations
 import dataclasses
 import math
 import numbers
+import os
 from typing import NamedTuple
 
 __all__ = [
     "CLOCK_PERIOD_NS",
     "DEVICE_MAP_BASE",
     "FLOAT_FIELDS",
+    "MAX_CHIP_SRAM_BYTES",
     "MAX_CYCLES",
     "MAX_SEED",
     "MAX_SRAM_BYTES",
@@ -29,9 +31,12 @@ __all__ = [
     "check_fields",
     "check_float",
     "check_int",
+    "check_memory",
     "check_seed",
     "check_sram_bytes",
     "describe",
+    "format_bytes",
+    "host_memory_bytes",
 ]
 
 #: Largest cycle budget or cycle count: counters are 64-bit and the simulator adds slices to them.
@@ -43,6 +48,38 @@ MIN_SRAM_BYTES = 4096
 MAX_SRAM_BYTES = 2**30
 #: Lowest device address (the exit trap, platform.md §2): SRAM at 0x40000000 must end below it.
 DEVICE_MAP_BASE = 0xE000_0000
+#: Most SRAM a chip may simulate in all (the simulator gives every tile the largest tile's SRAM):
+#: 16 GiB, e.g. 256 tiles of 64 MiB or 16 tiles of 1 GiB.
+MAX_CHIP_SRAM_BYTES = 2**34
+
+
+def format_bytes(n: int) -> str:
+    """``256 GiB``, ``1.5 MiB``, ``4096 bytes``: a size as people read it."""
+    for unit, size in (("TiB", 2**40), ("GiB", 2**30), ("MiB", 2**20), ("KiB", 2**10)):
+        if n >= size:
+            return f"{n / size:.4g} {unit}"
+    return f"{n} bytes"
+
+
+def host_memory_bytes() -> int | None:
+    """This machine's physical memory in bytes (``None`` if the system does not say)."""
+    try:
+        return os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    except (AttributeError, ValueError, OSError):
+        return None
+
+
+def check_memory(name: str, needed: int, what: str) -> None:
+    """Refuse to allocate ``needed`` bytes (for ``what``) that this machine does not have.
+
+    Raises:
+        ValueError: ``"<name>: <what> needs 256 GiB of memory, more than this machine's 23.4 GiB"``.
+    """
+    total = host_memory_bytes()
+    if total is not None and needed > total:
+        raise ValueError(
+            f"{name}: {what} needs {format_bytes(needed)} of memory, more than this machine's {format_bytes(total)}"
+        )
 
 
 def describe(value: float) -> str:
