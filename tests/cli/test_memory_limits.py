@@ -13,12 +13,12 @@ from elftools.elf.elffile import ELFFile
 from typer.testing import CliRunner
 
 from robosoc.chip import core_state, mpsoc
-from robosoc.chip.elf import ElfError, load_elf
 from robosoc.cli import app, exit_codes
 from robosoc.config import ranges
 from robosoc.config.chip import ChipConfig, TileConfig, TileOverride
 from robosoc.config.ranges import MAX_CHIP_SRAM_BYTES, check_memory, format_bytes
 from robosoc.config.sweep import SweepConfig, load_sweep
+from robosoc.program.elf import ElfError, load_elf
 
 runner = CliRunner()
 
@@ -116,6 +116,13 @@ def test_a_sweep_counts_its_points_as_it_builds_them(tmp_path: Path) -> None:
 
 
 # --- ELF segments -------------------------------------------------------------------------------------
+
+
+def test_the_largest_elf_segment_is_the_largest_sram() -> None:
+    from robosoc.config.ranges import MAX_SRAM_BYTES
+    from robosoc.program.elf import MAX_SEGMENT_BYTES
+
+    assert MAX_SEGMENT_BYTES == MAX_SRAM_BYTES
 
 
 def _with_memsz(elf: Path, out: Path, memsz: int) -> Path:

@@ -133,7 +133,7 @@ def firmware_replay(
         try:
             rows = read_flight_log(path)
         except ValueError as exc:
-            raise CliError(f"{path}: not a flight log of robosoc fly: {exc}") from exc
+            raise CliError(str(exc) if str(exc).startswith(str(path)) else f"{path}: {exc}") from exc
     else:
         rows = built_in_rows(seconds, seed)
     console = make_console(stderr=True)

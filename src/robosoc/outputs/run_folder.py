@@ -23,6 +23,7 @@ import numpy as np
 from robosoc import output_files
 from robosoc.chip.function_profile import FunctionProfile
 from robosoc.control.flight import ROW_FIELDS
+from robosoc.control.flight_log import header_problem
 from robosoc.records import JobRecord
 
 FLIGHT_CSV = "flight.csv"
@@ -115,8 +116,9 @@ def read_flight_rows(path: Path, notes: list[str]) -> np.ndarray:
     with path.open(encoding="utf-8", newline="") as handle:
         reader = csv.reader(handle)
         header = next(reader, None)
-        if header is None or tuple(header) != ROW_FIELDS:
-            raise RunFolderError(f"{path}: not a robosoc flight log (unexpected header)")
+        problem = "empty file" if header is None else header_problem(header, ROW_FIELDS)
+        if problem is not None:
+            raise RunFolderError(f"{path}: not a robosoc flight log ({problem})")
         lines = list(reader)
     rows = []
     for k, line in enumerate(lines):
@@ -141,8 +143,9 @@ def read_jobs(path: Path, notes: list[str]) -> dict[str, np.ndarray]:
     with path.open(encoding="utf-8", newline="") as handle:
         reader = csv.reader(handle)
         header = next(reader, None)
-        if header is None or tuple(header) != JOB_CSV_FIELDS:
-            raise RunFolderError(f"{path}: not a robosoc job record file (unexpected header)")
+        problem = "empty file" if header is None else header_problem(header, JOB_CSV_FIELDS)
+        if problem is not None:
+            raise RunFolderError(f"{path}: not a robosoc job record file ({problem})")
         lines = [line for line in reader if line]
     if lines and len(lines[-1]) != len(JOB_CSV_FIELDS):
         notes.append(f"{path.name}: last line incomplete, skipped")

@@ -16,7 +16,10 @@ from elftools.elf.constants import P_FLAGS
 from elftools.elf.elffile import ELFFile
 from elftools.elf.sections import SymbolTableSection
 
-from robosoc.config.ranges import MAX_SRAM_BYTES, format_bytes
+#: Largest segment an ELF may ask for (memsz) when no regions are given: the largest SRAM of a tile,
+#: ``config.ranges.MAX_SRAM_BYTES`` (a test checks they agree), checked before the segment is made.
+MAX_SEGMENT_BYTES = 1 << 30
+
 
 EM_RISCV = "EM_RISCV"
 
@@ -226,10 +229,10 @@ def _read_program(path: Path, elf: ELFFile, allowed: list[Region] | None) -> Pro
             raise ElfError(
                 f"{path}: segment {index} at 0x{addr:08x} ({memsz} bytes) ends beyond the 32-bit address space"
             )
-        if allowed is None and memsz > MAX_SRAM_BYTES:
+        if allowed is None and memsz > MAX_SEGMENT_BYTES:
             raise ElfError(
-                f"{path}: segment {index} at 0x{addr:08x} has memsz {memsz} bytes ({format_bytes(memsz)}), "
-                f"more than any tile's SRAM ({format_bytes(MAX_SRAM_BYTES)})"
+                f"{path}: segment {index} at 0x{addr:08x} has memsz {memsz} bytes ({memsz / 2**30:.4g} GiB), "
+                f"more than any tile's SRAM ({MAX_SEGMENT_BYTES >> 30} GiB)"
             )
         if allowed is not None and not any(r.contains(addr, memsz) for r in allowed):
             where = ", ".join(f"{r.name} 0x{r.base:08x}-0x{r.end - 1:08x}" for r in allowed)
