@@ -255,10 +255,9 @@ def _simulate_single(
     if profile is not None:
         typer.echo(profile.table(cycles), err=True)
     cpi = cycles / instr if instr else float("nan")
-    mips = instr / seconds / 1e6 if seconds > 0 else float("nan")
     typer.echo(
         f"robosoc: {cycles} cycles, {instr} instructions, CPI {cpi:.3f}, "
-        f"energy {total_nj:.3f} nJ, host {mips:.0f} MIPS{_errata_summary(errata_hit)}"
+        f"energy {total_nj:.3f} nJ{host_speed(instr, seconds, gdb is not None)}{_errata_summary(errata_hit)}"
         + (f"; exit code {_code_text(result.exit_code)}" if result else ""),
         err=True,
     )
@@ -279,6 +278,14 @@ def _simulate_single(
 def _code_text(code: int) -> str:
     """``"3"``, or ``"3507801690 (0xd114ce5a)"`` for an exit word beyond a byte."""
     return str(code) if code <= 0xFF else f"{code} (0x{code:08x})"
+
+
+def host_speed(instructions: int, seconds: float, debugged: bool) -> str:
+    """``", host 120 MIPS"`` for the summary line, or nothing when the host time says nothing of the
+    simulator's speed: under GDB (it is the debugging session's time) or not measured (a run cut short)."""
+    if debugged or not seconds > 0:
+        return ""
+    return f", host {instructions / seconds / 1e6:.0f} MIPS"
 
 
 def _errata_summary(errata: dict[str, int]) -> str:
