@@ -9,11 +9,11 @@ import socket
 from pathlib import Path
 
 from gdb_client import Background, Client, frame
-from robosoc.chip.elf import load_elf
 from robosoc.chip.single import SingleCoreSoC
 from robosoc.cli.run import host_speed
 from robosoc.debug import GdbServer, Listener, SingleCoreTarget
 from robosoc.debug.gdb_server import SECOND_GDB_REPLY
+from robosoc.program.elf import load_elf
 
 JOIN_SECONDS = 120.0
 

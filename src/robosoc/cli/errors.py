@@ -24,11 +24,13 @@ import os
 import sys
 import traceback
 from collections.abc import Callable
-
-import click
+from typing import TYPE_CHECKING
 
 from robosoc.cli import exit_codes
 from robosoc.output_files import NotRegularFileError
+
+if TYPE_CHECKING:  # typer brings its own click (typer._click): exceptions are recognised by class name
+    import click
 
 __all__ = ["CliError", "command_path", "print_error", "run_guarded"]
 

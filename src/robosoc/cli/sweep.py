@@ -87,17 +87,24 @@ def sweep_command(
     if out is None:
         out = Path("runs") / f"sweep-{config.name}"
     out = files.output_dir(out, "--out", inputs=[file], names=("sweep.toml", "points.csv", "sweep.html"))
+    remote = dask is not None and dask != "local"
+    if remote and workers is not None:
+        raise options.fail("--workers", f"a Dask scheduler ({dask}) brings its own workers: give --workers without it")
     if workers is None:
         workers = os.cpu_count() or 1
     copy = out / "sweep.toml"
     if not copy.exists() or copy.read_bytes() != file.read_bytes():
         output_files.write_atomic(copy, file.read_bytes())
 
-    where = f"Dask at {dask}" if dask and dask != "local" else ("a Dask LocalCluster" if dask else "a local pool")
+    # a scheduler's workers are counted once connected (run_sweep says how many), not os.cpu_count() here
+    where = (
+        f"Dask at {escape(dask)}"
+        if remote
+        else f"{'a Dask LocalCluster' if dask else 'a local pool'} of {workers} workers"
+    )
     console.print(
         f"sweep [bold]{escape(config.name)}[/bold]: {total} runs "
-        f"({config.point_count()} points × {len(config.seeds)} seeds) on {where} of {workers} workers"
-        + ("" if not dask or dask == "local" else " (the cluster's own workers)")
+        f"({config.point_count()} points × {len(config.seeds)} seeds) on {where}"
     )
     state = {"failed": 0}
     with Progress(
