@@ -225,3 +225,55 @@ def test_run_refuses_absurd_chip_clocks_and_energy_coefficients(tmp_path: Path, 
             assert "expected a non-negative number" in result.output
         assert result.exit_code == exit_codes.USAGE, result.output
         assert where in result.output.splitlines()[0], result.output
+
+
+# --- the same through the command line: a file on disk, one line, exit 0 or 2 ---------------------------
+
+
+def _toml_value(value: Any) -> str:
+    if isinstance(value, dict):
+        return "{ " + ", ".join(f"{k} = {_toml_value(v)}" for k, v in value.items()) + " }"
+    if isinstance(value, list):
+        return "[" + ", ".join(_toml_value(v) for v in value) + "]"
+    if isinstance(value, str):
+        return f'"{value}"'
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    return _toml_float(value)
+
+
+def _toml(mapping: dict[str, Any]) -> str:
+    return "".join(f"{key} = {_toml_value(value)}\n" for key, value in mapping.items())
+
+
+CLI_FIELDS = [f for f in FIELDS if f[0] in (ScenarioConfig, ChipConfig)]
+
+
+@pytest.mark.parametrize(
+    ("root", "path", "owner", "kind"), CLI_FIELDS, ids=[f"{r.__name__}:{p}" for r, p, _, _ in CLI_FIELDS]
+)
+@settings(max_examples=8, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(value=FLOATS)
+def test_absurd_numbers_in_files_are_one_line_and_exit_2_on_the_command_line(
+    tmp_path: Path, root, path, owner, kind, value
+) -> None:
+    given_value: Any = [value, value, value] if kind == "vector" else value
+    file = tmp_path / "f.toml"
+    file.write_text(_toml(_mapping(path, given_value, owner)), encoding="utf-8")
+    elf = tmp_path / "none.elf"
+    elf.write_bytes(b"\x7fELF")
+    if root is ScenarioConfig:
+        args, command = ["scenario", "show", str(file)], "robosoc scenario show"
+    else:
+        args, command = ["run", str(elf), "--chip", str(file)], "robosoc run"
+    result = runner.invoke(app, args)
+    assert "Traceback" not in result.output and "internal error" not in result.output, result.output
+    if result.exit_code == 0:
+        assert root is ScenarioConfig
+        return
+    assert result.exit_code == exit_codes.USAGE, result.output
+    first = result.output.splitlines()[0]
+    assert first.startswith(f"{command}: "), first
+    if root is ChipConfig and str(elf) in first:
+        return  # the chip file was accepted: the (fake) program is what is refused
+    assert str(file) in first, first
