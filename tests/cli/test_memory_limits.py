@@ -13,6 +13,7 @@ from elftools.elf.elffile import ELFFile
 from typer.testing import CliRunner
 
 from robosoc.chip import core_state, mpsoc
+from robosoc.chip.single import SingleCoreSoC
 from robosoc.cli import app, exit_codes
 from robosoc.config import ranges
 from robosoc.config.chip import ChipConfig, TileConfig, TileOverride
@@ -75,6 +76,8 @@ def test_a_chip_larger_than_this_machine_is_refused_before_allocating(monkeypatc
     config = ChipConfig(width=4, height=4, tile=TileConfig(sram_bytes=2**27))
     with pytest.raises(ValueError, match=r"^sram_bytes: 16 tiles x 128 MiB of SRAM needs 2 GiB of memory, more than"):
         mpsoc.MPSoC(config)
+    with pytest.raises(ValueError, match=r"^sram_size: an SRAM of 2 GiB needs 2 GiB of memory, more than this"):
+        SingleCoreSoC(sram_size=2**31)
     check_memory("x", 2**30, "it")  # exactly what there is: fine
     assert format_bytes(3 * 2**29) == "1.5 GiB" and format_bytes(4096) == "4 KiB" and format_bytes(12) == "12 bytes"
 
