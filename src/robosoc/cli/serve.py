@@ -59,19 +59,18 @@ def resolve_side(flags: ScenarioFlags) -> tuple[ResolvedScenario, VehicleConfig]
     return resolved, vehicle_preset(resolved.config.vehicle)
 
 
-#: What either side writes in its --out folder (docs/decoupled.md).
-SERVE_FILES = ("flight.csv", "physics.json", "link-physics.log", "jobs.csv", "chip.json", "link-chip.log")
-
-
 def _out(out: Path | None, no_out: bool, side: str, name: str, seed: int, scenario: Path | None) -> Path | None:
     options.exclusive(out=out is not None, no_out=no_out)
     if no_out:
         return None
+    from robosoc.outputs import run_folder as rf
+
+    written = (rf.FLIGHT_CSV, rf.PHYSICS_JSON, rf.LINK_PHYSICS_LOG, rf.JOBS_CSV, rf.CHIP_JSON, rf.LINK_CHIP_LOG)
     return files.output_dir(
         out or Path("runs") / f"serve-{side}-{name}-s{seed}",
         "--out",
         inputs=[scenario] if scenario else (),
-        names=SERVE_FILES,
+        names=written,  # what either side writes in it (docs/decoupled.md): no device, FIFO or socket
     )
 
 
