@@ -10,7 +10,7 @@ from pathlib import Path
 
 from gdb_client import Background, Client, frame
 from robosoc.chip.single import SingleCoreSoC
-from robosoc.cli.run import host_speed
+from robosoc.cli.run import cpi_text, host_speed
 from robosoc.debug import GdbServer, Listener, SingleCoreTarget
 from robosoc.debug.gdb_server import SECOND_GDB_REPLY
 from robosoc.program.elf import load_elf
@@ -54,3 +54,4 @@ def test_the_summary_leaves_out_the_host_speed_when_it_says_nothing() -> None:
     assert host_speed(2_000_000, 0.5, debugged=False) == ", host 4 MIPS"
     assert host_speed(2_000_000, 0.5, debugged=True) == ""  # the session's time, halts included
     assert host_speed(2_000_000, 0.0, debugged=False) == ""  # not measured: no "nan MIPS"
+    assert cpi_text(34, 21) == "CPI 1.619" and cpi_text(3, 0) == "CPI n/a"  # killed before an instruction

@@ -254,9 +254,8 @@ def _simulate_single(
     cycles, instr = counters["cycles"], counters["instructions"]
     if profile is not None:
         typer.echo(profile.table(cycles), err=True)
-    cpi = cycles / instr if instr else float("nan")
     typer.echo(
-        f"robosoc: {cycles} cycles, {instr} instructions, CPI {cpi:.3f}, "
+        f"robosoc: {cycles} cycles, {instr} instructions, {cpi_text(cycles, instr)}, "
         f"energy {total_nj:.3f} nJ{host_speed(instr, seconds, gdb is not None)}{_errata_summary(errata_hit)}"
         + (f"; exit code {_code_text(result.exit_code)}" if result else ""),
         err=True,
@@ -278,6 +277,12 @@ def _simulate_single(
 def _code_text(code: int) -> str:
     """``"3"``, or ``"3507801690 (0xd114ce5a)"`` for an exit word beyond a byte."""
     return str(code) if code <= 0xFF else f"{code} (0x{code:08x})"
+
+
+def cpi_text(cycles: int, instructions: int) -> str:
+    """``"CPI 1.619"``, or ``"CPI n/a"`` before the first instruction (a run GDB killed at once: no
+    "CPI nan")."""
+    return f"CPI {cycles / instructions:.3f}" if instructions else "CPI n/a"
 
 
 def host_speed(instructions: int, seconds: float, debugged: bool) -> str:
@@ -395,12 +400,12 @@ def _simulate_chip(chip, config, programs, max_cycles, stats, model, exit_mode, 
         per_tile[f"{xy[0]},{xy[1]}"] = {
             "state": chip.state(xy), "counters": c, "energy_nj": e, "tasks": tasks, "errata": hit,
         }  # fmt: skip
-        cpi = c["cycles"] / c["instructions"] if c["instructions"] else float("nan")
         state = chip.state(xy)
         exited = f" with exit code {_code_text(chip.exit_code(xy))}" if state == "exited" else ""
         typer.echo(
             f"robosoc: tile {xy}: {state}{exited}, {c['cycles']} cycles, {c['instructions']} instructions, "
-            f"CPI {cpi:.3f}, sleep {c['sleep_cycle']}, energy {e:.3f} nJ{_errata_summary(hit)}",
+            f"{cpi_text(c['cycles'], c['instructions'])}, sleep {c['sleep_cycle']}, "
+            f"energy {e:.3f} nJ{_errata_summary(hit)}",
             err=True,
         )
         for _, note in report.values():
