@@ -9,6 +9,7 @@ from pathlib import Path
 
 import pytest
 
+from robosoc import output_files
 from robosoc.cosim.chip_timeline import ChipTimeline, Packet, Sleep, TaskSpan
 from robosoc.host.images import IDLE_TASK_ID, KERNEL_TASK_ID
 from robosoc.outputs import chip_trace as chip_trace_module
@@ -176,7 +177,7 @@ def test_a_trace_file_is_compact_json_and_an_interrupted_write_leaves_no_partial
     def interrupted(src, dst):
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(chip_trace_module.os, "replace", interrupted)
+    monkeypatch.setattr(output_files.os, "replace", interrupted)  # the one writer of outputs
     with pytest.raises(KeyboardInterrupt):
         write_chip_trace({"traceEvents": []}, path)
     assert json.loads(path.read_text(encoding="utf-8")) == trace  # the last whole file stays

@@ -190,7 +190,7 @@ def test_files_round_trip_and_summary_check(replays, tmp_path: Path) -> None:
     assert len(table) == len(data["rows"]) == len(profile.rows)
     for tile, cycles in data["totals"]["cycles"].items():
         assert sum(int(r["cycles"]) for r in table if r["tile"] == tile) == cycles
-    assert not list(tmp_path.glob("*.tmp"))
+    assert not list(tmp_path.glob("*.partial"))
     summary = {
         "cycles": {"tiles": {f"{x},{y}": c["cycles"] for (x, y), c in result.counters.items()}},
         "energy": {

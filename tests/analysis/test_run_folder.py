@@ -68,20 +68,28 @@ def test_a_bad_flight_row_before_the_last_names_its_line(tmp_path: Path) -> None
 
 
 @pytest.mark.parametrize(
-    ("name", "read", "text", "what"),
+    ("name", "read", "text", "what", "problem"),
     [
-        ("flight.csv", read_flight_rows, "", "a robosoc flight log"),
-        ("flight.csv", read_flight_rows, "t,x,y\n1,2,3\n", "a robosoc flight log"),
-        ("jobs.csv", read_jobs, "", "a robosoc job record file"),
-        ("jobs.csv", read_jobs, "task,tile\n", "a robosoc job record file"),
+        ("flight.csv", read_flight_rows, "", "a robosoc flight log", "empty file"),
+        (
+            "flight.csv",
+            read_flight_rows,
+            "t,x,y\n1,2,3\n",
+            "a robosoc flight log",
+            "missing columns z, roll, pitch, yaw,",
+        ),
+        ("jobs.csv", read_jobs, "", "a robosoc job record file", "empty file"),
+        ("jobs.csv", read_jobs, "task,tile\n", "a robosoc job record file", "missing columns job, release_cycle,"),
     ],
 )
-def test_a_file_without_its_header_is_refused(tmp_path: Path, name: str, read, text: str, what: str) -> None:
+def test_a_file_without_its_header_is_refused(
+    tmp_path: Path, name: str, read, text: str, what: str, problem: str
+) -> None:
     path = tmp_path / name
     path.write_text(text)
     with pytest.raises(RunFolderError) as caught:
         read(path, [])
-    assert str(caught.value) == f"{path}: not {what} (unexpected header)"
+    assert str(caught.value).startswith(f"{path}: not {what} ({problem}"), caught.value
 
 
 def test_jobs_are_columns_with_text_for_task_and_tile(tmp_path: Path) -> None:

@@ -11,12 +11,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from robosoc import output_files
 from robosoc.config.firmware import FirmwareConfig
 from robosoc.config.scenario import ScenarioConfig
 from robosoc.config.vehicle import vehicle_preset
 from robosoc.control.flight import ROW_FIELDS, flight_metrics
 from robosoc.cosim.firmware_run import ReplayResult
-from robosoc.outputs import run_summary
 from robosoc.outputs.run_summary import (
     HOST_TIMING_KEYS,
     SCHEMA,
@@ -202,11 +202,11 @@ def test_a_summary_file_is_two_space_json_and_an_interrupted_write_keeps_the_las
     def interrupted(src, dst):
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(run_summary.os, "replace", interrupted)
+    monkeypatch.setattr(output_files.os, "replace", interrupted)
     with pytest.raises(KeyboardInterrupt):
         write_summary({"a": 2}, path)
     assert json.loads(path.read_text()) == {"a": 1, "b": {"c": [1, 2]}, "é": None}  # still the last whole one
-    assert json.loads((tmp_path / "summary.json.tmp").read_text(encoding="utf-8")) == {"a": 2}
+    assert not (tmp_path / "summary.json.partial").exists()  # the unfinished one is removed
 
 
 def test_a_vehicle_summary_of_a_flight_holds_its_flight_figures(hover_flight):

@@ -20,7 +20,7 @@ PACKAGE = ROOT / "src" / "robosoc"
 
 #: Bottom to top.  A package (or top-level module) may import those of the layers below its own.
 LAYERS: tuple[tuple[str, ...], ...] = (
-    ("cache", "isa", "records", "program", "firmware"),
+    ("cache", "isa", "records", "output_files", "program", "firmware"),
     ("config",),
     ("kernels", "physics"),
     ("toolchain",),

@@ -306,7 +306,9 @@ def test_firmware_replay_names_the_log_argument(host_run: Path) -> None:
     assert result.stderr == "robosoc firmware replay: LOG: cannot be combined with --seconds\n"
     summary = invoke("firmware", "replay", host_run / "summary.json")
     assert summary.exit_code == exit_codes.USAGE
-    assert summary.stderr.startswith(f"robosoc firmware replay: {host_run / 'summary.json'}: not a flight log")
+    assert summary.stderr.startswith(
+        f"robosoc firmware replay: {host_run / 'summary.json'}: not a robosoc flight log ("
+    )
 
 
 # --- robosoc fly: the decoupled mode's checks, the summary, the live server ------------------------------

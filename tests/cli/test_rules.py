@@ -161,7 +161,7 @@ def test_missing_output_folders_are_created(elves: dict[str, Path], tmp_path: Pa
     result = invoke("run", elves["ok"], "--stats", stats)
     assert result.exit_code == 0, result.output
     assert json.loads(stats.read_text())["exit_code"] == 0
-    assert not list(stats.parent.glob("*.tmp"))
+    assert not list(stats.parent.glob("*.partial"))
 
 
 # --- exit codes -----------------------------------------------------------------------------------

@@ -183,7 +183,9 @@ def test_stats_are_two_space_json_and_a_failed_write_names_the_file(
     def full(self, *args, **kwargs):  # type: ignore[no-untyped-def]
         raise OSError(28, "No space left on device")
 
-    monkeypatch.setattr(Path, "write_text", full)
+    from robosoc import output_files
+
+    monkeypatch.setattr(output_files, "write_atomic", full)  # the one writer of outputs
     with pytest.raises(CliError) as caught:
         run_cli._write_json(tmp_path / "again.json", {"a": 1})
     assert caught.value.message == f"--stats: {tmp_path / 'again.json'}: cannot write: No space left on device"

@@ -23,4 +23,4 @@ def test_table_writes_csv_and_json(tmp_path: Path) -> None:
         assert abs(float(row["energy_nj"]) - parts) <= 1e-9 * parts
     data = json.loads((tmp_path / "table.json").read_text())
     assert {r["build"] for r in data["runs"]} == {"float+mul", "float-no-mul", "fixed+mul", "fixed-no-mul"}
-    assert not list(tmp_path.glob("*.tmp"))
+    assert not list(tmp_path.glob("*.partial"))

@@ -14,6 +14,7 @@ from typing import Any
 import pytest
 
 from robosoc.config.chip import ChipConfig, NocConfig, TileConfig, TileOverride
+from robosoc.config.ranges import FLOAT_FIELDS
 from robosoc.config.scenario import (
     FlightPlan,
     GustConfig,
@@ -52,7 +53,10 @@ MOTOR_POSITIVE = ("psi", "j_m", "r_a", "alpha_m", "beta_m", "ct0s", "supply_volt
 def test_motor_constants_must_be_positive(name: str) -> None:
     rejected(MotorConfig, f"{name}: must be a positive number, got 0.0", **{name: 0.0})
     rejected(MotorConfig, f"{name}: must be a positive number, got inf", **{name: INF})
-    assert getattr(MotorConfig(**{name: 1e-9}), name) == 1e-9
+    low = FLOAT_FIELDS[f"MotorConfig.{name}"].lo  # positive and finite, and no smaller than this
+    assert getattr(MotorConfig(**{name: low}), name) == low
+    with pytest.raises(ValueError, match=rf"^{name}: must be in \[{low:g}, "):
+        MotorConfig(**{name: low / 2})
 
 
 @pytest.mark.parametrize("name", ["k_t", "k_m", "ct1s", "ct2s"])
@@ -318,7 +322,9 @@ def test_tile_rules() -> None:
             TileConfig, f"sram_bytes: must be a multiple of 4 between 4096 and 2**30 bytes, got {bad}", sram_bytes=bad
         )
     assert TileConfig(sram_bytes=4096).sram_bytes == 4096 and TileConfig(sram_bytes=1 << 30).sram_bytes == 1 << 30
-    rejected(TileConfig, "clock_period_ns: must be > 0 ns, got 0.0", clock_period_ns=0.0)
+    rejected(TileConfig, "clock_period_ns: must be in [0.5, 1000] ns, got 0", clock_period_ns=0.0)
+    rejected(TileConfig, "clock_period_ns: must be in [0.5, 1000] ns, got 1e-09", clock_period_ns=1e-9)
+    rejected(TileConfig, "clock_period_ns: must be a finite number, got inf", clock_period_ns=math.inf)
     assert TileConfig(clock_period_ns=0.5).clock_period_ns == 0.5
     rejected(TileOverride, "x: must be >= 0, got -1", x=-1, y=0)
     rejected(TileOverride, "y: must be >= 0, got -2", x=0, y=-2)
@@ -329,7 +335,7 @@ def test_tile_rules() -> None:
         y=0,
         sram_bytes=100,
     )
-    rejected(TileOverride, "clock_period_ns: must be > 0 ns, got -1.0", x=0, y=0, clock_period_ns=-1.0)
+    rejected(TileOverride, "clock_period_ns: must be in [0.5, 1000] ns, got -1", x=0, y=0, clock_period_ns=-1.0)
     assert TileOverride(0, 0, clock_period_ns=0.5).clock_period_ns == 0.5
 
 

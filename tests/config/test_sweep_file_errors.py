@@ -142,4 +142,4 @@ def test_the_size_guard_allows_exactly_max_points_runs_and_refuses_one_more(tmp_
     path.write_text(f"seeds = {[*seeds, 100]}\n[grid]\nduration_s = {durations}\n")
     with pytest.raises(ConfigError) as info:
         load_sweep(path)
-    assert str(info.value) == f"{path}: grid: {1000 * 101} runs (points × seeds), more than {MAX_POINTS}"
+    assert str(info.value) == f"{path}: grid: {1000 * 101} runs (1000 points × 101 seeds), more than {MAX_POINTS}"

@@ -79,7 +79,7 @@ CONVERSION_ERRORS = [
     (ScenarioConfig, {"flight": {"steps": [{"time_s": 1.0, "axis": "roll", "value": 1.0}]}},
      "f.toml: flight.steps[0].time_s: must not come before take-off + climb_s (4.5 s), got 1.0"),
     (ChipConfig, {"tiles": [{"x": 1, "y": 0, "clock_period_ns": 0.0}]},
-     "f.toml: tiles[0].clock_period_ns: must be > 0 ns, got 0.0"),
+     "f.toml: tiles[0].clock_period_ns: must be in [0.5, 1000] ns, got 0"),
     (Probe, {"note": "plain"}, "f.toml: <root>: no field named here"),
     (Probe, {"note": "spaces"}, "f.toml: <root>: two words: then the reason"),
     (ScenarioConfig, {"wind": {"gusts": [{"start_s": 1.0, "duration_s": 1.0, "rise_s": 0.8}]}},

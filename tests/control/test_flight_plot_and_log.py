@@ -134,4 +134,20 @@ def test_reading_a_file_that_is_not_a_flight_log(tmp_path: Path) -> None:
     path.write_text("a,b,c\n1,2,3\n")
     with pytest.raises(ValueError) as info:
         read_flight_log(path)
-    assert str(info.value) == f"{path}: not a robosoc flight log (unexpected header)"
+    message = str(info.value)  # the missing columns are named (issue 34), not numpy's usecols hint
+    assert message.startswith(f"{path}: not a robosoc flight log (missing columns t, "), message
+    assert message.endswith(f"({len(ROW_FIELDS)} in all); unknown columns a, b, c)"), message
+
+
+def test_a_flight_log_missing_a_column_names_it_and_a_short_row_names_its_line(tmp_path: Path) -> None:
+    path = tmp_path / "flight.csv"
+    header = [f for f in ROW_FIELDS if f != "pwm3"]
+    path.write_text(",".join(header) + "\n" + ",".join(["0"] * len(header)) + "\n")
+    with pytest.raises(ValueError, match=r"not a robosoc flight log \(missing column pwm3\)$"):
+        read_flight_log(path)
+    row = ",".join(["0"] * len(ROW_FIELDS))
+    path.write_text(",".join(ROW_FIELDS) + f"\n{row}\n{row[:-2]}\n{row}\n")
+    with pytest.raises(ValueError) as info:
+        read_flight_log(path)
+    assert str(info.value) == f"{path}: line 3: {len(ROW_FIELDS) - 1} values, expected {len(ROW_FIELDS)}"
+    assert "usecols" not in str(info.value)

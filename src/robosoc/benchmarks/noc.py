@@ -27,6 +27,7 @@ from rich.table import Table
 from robosoc.chip.noc import Mesh
 from robosoc.config.chip import ARBITERS, HERMES_ROUTING_LATENCY, ChipConfig, NocConfig
 from robosoc.config.ranges import MAX_CYCLES, check_float, check_int, check_seed
+from robosoc.output_files import save_figure
 
 __all__ = ["NocBenchmarkRow", "run_noc_benchmark"]
 
@@ -228,5 +229,5 @@ def _plot(rows: list[NocBenchmarkRow], path: Path, title: str) -> None:
     ax.legend()
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    save_figure(fig, path, dpi=120)
     plt.close(fig)

@@ -12,6 +12,7 @@ from importlib import resources
 from pathlib import Path
 
 from robosoc.config import ConfigError
+from robosoc.config.ranges import FLOAT_FIELDS
 from robosoc.isa.table import CLASS_NAMES, CORE_STALL_KINDS
 
 INSTRUCTION_CLASSES: tuple[str, ...] = tuple(CLASS_NAMES.values())
@@ -73,6 +74,10 @@ class EnergyModel:
                 pj = entry.get("pj")
                 if isinstance(pj, bool) or not isinstance(pj, int | float) or pj < 0:
                     raise ConfigError(where, f"{field}.pj", f"expected a non-negative number, got {pj!r}")
+                try:
+                    FLOAT_FIELDS["Coefficient.pj"].check("pj", pj)
+                except ValueError as exc:
+                    raise ConfigError(where, f"{field}.pj", str(exc).partition(": ")[2]) from None
                 status = entry.get("status")
                 if status not in ("published", "assumed", "measured"):
                     raise ConfigError(where, f"{field}.status", "must be 'published', 'measured' or 'assumed'")
@@ -88,6 +93,10 @@ class EnergyModel:
         clock = data.get("clock_ns", 4.0)
         if isinstance(clock, bool) or not isinstance(clock, int | float) or clock <= 0:
             raise ConfigError(where, "clock_ns", "expected a positive number")
+        try:
+            FLOAT_FIELDS["EnergyModel.clock_ns"].check("clock_ns", clock)
+        except ValueError as exc:
+            raise ConfigError(where, "clock_ns", str(exc).partition(": ")[2]) from None
         return cls(
             table("instruction", INSTRUCTION_CLASSES),
             table("stall", STALL_KINDS),

@@ -30,6 +30,7 @@ from robosoc.chip.single import (
 )
 from robosoc.chip.translation import ChipTranslation
 from robosoc.config.chip import MIN_PACKET_FLITS, ChipConfig
+from robosoc.config.ranges import check_memory, format_bytes
 from robosoc.isa.disasm import disassemble
 from robosoc.isa.table import MEMORY_CYCLES
 from robosoc.jit import ENGINES
@@ -125,6 +126,7 @@ class MPSoC:
         self.clock_ns = periods.pop()
         n = config.n_tiles
         sizes = [config.tile_config(config.tile_xy(t)).sram_bytes for t in range(n)]
+        check_memory("sram_bytes", n * max(sizes), f"{n} tiles x {format_bytes(max(sizes))} of SRAM")
         muls = [config.tile_config(config.tile_xy(t)).multiplier for t in range(n)]
         self.cores = CoreState.new(
             mul=muls, sram_size=max(sizes), base=SRAM_BASE, tiles=n, errata=ERRATA_MODES[config.errata], code_size=0

@@ -18,7 +18,7 @@ import numpy as np
 
 from robosoc.chip.core_state import DEFAULT_SRAM_SIZE, SRAM_BASE, CoreState
 from robosoc.chip.counters import counters_dict
-from robosoc.config.ranges import DEVICE_MAP_BASE, MAX_CYCLES, check_int
+from robosoc.config.ranges import DEVICE_MAP_BASE, MAX_CYCLES, check_int, check_memory, format_bytes
 from robosoc.isa.disasm import disassemble
 from robosoc.jit import DEFAULT_ENGINE, ENGINES
 from robosoc.kernels.core import run_cores
@@ -227,6 +227,7 @@ class SingleCoreSoC:
         if engine not in ENGINES:
             raise ValueError(f"engine: must be one of {', '.join(map(repr, ENGINES))}, got {engine!r}")
         check_int("sram_size", sram_size, 4, DEVICE_MAP_BASE - SRAM_BASE, "bytes")
+        check_memory("sram_size", sram_size, f"an SRAM of {format_bytes(sram_size)}")
         self.mul = mul
         self.errata = errata
         self.state = CoreState.new(mul=mul, sram_size=sram_size, base=SRAM_BASE, errata=ERRATA_MODES[errata])

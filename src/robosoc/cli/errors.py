@@ -10,6 +10,8 @@ turns it and everything else into a message on stderr and an exit code (:mod:`ro
 * ``typer.Exit(n)``: nothing more, ``n``;
 * Ctrl-C: ``robosoc CMD: interrupted``, 130;
 * a closed output pipe: nothing, 141;
+* an output that is a device, a FIFO or a socket (:class:`robosoc.output_files.NotRegularFileError`,
+  met inside an output folder; named options are checked first by :func:`robosoc.cli.files.output_file`): 2;
 * any other exception: the traceback and a request to report the bug, 1.
 
 Messages are plain text (never rich markup), so brackets and paths come out as written.
@@ -22,10 +24,13 @@ import os
 import sys
 import traceback
 from collections.abc import Callable
-
-import click
+from typing import TYPE_CHECKING
 
 from robosoc.cli import exit_codes
+from robosoc.output_files import NotRegularFileError
+
+if TYPE_CHECKING:  # typer brings its own click (typer._click): exceptions are recognised by class name
+    import click
 
 __all__ = ["CliError", "command_path", "print_error", "run_guarded"]
 
@@ -124,6 +129,9 @@ def run_guarded(main: Callable[[], object], default_command: str = PROGRAM) -> i
     except KeyboardInterrupt:
         print_error(default_command, "interrupted")
         return exit_codes.INTERRUPTED
+    except NotRegularFileError as exc:  # an output inside an output folder: the file is named
+        print_error(getattr(exc, "robosoc_command", default_command), str(exc))
+        return exit_codes.USAGE
     except BrokenPipeError:
         _silence_stdout()
         return exit_codes.BROKEN_PIPE

@@ -7,7 +7,9 @@ Inputs (:func:`input_file`, :func:`read_text`, :func:`read_toml`, :func:`load_to
 Outputs (:func:`output_file`, :func:`output_dir`) are checked when the command starts, before any
 long work: the parent folder exists or is created, a file is not a folder (and the other way
 round), the place is writable (checked by writing, which also works for root and read-only file
-systems), and an output is not one of the command's inputs.  A file that did not exist is not left
+systems), an existing file is a regular file (never a device such as ``/dev/null``, a FIFO or a
+socket: outputs are renamed over their target, :mod:`robosoc.output_files`), and an output is not
+one of the command's inputs.  A file that did not exist is not left
 behind by the check.
 
 ``label`` is how the user gave the path: the option (``"--stats"``) or ``None`` for an argument,
@@ -23,6 +25,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, TypeVar
 
 from robosoc.cli.errors import CliError
+from robosoc.output_files import not_regular
 
 if TYPE_CHECKING:
     from robosoc.program.elf import Program, Region
@@ -162,6 +165,9 @@ def output_file(
     p = Path(path).expanduser()
     if str(path) == "" or p.is_dir():
         raise _error(label, path, "is a folder, expected a file name")
+    kind = not_regular(p)
+    if kind is not None:  # before the probe: opening a FIFO waits for a reader, a rename replaces a device
+        raise _error(label, path, f"is {kind}, expected a regular file (robosoc writes only regular files)")
     if suffixes is not None and p.suffix.lower() not in suffixes:
         raise _error(label, path, f"must end in {' or '.join(suffixes)}")
     for source in inputs:
@@ -180,11 +186,18 @@ def output_file(
     return p
 
 
-def output_dir(path: Path | str, label: str | None = None, *, inputs: Iterable[Path | str] = ()) -> Path:
-    """``path``, created if needed and checked to be a folder one can write files in."""
+def output_dir(
+    path: Path | str, label: str | None = None, *, inputs: Iterable[Path | str] = (), names: Iterable[str] = ()
+) -> Path:
+    """``path``, created if needed and checked to be a folder one can write files in.
+
+    Args:
+        names: the files the command writes in the folder; none of them may exist as a device, a FIFO
+            or a socket.
+    """
     p = Path(path).expanduser()
     if p.exists() and not p.is_dir():
-        raise _error(label, path, "is a file, expected a folder")
+        raise _error(label, path, f"is {not_regular(p) or 'a file'}, expected a folder")
     for source in inputs:
         if _same_file(p, Path(source)):
             raise _error(label, path, "is also an input of this command")
@@ -194,6 +207,10 @@ def output_dir(path: Path | str, label: str | None = None, *, inputs: Iterable[P
             pass
     except OSError as exc:
         raise _error(label, path, f"cannot write in this folder: {_reason(exc)}") from exc
+    for name in names:
+        kind = not_regular(p / name)
+        if kind is not None:
+            raise _error(label, path, f"{name} in it is {kind}, not a regular file (robosoc writes only regular files)")
     return p
 
 

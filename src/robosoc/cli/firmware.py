@@ -8,6 +8,7 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
+from robosoc import output_files
 from robosoc.cli import exit_codes, files, options
 from robosoc.cli.app import firmware_app
 from robosoc.cli.console import make_console, plain
@@ -45,13 +46,12 @@ def firmware_build(
 
     Builds are cached: the same configuration returns the same file without compiling.
     """
-    import shutil
 
     out = files.output_file(output, "--output") if output is not None else None
     fw = _firmware(flags, config)
     elf = _build(fw)
     if out is not None:
-        shutil.copyfile(elf, out)
+        output_files.write_atomic(out, elf.read_bytes())
         elf = out
     print(f"{fw.label}: {elf}")
 
@@ -120,8 +120,9 @@ def firmware_replay(
 
     from robosoc.control.flight_log import read_flight_log
     from robosoc.cosim.replay import built_in_rows, replay
+    from robosoc.outputs.run_folder import JOBS_CSV, SUMMARY_JSON
 
-    folder = files.output_dir(out, "--out") if out is not None else None
+    folder = files.output_dir(out, "--out", names=(JOBS_CSV, SUMMARY_JSON)) if out is not None else None
     fw = _firmware(flags, config)
     if log is not None:
         options.exclusive(
@@ -132,7 +133,7 @@ def firmware_replay(
         try:
             rows = read_flight_log(path)
         except ValueError as exc:
-            raise CliError(f"{path}: not a flight log of robosoc fly: {exc}") from exc
+            raise CliError(str(exc) if str(exc).startswith(str(path)) else f"{path}: {exc}") from exc
     else:
         rows = built_in_rows(seconds, seed)
     console = make_console(stderr=True)
@@ -175,5 +176,5 @@ def _report(result: ReplayResult, folder: Path | None) -> None:
         "tasks": summary,
         "energy_pj": result.energy_pj,
     }
-    (folder / SUMMARY_JSON).write_text(json.dumps(record, indent=2) + "\n")
+    output_files.write_atomic(folder / SUMMARY_JSON, json.dumps(record, indent=2) + "\n")
     plain(console, f"wrote {folder / 'jobs.csv'} and {folder / 'summary.json'}")

@@ -87,7 +87,9 @@ def fly_command(
     if out is None and not no_out:
         out = Path("runs") / f"fly-{config.name}-s{config.seed}"
     if out is not None:
-        out = files.output_dir(out, "--out", inputs=resolved.inputs)
+        from robosoc.outputs.run_folder import RUN_FILES
+
+        out = files.output_dir(out, "--out", inputs=resolved.inputs, names=RUN_FILES)
     if link is not None:
         fly_decoupled.fly_decoupled_run(console, config, out, link, bind)
         return

@@ -90,7 +90,7 @@ def profile_command(run_dir: RunDir, top: Top = 10) -> None:
     from robosoc.cli.fly import FlightProgress
     from robosoc.cli.scenario import load_scenario
     from robosoc.outputs.flight_session import fly_scenario, vehicle_folder
-    from robosoc.outputs.run_folder import SCENARIO_TOML, SUMMARY_JSON, write_profile
+    from robosoc.outputs.run_folder import PROFILE_CSV, PROFILE_JSON, SCENARIO_TOML, SUMMARY_JSON, write_profile
 
     folder = files.input_dir(run_dir, None)
     for name in (SCENARIO_TOML, SUMMARY_JSON):
@@ -102,6 +102,9 @@ def profile_command(run_dir: RunDir, top: Top = 10) -> None:
     count = config.vehicles
     folders = [vehicle_folder(folder, i, count) for i in range(count)]
     summaries = [_read_summary(f / SUMMARY_JSON) for f in folders]
+    for f in folders:  # before the re-flight: each profile file must be writable (and a regular file)
+        for name in (PROFILE_JSON, PROFILE_CSV):
+            files.output_file(f / name, None)
     console = make_console()
     console.print(
         f"profiling {run_dir}: flying scenario {config.name} again for {config.duration_s:g} s "

@@ -37,6 +37,8 @@ def report_command(run_dir: RunDir, out: Out = None, mcap: Mcap = False) -> None
     )
     if mcap and not (folder / FLIGHT_CSV).is_file():
         raise CliError(f"--mcap: {run_dir}: has no {FLIGHT_CSV} to convert")
+    if mcap:
+        files.output_file(folder / FLIGHT_MCAP, "--mcap", inputs=inputs)
     from robosoc.outputs.mcap_log import flight_csv_to_mcap
     from robosoc.outputs.report import write_report
 

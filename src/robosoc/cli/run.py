@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
+from robosoc import output_files
 from robosoc.cli import exit_codes, files, options
 from robosoc.cli.app import app
 from robosoc.cli.engine_option import Engine
@@ -83,10 +84,8 @@ ExitCode = Annotated[
 
 
 def _write_json(path: Path, record: dict) -> None:
-    tmp = path.with_name(path.name + ".tmp")
     try:
-        tmp.write_text(json.dumps(record, indent=2) + "\n")
-        tmp.replace(path)
+        output_files.write_atomic(path, json.dumps(record, indent=2) + "\n")
     except OSError as exc:  # checked at the start; the disk may still fill up or the folder vanish
         raise CliError(f"--stats: {path}: cannot write: {exc.strerror or exc}") from exc
 
@@ -255,11 +254,9 @@ def _simulate_single(
     cycles, instr = counters["cycles"], counters["instructions"]
     if profile is not None:
         typer.echo(profile.table(cycles), err=True)
-    cpi = cycles / instr if instr else float("nan")
-    mips = instr / seconds / 1e6 if seconds > 0 else float("nan")
     typer.echo(
-        f"robosoc: {cycles} cycles, {instr} instructions, CPI {cpi:.3f}, "
-        f"energy {total_nj:.3f} nJ, host {mips:.0f} MIPS{_errata_summary(errata_hit)}"
+        f"robosoc: {cycles} cycles, {instr} instructions, {cpi_text(cycles, instr)}, "
+        f"energy {total_nj:.3f} nJ{host_speed(instr, seconds, gdb is not None)}{_errata_summary(errata_hit)}"
         + (f"; exit code {_code_text(result.exit_code)}" if result else ""),
         err=True,
     )
@@ -282,6 +279,20 @@ def _code_text(code: int) -> str:
     return str(code) if code <= 0xFF else f"{code} (0x{code:08x})"
 
 
+def cpi_text(cycles: int, instructions: int) -> str:
+    """``"CPI 1.619"``, or ``"CPI n/a"`` before the first instruction (a run GDB killed at once: no
+    "CPI nan")."""
+    return f"CPI {cycles / instructions:.3f}" if instructions else "CPI n/a"
+
+
+def host_speed(instructions: int, seconds: float, debugged: bool) -> str:
+    """``", host 120 MIPS"`` for the summary line, or nothing when the host time says nothing of the
+    simulator's speed: under GDB (it is the debugging session's time) or not measured (a run cut short)."""
+    if debugged or not seconds > 0:
+        return ""
+    return f", host {instructions / seconds / 1e6:.0f} MIPS"
+
+
 def _errata_summary(errata: dict[str, int]) -> str:
     """``", RTL errata: mulhsu 2"`` for the summary line (empty when none was hit)."""
     hit = ", ".join(f"{name} {n}" for name, n in errata.items() if n)
@@ -296,7 +307,10 @@ def _chip_config(ctx: typer.Context, mul: bool, sram_size: int, mesh: str | None
         config, _ = files.load_toml(ChipConfig, chip_file, "--chip")
     else:
         w, h = options.parse_mesh("--mesh", "2x2" if mesh is None else mesh)
-        config = ChipConfig(width=w, height=h, tile=TileConfig(multiplier=mul, sram_bytes=sram_size))
+        try:
+            config = ChipConfig(width=w, height=h, tile=TileConfig(multiplier=mul, sram_bytes=sram_size))
+        except ValueError as exc:  # the only rule across the two: the SRAM of all tiles together
+            raise options.fail("--sram-size", f"{exc.args[0].partition(': ')[2]} (with --mesh {w}x{h})") from exc
     changes = {}
     if off:
         changes["--off"] = ("powered_off", tuple(options.parse_tile("--off", t) for t in off))
@@ -386,12 +400,12 @@ def _simulate_chip(chip, config, programs, max_cycles, stats, model, exit_mode, 
         per_tile[f"{xy[0]},{xy[1]}"] = {
             "state": chip.state(xy), "counters": c, "energy_nj": e, "tasks": tasks, "errata": hit,
         }  # fmt: skip
-        cpi = c["cycles"] / c["instructions"] if c["instructions"] else float("nan")
         state = chip.state(xy)
         exited = f" with exit code {_code_text(chip.exit_code(xy))}" if state == "exited" else ""
         typer.echo(
             f"robosoc: tile {xy}: {state}{exited}, {c['cycles']} cycles, {c['instructions']} instructions, "
-            f"CPI {cpi:.3f}, sleep {c['sleep_cycle']}, energy {e:.3f} nJ{_errata_summary(hit)}",
+            f"{cpi_text(c['cycles'], c['instructions'])}, sleep {c['sleep_cycle']}, "
+            f"energy {e:.3f} nJ{_errata_summary(hit)}",
             err=True,
         )
         for _, note in report.values():

@@ -64,8 +64,14 @@ def _out(out: Path | None, no_out: bool, side: str, name: str, seed: int, scenar
     options.exclusive(out=out is not None, no_out=no_out)
     if no_out:
         return None
+    from robosoc.outputs import run_folder as rf
+
+    written = (rf.FLIGHT_CSV, rf.PHYSICS_JSON, rf.LINK_PHYSICS_LOG, rf.JOBS_CSV, rf.CHIP_JSON, rf.LINK_CHIP_LOG)
     return files.output_dir(
-        out or Path("runs") / f"serve-{side}-{name}-s{seed}", "--out", inputs=[scenario] if scenario else ()
+        out or Path("runs") / f"serve-{side}-{name}-s{seed}",
+        "--out",
+        inputs=[scenario] if scenario else (),
+        names=written,  # what either side writes in it (docs/decoupled.md): no device, FIFO or socket
     )
 
 

@@ -3,12 +3,12 @@
 from __future__ import annotations
 
 import os
-import shutil
 from pathlib import Path
 from typing import Annotated
 
 import typer
 
+from robosoc import output_files
 from robosoc.cli import exit_codes, files, options
 from robosoc.cli.app import app
 from robosoc.cli.console import make_console, note, plain
@@ -86,18 +86,25 @@ def sweep_command(
         raise CliError(str(exc)) from None
     if out is None:
         out = Path("runs") / f"sweep-{config.name}"
-    out = files.output_dir(out, "--out", inputs=[file])
+    out = files.output_dir(out, "--out", inputs=[file], names=("sweep.toml", "points.csv", "sweep.html"))
+    remote = dask is not None and dask != "local"
+    if remote and workers is not None:
+        raise options.fail("--workers", f"a Dask scheduler ({dask}) brings its own workers: give --workers without it")
     if workers is None:
         workers = os.cpu_count() or 1
     copy = out / "sweep.toml"
     if not copy.exists() or copy.read_bytes() != file.read_bytes():
-        shutil.copyfile(file, copy)
+        output_files.write_atomic(copy, file.read_bytes())
 
-    where = f"Dask at {dask}" if dask and dask != "local" else ("a Dask LocalCluster" if dask else "a local pool")
+    # a scheduler's workers are counted once connected (run_sweep says how many), not os.cpu_count() here
+    where = (
+        f"Dask at {escape(dask)}"
+        if remote
+        else f"{'a Dask LocalCluster' if dask else 'a local pool'} of {workers} workers"
+    )
     console.print(
         f"sweep [bold]{escape(config.name)}[/bold]: {total} runs "
-        f"({len(config.assignments())} points × {len(config.seeds)} seeds) on {where} of {workers} workers"
-        + ("" if not dask or dask == "local" else " (the cluster's own workers)")
+        f"({config.point_count()} points × {len(config.seeds)} seeds) on {where}"
     )
     state = {"failed": 0}
     with Progress(
@@ -142,7 +149,7 @@ def sweep_command(
     records = [outcome.records[p.key] for p in outcome.points if p.key in outcome.records]
     plots = write_sweep_plots(out, records, config.varied(), config.metrics)
     page = out / "sweep.html"
-    page.write_text(sweep_html(f"sweep {config.name}", records, plots, outcome.table.read_text()), "utf-8")
+    output_files.write_atomic(page, sweep_html(f"sweep {config.name}", records, plots, outcome.table.read_text()))
     ok = sum(1 for r in records if r["status"] == OK)
     console.print(f"{outcome.ran} runs now, {outcome.skipped} done before; {ok} ok, {len(records) - ok} failed")
     for record in outcome.failures:

@@ -4,12 +4,12 @@ from __future__ import annotations
 
 import csv
 import json
-import os
 from pathlib import Path
 from typing import Annotated
 
 import typer
 
+from robosoc import output_files
 from robosoc.cli import exit_codes, files, options
 from robosoc.cli.app import app
 from robosoc.cli.console import make_console, plain
@@ -73,7 +73,7 @@ def table(
 
     from robosoc.sweep import table_one
 
-    folder = files.output_dir(out, "--out") if out is not None else None
+    folder = files.output_dir(out, "--out", names=("table.csv", "table.json")) if out is not None else None
     project = ""
     if firmware is not None:
         if release != "event":
@@ -108,14 +108,10 @@ def table(
         return
     _write_atomic(folder / "table.json", json.dumps(table_one.to_json(result), indent=2, allow_nan=False) + "\n")
     rows = [table_one.CSV_FIELDS, *table_one.csv_rows(result)]
-    tmp = folder / "table.csv.tmp"
-    with tmp.open("w", newline="") as handle:
+    with output_files.atomic_open(folder / "table.csv", "w", newline="") as handle:
         csv.writer(handle).writerows(rows)
-    os.replace(tmp, folder / "table.csv")
     plain(stdout, f"wrote {folder / 'table.csv'} and {folder / 'table.json'}")
 
 
 def _write_atomic(path: Path, text: str) -> None:
-    tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(text)
-    os.replace(tmp, path)
+    output_files.write_atomic(path, text)

@@ -37,6 +37,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Literal, get_args
 
+from robosoc.config.ranges import CLOCK_PERIOD_NS, MAX_CHIP_SRAM_BYTES, format_bytes
 from robosoc.config.validate import load_toml
 
 __all__ = [
@@ -81,8 +82,7 @@ def _check_sram(name: str, value: int) -> None:
 
 
 def _check_period(name: str, value: float) -> None:
-    if not value > 0.0:
-        raise ValueError(f"{name}: must be > 0 ns, got {value}")
+    CLOCK_PERIOD_NS.check(name, value)
 
 
 @dataclass(frozen=True)
@@ -231,6 +231,21 @@ class ChipConfig:
             if xy in overridden:
                 raise ValueError(f"tiles[{i}]: {xy} is overridden twice")
             overridden.add(xy)
+        self._check_sram_total()
+
+    def _check_sram_total(self) -> None:
+        """The simulator holds every tile's SRAM at the largest tile's size: refuse a chip whose total
+        is beyond :data:`MAX_CHIP_SRAM_BYTES` before anything is allocated."""
+        largest, field = self.tile.sram_bytes, "tile.sram_bytes"
+        for i, over in enumerate(self.tiles):
+            if over.sram_bytes is not None and over.sram_bytes > largest:
+                largest, field = over.sram_bytes, f"tiles[{i}].sram_bytes"
+        total = self.n_tiles * largest
+        if total > MAX_CHIP_SRAM_BYTES:
+            raise ValueError(
+                f"{field}: {self.n_tiles} tiles x {format_bytes(largest)} of SRAM = {format_bytes(total)} to simulate, "
+                f"more than {format_bytes(MAX_CHIP_SRAM_BYTES)} (every tile gets the largest tile's SRAM)"
+            )
 
     @property
     def n_tiles(self) -> int:

@@ -22,6 +22,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field, fields
 
+from robosoc.config.ranges import check_fields
+
 __all__ = ["FAULT_NAMES", "HOLD_CHOICES", "PACE_CHOICES", "LinkConfig", "LinkFaults", "parse_faults"]
 
 PACE_CHOICES = ("realtime", "fast")
@@ -59,6 +61,7 @@ class LinkFaults:
                 "loss: loss + duplicate + reorder + truncate must be at most 1 (one fault per datagram), "
                 f"got {exclusive:g}"
             )
+        check_fields(self)  # and every float in its range (config/ranges.py)
 
     @property
     def any(self) -> bool:
@@ -126,3 +129,4 @@ class LinkConfig:
             )
         if isinstance(self.resend, bool) or not isinstance(self.resend, int) or not 0 <= self.resend <= MAX_RESEND:
             raise ValueError(f"resend: must be between 0 and {MAX_RESEND}, got {self.resend!r}")
+        check_fields(self)  # and every float in its range (config/ranges.py)

@@ -61,7 +61,7 @@ from typing import Literal
 
 from robosoc.config.chip import ChipConfig
 from robosoc.config.firmware import FirmwareConfig
-from robosoc.config.ranges import MAX_SEED
+from robosoc.config.ranges import MAX_SEED, check_fields
 from robosoc.config.toml_text import to_toml
 from robosoc.config.vehicle import VEHICLE_PRESETS
 
@@ -146,6 +146,7 @@ class SensorConfig:
             "bias_tau_s",
             f"must be positive, got {self.bias_tau_s}",
         )
+        check_fields(self)  # and every float in its range (config/ranges.py)
 
     @property
     def period_steps(self) -> int:
@@ -181,6 +182,7 @@ class GustConfig:
             "velocity",
             f"components must be within ±30 m/s, got {self.velocity}",
         )
+        check_fields(self)  # and every float in its range (config/ranges.py)
 
 
 @dataclass(frozen=True)
@@ -218,6 +220,7 @@ class WindConfig:
             "update_s",
             f"must be a whole number of {PHYSICS_DT_S * 1000:g} ms physics steps, got {self.update_s}",
         )
+        check_fields(self)  # and every float in its range (config/ranges.py)
 
     @property
     def update_steps(self) -> int:
@@ -253,6 +256,7 @@ class SetpointStep:
                 "value",
                 f"{self.axis} must be within ±{MAX_ANGLE_DEG:g} degrees, got {self.value}",
             )
+        check_fields(self)  # and every float in its range (config/ranges.py)
 
 
 @dataclass(frozen=True)
@@ -329,6 +333,7 @@ class FlightPlan:
                 f"steps[{i}].time_s",
                 f"must not come before take-off + climb_s ({self.attitude_from_s:g} s), got {step.time_s}",
             )
+        check_fields(self)  # and every float in its range (config/ranges.py)
 
     @property
     def attitude_from_s(self) -> float:
@@ -458,6 +463,7 @@ class ScenarioConfig:
                 f"a height step must not come before the previous height move ends ({previous.end_s:g} s), "
                 f"got {self.flight.steps[i].time_s}",
             )
+        check_fields(self)  # and every float in its range (config/ranges.py)
 
     @property
     def samples(self) -> int:

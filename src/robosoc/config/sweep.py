@@ -34,6 +34,7 @@ combination (the listed values win where both set a field).
 from __future__ import annotations
 
 import dataclasses
+import math
 import typing
 from dataclasses import dataclass
 from pathlib import Path
@@ -122,6 +123,10 @@ class SweepConfig:
     seeds: tuple[int, ...]
     metrics: tuple[str, ...]
     source: str
+
+    def point_count(self) -> int:
+        """How many points :meth:`assignments` gives, computed without building them."""
+        return math.prod(len(values) for _, values in self.grid) * max(1, len(self.points))
 
     def assignments(self) -> list[Assignment]:
         """Every point's field values, grid order first (the last grid field varies fastest)."""
@@ -223,9 +228,10 @@ def sweep_from_mapping(data: dict[str, Any], where: str, folder: Path, default_n
     metrics = tuple(_list_of(data.get("metrics", list(DEFAULT_METRICS)), where, "metrics", str, "dotted names"))
 
     config = SweepConfig(name, base, tuple(base_data.items()), tuple(grid), tuple(points), seeds, metrics, where)
-    total = len(config.assignments()) * len(seeds)
+    total = config.point_count() * len(seeds)  # counted, not built: a grid of 10**10 points never exists
     if total > MAX_POINTS:
-        raise ConfigError(where, "grid", f"{total} runs (points × seeds), more than {MAX_POINTS}")
+        sizes = " × ".join([*(str(len(values)) for _, values in grid), *([str(len(points))] if points else [])])
+        raise ConfigError(where, "grid", f"{total} runs ({sizes} points × {len(seeds)} seeds), more than {MAX_POINTS}")
     return config
 
 

@@ -15,6 +15,8 @@ import math
 from dataclasses import dataclass, field
 from typing import Literal
 
+from robosoc.config.ranges import check_fields
+
 Vector3 = tuple[float, float, float]
 
 
@@ -57,6 +59,7 @@ class MotorConfig:
         for name in ("k_t", "k_m", "ct1s", "ct2s"):
             _require(math.isfinite(getattr(self, name)), name, "must be finite")
         _require(self.k_t >= 0, "k_t", f"must be >= 0, got {self.k_t}")
+        check_fields(self)  # and every float in its range (config/ranges.py)
 
 
 @dataclass(frozen=True)
@@ -72,6 +75,7 @@ class DragConfig:
         for name in ("c_wxy", "c_wz", "c_mxy", "c_mz"):
             value = getattr(self, name)
             _require(math.isfinite(value) and value >= 0, name, f"must be >= 0, got {value}")
+        check_fields(self)  # and every float in its range (config/ranges.py)
 
 
 @dataclass(frozen=True)
@@ -167,6 +171,7 @@ class VehicleConfig:
             "idle_pwm",
             f"must be a PWM count in [0, 254], got {self.idle_pwm!r}",
         )
+        check_fields(self)  # and every float in its range (config/ranges.py)
 
     @property
     def rest_height(self) -> float:

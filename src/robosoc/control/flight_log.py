@@ -6,12 +6,14 @@ every row up to the interruption.  Columns are :data:`robosoc.control.flight.ROW
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
 from types import TracebackType
 
 import numpy as np
 
 from robosoc.control.flight import ROW_FIELDS
+from robosoc.output_files import open_in_place
 
 
 class CsvFlightLog:
@@ -20,7 +22,7 @@ class CsvFlightLog:
     def __init__(self, path: Path) -> None:
         self.path = path
         path.parent.mkdir(parents=True, exist_ok=True)
-        self._file = path.open("w", encoding="utf-8", newline="\n")
+        self._file = open_in_place(path, "w", encoding="utf-8", newline="\n")
         self._file.write(",".join(ROW_FIELDS) + "\n")
         self._file.flush()
         self.rows = 0
@@ -45,15 +47,43 @@ class CsvFlightLog:
         self.close()
 
 
+def header_problem(header: Sequence[str], expected: Sequence[str]) -> str | None:
+    """What is wrong with a CSV file's ``header`` (``"missing column pwm3"``), or ``None`` if it is ``expected``."""
+    if tuple(header) == tuple(expected):
+        return None
+
+    def names(columns: list[str]) -> str:
+        shown = ", ".join(columns[:6]) + (f", ... ({len(columns)} in all)" if len(columns) > 6 else "")
+        return f"column{'s' if len(columns) > 1 else ''} {shown}"
+
+    missing = [c for c in expected if c not in header]
+    unknown = [c for c in header if c not in expected]
+    parts = [f"missing {names(missing)}"] if missing else []
+    parts += [f"unknown {names(unknown)}"] if unknown else []
+    if not parts:
+        repeated = sorted({c for c in header if list(header).count(c) > 1})
+        parts.append(f"repeated {names(repeated)}" if repeated else "the columns are in another order")
+    return "; ".join(parts)
+
+
 def read_flight_log(path: Path) -> np.ndarray:
     """Read a CSV flight log back into an array with the columns of :data:`ROW_FIELDS`.
 
     Raises:
-        ValueError: the header does not match.
+        ValueError: the header does not match (the message names the missing columns), or a row has
+            another number of values or one that is not a number (the message names the line).
     """
     with path.open(encoding="utf-8") as handle:
         header = handle.readline().strip().split(",")
-    if tuple(header) != ROW_FIELDS:
-        raise ValueError(f"{path}: not a robosoc flight log (unexpected header)")
-    data = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+        problem = header_problem(header, ROW_FIELDS)
+        if problem is not None:
+            raise ValueError(f"{path}: not a robosoc flight log ({problem})")
+        for number, line in enumerate(handle, start=2):
+            count = line.count(",") + 1
+            if line.strip() and count != len(ROW_FIELDS):
+                raise ValueError(f"{path}: line {number}: {count} values, expected {len(ROW_FIELDS)}")
+    try:
+        data = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+    except ValueError as exc:
+        raise ValueError(f"{path}: {exc}") from None
     return data.reshape(-1, len(ROW_FIELDS))

@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from robosoc.control.flight import column
+from robosoc.output_files import save_figure
 
 
 def plot_flight(rows: np.ndarray, path: Path, title: str = "") -> None:
@@ -42,5 +43,5 @@ def plot_flight(rows: np.ndarray, path: Path, title: str = "") -> None:
         fig.suptitle(title)
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=100)
+    save_figure(fig, path, dpi=100)
     plt.close(fig)

@@ -37,6 +37,7 @@ from robosoc.cosim.datagram import (
 )
 from robosoc.cosim.link_counters import Arrival, ReceiveCounts
 from robosoc.cosim.link_faults import FaultInjector
+from robosoc.output_files import open_in_place
 
 __all__ = ["Address", "LinkError", "LinkLog", "UdpLink", "parse_address"]
 
@@ -111,7 +112,7 @@ class LinkLog:
 
     def __init__(self, path: Path | None) -> None:
         self.path = path
-        self._file: TextIO | None = path.open("w", encoding="utf-8") if path is not None else None
+        self._file: TextIO | None = open_in_place(path, "w", encoding="utf-8") if path is not None else None
         self._start = time.monotonic()
 
     def write(self, event: str) -> None:

@@ -41,6 +41,8 @@ E_TOO_LONG = b"E02"  # a packet longer than PacketSize
 E_MEMORY = b"E03"  # no memory at the address
 E_REFUSED = b"E04"  # a write to device registers
 E_NOT_CODE = b"E05"  # a breakpoint that is not on an instruction of the loaded code
+#: The answer to a second GDB while one is connected (GDB shows the text after "E.").
+SECOND_GDB_REPLY = b"E.robosoc: another GDB is debugging this core already; one GDB at a time"
 
 THREAD = 1
 #: seconds between looks at the socket for Ctrl-C while the core runs
@@ -162,6 +164,9 @@ class GdbServer:
             self._attached = False
             return
         self._log("GDB connected; the core waits before its first instruction")
+        self.listener.refuse_others(
+            SECOND_GDB_REPLY, lambda peer: self._log(f"refused a second GDB connection from {peer}: one at a time")
+        )
 
     def _halt(self, reply: bytes) -> None:
         """The core stops here; GDB hears it on the next call (after the caller drained the output)."""

@@ -11,7 +11,9 @@ import contextlib
 import errno
 import select
 import socket
+import threading
 from collections import deque
+from collections.abc import Callable
 
 from robosoc.debug.rsp import Ack, BadChecksum, Event, Interrupt, Nack, Oversized, Packet, PacketReader, frame
 
@@ -52,6 +54,8 @@ class Listener:
                 ) from exc
             raise ListenError(f"cannot listen for GDB on {host}:{port}: {exc.strerror or exc}") from exc
         self._sock = sock
+        self._refusing = threading.Event()  # set: the thread answering further connections is to stop
+        self._refuser: threading.Thread | None = None
 
     @property
     def port(self) -> int:
@@ -66,7 +70,38 @@ class Listener:
         sock, _ = self._sock.accept()
         return Connection(sock)
 
+    def refuse_others(self, reply: bytes, on_refused: Callable[[str], object] = lambda _: None) -> None:
+        """From now on answer every further connection (a second GDB) with the packet ``reply`` and
+        close it, in a thread, instead of leaving it in the backlog unanswered; ``on_refused`` is told
+        the peer's address."""
+        if self._refuser is not None:
+            return
+
+        def loop() -> None:
+            while not self._refusing.is_set():
+                try:
+                    ready, _, _ = select.select([self._sock], [], [], 0.1)
+                    if not ready:
+                        continue
+                    sock, peer = self._sock.accept()
+                except (OSError, ValueError):
+                    return  # the listener is closed
+                with sock, contextlib.suppress(OSError):
+                    sock.settimeout(2.0)
+                    sock.recv(_RECV_BYTES)  # GDB's first packet (qSupported): the reply answers it
+                    sock.sendall(b"+" + frame(reply))
+                    sock.shutdown(socket.SHUT_WR)
+                    while sock.recv(_RECV_BYTES):  # let GDB read the reply before the connection goes
+                        pass
+                on_refused(f"{peer[0]}:{peer[1]}")
+
+        self._refuser = threading.Thread(target=loop, name="gdb-refuse-others", daemon=True)
+        self._refuser.start()
+
     def close(self) -> None:
+        self._refusing.set()
+        if self._refuser is not None and self._refuser is not threading.current_thread():
+            self._refuser.join(1.0)
         self._sock.close()
 
 

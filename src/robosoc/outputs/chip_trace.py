@@ -18,10 +18,10 @@ events come from :mod:`robosoc.cosim.chip_timeline` and the job records of the r
 from __future__ import annotations
 
 import json
-import os
 from collections.abc import Iterable, Sequence
 from pathlib import Path
 
+from robosoc import output_files
 from robosoc.cosim.chip_timeline import ChipTimeline, timeline_of
 from robosoc.cosim.firmware_run import FirmwareRun, ReplayResult
 from robosoc.host import images
@@ -191,13 +191,8 @@ def chip_trace(
 
 def write_chip_trace(trace: dict, path: Path) -> None:
     """Write ``trace`` to ``path`` (under a temporary name, then renamed)."""
-    partial = path.with_name(path.name + ".partial")
-    try:
-        with partial.open("w", encoding="utf-8") as handle:
-            json.dump(trace, handle, separators=(",", ":"))
-        os.replace(partial, path)
-    finally:
-        partial.unlink(missing_ok=True)
+    with output_files.atomic_open(path, "w", encoding="utf-8") as handle:
+        json.dump(trace, handle, separators=(",", ":"))
 
 
 def run_trace(run: FirmwareRun, result: ReplayResult, metadata: dict[str, object] | None = None) -> dict:

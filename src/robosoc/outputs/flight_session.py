@@ -35,6 +35,7 @@ from typing import Any
 
 import numpy as np
 
+from robosoc import output_files
 from robosoc.config.scenario import ScenarioConfig, scenario_toml
 from robosoc.config.vehicle import VehicleConfig, vehicle_preset
 from robosoc.control.flight import ROW_FIELDS
@@ -167,7 +168,7 @@ def fly_scenario(
     csv_logs: list[CsvFlightLog] = []
     if out is not None:
         out.mkdir(parents=True, exist_ok=True)
-        (out / SCENARIO_TOML).write_text(scenario_toml(scenario), encoding="utf-8")
+        output_files.write_atomic(out / SCENARIO_TOML, scenario_toml(scenario))
         csv_logs = [CsvFlightLog(folder / FLIGHT_CSV) for folder in folders]
     flown: list[list[np.ndarray]] = [[] for _ in vehicles]
 

@@ -8,12 +8,12 @@ renamed, so an interrupted write leaves no truncated ``flight.mcap``.
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 import numpy as np
 from mcap_ros2.writer import Writer
 
+from robosoc import output_files
 from robosoc.control.flight import ROW_FIELDS
 from robosoc.control.flight_log import read_flight_log
 from robosoc.outputs.ros2_flight import message_definition, row_messages
@@ -27,24 +27,19 @@ def write_flight_mcap(rows: np.ndarray, path: Path) -> int:
     """
     if rows.ndim != 2 or rows.shape[1] != len(ROW_FIELDS):
         raise ValueError(f"a flight has {len(ROW_FIELDS)} columns (robosoc.control.flight.ROW_FIELDS)")
-    partial = path.with_name(path.name + ".partial")
     count = 0
-    try:
-        with partial.open("wb") as stream:
-            writer = Writer(stream)
-            schemas = {}
-            for row in rows:
-                for topic, message, ns in row_messages(row):
-                    schema = schemas.get(topic.datatype)
-                    if schema is None:
-                        schema = writer.register_msgdef(topic.datatype, message_definition(topic.datatype))
-                        schemas[topic.datatype] = schema
-                    writer.write_message(topic.name, schema, message, log_time=ns, publish_time=ns, sequence=count)
-                    count += 1
-            writer.finish()
-        os.replace(partial, path)
-    finally:
-        partial.unlink(missing_ok=True)
+    with output_files.atomic_open(path, "wb") as stream:
+        writer = Writer(stream)
+        schemas = {}
+        for row in rows:
+            for topic, message, ns in row_messages(row):
+                schema = schemas.get(topic.datatype)
+                if schema is None:
+                    schema = writer.register_msgdef(topic.datatype, message_definition(topic.datatype))
+                    schemas[topic.datatype] = schema
+                writer.write_message(topic.name, schema, message, log_time=ns, publish_time=ns, sequence=count)
+                count += 1
+        writer.finish()
     return count
 
 

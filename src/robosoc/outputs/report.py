@@ -21,12 +21,12 @@ import html
 import io
 import json
 import math
-import os
 from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 
+from robosoc import output_files
 from robosoc.control.flight import ROW_FIELDS
 from robosoc.outputs.run_folder import REPORT_HTML, RunFolder, finite, read_run_folder
 
@@ -411,12 +411,7 @@ def write_report(run_dir: Path, out: Path | None = None) -> Path:
     """
     run = read_run_folder(run_dir)
     target = out if out is not None else run_dir / REPORT_HTML
-    partial = target.with_name(target.name + ".partial")
-    try:
-        partial.write_text(render_report(run), encoding="utf-8")
-        os.replace(partial, target)
-    finally:
-        partial.unlink(missing_ok=True)
+    output_files.write_atomic(target, render_report(run))
     return target
 
 

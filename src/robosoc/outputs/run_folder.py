@@ -13,7 +13,6 @@ from __future__ import annotations
 import csv
 import json
 import math
-import os
 import re
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -21,8 +20,10 @@ from pathlib import Path
 
 import numpy as np
 
+from robosoc import output_files
 from robosoc.chip.function_profile import FunctionProfile
 from robosoc.control.flight import ROW_FIELDS
+from robosoc.control.flight_log import header_problem
 from robosoc.records import JobRecord
 
 FLIGHT_CSV = "flight.csv"
@@ -40,6 +41,11 @@ CHIP_JSON = "chip.json"  # the decoupled mode's chip side
 LINK_PHYSICS_LOG = "link-physics.log"
 LINK_CHIP_LOG = "link-chip.log"
 VEHICLE_FOLDER = re.compile(r"vehicle-(\d+)")
+#: Every file robosoc fly may write in a run folder (checked to be regular files before a flight).
+RUN_FILES = (
+    FLIGHT_CSV, JOBS_CSV, SUMMARY_JSON, SCENARIO_TOML, FLIGHT_MCAP, CHIP_TRACE_JSON, REPORT_HTML, PROFILE_JSON,
+    PROFILE_CSV, FLIGHT_PNG,
+)  # fmt: skip
 
 JOB_CSV_FIELDS = (
     "task", "tile", "job", "release_cycle", "start_cycle", "completion_cycle", "response_cycles", "exec_cycles",
@@ -50,7 +56,7 @@ JOB_CSV_FIELDS = (
 
 def write_jobs_csv(jobs: Sequence[JobRecord], path: Path) -> None:
     """Write ``jobs`` to ``path`` with the columns :data:`JOB_CSV_FIELDS`."""
-    with path.open("w", newline="") as handle:
+    with output_files.atomic_open(path, "w", newline="") as handle:
         writer = csv.writer(handle)
         writer.writerow(JOB_CSV_FIELDS)
         for j in jobs:
@@ -66,12 +72,10 @@ def write_jobs_csv(jobs: Sequence[JobRecord], path: Path) -> None:
 
 def write_profile(profile: FunctionProfile, folder: Path) -> tuple[Path, Path]:
     """Write ``profile.json`` and ``profile.csv`` into ``folder``, each to a temporary name first
-    and then renamed, so an interruption never leaves half a file."""
+    and then renamed, so an interruption never leaves half a file (:mod:`robosoc.output_files`)."""
     paths = folder / PROFILE_JSON, folder / PROFILE_CSV
     for path, text in zip(paths, (profile.json_text(), profile.csv_text()), strict=True):
-        tmp = path.with_name(path.name + ".tmp")
-        tmp.write_text(text, encoding="utf-8")
-        os.replace(tmp, path)
+        output_files.write_atomic(path, text)
     return paths
 
 
@@ -112,8 +116,9 @@ def read_flight_rows(path: Path, notes: list[str]) -> np.ndarray:
     with path.open(encoding="utf-8", newline="") as handle:
         reader = csv.reader(handle)
         header = next(reader, None)
-        if header is None or tuple(header) != ROW_FIELDS:
-            raise RunFolderError(f"{path}: not a robosoc flight log (unexpected header)")
+        problem = "empty file" if header is None else header_problem(header, ROW_FIELDS)
+        if problem is not None:
+            raise RunFolderError(f"{path}: not a robosoc flight log ({problem})")
         lines = list(reader)
     rows = []
     for k, line in enumerate(lines):
@@ -138,8 +143,9 @@ def read_jobs(path: Path, notes: list[str]) -> dict[str, np.ndarray]:
     with path.open(encoding="utf-8", newline="") as handle:
         reader = csv.reader(handle)
         header = next(reader, None)
-        if header is None or tuple(header) != JOB_CSV_FIELDS:
-            raise RunFolderError(f"{path}: not a robosoc job record file (unexpected header)")
+        problem = "empty file" if header is None else header_problem(header, JOB_CSV_FIELDS)
+        if problem is not None:
+            raise RunFolderError(f"{path}: not a robosoc job record file ({problem})")
         lines = [line for line in reader if line]
     if lines and len(lines[-1]) != len(JOB_CSV_FIELDS):
         notes.append(f"{path.name}: last line incomplete, skipped")

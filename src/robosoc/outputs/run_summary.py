@@ -28,13 +28,13 @@ from __future__ import annotations
 
 import json
 import math
-import os
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from robosoc import output_files
 from robosoc.config.chip import ChipConfig
 from robosoc.config.firmware import FirmwareConfig
 from robosoc.config.scenario import ScenarioConfig
@@ -259,6 +259,4 @@ def write_summary(summary: dict[str, Any], path: Path) -> None:
     """Write ``summary`` as JSON (NaN as null) to a temporary name and rename it to ``path``, so that
     a reader never sees half a file."""
     text = json.dumps(json_safe(summary), indent=2, allow_nan=False) + "\n"
-    tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(text, encoding="utf-8")
-    os.replace(tmp, path)
+    output_files.write_atomic(path, text)

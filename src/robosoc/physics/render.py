@@ -18,6 +18,8 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
+from robosoc import output_files
+
 _PROBE = """
 import mujoco
 m = mujoco.MjModel.from_xml_string('<mujoco><worldbody><geom type="sphere" size="1"/></worldbody></mujoco>')
@@ -143,6 +145,7 @@ class FrameSink:
                     "give a folder instead to get PNG frames"
                 ) from exc
             path.parent.mkdir(parents=True, exist_ok=True)
+            output_files.check_regular(path)  # ffmpeg writes in place: no device, FIFO or socket
             self._writer = imageio.get_writer(str(path), fps=fps, codec="libx264", macro_block_size=8)
         else:
             path.mkdir(parents=True, exist_ok=True)
@@ -154,7 +157,9 @@ class FrameSink:
         else:
             import matplotlib.image
 
-            matplotlib.image.imsave(self.path / f"frame_{self.frames:05d}.png", frame)
+            frame_path = self.path / f"frame_{self.frames:05d}.png"
+            output_files.check_regular(frame_path)
+            matplotlib.image.imsave(frame_path, frame)
         self.frames += 1
 
     def close(self) -> None:

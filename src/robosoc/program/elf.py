@@ -16,6 +16,11 @@ from elftools.elf.constants import P_FLAGS
 from elftools.elf.elffile import ELFFile
 from elftools.elf.sections import SymbolTableSection
 
+#: Largest segment an ELF may ask for (memsz) when no regions are given: the largest SRAM of a tile,
+#: ``config.ranges.MAX_SRAM_BYTES`` (a test checks they agree), checked before the segment is made.
+MAX_SEGMENT_BYTES = 1 << 30
+
+
 EM_RISCV = "EM_RISCV"
 
 
@@ -220,6 +225,15 @@ def _read_program(path: Path, elf: ELFFile, allowed: list[Region] | None) -> Pro
         addr, filesz, memsz = seg["p_paddr"], seg["p_filesz"], seg["p_memsz"]
         if filesz > memsz:
             raise ElfError(f"{path}: segment {index} at 0x{addr:08x} has filesz {filesz} > memsz {memsz}")
+        if addr + memsz > 1 << 32:  # checked before the segment's bytes are made: memsz 0xfffffff0 is 4 GiB
+            raise ElfError(
+                f"{path}: segment {index} at 0x{addr:08x} ({memsz} bytes) ends beyond the 32-bit address space"
+            )
+        if allowed is None and memsz > MAX_SEGMENT_BYTES:
+            raise ElfError(
+                f"{path}: segment {index} at 0x{addr:08x} has memsz {memsz} bytes ({memsz / 2**30:.4g} GiB), "
+                f"more than any tile's SRAM ({MAX_SEGMENT_BYTES >> 30} GiB)"
+            )
         if allowed is not None and not any(r.contains(addr, memsz) for r in allowed):
             where = ", ".join(f"{r.name} 0x{r.base:08x}-0x{r.end - 1:08x}" for r in allowed)
             raise ElfError(

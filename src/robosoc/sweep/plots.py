@@ -13,6 +13,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+from robosoc.output_files import save_figure
 from robosoc.sweep.point import OK, metric
 
 TASKS = ("estimator", "pid")
@@ -54,9 +55,9 @@ def _png(fig, path: Path, dpi: int) -> str:
     """Save ``fig`` as PNG at ``path`` and close it; the PNG as base64 for an inline image."""
     import base64
 
-    fig.savefig(path, dpi=dpi)
+    data = save_figure(fig, path, dpi=dpi)
     _pyplot().close(fig)
-    return base64.b64encode(path.read_bytes()).decode("ascii")
+    return base64.b64encode(data).decode("ascii")
 
 
 def _pyplot():

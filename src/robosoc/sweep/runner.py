@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import multiprocessing
 import signal
+import threading
 from collections.abc import Callable, Iterator
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
@@ -71,7 +72,8 @@ Progress = Callable[[Point, dict[str, Any]], None]
 
 def warm_worker() -> None:
     """Import what a point needs once per worker process; Ctrl-C belongs to the driving process."""
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    if threading.current_thread() is threading.main_thread():  # a Dask worker may run this in a thread
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
     import robosoc.outputs.flight_session  # noqa: F401  (physics, chip and firmware: once per process)
 
 
@@ -153,7 +155,7 @@ class _LocalPool:
 class _DaskPool:
     """Points on a Dask cluster (an existing scheduler, or a LocalCluster)."""
 
-    def __init__(self, address: str, workers: int) -> None:
+    def __init__(self, address: str, workers: int, on_status: Callable[[str], None] = lambda _text: None) -> None:
         from dask.distributed import Client, LocalCluster
 
         self.cluster = None
@@ -162,7 +164,16 @@ class _DaskPool:
             self.client = Client(self.cluster)
         else:
             self.client = Client(address, timeout="20s")
+            count = self.workers()
+            on_status(f"the Dask scheduler at {address} has {count} worker{'s' if count != 1 else ''}")
         self.client.run(warm_worker)
+
+    def workers(self) -> int:
+        """The cluster's workers now (a scheduler's, not this machine's cores)."""
+        try:
+            return len(self.client.scheduler_info().get("workers", {}))
+        except Exception:  # a count for a message only
+            return 0
 
     @property
     def dashboard(self) -> str | None:
@@ -229,7 +240,9 @@ def run_sweep(
     ran = 0
     if todo:
         prepare(config, todo, on_status or (lambda _text: None))
-        pool: _LocalPool | _DaskPool = _DaskPool(dask, workers) if dask else _LocalPool(workers)
+        pool: _LocalPool | _DaskPool = (
+            _DaskPool(dask, workers, on_status or (lambda _text: None)) if dask else _LocalPool(workers)
+        )
         aborted = True
         try:
             for point, result in pool.run(config, todo):

@@ -23,6 +23,7 @@ import shutil
 from pathlib import Path
 from typing import Any
 
+from robosoc import output_files
 from robosoc.outputs.run_summary import json_safe
 from robosoc.sweep.plan import Point
 from robosoc.sweep.point import PointResult, metric
@@ -32,13 +33,9 @@ TABLE_LEADING = ("index", "key", "seed", "status", "error")
 
 
 def write_atomic(path: Path, data: bytes) -> None:
-    """Write ``path`` so that it is either absent or complete, whatever interrupts the write."""
-    scratch = path.with_name(f".{path.name}.partial")
-    with open(scratch, "wb") as file:
-        file.write(data)
-        file.flush()
-        os.fsync(file.fileno())
-    os.replace(scratch, path)
+    """Write ``path`` so that it is either absent or complete, whatever interrupts the write
+    (never over a device, a FIFO or a socket: :func:`robosoc.output_files.write_atomic`)."""
+    output_files.write_atomic(path, data, fsync=True)
 
 
 class SweepStore:

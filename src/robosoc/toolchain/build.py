@@ -3,12 +3,12 @@
 import json
 import os
 import re
-import shutil
 import tempfile
 import warnings
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
+from robosoc import output_files
 from robosoc.firmware import INCLUDE_DIR, LIBC_INCLUDE_DIR, runtime_sources
 from robosoc.toolchain.cache import build_key, entry_dir, file_digest, header_digests, zig_cache_dir
 from robosoc.toolchain.errors import CompileError, CompilerWarning, FixedRegisterWarning, ToolchainError
@@ -131,8 +131,30 @@ def build_elf(
         return cached
     out_path = Path(out).expanduser().resolve()
     out_path.parent.mkdir(parents=True, exist_ok=True)
-    shutil.copyfile(cached, out_path)
+    output_files.write_atomic(out_path, cached.read_bytes())
     return out_path
+
+
+#: Most characters of ``-D`` options given to zig on its command line: past about 32 KB, zig cc
+#: cannot preprocess an assembly (.S) source (it prints its usage).  More go to a generated header.
+MAX_DEFINE_CHARS = 16_000
+DEFINES_HEADER = "defines.h"
+
+
+def defines_to_header(args: list[str], header: Path) -> list[str]:
+    """``args``, or, when their ``-D`` options are longer than :data:`MAX_DEFINE_CHARS`, ``args``
+    without them and with ``-include header``, a header that defines the same names (``-DN=V`` is
+    ``#define N V``, ``-DN`` is ``#define N 1``)."""
+    defines = [a for a in args if a.startswith("-D") and len(a) > 2]
+    if sum(len(a) + 1 for a in defines) <= MAX_DEFINE_CHARS or any("\n" in a or "\r" in a for a in defines):
+        return args
+    lines = []
+    for flag in defines:
+        name, eq, value = flag[2:].partition("=")
+        lines.append(f"#define {name} {value if eq else '1'}\n")
+    header.write_text("".join(lines), encoding="utf-8")
+    moved = set(defines)
+    return ["-include", str(header), *(a for a in args if a not in moved)]
 
 
 def _compile_into(
@@ -146,9 +168,16 @@ def _compile_into(
         elf = scratch / ELF_NAME
         script = str(scratch / "link.ld")
         args = [*options.compiler_flags(), "-T", script, *map(str, all_sources), "-o", str(elf)]
+        args = defines_to_header(args, scratch / DEFINES_HEADER)
         proc = run_zig_cc(args, zig_cache_dir(), cwd=scratch)
         if proc.returncode != 0 or not elf.is_file():
             message = proc.stderr or proc.stdout or f"zig cc exited with status {proc.returncode}"
+            if message.startswith("info: Usage: zig"):  # zig's answer to a command line it cannot pass on
+                chars = sum(len(a) + 1 for a in args)
+                message = (
+                    f"zig cc refused its command line ({len(args)} arguments, {chars} characters) and printed its "
+                    "usage; fewer or shorter -D/-I options may help"
+                )
             raise CompileError(files_named_in(message, user_sources), message, zig_cc_command(args))
         meta = {
             "command": zig_cc_command(args),

@@ -12,6 +12,7 @@ import tempfile
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
+from robosoc import output_files
 from robosoc.firmware import INCLUDE_DIR, host_sources
 from robosoc.toolchain.build import files_named_in, resolve_sources
 from robosoc.toolchain.cache import build_key, entry_dir, file_digest, header_digests, zig_cache_dir
@@ -87,6 +88,7 @@ def compile_native(
         return exe
     out_path = Path(out).expanduser().resolve()
     out_path.parent.mkdir(parents=True, exist_ok=True)
+    output_files.check_regular(out_path)  # a device, FIFO or socket is neither replaced nor opened
     shutil.copy2(exe, out_path)
     return out_path
 
