@@ -15,8 +15,8 @@ from robosoc.cli.app import app
 from robosoc.cli.engine_option import Engine
 from robosoc.cli.errors import CliError
 from robosoc.cli.gdb_option import GDB_HELP, TILE_HELP, check_gdb_options, gdb_session
+from robosoc.config.chip import DEFAULT_ENGINE
 from robosoc.config.ranges import MAX_CYCLES
-from robosoc.jit import DEFAULT_ENGINE
 
 if TYPE_CHECKING:
     from robosoc.chip.energy import EnergyModel
