@@ -109,7 +109,7 @@ def run_core_benchmark(
 def _settled(soc: SingleCoreSoC) -> bool:
     """Whether a run's translator (if any) may translate and entered, handed over or put off
     nothing: the next runs will run what is translated now."""
-    from robosoc.jit.engine import NEVER_ASK
+    from robosoc.jit.policy import NEVER_ASK
 
     translator = soc.translator
     if translator is None:
@@ -155,7 +155,7 @@ def _report(
 
 def _report_translation(console: Console) -> None:
     from robosoc.jit.compiler import shared_compiler
-    from robosoc.jit.engine import translated_instructions
+    from robosoc.jit.tables import translated_instructions
 
     stats = shared_compiler().stats
     n = translated_instructions()

@@ -19,7 +19,8 @@ from robosoc.config.chip import ENGINE_CHOICES, engine_name
 
 if TYPE_CHECKING:
     from robosoc.chip.core_state import CoreState
-    from robosoc.jit.engine import TranslatingCore, TranslationStats
+    from robosoc.jit.engine import TranslatingCore
+    from robosoc.jit.tables import TranslationStats
 
 
 class Engine(Protocol):

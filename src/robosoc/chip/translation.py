@@ -24,7 +24,8 @@ from robosoc.kernels.jit_dispatch import JitArrays, empty_tables, set_tables
 if TYPE_CHECKING:
     from robosoc.chip.engines import Engine
     from robosoc.chip.mpsoc import MPSoC
-    from robosoc.jit.engine import TranslatingCore, TranslationStats
+    from robosoc.jit.engine import TranslatingCore
+    from robosoc.jit.tables import TranslationStats
 
 
 #: auto on the chip: a tile gets its translator once, since the last look, it executed at least
@@ -105,7 +106,8 @@ class ChipTranslation:
         if busy is not None:
             self._look = AUTO_LOOK_CYCLES if made else min(2 * self._look, AUTO_LOOK_MAX_CYCLES)
         live = [tr for tr in self.translators if tr is not None]
-        self._cached = self.engine.waits_for_busy_tiles and any(tr.has_cached_regions() for tr in live)
+        # (only a policy that reads its code's manifest has cached regions: auto)
+        self._cached = bool(live) and live[0].policy.reads_manifest and any(tr.has_cached_regions() for tr in live)
         if live:
             self._set_threshold(live[0])
         self._prepared = self._situation(chip)
@@ -118,7 +120,7 @@ class ChipTranslation:
             return None
         entered = 0
         if self.stats is not None:  # a translator was made: the engine is imported
-            from robosoc.jit.engine import entered_regions
+            from robosoc.jit.tables import entered_regions
 
             entered = entered_regions()
         return entered, self._changes, chip.cores.st[:, S_CODE_SIZE].tobytes()
@@ -141,7 +143,7 @@ class ChipTranslation:
         """A translator for tile ``t`` (the translating engine is imported only now: a short run of
         ``auto`` whose tiles never turn busy does without it, 30-45 ms when Python has to compile
         its modules' source)."""
-        from robosoc.jit.engine import TranslationStats
+        from robosoc.jit.tables import TranslationStats
 
         if self.stats is None:
             self.stats = TranslationStats(run_seconds=self._run_seconds)
