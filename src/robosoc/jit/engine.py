@@ -76,7 +76,7 @@ class TranslatingCore(CoreTables):
         self.policy = policies.POLICIES[mode](self)
         self._compiler = compiler
         self._tiles = np.array([tile], dtype=np.int64)
-        self.manifest = Manifest(self._manifest_key, read=False)  # made again for each code loaded
+        self.manifest = Manifest()  # made again for each code loaded
         self._compiling: list[tuple[Pending, Region, EmittedRegion, np.ndarray, np.ndarray]] = []
         if self.background:
             _LIVE.add(self)
@@ -104,14 +104,14 @@ class TranslatingCore(CoreTables):
     # --- what goes with the tables --------------------------------------------------------------
     def _new_code(self) -> None:
         self.policy.new_code()
-        self.manifest = Manifest(self._manifest_key, read=self.policy.reads_manifest)
+        self.manifest = Manifest(self._manifest_key() if self.policy.reads_manifest else None)
 
     def _sibling(self, tile: int) -> TranslatingCore:
         return TranslatingCore(self.state, tile, self.mode, self._compiler, self.stats)
 
     def _adopt(self, other: TranslatingCore) -> None:
         super()._adopt(other)
-        self.manifest = other.manifest.copy(self._manifest_key)
+        self.manifest = other.manifest.copy()
 
     def _manifest_key(self) -> str:
         """The loaded code and build options: the key of the list of regions compiled for them
@@ -204,7 +204,7 @@ class TranslatingCore(CoreTables):
         """Note a translated region (for every core of this build) and enter it in this core's tables."""
         build = self._key()
         if region.blocks and self.compiler.cache_dir is not None:
-            self.manifest.note(region.start)
+            self.manifest.note(region.start, self._manifest_key)
         done = Translated.of(region, emitted, address, pcs, words, build[0].base)
         self._add(done, note_translated(build, done))
         self.stats.regions += 1

@@ -56,31 +56,26 @@ class Manifest:
     """What one core knows of its loaded code's manifest: the starts listed or noted since, and
     those an earlier run compiled (``cached``: installed at once when they turn hot)."""
 
-    def __init__(self, make_key: Callable[[], str], read: bool) -> None:
-        """``make_key``: the key of the code now loaded (made once, when first needed: hashing the
-        code cost each region 0.1 ms); ``read``: read the list now (``auto``), or start empty."""
-        self._make_key = make_key
-        self._key: str | None = None
-        self.known: set[int] = read_manifest(self.key) if read else set()
+    def __init__(self, key: str | None = None) -> None:
+        """``key``: read the list of the code with that key now (``auto``); None: start empty, the
+        key made when a region is first noted (hashing the code cost each region 0.1 ms)."""
+        self.key = key
+        self.known: set[int] = read_manifest(key) if key is not None else set()
         self.cached: frozenset[int] = frozenset(self.known)
 
-    @property
-    def key(self) -> str:
-        if self._key is None:
-            self._key = self._make_key()
-        return self._key
-
-    def note(self, start: int) -> None:
-        """A region compiled at ``start`` (added to the file once)."""
+    def note(self, start: int, make_key: Callable[[], str]) -> None:
+        """A region compiled at ``start`` (added to the file once); ``make_key``: the code's key,
+        if not made yet."""
         if start not in self.known:
             self.known.add(start)
+            if self.key is None:
+                self.key = make_key()
             add_to_manifest(self.key, start)
 
-    def copy(self, make_key: Callable[[], str]) -> Manifest:
-        """The same knowledge for another core holding the same code (its key, if made, is shared)."""
+    def copy(self) -> Manifest:
+        """The same knowledge for another core holding the same code."""
         other = Manifest.__new__(Manifest)
-        other._make_key = make_key
-        other._key = self._key
+        other.key = self.key
         other.known = set(self.known)
         other.cached = self.cached
         return other

@@ -11,6 +11,7 @@ tables and its manifest (docs/translation.md, "Tiers and cache").
 
 from __future__ import annotations
 
+import weakref
 from typing import TYPE_CHECKING
 
 from robosoc.kernels import compiled_or_cached
@@ -98,7 +99,9 @@ class JitPolicy:
     reads_manifest = False
 
     def __init__(self, core: TranslatingCore) -> None:
-        self.core = core
+        # a proxy: no reference cycle, so a core dies with its last reference (the compiling thread
+        # drops the jobs of cores that are gone: TranslatingCore's ``wanted``)
+        self.core = weakref.proxy(core)
         self.threshold = THRESHOLDS[self.name]
         self.stretch = STRETCHES[self.name]
         #: compile regions in the background thread: the core interprets them meanwhile
