@@ -54,3 +54,18 @@ def test_the_interpreter_imports_nothing_of_the_translator() -> None:
     )
     done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=300, check=True)
     assert done.stdout.strip() == "[]", done.stderr
+
+
+def test_the_core_benchmark_reports_the_engine_it_was_given(capsys: pytest.CaptureFixture[str]) -> None:
+    """Named or given as an object, the engine's median is the one returned and printed last."""
+    from rich.console import Console
+
+    from robosoc.benchmarks.core import run_core_benchmark
+
+    for engine in ("jit", JIT):
+        console = Console(record=True, width=200)
+        median = run_core_benchmark(runs=1, iterations=2, engine=engine, console=console)
+        text = console.export_text()
+        assert "jit / interp: " in text
+        assert f"jit: MIPS median {median:.1f}," in text
+        assert capsys.readouterr().out.strip().splitlines()[-1] == f"core: {median:.0f} MIPS"

@@ -54,11 +54,10 @@ def run_core_benchmark(
     check_int("runs", runs, 1)
     check_int("iterations", iterations, 1)
     chosen = resolve_engine(engine)
-    name = chosen.name
     console = console or Console(stderr=False)
     elf = build_elf([MATRIX_BENCH_SOURCE], mul=mul, defines={"BENCH_ITERATIONS": iterations, "BENCH_QUIET": None})
     program = load_elf(elf)
-    engines = [name] if not chosen.translates or not compare else [name, INTERP.name]
+    engines = [chosen.name] if not chosen.translates or not compare else [chosen.name, INTERP.name]
     reference: dict[str, int] | None = None
 
     def one_run(name: str) -> tuple[int, int, float, bool]:
@@ -99,11 +98,11 @@ def run_core_benchmark(
         _report_translation(console)
     if len(engines) > 1:
         console.print(
-            f"{name} / interp: {medians[name] / medians['interp']:.2f}x "
-            f"(median {medians[name]:.1f} against {medians['interp']:.1f} MIPS, alternating runs)"
+            f"{chosen.name} / interp: {medians[chosen.name] / medians['interp']:.2f}x "
+            f"(median {medians[chosen.name]:.1f} against {medians['interp']:.1f} MIPS, alternating runs)"
         )
-    print(f"core: {medians[name]:.0f} MIPS")
-    return medians[name]
+    print(f"core: {medians[chosen.name]:.0f} MIPS")
+    return medians[chosen.name]
 
 
 def _settled(soc: SingleCoreSoC) -> bool:
