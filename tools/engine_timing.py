@@ -68,7 +68,7 @@ def main() -> None:
     parser.add_argument("--engines", default="interp,auto")
     parser.add_argument("--iterations", default="2,30,300,3000")
     args = parser.parse_args()
-    from robosoc.jit import ENGINES
+    from robosoc.config.chip import ENGINE_CHOICES as ENGINES
 
     engines = args.engines.split(",")
     if args.repeats < 1:

@@ -38,10 +38,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
 
 #: Imports that still run upward, each with the reason and the work that removes it.  The test
 #: fails when one of them is gone (so this list only shrinks) or when a new one appears.
-KNOWN_UPWARD: dict[tuple[str, str], str] = {
-    ("jit", "chip"): "jit/engine.py names chip.core_state.CoreState in type hints (TYPE_CHECKING only); "
-    "removed when the engines become objects the chip is given (issue 33, item 4)",
-}
+KNOWN_UPWARD: dict[tuple[str, str], str] = {}
 
 
 def _layer_of() -> dict[str, int]:

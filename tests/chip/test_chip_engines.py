@@ -14,6 +14,7 @@ from pathlib import Path
 
 import pytest
 
+import robosoc.jit.tables as jit_tables
 import rv32_asm as A
 from core_harness import exit_with
 from robosoc.chip.mpsoc import ChipError, MPSoC
@@ -257,7 +258,7 @@ def test_auto_compiles_in_the_background_and_changes_nothing(monkeypatch) -> Non
     """With a cold object cache auto hands regions to the compiling thread and the tile interprets
     them meanwhile; what the thread compiled is entered at the next step (here: after waiting for
     it), and the chip's state is the interpreter's whatever the timing."""
-    monkeypatch.setattr("robosoc.jit.engine.AUTO_WARMUP_SECONDS", 0.0)  # short runs translate too
+    monkeypatch.setattr("robosoc.jit.policy.AUTO_WARMUP_SECONDS", 0.0)  # short runs translate too
     from robosoc.benchmarks.chip import _build
     from robosoc.chip.translation import AUTO_LOOK_CYCLES
     from robosoc.jit.compiler import Compiler
@@ -387,12 +388,11 @@ def test_the_tiles_holding_one_program_get_copies_of_the_first_tiles_tables(monk
     place; the chip runs as on the interpreter."""
     import numpy as np
 
-    import robosoc.jit.engine as engine
     from robosoc.isa.table import OP_ENTRY
     from robosoc.jit.engine import TranslatingCore
 
-    monkeypatch.setattr(engine, "_TRANSLATED", {})
-    monkeypatch.setattr(engine, "_FRESH_TABLES", {})
+    monkeypatch.setattr(jit_tables, "_TRANSLATED", {})
+    monkeypatch.setattr(jit_tables, "_FRESH_TABLES", {})
 
     def counting(rounds: int) -> Program:
         loop = [A.i("addi", A0, 0, 0), A.i("addi", T1, 0, rounds), A.i("addi", A0, A0, 1)]
@@ -423,7 +423,7 @@ def test_the_tiles_holding_one_program_get_copies_of_the_first_tiles_tables(monk
     first, copy = (chip._jit.translators[tiles[xy]].tables() for xy in ((1, 0), (0, 1)))
     for name in ("entry_fn", "entry_slot", "entry_blk", "hot", "tmap", "cnt", "ctx"):
         assert not np.shares_memory(getattr(first, name), getattr(copy, name)), name
-    monkeypatch.setattr(engine, "_FRESH_TABLES", {})
+    monkeypatch.setattr(jit_tables, "_FRESH_TABLES", {})
     for t in tiles.values():
         afresh = TranslatingCore(chip.cores, tile=t, mode="jit")
         want = afresh.tables()  # made afresh, marks again

@@ -16,6 +16,8 @@ import numpy as np
 import pytest
 import test_irq_differential as irq
 
+import robosoc.jit.policy as jit_policy
+import robosoc.jit.tables as jit_tables
 import rv32_asm as A
 from core_harness import exit_with, make_soc
 from robosoc.chip.core_state import SRAM_BASE
@@ -77,11 +79,9 @@ def test_random_interrupt_programs_run_as_on_the_interpreter(mul: bool, errata: 
         # these runs are short: auto's budget would leave them to the interpreter, and its compiling
         # thread deliver after they end, unless the jit variant ran first in this process and left
         # its regions (the test must not rely on that)
-        import robosoc.jit.engine as jit_engine
-
-        monkeypatch.setattr(jit_engine, "AUTO_BACKGROUND", False)
-        monkeypatch.setattr(jit_engine, "AUTO_COMPILE_SHARE", 1e9)
-        monkeypatch.setattr(jit_engine, "STRETCHES", {"auto": 50})  # samples often enough to find hot words
+        monkeypatch.setattr(jit_policy, "AUTO_BACKGROUND", False)
+        monkeypatch.setattr(jit_policy, "AUTO_COMPILE_SHARE", 1e9)
+        monkeypatch.setattr(jit_policy, "STRETCHES", {"auto": 50})  # samples often enough to find hot words
     translated = 0
     for k in range(SEEDS[engine]):
         words, _ = irq.build(7000 + 100 * irq.FLAVOURS.index((mul, errata)) + k, mul, errata)
@@ -185,8 +185,6 @@ def test_grouped_accesses_at_the_edges_are_the_interpreters(group: str, where: s
     base around the ends of the code and of SRAM, aligned or not, the translated block does what
     the interpreter does (the block leaves before the group, and the interpreter makes each access
     or raises its error at the one that fails)."""
-    import robosoc.jit.engine as jit_engine
-
     accesses = GROUPS[group]
     body = [A.i("addi", 11, 0, 3)] * 5
     code_words = len(body) + 2 + 1 + len(accesses) + 2 * (len(accesses) - 1) + 8
@@ -207,7 +205,7 @@ def test_grouped_accesses_at_the_edges_are_the_interpreters(group: str, where: s
         assert len(words) == code_words, (len(words), code_words)
         # translated afresh: a region left by an earlier base (which started inside the group, after
         # a way out) would split the group
-        monkeypatch.setattr(jit_engine, "_TRANSLATED", {})
+        monkeypatch.setattr(jit_tables, "_TRANSLATED", {})
         assert_same(words, "jit", 5_000, code_words, sram_size=EDGE_SRAM)
 
 
@@ -345,11 +343,10 @@ def test_the_core_benchmark_warms_up_until_a_run_translates_nothing_new(monkeypa
     """``bench core`` times runs only once translation has settled: a run that entered a region,
     handed one to the compiling thread or put one off, or whose engine may not translate yet (auto
     before its warm-up) is followed by another untimed run."""
-    import robosoc.jit.engine as engine
     from robosoc.benchmarks.core import _settled
 
-    monkeypatch.setattr(engine, "_TRANSLATED", {})
-    monkeypatch.setattr(engine, "_FRESH_TABLES", {})
+    monkeypatch.setattr(jit_tables, "_TRANSLATED", {})
+    monkeypatch.setattr(jit_tables, "_FRESH_TABLES", {})
     words = [A.i("addi", 10, 0, 0), A.i("addi", 10, 10, 1), A.i("addi", 11, 0, 40), A.branch("bne", 10, 11, -8)]
     words += exit_with(10)
 
@@ -361,9 +358,9 @@ def test_the_core_benchmark_warms_up_until_a_run_translates_nothing_new(monkeypa
     assert _settled(ran("interp"))
     assert not _settled(ran("jit"))  # translated its regions
     assert _settled(ran("jit"))  # entered them from the process
-    monkeypatch.setattr(engine, "_BUILD_SECONDS", {})
+    monkeypatch.setattr(jit_policy, "_BUILD_SECONDS", {})
     assert not _settled(ran("auto"))  # its warm-up is not over: it may translate later
-    monkeypatch.setattr(engine, "AUTO_WARMUP_SECONDS", 0.0)
+    monkeypatch.setattr(jit_policy, "AUTO_WARMUP_SECONDS", 0.0)
     assert _settled(ran("auto"))  # may translate, and every region it wants is there
 
 
@@ -383,10 +380,8 @@ def test_a_core_copying_the_tables_of_the_last_gets_those_made_afresh(
     """The cores of a chip share one program: a core makes its fresh tables by copying those the
     last core of the build made, which must equal entering every known region itself; a core whose
     code differs anywhere (a region's word or not) makes its own."""
-    import robosoc.jit.engine as engine
-
-    monkeypatch.setattr(engine, "_TRANSLATED", {})
-    monkeypatch.setattr(engine, "_FRESH_TABLES", {})
+    monkeypatch.setattr(jit_tables, "_TRANSLATED", {})
+    monkeypatch.setattr(jit_tables, "_FRESH_TABLES", {})
     words = [A.i("addi", 10, 0, 0), A.i("addi", 10, 10, 1), A.i("addi", 11, 0, 40), A.branch("bne", 10, 11, -8)]
     words += exit_with(10)
     words += [0] * (32 - len(words))  # an illegal word ends the region: word 30 is in no region
@@ -399,7 +394,7 @@ def test_a_core_copying_the_tables_of_the_last_gets_those_made_afresh(
         make_soc(words, engine="jit").translator.translate(SRAM_BASE + 8)
     copied = make_soc(mine, engine="jit")
     got = _fresh_tables(copied)
-    monkeypatch.setattr(engine, "_FRESH_TABLES", {})
+    monkeypatch.setattr(jit_tables, "_FRESH_TABLES", {})
     made = make_soc(mine, engine="jit")
     want = _fresh_tables(made)
     assert len(got[0]) == len(want[0])
@@ -426,15 +421,16 @@ def test_a_core_copying_the_tables_of_the_last_gets_those_made_afresh(
 def test_many_small_chained_regions_run_as_on_the_interpreter(monkeypatch) -> None:
     """Regions of at most 8 instructions: control crosses regions all the time (tail calls through
     the entry table, returns into other regions, arrivals inside translated blocks after interrupts)."""
-    import robosoc.jit.engine as engine
     import robosoc.jit.regions as regions
 
     monkeypatch.setattr(regions, "MAX_REGION_INSTRUCTIONS", 8)  # the cap of jit's regions
-    monkeypatch.setattr(engine, "_TRANSLATED", {})  # nothing reused from the larger regions of other tests
+    monkeypatch.setattr(jit_tables, "_TRANSLATED", {})  # nothing reused from the larger regions of other tests
     words, _ = irq.build(7003, True, "spec")
     soc = assert_same(words, "jit", irq.MAX_CYCLES, len(words), mul=True, sram_size=irq.SRAM_SIZE)
     assert soc.translator.stats.regions >= 5
-    assert all(len(b.insns) <= 8 for t in engine._TRANSLATED[soc.translator._key()] for b in t.region.blocks.values())
+    assert all(
+        len(b.insns) <= 8 for t in jit_tables._TRANSLATED[soc.translator._key()] for b in t.region.blocks.values()
+    )
 
 
 def indirect_calls(count: int) -> list[int]:
@@ -468,10 +464,9 @@ def test_indirect_calls_through_a_register_run_as_on_the_interpreter() -> None:
 
 
 def test_auto_compiles_nothing_when_compiling_is_not_worth_it(monkeypatch) -> None:
-    import robosoc.jit.engine as engine
 
-    monkeypatch.setattr(engine, "AUTO_COMPILE_SHARE", 0.0)
-    monkeypatch.setattr(engine, "_TRANSLATED", {})
+    monkeypatch.setattr(jit_policy, "AUTO_COMPILE_SHARE", 0.0)
+    monkeypatch.setattr(jit_tables, "_TRANSLATED", {})
     words, _ = irq.build(7004, True, "spec")
     soc = assert_same(words, "auto", irq.MAX_CYCLES, len(words), mul=True, sram_size=irq.SRAM_SIZE)
     assert soc.translator.stats.regions == 0
@@ -481,52 +476,49 @@ def test_auto_asks_for_no_region_before_its_warm_up(monkeypatch) -> None:
     """A run shorter than AUTO_WARMUP_SECONDS is interpreted as by interp (nothing found, written
     or handed to the compiling thread); once the core, or the cores of its build in the process,
     have run that long, hot words are asked for."""
-    import robosoc.jit.engine as engine
-
-    monkeypatch.setattr(engine, "_TRANSLATED", {})
-    monkeypatch.setattr(engine, "_BUILD_SECONDS", {})
-    monkeypatch.setattr(engine, "AUTO_WARMUP_SECONDS", 3600.0)  # longer than any run here
+    monkeypatch.setattr(jit_tables, "_TRANSLATED", {})
+    monkeypatch.setattr(jit_policy, "_BUILD_SECONDS", {})
+    monkeypatch.setattr(jit_policy, "AUTO_WARMUP_SECONDS", 3600.0)  # longer than any run here
     words, _ = irq.build(7005, True, "spec")
     soc = assert_same(words, "auto", irq.MAX_CYCLES, len(words), mul=True, sram_size=irq.SRAM_SIZE)
     stats = soc.translator.stats
     assert stats.run_seconds > 0 and (stats.regions, stats.background, stats.deferred) == (0, 0, 0)
-    assert soc.translator.ask_threshold(cached=False) == engine.NEVER_ASK
+    assert soc.translator.ask_threshold(cached=False) == jit_policy.NEVER_ASK
     stats.run_seconds = 3600.5  # warmed up (and the budget is large)
-    assert soc.translator.ask_threshold(cached=False) == engine.AUTO_THRESHOLD
+    assert soc.translator.ask_threshold(cached=False) == jit_policy.AUTO_THRESHOLD
     stats.run_seconds = 0.0  # regions compiled by an earlier run are installed from the start
-    assert soc.translator.ask_threshold(cached=True) == engine.AUTO_THRESHOLD
-    ran = engine._BUILD_SECONDS[soc.translator._key()]
+    assert soc.translator.ask_threshold(cached=True) == jit_policy.AUTO_THRESHOLD
+    ran = jit_policy._BUILD_SECONDS[soc.translator._key()]
     assert 0 < ran < 3600  # the run counted for its build
-    engine._BUILD_SECONDS[soc.translator._key()] = 3600.5  # earlier runs of the build warmed it up
-    monkeypatch.setattr(engine.TranslatingCore, "_budget", lambda self: 1.0)  # (a new core's is 0 before it runs)
+    jit_policy._BUILD_SECONDS[soc.translator._key()] = 3600.5  # earlier runs of the build warmed it up
+    monkeypatch.setattr(jit_policy.AutoPolicy, "budget", lambda self: 1.0)  # (a new core's is 0 before it runs)
     fresh = make_soc(words, engine="auto", mul=True, sram_size=irq.SRAM_SIZE)
     fresh.state.set_code_size(4 * len(words))
     assert fresh.translator.stats.run_seconds == 0
-    assert fresh.translator.ask_threshold(cached=False) == engine.AUTO_THRESHOLD
+    assert fresh.translator.ask_threshold(cached=False) == jit_policy.AUTO_THRESHOLD
     other = make_soc(words, engine="auto", mul=False, sram_size=irq.SRAM_SIZE)  # another build: not warm
     other.state.set_code_size(4 * len(words))
-    assert other.translator.ask_threshold(cached=False) == engine.NEVER_ASK
+    assert other.translator.ask_threshold(cached=False) == jit_policy.NEVER_ASK
 
 
 def test_auto_installs_regions_compiled_by_an_earlier_run_at_once(tmp_path, monkeypatch) -> None:
-    monkeypatch.setattr("robosoc.jit.engine.AUTO_WARMUP_SECONDS", 0.0)  # short runs translate too
+    monkeypatch.setattr("robosoc.jit.policy.AUTO_WARMUP_SECONDS", 0.0)  # short runs translate too
     import robosoc.jit.compiler as compiler
-    import robosoc.jit.engine as engine
 
     monkeypatch.setenv("ROBOSOC_CACHE", str(tmp_path))
-    monkeypatch.setattr(engine, "_TRANSLATED", {})
+    monkeypatch.setattr(jit_tables, "_TRANSLATED", {})
     monkeypatch.setattr(compiler, "_SHARED", None)
     words = indirect_calls(2000)
     # the first run may compile whatever turns hot (as a long run would; short stretches sample
     # often), in line: a run this short ends before the compiling thread delivers
-    monkeypatch.setattr(engine, "AUTO_BACKGROUND", False)
-    monkeypatch.setattr(engine.TranslatingCore, "_budget", lambda self: float("inf"))  # always worth compiling
-    monkeypatch.setattr(engine, "STRETCHES", {"auto": 50})
+    monkeypatch.setattr(jit_policy, "AUTO_BACKGROUND", False)
+    monkeypatch.setattr(jit_policy.AutoPolicy, "budget", lambda self: float("inf"))  # always worth compiling
+    monkeypatch.setattr(jit_policy, "STRETCHES", {"auto": 50})
     first = assert_same(words, "auto", 1_000_000, len(words))
     assert first.translator.stats.regions >= 1
     # a new process (no regions in memory) that may not compile anything: the cached regions still come in
-    monkeypatch.setattr(engine.TranslatingCore, "_budget", lambda self: 0.0)
-    monkeypatch.setattr(engine, "_TRANSLATED", {})
+    monkeypatch.setattr(jit_policy.AutoPolicy, "budget", lambda self: 0.0)
+    monkeypatch.setattr(jit_tables, "_TRANSLATED", {})
     monkeypatch.setattr(compiler, "_SHARED", None)
     second = assert_same(words, "auto", 1_000_000, len(words))
     assert second.translator.stats.regions >= 1
@@ -553,15 +545,14 @@ def _run_waiting_for_compiles(soc: SingleCoreSoC, max_cycles: int, chunk: int) -
 def test_auto_on_one_core_compiles_in_the_background_and_changes_nothing(tmp_path, monkeypatch) -> None:
     """auto hands its regions to the compiling thread and interprets them meanwhile; the chunk
     after they arrive runs them translated, with the interpreter's cycles, counters and state."""
-    monkeypatch.setattr("robosoc.jit.engine.AUTO_WARMUP_SECONDS", 0.0)  # short runs translate too
+    monkeypatch.setattr("robosoc.jit.policy.AUTO_WARMUP_SECONDS", 0.0)  # short runs translate too
     import robosoc.jit.compiler as compiler
-    import robosoc.jit.engine as engine
 
     monkeypatch.setenv("ROBOSOC_CACHE", str(tmp_path))
-    monkeypatch.setattr(engine, "_TRANSLATED", {})
+    monkeypatch.setattr(jit_tables, "_TRANSLATED", {})
     monkeypatch.setattr(compiler, "_SHARED", None)
-    monkeypatch.setattr(engine, "AUTO_COMPILE_SHARE", 1e9)
-    monkeypatch.setattr(engine, "STRETCHES", {"auto": 50})
+    monkeypatch.setattr(jit_policy, "AUTO_COMPILE_SHARE", 1e9)
+    monkeypatch.setattr(jit_policy, "STRETCHES", {"auto": 50})
     words = indirect_calls(2000)
     ref = make_soc(words)
     ref.state.set_code_size(4 * len(words))
@@ -583,17 +574,16 @@ def test_a_region_compiling_for_a_core_that_is_gone_keeps_no_other_core_waiting(
     """A run that ends while its region compiles leaves it loaded in the process (and in the disk
     cache): the next core that asks for the region enters it, instead of waiting for the first
     core to."""
-    monkeypatch.setattr("robosoc.jit.engine.AUTO_WARMUP_SECONDS", 0.0)  # short runs translate too
+    monkeypatch.setattr("robosoc.jit.policy.AUTO_WARMUP_SECONDS", 0.0)  # short runs translate too
     import robosoc.jit.compiler as compiler
-    import robosoc.jit.engine as engine
 
     monkeypatch.setenv("ROBOSOC_CACHE", str(tmp_path))
-    monkeypatch.setattr(engine, "_TRANSLATED", {})
+    monkeypatch.setattr(jit_tables, "_TRANSLATED", {})
     monkeypatch.setattr(compiler, "_SHARED", None)
-    monkeypatch.setattr(engine, "_COMPILING", {})
-    monkeypatch.setattr(engine.TranslatingCore, "_budget", lambda self: float("inf"))  # always worth compiling
-    monkeypatch.setattr(engine, "STRETCHES", {"auto": 50})
-    monkeypatch.setitem(engine.THRESHOLDS, "auto", 3)  # a short program: few samples per word
+    monkeypatch.setattr(jit_policy, "_COMPILING", {})
+    monkeypatch.setattr(jit_policy.AutoPolicy, "budget", lambda self: float("inf"))  # always worth compiling
+    monkeypatch.setattr(jit_policy, "STRETCHES", {"auto": 50})
+    monkeypatch.setitem(jit_policy.THRESHOLDS, "auto", 3)  # a short program: few samples per word
     gate = threading.Event()  # the compiling thread starts once the first run has ended
     work = compiler.Compiler._work
     monkeypatch.setattr(compiler.Compiler, "_work", lambda self: (gate.wait(), work(self)))
@@ -618,13 +608,13 @@ def _gated_compiling(tmp_path, monkeypatch):  # type: ignore[no-untyped-def]
     import robosoc.jit.engine as engine
 
     monkeypatch.setenv("ROBOSOC_CACHE", str(tmp_path))
-    monkeypatch.setattr(engine, "_TRANSLATED", {})
+    monkeypatch.setattr(jit_tables, "_TRANSLATED", {})
     monkeypatch.setattr(compiler, "_SHARED", None)
-    monkeypatch.setattr(engine, "_COMPILING", {})
-    monkeypatch.setattr(engine, "AUTO_WARMUP_SECONDS", 0.0)
-    monkeypatch.setattr(engine.TranslatingCore, "_budget", lambda self: float("inf"))
-    monkeypatch.setattr(engine, "STRETCHES", {"auto": 50})
-    monkeypatch.setitem(engine.THRESHOLDS, "auto", 3)  # a short program: few samples per word
+    monkeypatch.setattr(jit_policy, "_COMPILING", {})
+    monkeypatch.setattr(jit_policy, "AUTO_WARMUP_SECONDS", 0.0)
+    monkeypatch.setattr(jit_policy.AutoPolicy, "budget", lambda self: float("inf"))
+    monkeypatch.setattr(jit_policy, "STRETCHES", {"auto": 50})
+    monkeypatch.setitem(jit_policy.THRESHOLDS, "auto", 3)  # a short program: few samples per word
     gate = threading.Event()
     work = compiler.Compiler._work
     monkeypatch.setattr(compiler.Compiler, "_work", lambda self: (gate.wait(), work(self)))
@@ -636,10 +626,10 @@ def test_auto_stops_for_no_region_while_its_compiling_queue_is_full(tmp_path, mo
     would be parked at once) and comes back every POLL_CYCLES to enter what the thread finished;
     the call that only loads the kernel counts no run time."""
     engine, gate = _gated_compiling(tmp_path, monkeypatch)  # nothing compiled during the run: the queue stays full
-    monkeypatch.setattr(engine, "POLL_CYCLES", 100)  # the run is 5,658 cycles long
+    monkeypatch.setattr(jit_policy, "POLL_CYCLES", 100)  # the run is 5,658 cycles long
     calls = []
     dispatch = engine.run_translated
-    monkeypatch.setattr(engine, "_dispatch_loop_ready", True)
+    monkeypatch.setattr(jit_policy, "_dispatch_loop_ready", True)
     monkeypatch.setattr(engine, "run_translated", lambda *args: (calls.append(args[2]), dispatch(*args)))
     words, _ = irq.build(7006, True, "spec")
     soc = make_soc(words, engine="auto", mul=True, sram_size=irq.SRAM_SIZE)
@@ -654,10 +644,10 @@ def test_auto_stops_for_no_region_while_its_compiling_queue_is_full(tmp_path, mo
     want = outcome(ref, irq.MAX_CYCLES)
     assert got[0] == want[0] and all(np.array_equal(got[1][n], want[1][n]) for n in want[1])
     stats = soc.translator.stats
-    assert soc.translator.compiling() == stats.background == engine.BACKGROUND_QUEUE
+    assert soc.translator.compiling() == stats.background == jit_policy.BACKGROUND_QUEUE
     assert stats.deferred == 0  # asked for nothing more once the queue was full
     cycles = int(soc.state.st[0, S_CYCLE])
-    assert len(calls) > cycles // (2 * engine.POLL_CYCLES)  # came back to look for finished regions
+    assert len(calls) > cycles // (2 * jit_policy.POLL_CYCLES)  # came back to look for finished regions
 
 
 def test_auto_unparks_no_more_words_than_its_compiling_queue_has_room_for(monkeypatch) -> None:
@@ -665,9 +655,9 @@ def test_auto_unparks_no_more_words_than_its_compiling_queue_has_room_for(monkey
     the loop to be parked again."""
     import robosoc.jit.engine as engine
 
-    monkeypatch.setattr(engine, "AUTO_WARMUP_SECONDS", 0.0)
-    monkeypatch.setattr(engine.TranslatingCore, "_budget", lambda self: float("inf"))
-    monkeypatch.setattr(engine, "_COMPILING", {})
+    monkeypatch.setattr(jit_policy, "AUTO_WARMUP_SECONDS", 0.0)
+    monkeypatch.setattr(jit_policy.AutoPolicy, "budget", lambda self: float("inf"))
+    monkeypatch.setattr(jit_policy, "_COMPILING", {})
     soc = make_soc(indirect_calls(10), engine="auto")
     tr = soc.translator
     assert tr.background
@@ -675,13 +665,13 @@ def test_auto_unparks_no_more_words_than_its_compiling_queue_has_room_for(monkey
     parked = range(2, 8)
     for i in parked:
         jt.hot[i] = engine.NEVER_TRANSLATE
-        tr._parked[i] = SRAM_BASE + 4 * i
-    tr._compiling = [None] * (engine.BACKGROUND_QUEUE - 2)  # two places left
+        tr.policy._parked[i] = SRAM_BASE + 4 * i
+    tr._compiling = [None] * (jit_policy.BACKGROUND_QUEUE - 2)  # two places left
     tr.ask_threshold(cached=False)
-    assert [i for i in parked if jt.hot[i] == 0] == [2, 3] and sorted(tr._parked) == [4, 5, 6, 7]
+    assert [i for i in parked if jt.hot[i] == 0] == [2, 3] and sorted(tr.policy._parked) == [4, 5, 6, 7]
     tr._compiling = []
     tr.ask_threshold(cached=False)
-    assert [i for i in parked if jt.hot[i] == 0] == [2, 3, 4, 5, 6, 7] and not tr._parked
+    assert [i for i in parked if jt.hot[i] == 0] == [2, 3, 4, 5, 6, 7] and not tr.policy._parked
 
 
 def test_the_compiling_thread_drops_what_no_live_core_could_use(tmp_path, monkeypatch) -> None:
@@ -689,7 +679,7 @@ def test_the_compiling_thread_drops_what_no_live_core_could_use(tmp_path, monkey
     run ended and nothing else runs the program): a process's later work does not share the host
     with a backlog nobody will run.  Another core with the same code keeps it wanted (a
     benchmark's next run, a chip's other tiles)."""
-    engine, gate = _gated_compiling(tmp_path, monkeypatch)
+    _, gate = _gated_compiling(tmp_path, monkeypatch)
     words, _ = irq.build(7006, True, "spec")
 
     def core(code: list[int]) -> SingleCoreSoC:
@@ -702,7 +692,7 @@ def test_the_compiling_thread_drops_what_no_live_core_could_use(tmp_path, monkey
     outcome(first, irq.MAX_CYCLES)
     jobs = [job for job, *_ in first.translator._compiling]
     shared = first.translator.compiler
-    assert len(jobs) == engine.BACKGROUND_QUEUE
+    assert len(jobs) == jit_policy.BACKGROUND_QUEUE
     second = core(words)  # the same program: wanted while either runs
     del first
     assert all(job.wanted() for job in jobs)
@@ -722,26 +712,25 @@ def test_auto_on_a_fresh_install_interprets_until_compiling_the_dispatch_loop_pa
     """numba has not compiled the dispatch loop yet: auto runs the interpreter (which interp would
     compile as well) and counts the time, and takes the dispatch loop once that time would pay for
     compiling it (docs/translation.md)."""
-    monkeypatch.setattr("robosoc.jit.engine.AUTO_WARMUP_SECONDS", 0.0)  # short runs translate too
-    import robosoc.jit.engine as engine
+    monkeypatch.setattr("robosoc.jit.policy.AUTO_WARMUP_SECONDS", 0.0)  # short runs translate too
 
-    monkeypatch.setattr(engine, "compiled_or_cached", lambda kernel: False)
-    monkeypatch.setattr(engine, "_dispatch_loop_ready", False)
-    monkeypatch.setattr(engine, "STRETCHES", {"auto": 50})
-    monkeypatch.setattr(engine.TranslatingCore, "_budget", lambda self: float("inf"))  # always worth compiling
-    monkeypatch.setattr(engine, "AUTO_BACKGROUND", False)  # and compiled before this short run ends
+    monkeypatch.setattr(jit_policy, "compiled_or_cached", lambda kernel: False)
+    monkeypatch.setattr(jit_policy, "_dispatch_loop_ready", False)
+    monkeypatch.setattr(jit_policy, "STRETCHES", {"auto": 50})
+    monkeypatch.setattr(jit_policy.AutoPolicy, "budget", lambda self: float("inf"))  # always worth compiling
+    monkeypatch.setattr(jit_policy, "AUTO_BACKGROUND", False)  # and compiled before this short run ends
     words = indirect_calls(2000)
-    monkeypatch.setattr(engine, "ESTIMATED_DISPATCH_LOOP_SECONDS", 1e12)
+    monkeypatch.setattr(jit_policy, "ESTIMATED_DISPATCH_LOOP_SECONDS", 1e12)
     soc = assert_same(words, "auto", 1_000_000, len(words))
     assert soc.translator.stats.regions == soc.translator.stats.reused == 0
     assert int(soc.translator.tables().ctx[CTX_STEPS]) == 0  # the dispatch loop never ran
     assert soc.translator.stats.run_seconds > 0
-    assert not engine._dispatch_loop_ready
+    assert not jit_policy._dispatch_loop_ready
     # worth it at once: the slices run in the dispatch loop and translate
-    monkeypatch.setattr(engine, "ESTIMATED_DISPATCH_LOOP_SECONDS", 0.0)
-    monkeypatch.setattr(engine, "_TRANSLATED", {})
+    monkeypatch.setattr(jit_policy, "ESTIMATED_DISPATCH_LOOP_SECONDS", 0.0)
+    monkeypatch.setattr(jit_tables, "_TRANSLATED", {})
     soc = assert_same(words, "auto", 1_000_000, len(words))
-    assert engine._dispatch_loop_ready
+    assert jit_policy._dispatch_loop_ready
     assert soc.translator.stats.regions >= 1
 
 

@@ -17,9 +17,13 @@ from __future__ import annotations
 
 import statistics
 import time
+from typing import TYPE_CHECKING
 
 from rich.console import Console
 from rich.table import Table
+
+if TYPE_CHECKING:
+    from robosoc.chip.engines import Engine
 
 
 def _build(source: str, mul: bool, defines: dict[str, object]):
@@ -30,7 +34,7 @@ def _build(source: str, mul: bool, defines: dict[str, object]):
     return load_elf(build_elf([FIRMWARE_DIR / "bench" / source], mul=mul, defines=defines))
 
 
-def _busy(width: int, height: int, cycles: int, runs: int, engine: str) -> list[float]:
+def _busy(width: int, height: int, cycles: int, runs: int, engine: Engine) -> list[float]:
     from robosoc.chip.mpsoc import MPSoC
     from robosoc.config.chip import ChipConfig
 
@@ -47,7 +51,7 @@ def _busy(width: int, height: int, cycles: int, runs: int, engine: str) -> list[
     return rates
 
 
-def _sleeping(width: int, height: int, ticks: int, runs: int, engine: str) -> tuple[list[float], float]:
+def _sleeping(width: int, height: int, ticks: int, runs: int, engine: Engine) -> tuple[list[float], float]:
     from robosoc.chip.mpsoc import MPSoC
     from robosoc.config.chip import ChipConfig
 
@@ -72,7 +76,7 @@ def run_chip_benchmark(
     ticks: int = 40,
     noc: bool = True,
     console: Console | None = None,
-    engine: str = "interp",
+    engine: str | Engine = "interp",
 ) -> float:
     """Print the figures; returns the median M core-cycles/s of the busy 4x4 mesh.
 
@@ -80,28 +84,27 @@ def run_chip_benchmark(
         ValueError: ``runs``, ``cycles`` or ``ticks`` below 1 (or ``cycles`` beyond 2**62), or an
             unknown ``engine``.
     """
+    from robosoc.chip.engines import resolve_engine
     from robosoc.config.ranges import MAX_CYCLES, check_int
-    from robosoc.jit import ENGINES
 
-    if engine not in ENGINES:
-        raise ValueError(f"engine: must be one of {', '.join(map(repr, ENGINES))}, got {engine!r}")
+    chosen = resolve_engine(engine)  # an unknown name fails before anything runs
 
     check_int("runs", runs, 1)
     check_int("cycles", cycles, 1, MAX_CYCLES, "cycles")
     check_int("ticks", ticks, 1)
     console = console or Console()
-    table = Table(title=f"robosoc bench chip (engine {engine})")
+    table = Table(title=f"robosoc bench chip (engine {chosen.name})")
     table.add_column("case")
     table.add_column("median", justify="right")
     table.add_column("min..max", justify="right")
     rows = {}
     for w, h in ((2, 2), (4, 4), (8, 8)):
-        rates = _busy(w, h, cycles, runs, engine)
+        rates = _busy(w, h, cycles, runs, chosen)
         rows[(w, h)] = rates
         table.add_row(f"{w}x{h} all cores busy (M core-cycles/s)", f"{statistics.median(rates):.1f}",
                       f"{min(rates):.1f}..{max(rates):.1f}")  # fmt: skip
     for w, h in ((2, 2), (16, 16)):
-        factors, awake = _sleeping(w, h, ticks, runs, engine)
+        factors, awake = _sleeping(w, h, ticks, runs, chosen)
         table.add_row(
             f"{w}x{h} sleeping, 1 ms tick, {awake:.1%} awake (x real time at 250 MHz)",
             f"{statistics.median(factors):.2f}",

@@ -22,6 +22,7 @@ from rich.progress import Progress
 from rich.table import Table
 
 if TYPE_CHECKING:
+    from robosoc.chip.engines import Engine
     from robosoc.chip.single import SingleCoreSoC
 
 ITERATIONS = 300  # about 34 M instructions with the multiplier
@@ -33,7 +34,7 @@ def run_core_benchmark(
     runs: int = 7,
     mul: bool = True,
     iterations: int = ITERATIONS,
-    engine: str = "interp",
+    engine: str | Engine = "interp",
     compare: bool = True,
     console: Console | None = None,
 ) -> float:
@@ -43,21 +44,20 @@ def run_core_benchmark(
         ValueError: ``runs`` or ``iterations`` below 1, or an unknown engine.
         RuntimeError: the workload failed its self-check, or two engines disagreed.
     """
+    from robosoc.chip.engines import INTERP, resolve_engine
     from robosoc.chip.single import SingleCoreSoC
     from robosoc.config.ranges import check_int
     from robosoc.firmware import MATRIX_BENCH_SOURCE
-    from robosoc.jit import ENGINES
     from robosoc.program.elf import load_elf
     from robosoc.toolchain import build_elf
 
     check_int("runs", runs, 1)
     check_int("iterations", iterations, 1)
-    if engine not in ENGINES:
-        raise ValueError(f"engine: must be one of {', '.join(ENGINES)}, got {engine!r}")
+    chosen = resolve_engine(engine)
     console = console or Console(stderr=False)
     elf = build_elf([MATRIX_BENCH_SOURCE], mul=mul, defines={"BENCH_ITERATIONS": iterations, "BENCH_QUIET": None})
     program = load_elf(elf)
-    engines = [engine] if engine == "interp" or not compare else [engine, "interp"]
+    engines = [chosen.name] if not chosen.translates or not compare else [chosen.name, INTERP.name]
     reference: dict[str, int] | None = None
 
     def one_run(name: str) -> tuple[int, int, float, bool]:
@@ -94,21 +94,21 @@ def run_core_benchmark(
     medians: dict[str, float] = {}
     for name in engines:
         medians[name] = _report(console, name, rows[name], mul, iterations, warm[name], warm_runs[name])
-    if engine != "interp":
+    if chosen.translates:
         _report_translation(console)
     if len(engines) > 1:
         console.print(
-            f"{engine} / interp: {medians[engine] / medians['interp']:.2f}x "
-            f"(median {medians[engine]:.1f} against {medians['interp']:.1f} MIPS, alternating runs)"
+            f"{chosen.name} / interp: {medians[chosen.name] / medians['interp']:.2f}x "
+            f"(median {medians[chosen.name]:.1f} against {medians['interp']:.1f} MIPS, alternating runs)"
         )
-    print(f"core: {medians[engine]:.0f} MIPS")
-    return medians[engine]
+    print(f"core: {medians[chosen.name]:.0f} MIPS")
+    return medians[chosen.name]
 
 
 def _settled(soc: SingleCoreSoC) -> bool:
     """Whether a run's translator (if any) may translate and entered, handed over or put off
     nothing: the next runs will run what is translated now."""
-    from robosoc.jit.engine import NEVER_ASK
+    from robosoc.jit.policy import NEVER_ASK
 
     translator = soc.translator
     if translator is None:
@@ -154,7 +154,7 @@ def _report(
 
 def _report_translation(console: Console) -> None:
     from robosoc.jit.compiler import shared_compiler
-    from robosoc.jit.engine import translated_instructions
+    from robosoc.jit.tables import translated_instructions
 
     stats = shared_compiler().stats
     n = translated_instructions()

@@ -19,6 +19,7 @@ import numpy as np
 
 from robosoc.chip.core_state import SRAM_BASE, CoreState
 from robosoc.chip.counters import counters_dict
+from robosoc.chip.engines import Engine, resolve_engine
 from robosoc.chip.single import (
     ERRATUM_WARNINGS,
     check_budget,
@@ -33,7 +34,6 @@ from robosoc.config.chip import MIN_PACKET_FLITS, ChipConfig
 from robosoc.config.ranges import check_memory, format_bytes
 from robosoc.isa.disasm import disassemble
 from robosoc.isa.table import MEMORY_CYCLES
-from robosoc.jit import ENGINES
 from robosoc.kernels import chip as kc
 from robosoc.kernels import noc as nk
 from robosoc.kernels.core_layout import (
@@ -103,22 +103,20 @@ class ChipResult:
 class MPSoC:
     """A mesh of tiles built from a :class:`ChipConfig`."""
 
-    def __init__(self, config: ChipConfig, lockstep: bool = False, engine: str | None = None) -> None:
+    def __init__(self, config: ChipConfig, lockstep: bool = False, engine: str | Engine | None = None) -> None:
         """Build the chip.
 
         Args:
             config: the validated platform configuration.
             lockstep: advance everything one cycle at a time instead of in quanta (slow; the
                 results must be identical, which the tests use to check the quantum scheme).
-            engine: "interp" (every core on the interpreter), "jit" (each core translates a region
-                at its first arrival) or "auto" (each core translates the regions that turn hot);
+            engine: an engine or its name (:func:`robosoc.chip.engines.resolve_engine`): "interp"
+                (every core on the interpreter), "jit" (each core translates a region at its first
+                arrival) or "auto" (each core translates the regions that turn hot);
                 every engine gives the same cycles, counters, outputs and errors
                 (docs/translation.md).  Default: the configuration's ``engine``.
         """
-        engine = config.engine if engine is None else engine
-        if engine not in ENGINES:
-            raise ValueError(f"engine: must be one of {', '.join(map(repr, ENGINES))}, got {engine!r}")
-        self.engine = engine
+        self.engine = resolve_engine(config.engine if engine is None else engine)
         periods = {config.tile_config(config.tile_xy(t)).clock_period_ns for t in range(config.n_tiles)}
         if len(periods) > 1:
             raise ValueError("tiles: different clock periods per tile are not supported yet (one global clock)")
@@ -175,7 +173,7 @@ class MPSoC:
         self._timeline_room = 0
         self._timeline_dropped = 0
         # translated code (engine jit or auto): per tile its translator, created at the first step
-        self._jit = ChipTranslation(n, engine)
+        self._jit = ChipTranslation(n, self.engine)
 
     # --- the timeline recorder -------------------------------------------------------------
     def record_timeline(self, rows: int = TIMELINE_ROWS, keep: int = TIMELINE_KEEP) -> None:

@@ -18,9 +18,10 @@ import numpy as np
 
 from robosoc.chip.core_state import DEFAULT_SRAM_SIZE, SRAM_BASE, CoreState
 from robosoc.chip.counters import counters_dict
+from robosoc.chip.engines import Engine, resolve_engine
+from robosoc.config.chip import DEFAULT_ENGINE
 from robosoc.config.ranges import DEVICE_MAP_BASE, MAX_CYCLES, check_int, check_memory, format_bytes
 from robosoc.isa.disasm import disassemble
-from robosoc.jit import DEFAULT_ENGINE, ENGINES
 from robosoc.kernels.core import run_cores
 from robosoc.kernels.core_layout import (
     ADDRESS_ERRORS,
@@ -209,7 +210,7 @@ class SingleCoreSoC:
         mul: bool = True,
         sram_size: int = DEFAULT_SRAM_SIZE,
         errata: str = "spec",
-        engine: str = DEFAULT_ENGINE,
+        engine: str | Engine = DEFAULT_ENGINE,
     ) -> None:
         """A core after reset.
 
@@ -218,26 +219,21 @@ class SingleCoreSoC:
             sram_size: bytes of SRAM at 0x40000000, a multiple of 4 ending below the devices at 0xe0000000.
             errata: "spec" (RISC-V results, each RTL erratum the program hits is counted and warned
                 about) or "rtl" (reproduce the RTL's errata, still counted).
-            engine: "interp" (the interpreter), "jit" (translate regions at their first arrival) or
-                "auto" (translate the regions that turn hot); every engine gives the same cycles,
+            engine: an engine or its name (:func:`robosoc.chip.engines.resolve_engine`): "interp"
+                (the interpreter), "jit" (translate regions at their first arrival) or "auto"
+                (translate the regions that turn hot); every engine gives the same cycles,
                 counters, outputs and errors (docs/translation.md).
         """
         if errata not in ERRATA_MODES:
             raise ValueError(f"errata: must be one of {', '.join(map(repr, ERRATA_MODES))}, got {errata!r}")
-        if engine not in ENGINES:
-            raise ValueError(f"engine: must be one of {', '.join(map(repr, ENGINES))}, got {engine!r}")
+        self.engine = resolve_engine(engine)
         check_int("sram_size", sram_size, 4, DEVICE_MAP_BASE - SRAM_BASE, "bytes")
         check_memory("sram_size", sram_size, f"an SRAM of {format_bytes(sram_size)}")
         self.mul = mul
         self.errata = errata
         self.state = CoreState.new(mul=mul, sram_size=sram_size, base=SRAM_BASE, errata=ERRATA_MODES[errata])
         self.program: Program | None = None
-        self.engine = engine
-        self.translator: TranslatingCore | None = None
-        if engine != "interp":
-            from robosoc.jit.engine import TranslatingCore
-
-            self.translator = TranslatingCore(self.state, mode=engine)
+        self.translator: TranslatingCore | None = self.engine.translator(self.state)
 
     def regions(self) -> list[Region]:
         return [Region(SRAM_BASE, self.state.size, "SRAM")]
@@ -390,7 +386,7 @@ def run_elf(
     sram_size: int = DEFAULT_SRAM_SIZE,
     on_output: Callable[[bytes], object] | None = None,
     errata: str = "spec",
-    engine: str = DEFAULT_ENGINE,
+    engine: str | Engine = DEFAULT_ENGINE,
 ) -> RunResult:
     """Load an ELF into a fresh single-core SoC and run it to its exit."""
     soc = SingleCoreSoC(mul=mul, sram_size=sram_size, errata=errata, engine=engine)

@@ -2,7 +2,8 @@
 
 :class:`~robosoc.chip.mpsoc.MPSoC` holds one :class:`ChipTranslation`.  Before each call of
 :func:`robosoc.kernels.chip.run_chip` it makes sure every loaded core tile has its translator
-(:class:`robosoc.jit.engine.TranslatingCore`, engine ``jit`` or ``auto``) and hands the loop each
+(:class:`robosoc.jit.engine.TranslatingCore`, made by the chip's engine,
+:mod:`robosoc.chip.engines`: ``jit`` or ``auto``) and hands the loop each
 tile's tables in a numba typed list; when a tile turns hot at a word without a translation the
 loop stops with CHIP_TRANSLATE, :meth:`ChipTranslation.translate` translates a region there and
 the loop goes on where it stopped.  The translators of one chip share their statistics, so
@@ -21,8 +22,10 @@ from robosoc.kernels.core_layout import RUN_CHUNK, S_CODE_SIZE, S_PC, S_RUN
 from robosoc.kernels.jit_dispatch import JitArrays, empty_tables, set_tables
 
 if TYPE_CHECKING:
+    from robosoc.chip.engines import Engine
     from robosoc.chip.mpsoc import MPSoC
-    from robosoc.jit.engine import TranslatingCore, TranslationStats
+    from robosoc.jit.engine import TranslatingCore
+    from robosoc.jit.tables import TranslationStats
 
 
 #: auto on the chip: a tile gets its translator once, since the last look, it executed at least
@@ -45,7 +48,7 @@ AUTO_LOOK_MAX_CYCLES = 1 << 24
 class ChipTranslation:
     """Per tile: whether it runs translated code, its translator and its tables (see the module doc)."""
 
-    def __init__(self, tiles: int, engine: str) -> None:
+    def __init__(self, tiles: int, engine: Engine) -> None:
         self.engine = engine
         self.on = np.zeros(tiles, dtype=np.int64)
         self.params = np.zeros(kc.J_SIZE, dtype=np.int64)
@@ -71,7 +74,7 @@ class ChipTranslation:
 
     def prepare(self, chip: MPSoC) -> None:
         """Before a run: a translator for every loaded core tile, and its current tables."""
-        if self.engine == "interp":
+        if not self.engine.translates:
             return
         situation = self._situation(chip)
         if situation is not None and situation == self._prepared:
@@ -81,7 +84,7 @@ class ChipTranslation:
             if live is not None:
                 self._set_threshold(live)
             return
-        busy = self._busy(chip) if self.engine == "auto" else None
+        busy = self._busy(chip) if self.engine.waits_for_busy_tiles else None
         new: list[int] = []
         for t in range(len(self.on)):
             if self._stopped[t] or t not in chip.programs or int(chip.cores.st[t, S_CODE_SIZE]) == 0:
@@ -103,7 +106,8 @@ class ChipTranslation:
         if busy is not None:
             self._look = AUTO_LOOK_CYCLES if made else min(2 * self._look, AUTO_LOOK_MAX_CYCLES)
         live = [tr for tr in self.translators if tr is not None]
-        self._cached = self.engine == "auto" and any(tr.has_cached_regions() for tr in live)
+        # (only a policy that reads its code's manifest has cached regions: auto)
+        self._cached = bool(live) and live[0].policy.reads_manifest and any(tr.has_cached_regions() for tr in live)
         if live:
             self._set_threshold(live[0])
         self._prepared = self._situation(chip)
@@ -116,7 +120,7 @@ class ChipTranslation:
             return None
         entered = 0
         if self.stats is not None:  # a translator was made: the engine is imported
-            from robosoc.jit.engine import entered_regions
+            from robosoc.jit.tables import entered_regions
 
             entered = entered_regions()
         return entered, self._changes, chip.cores.st[:, S_CODE_SIZE].tobytes()
@@ -139,11 +143,13 @@ class ChipTranslation:
         """A translator for tile ``t`` (the translating engine is imported only now: a short run of
         ``auto`` whose tiles never turn busy does without it, 30-45 ms when Python has to compile
         its modules' source)."""
-        from robosoc.jit.engine import TranslatingCore, TranslationStats
+        from robosoc.jit.tables import TranslationStats
 
         if self.stats is None:
             self.stats = TranslationStats(run_seconds=self._run_seconds)
-        return TranslatingCore(chip.cores, tile=t, mode=self.engine, stats=self.stats)
+        translator = self.engine.translator(chip.cores, t, self.stats)
+        assert translator is not None, f"engine {self.engine} made no translator"
+        return translator
 
     def _set_threshold(self, translator: TranslatingCore) -> None:
         """The dispatch loop's parameters, from a translator (they share mode and budget) and whether
@@ -157,7 +163,7 @@ class ChipTranslation:
 
     def watching(self) -> bool:
         """auto: whether some loaded tile may still get a translator (the chip is looked at again)."""
-        return self.engine == "auto" and bool(self._watched)
+        return bool(self._watched)  # only an engine that waits for busy tiles watches any
 
     def _busy(self, chip: MPSoC) -> np.ndarray:
         """auto: per tile, whether it worked enough since the last look to be worth translating."""

@@ -8,8 +8,8 @@ import typer
 from robosoc.cli import exit_codes, files, options
 from robosoc.cli.app import bench_app
 from robosoc.cli.console import make_console
+from robosoc.cli.engine_option import check_engine
 from robosoc.config.firmware import ARITH_CHOICES
-from robosoc.jit import ENGINES
 
 MAX_RUNS = 1000
 #: Largest NoC benchmark: generated-cycles x tiles (the traffic draws one number per tile and cycle).
@@ -33,7 +33,7 @@ def bench_core(
         str,
         typer.Option(
             help="interp, jit or auto (docs/translation.md); the last line gives this engine's median.",
-            callback=options.choice(*ENGINES),
+            callback=check_engine,
         ),
     ] = "interp",
     compare: Annotated[
@@ -138,7 +138,7 @@ def bench_chip(
     ] = 40,
     noc: Annotated[bool, typer.Option("--noc/--no-noc", help="Also run the NoC-alone benchmark.")] = True,
     engine: Annotated[
-        str, typer.Option(help="interp, jit or auto (docs/translation.md).", callback=options.choice(*ENGINES))
+        str, typer.Option(help="interp, jit or auto (docs/translation.md).", callback=check_engine)
     ] = "interp",
 ) -> None:
     """Whole-MPSoC speed: busy 2x2, 4x4 and 8x8 meshes, mostly sleeping 2x2 and 16x16, and the NoC alone."""

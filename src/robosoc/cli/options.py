@@ -73,6 +73,11 @@ def _checked(check: Callable[[str, Any], Any]) -> Callback:
     return callback
 
 
+def checked(check: Callable[[str, Any], Any]) -> Callback:
+    """A callback from ``check(option name, value)``, whose ``ValueError`` becomes the option's error."""
+    return _checked(check)
+
+
 def int_range(lo: int | None, hi: int | None = None, unit: str = "") -> Callback:
     """An integer in ``[lo, hi]`` (:func:`robosoc.config.ranges.check_int`)."""
     return _checked(lambda name, v: ranges.check_int(name, v, lo, hi, unit))

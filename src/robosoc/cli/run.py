@@ -11,13 +11,14 @@ from typing import TYPE_CHECKING, Annotated
 import typer
 
 from robosoc import output_files
+from robosoc.chip.engines import INTERP, resolve_engine
 from robosoc.cli import exit_codes, files, options
 from robosoc.cli.app import app
 from robosoc.cli.engine_option import Engine
 from robosoc.cli.errors import CliError
 from robosoc.cli.gdb_option import GDB_HELP, TILE_HELP, check_gdb_options, gdb_session
+from robosoc.config.chip import DEFAULT_ENGINE
 from robosoc.config.ranges import MAX_CYCLES
-from robosoc.jit import DEFAULT_ENGINE
 
 if TYPE_CHECKING:
     from robosoc.chip.energy import EnergyModel
@@ -143,7 +144,7 @@ def run(
     if on_chip and (trace or profile):
         raise options.fail("--trace" if trace else "--profile", "works on one core (without --mesh/--chip/--off)")
     options.exclusive(mesh=mesh is not None, chip=chip is not None)
-    if engine is not None and engine != "interp" and gdb is not None:
+    if engine is not None and resolve_engine(engine).translates and gdb is not None:
         raise options.fail("--engine", f"{engine} runs without --gdb (the debugger uses the interpreter)")
     if chip is not None:
         for name, field in (("sram_size", "tile.sram_bytes"), ("mul", "tile.multiplier")):
@@ -165,7 +166,7 @@ def run(
                   exit_code, inputs, gdb=gdb, gdb_tile=tile, engine=engine)  # fmt: skip
     else:
         _run_single(programs[0], mul, max_cycles, stats, model, sram_size, trace, profile, errata, exit_code,
-                    inputs, gdb=gdb, engine=engine or (DEFAULT_ENGINE if gdb is None else "interp"))  # fmt: skip
+                    inputs, gdb=gdb, engine=engine or (DEFAULT_ENGINE if gdb is None else INTERP.name))  # fmt: skip
 
 
 def _run_single(

@@ -68,6 +68,23 @@ ERRATA_CHOICES = ("spec", "rtl")
 ENGINE_CHOICES = ("interp", "jit", "auto")
 """How the cores execute: the interpreter, or code translated at a region's first arrival or once
 it turns hot (docs/translation.md); every engine gives the same cycles, counters and outputs."""
+
+
+def engine_name(value: str, what: str = "engine", quote: bool = True) -> str:
+    """``value`` if it names an engine (:data:`ENGINE_CHOICES`): the one check of an engine's name
+    (the configuration's field, the command line's ``--engine``, the chips' and the benchmarks'
+    arguments, through :func:`robosoc.chip.engines.resolve_engine`).
+
+    Raises:
+        ValueError: naming ``what`` and the choices (quoted, as the configuration's messages are;
+            bare with ``quote`` False, as the command line's are).
+    """
+    if value not in ENGINE_CHOICES:
+        choices = ", ".join(map(repr, ENGINE_CHOICES)) if quote else ", ".join(ENGINE_CHOICES)
+        raise ValueError(f"{what}: must be one of {choices}, got {value!r}")
+    return value
+
+
 DEFAULT_ENGINE = "auto"
 """The engine of one core when none is named: interprets, and translates what turns hot."""
 DEFAULT_CHIP_ENGINE = "auto"
@@ -204,8 +221,7 @@ class ChipConfig:
     def __post_init__(self) -> None:
         if self.errata not in ERRATA_CHOICES:
             raise ValueError(f"errata: must be one of {', '.join(map(repr, ERRATA_CHOICES))}, got {self.errata!r}")
-        if self.engine not in ENGINE_CHOICES:
-            raise ValueError(f"engine: must be one of {', '.join(map(repr, ENGINE_CHOICES))}, got {self.engine!r}")
+        engine_name(self.engine)
         for name in ("width", "height"):
             value = getattr(self, name)
             if not 1 <= value <= MAX_MESH_SIDE:

@@ -6,8 +6,3 @@ only finds regions (:mod:`~robosoc.jit.regions`), writes their LLVM IR
 them (:mod:`~robosoc.jit.compiler`) and keeps the tables the compiled dispatch loop
 (:mod:`robosoc.kernels.jit_dispatch`) reads (:mod:`~robosoc.jit.engine`).
 """
-
-from robosoc.config.chip import DEFAULT_ENGINE
-from robosoc.config.chip import ENGINE_CHOICES as ENGINES
-
-__all__ = ["DEFAULT_ENGINE", "ENGINES"]

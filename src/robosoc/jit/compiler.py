@@ -10,7 +10,6 @@ optimisation and code generation and loads the object into the JIT.
 
 from __future__ import annotations
 
-import functools
 import hashlib
 import os
 import queue
@@ -270,38 +269,6 @@ class Compiler:
         if job.error is not None:
             raise job.error
         return job.addresses
-
-
-def _manifest_path(key: str) -> Path:
-    return cache_root() / "jit" / "manifests" / f"{key}.txt"
-
-
-@functools.cache
-def _manifest_host() -> str:
-    """LLVM and the host, asked once: each LLVM call waits for llvmlite's process-wide lock, which
-    the compiling thread holds while it generates code."""
-    return f"llvm{llvm.llvm_version_info} {llvm.get_default_triple()} {llvm.get_host_cpu_name()} {PIPELINE_VERSION}"
-
-
-def manifest_key(code: bytes, options: str) -> str:
-    """The key of a program's manifest: its code bytes, build options, LLVM and host (as object keys)."""
-    return hashlib.sha256(_manifest_host().encode() + options.encode() + code).hexdigest()
-
-
-def read_manifest(key: str) -> set[int]:
-    """The region starts compiled before for this program (their objects are likely in the cache)."""
-    try:
-        return {int(line, 16) for line in _manifest_path(key).read_text().split()}
-    except (OSError, ValueError):
-        return set()
-
-
-def add_to_manifest(key: str, start: int) -> None:
-    """Note a compiled region's start in the program's manifest (one line appended: readers see whole lines)."""
-    path = _manifest_path(key)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with path.open("a") as f:
-        f.write(f"{start:08x}\n")
 
 
 _SHARED: Compiler | None = None
