@@ -219,8 +219,8 @@ def test_parameters_are_the_golden_models(vehicle: VehicleConfig) -> None:
 
 
 def test_a_parameter_outside_its_fixed_point_unit_is_an_error() -> None:
-    vehicle = VehicleConfig(motor=MotorConfig(k_t=300.0))
-    with pytest.raises(ValueError, match=r"MIX_CURRENT_PER_FORCE: .* does not fit Q16\.16"):
+    vehicle = VehicleConfig(motor=MotorConfig(k_m=10.0))  # in its range, but k_m / (Psi sqrt(CT0s)) is too large
+    with pytest.raises(ValueError, match=r"MIX_CURRENT_PER_ROOT_FORCE: .* does not fit Q16\.16"):
         control_header(vehicle)
 
 
