@@ -143,3 +143,53 @@ def test_table_measures_a_projects_tasks_in_the_builds_it_supports(tmp_path: Pat
     assert all(t["seed_response_ms"] is None for run in data["runs"] for t in run["tasks"].values())
     assert "fixed-no-mul" in result.output  # its column, empty
     assert invoke("table", "--firmware", tmp_path / "p", "--release", "both").exit_code == exit_codes.USAGE
+
+
+def _broken(tmp_path: Path, before: str, insert: str) -> Path:
+    assert invoke("new", tmp_path / "p").exit_code == 0
+    source = tmp_path / "p" / "controller.c"
+    text = source.read_text()
+    assert before in text
+    source.write_text(text.replace(before, insert + before, 1))
+    return tmp_path / "p"
+
+
+def test_a_task_that_faults_names_tile_task_pc_and_the_run_says_incomplete(tmp_path: Path) -> None:
+    project = _broken(
+        tmp_path, "    if (est_packet_step", '    if (in.seq == 3) { __asm__ volatile(".word 0x00000000"); }\n'
+    )
+    out = tmp_path / "run"
+    result = invoke("fly", "--firmware", project, "--duration", "0.2", "--out", out)
+    assert result.exit_code == exit_codes.SIMULATOR_STOP, result.output
+    message = " ".join(result.output.split())
+    assert "tile (0, 1): illegal instruction at pc 0x" in message and "(controller_on_message+0x" in message
+    assert "(task 'controller')" in message and "Traceback" not in message
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["complete"] is False and "illegal instruction" in summary["stopped"]
+    assert summary["tasks"]["controller"]["jobs"] == 3  # the jobs of samples 0, 1, 2 were done
+
+
+def test_a_task_the_kernel_refuses_is_named(tmp_path: Path) -> None:
+    """Two tasks of 1 MiB stack each on one tile of 2 MiB SRAM: no room for the second."""
+    assert invoke("new", tmp_path / "p", "--template", "quadrotor").exit_code == 0
+    toml = tmp_path / "p" / "robosoc.toml"
+    text = toml.read_text().replace("tile = [1, 0]", "tile = [0, 1]")
+    toml.write_text(
+        text.replace("stack_bytes = 6144", "stack_bytes = 1048576").replace(
+            "stack_bytes = 3072", "stack_bytes = 1048576"
+        )
+    )
+    result = invoke("fly", "--firmware", tmp_path / "p", "--duration", "0.05", "--no-out")
+    assert result.exit_code == exit_codes.SIMULATOR_STOP, result.output
+    assert "tile (0, 1): the kernel refused task 'pid'" in " ".join(result.output.split())
+
+
+def test_a_project_is_linked_for_its_tiles_sram_and_one_too_large_is_a_build_error(tmp_path: Path) -> None:
+    assert invoke("new", tmp_path / "p").exit_code == 0
+    scenario = tmp_path / "s.toml"  # 1 MiB tiles: the stack's top moves down, the program still fits
+    scenario.write_text('duration_s = 0.05\n[firmware]\nproject = "p"\n[chip.tile]\nsram_bytes = 1048576\n')
+    assert invoke("fly", scenario, "--no-out").exit_code == 0
+    scenario.write_text(scenario.read_text().replace("1048576", "16384"))  # smaller than the program
+    small = invoke("fly", scenario, "--no-out")
+    assert small.exit_code == exit_codes.USAGE and "the firmware does not build" in small.output
+    assert "does not fit in SRAM of 16384 bytes" in small.output and "Traceback" not in small.output

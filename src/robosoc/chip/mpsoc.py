@@ -335,6 +335,15 @@ class MPSoC:
         self._drain_rec()
         return int(self.gst[kc.G_STATUS])
 
+    def raise_failure(self, status: int) -> None:
+        """Raise what a :meth:`step` that returned ``status`` met: a tile that failed.
+
+        Raises:
+            CoreError / ChipError: naming the tile, pc, symbol, instruction and address.
+        """
+        if status == kc.CHIP_ERROR:
+            raise self._error()
+
     def drain_output(self) -> dict[tuple[int, int], bytes]:
         out = {}
         for t in range(self.config.n_tiles):

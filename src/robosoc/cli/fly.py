@@ -145,7 +145,7 @@ def _fly(console, config: ScenarioConfig, out: Path | None, video: Path | None, 
     from robosoc.chip.mpsoc import ChipError
     from robosoc.chip.single import CoreError
     from robosoc.outputs.flight_session import fly_scenario
-    from robosoc.toolchain import CompileError
+    from robosoc.toolchain import ToolchainError
 
     video_state = _VideoState(console, video) if video is not None else None
     live = _start_live(console, foxglove)  # --foxglove (docs/results-logs.md)
@@ -167,7 +167,7 @@ def _fly(console, config: ScenarioConfig, out: Path | None, video: Path | None, 
             console, "interrupted" + (f"; the flight so far is in {out} (summary.json: complete false)" if out else "")
         )
         raise typer.Exit(exit_codes.INTERRUPTED) from None
-    except CompileError as exc:
+    except ToolchainError as exc:  # a compile error (file and line), or a program that cannot fit
         progress.stop()
         raise CliError(f"the firmware does not build: {exc}") from exc
     except (ChipError, CoreError) as exc:

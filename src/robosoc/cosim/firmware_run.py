@@ -37,11 +37,13 @@ from dataclasses import dataclass, field
 
 from robosoc.chip.energy import EnergyModel
 from robosoc.chip.function_profile import FunctionProfile, chip_profile
-from robosoc.chip.mpsoc import MPSoC
+from robosoc.chip.mpsoc import ChipError, MPSoC
+from robosoc.chip.single import CoreError
 from robosoc.config.chip import ChipConfig
 from robosoc.config.firmware import FirmwareConfig
 from robosoc.host import flight_app, images, packets
 from robosoc.host.firmware_image import FirmwareImage
+from robosoc.kernels.chip import K_TASK
 from robosoc.program.elf import load_elf
 from robosoc.records import JobRecord, PwmCommand, SampleInput
 
@@ -162,7 +164,15 @@ class FirmwareRun:
         Raises:
             robosoc.chip.mpsoc.ChipError / CoreError: the firmware faulted (names tile, pc, symbol).
         """
-        self.chip.step(cycle)
+        status = self.chip.step(cycle)
+        try:
+            self.chip.raise_failure(status)
+        except (ChipError, CoreError) as exc:
+            exc.args = (f"{exc.args[0]}{self._running_task(exc)}", *exc.args[1:])  # the task, by its name
+            raise
+        for xy in self.tiles:
+            if self.chip.state(xy) == "exited":  # main returned, or refused a task: no task runs there
+                raise ChipError(f"tile {xy}: {self.image.exit_reason(self.chip.exit_code(xy))}", xy)
         fresh = []
         # a PWM message fits one NoC packet, so no message straddles two calls
         for message in images.reassemble(self.chip.received()):
@@ -173,6 +183,16 @@ class FirmwareRun:
             fresh.append(PwmCommand(int(values["seq"]), pwm, message.cycle))  # type: ignore[arg-type]
         self.commands += fresh
         return fresh
+
+    def _running_task(self, exc: Exception) -> str:
+        """`` (task 'name')`` of the task that ran on the failed tile, or nothing."""
+        message = str(exc)
+        for xy in self.tiles:
+            if message.startswith(f"tile {xy}"):
+                task = int(self.chip.cst[self.chip.config.tile_index(xy), K_TASK])
+                name = self.names.get((xy, task))
+                return f" (task {name!r})" if name else ""
+        return ""
 
     def close_period(self) -> None:
         """End the period of the last injected sample (the chip is at the next sample's cycle):

@@ -15,13 +15,14 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
+from robosoc.config.chip import ChipConfig
 from robosoc.config.firmware import FirmwareConfig
 from robosoc.config.project import IO, FirmwareProject
 from robosoc.config.scenario import ScenarioConfig
 from robosoc.config.vehicle import VehicleConfig
 from robosoc.host.control_params import control_include_dir
 from robosoc.host.project_build import build_project
-from robosoc.host.project_main import Tile, task_ids
+from robosoc.host.project_main import TASK_REFUSED_EXIT, Tile, task_ids
 
 __all__ = ["FirmwareImage", "project_image"]
 
@@ -46,10 +47,19 @@ class FirmwareImage:
     actuator_port: int
     estimator: Tile | None = None
     project: str = ""
+    #: the project's tasks in the order of its file (how a refused task's exit code names it)
+    task_order: tuple[str, ...] = ()
 
     @property
     def tiles(self) -> list[Tile]:
         return list(self.tasks)
+
+    def exit_reason(self, code: int) -> str:
+        """Why the firmware ended on a tile with exit code ``code`` (it never should)."""
+        index = code - TASK_REFUSED_EXIT
+        if 0 <= index < len(self.task_order):
+            return f"the kernel refused task {self.task_order[index]!r} (no task slot or no memory for its stack)"
+        return f"the firmware ended (exit code {code:#x}): its main must not return"
 
     @property
     def task_names(self) -> list[str]:
@@ -62,9 +72,11 @@ def project_image(
     fw: FirmwareConfig,
     vehicle: VehicleConfig | None = None,
     scenario: ScenarioConfig | None = None,
+    chip: ChipConfig | None = None,
 ) -> FirmwareImage:
     """Build ``project`` for ``fw``'s build (arithmetic, multiplier, kernel tick), with the control
-    parameters of ``vehicle`` flying ``scenario`` in reach of its C (``robosoc_control.h``).
+    parameters of ``vehicle`` flying ``scenario`` in reach of its C (``robosoc_control.h``), linked
+    for the smallest SRAM of ``chip``'s tiles it runs on (default: the toolchain's 2 MiB).
 
     Raises:
         ValueError: the project has no single message from the I/O tile (the sensor packets) and to
@@ -84,6 +96,7 @@ def project_image(
         multiplier=fw.multiplier,
         tick_cycles=fw.tick_cycles,
         include_dirs=[control_include_dir(vehicle, scenario)],
+        sram_size=min(chip.tile_config(xy).sram_bytes for xy in project.tiles()) if chip is not None else None,
     )
     tiles = project.tiles()
     return FirmwareImage(
@@ -92,4 +105,5 @@ def project_image(
         sensor=((int(sensor.tile[0]), int(sensor.tile[1])), inputs[0].port),
         actuator_port=outputs[0].port,
         project=project.project.name,
+        task_order=project.task_names,
     )

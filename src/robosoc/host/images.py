@@ -55,6 +55,7 @@ def build(
     opt: str = "-O2",
     include_dirs: Sequence[Path | str] = (),
     out: Path | str | None = None,
+    sram_size: int | None = None,
 ) -> Path:
     """Compile an application with the kernel into an ELF for one MPSoC tile (cached).
 
@@ -63,6 +64,7 @@ def build(
         mul: for the core with the iterative multiplier, or without.
         defines: kernel settings of ``kernel/os_config.h`` and the application's own.
         opt, include_dirs, out: as :func:`robosoc.toolchain.build_elf`.
+        sram_size: the tile's SRAM (the stack starts at its top; default: the toolchain's, 2 MiB).
 
     Raises:
         CompileError: the compiler failed, or a kernel setting is invalid (its ``#error`` names it).
@@ -75,6 +77,7 @@ def build(
         defines=dict(defines or {}),
         include_dirs=[*include_dirs, KERNEL_DIR, PORT_DIR],
         runtime=False,
+        **({"sram_size": sram_size} if sram_size is not None else {}),
     )
 
 

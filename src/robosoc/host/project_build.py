@@ -44,9 +44,12 @@ def build_project(
     tick_cycles: int | None = None,
     defines: Sequence[str] = (),
     include_dirs: Sequence[Path] = (),
+    sram_size: int | None = None,
 ) -> Path:
     """The project's ELF for one build (cached: the same inputs return the same file).  The kernel
-    gets as many task slots (``OS_MAX_TASKS``) as the busiest tile has tasks.
+    gets as many task slots (``OS_MAX_TASKS``) as the busiest tile has tasks; ``sram_size`` is the
+    smallest SRAM of the tiles it runs on (a program that does not fit is the linker's error,
+    which names the overflow in bytes).
 
     Raises:
         ValueError: a build the project does not support (``arith`` or ``multiplier`` not listed in
@@ -69,4 +72,4 @@ def build_project(
     ]
     all_defines = project_defines(project, arith, tick_cycles, defines)
     all_defines.setdefault("OS_MAX_TASKS", busiest)  # task slots: as many as the busiest tile needs
-    return images.build(sources, mul=multiplier, defines=all_defines, include_dirs=folders)
+    return images.build(sources, mul=multiplier, defines=all_defines, include_dirs=folders, sram_size=sram_size)

@@ -34,7 +34,7 @@ def firmware_image(
     project = load_project(fw.project)
     if chip is not None:
         project.check_chip(chip)
-    return project_image(project, fw, vehicle, scenario)
+    return project_image(project, fw, vehicle, scenario, chip)
 
 
 def scenario_image(scenario: ScenarioConfig, vehicle: VehicleConfig) -> FirmwareImage:
