@@ -287,6 +287,16 @@ class ChipConfig:
         """Whether the tile's core, memory and NI are on."""
         return tuple(xy) not in set(self.powered_off)
 
+    def core_tile_problem(self, xy: tuple[int, int]) -> str | None:
+        """Why no task can run on tile ``xy`` (outside the mesh, the I/O tile, powered off), or None."""
+        if not self.contains(xy):
+            return f"is outside the {self.width}x{self.height} mesh"
+        if tuple(xy) == tuple(self.io_tile):
+            return "is the I/O tile, which has no core"
+        if not self.is_powered(xy):
+            return "is powered off in the chip configuration"
+        return None
+
     def tile_config(self, xy: tuple[int, int]) -> TileConfig:
         """The effective options of tile ``xy`` (chip defaults with its override applied)."""
         base = self.tile

@@ -93,13 +93,11 @@ class FirmwareConfig:
     def check_chip(self, chip: ChipConfig) -> None:
         """Raise ValueError unless both task tiles are powered core tiles of ``chip``."""
         for name in ("ekf_tile", "pid_tile"):
-            xy = tuple(getattr(self, name))
-            if not chip.contains(xy):
-                raise ValueError(f"{name}: {list(xy)} is outside the {chip.width}x{chip.height} mesh")
-            if xy == tuple(chip.io_tile):
-                raise ValueError(f"{name}: {list(xy)} is the I/O tile, which has no core")
-            if not chip.is_powered(xy):
-                raise ValueError(f"{name}: {list(xy)} is powered off in the chip configuration")
+            x, y = getattr(self, name)
+            xy = (int(x), int(y))
+            problem = chip.core_tile_problem(xy)
+            if problem:
+                raise ValueError(f"{name}: {list(xy)} {problem}")
 
     def default_chip(self) -> ChipConfig:
         """The chip a replay runs on when none is given: the seed's for the built-in application

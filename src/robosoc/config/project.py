@@ -281,13 +281,9 @@ class FirmwareProject:
         """Raise ValueError unless every task's tile is a powered core tile of ``chip``."""
         for i, task in enumerate(self.tasks):
             xy = (int(task.tile[0]), int(task.tile[1]))
-            where = f"tasks[{i}].tile"
-            if not chip.contains(xy):
-                raise ValueError(f"{where}: {list(xy)} ({task.name}) is outside the {chip.width}x{chip.height} mesh")
-            if xy == tuple(chip.io_tile):
-                raise ValueError(f"{where}: {list(xy)} ({task.name}) is the I/O tile, which has no core")
-            if not chip.is_powered(xy):
-                raise ValueError(f"{where}: {list(xy)} ({task.name}) is powered off in the chip configuration")
+            problem = chip.core_tile_problem(xy)
+            if problem:
+                raise ValueError(f"tasks[{i}].tile: {list(xy)} ({task.name}) {problem}")
 
 
 def load_project(folder: str | Path) -> FirmwareProject:
