@@ -6,6 +6,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import re
+from datetime import datetime
 from pathlib import Path
 
 import numpy as np
@@ -19,7 +20,7 @@ from robosoc.control.flight import ROW_FIELDS, fly
 from robosoc.control.flight_log import CsvFlightLog
 from robosoc.control.host import HostController
 from robosoc.outputs.mcap_log import flight_csv_to_mcap, write_flight_mcap
-from robosoc.outputs.ros2_flight import START_NS
+from robosoc.outputs.ros2_flight import START_NS, START_TIME
 from ros_bags import convert, read_bag
 
 SECONDS = 0.5
@@ -233,6 +234,7 @@ def test_the_start_time_sets_every_stamp_and_the_same_flight_gives_the_same_byte
     write_flight_mcap(rows[:20], second)
     assert first.read_bytes() == second.read_bytes()
     assert START_NS == 1_767_225_600 * 10**9
+    assert datetime.fromisoformat(START_TIME).timestamp() * 10**9 == START_NS
     write_flight_mcap(rows[:20], at_zero, start_ns=0)
     shifted, _ = read_bag(at_zero)
     t = [round(v * 1e9) for v in rows[:20, ROW_FIELDS.index("t")]]

@@ -81,12 +81,6 @@ def _package(datatype: str) -> str:
     return datatype.split("/")[0]
 
 
-def ros2_name(datatype: str) -> str:
-    """``pkg/msg/Type``, the name ROS 2 gives the type ``pkg/Type`` (a schema's name in rosbag2)."""
-    package, _, name = short_name(datatype).partition("/")
-    return f"{package}/msg/{name}"
-
-
 def short_name(datatype: str) -> str:
     """``pkg/Type`` for ``pkg/msg/Type`` (the name fields and ``MSG:`` sections use)."""
     parts = datatype.split("/")
@@ -321,5 +315,5 @@ def row_messages(row: np.ndarray, start_ns: int = START_NS) -> Iterator[tuple[To
 
 __all__ = [
     "FRAME_BODY", "FRAME_ESTIMATE", "FRAME_WORLD", "START_NS", "START_TIME", "TF_TRANSFORMS", "TOPICS", "Topic",
-    "Transform", "cdr_encoder", "message_definition", "ros2_name", "row_messages", "short_name", "stamp_ns",
+    "Transform", "cdr_encoder", "message_definition", "row_messages", "short_name", "stamp_ns",
 ]  # fmt: skip
