@@ -15,10 +15,13 @@ from pathlib import Path
 import jsonschema
 import pytest
 
+from headless_chromium import BROWSER, devtools_flows
 from robosoc.cosim.chip_timeline import timeline_of
 from robosoc.host import flight_app, images
 from robosoc.outputs.chip_trace import run_trace, write_chip_trace
 from run_folders import ChipReplay
+
+needs_chromium = pytest.mark.skipif(BROWSER is None, reason="chromium is not installed (.ci/run installs it)")
 
 _NUMBER = {"type": "number"}
 _ID = {"type": "integer", "minimum": 0}
@@ -78,18 +81,72 @@ def test_slices_nest_on_every_thread(trace: dict) -> None:
             stack.append(end)
 
 
-def test_flows_pair_up_inside_slices(trace: dict) -> None:
+def _bound_by_the_format(point: dict, slices: list[dict]) -> dict | None:
+    """The slice a flow point binds to by the Trace Event Format's rules (which Perfetto follows): a
+    start (``s``), or an end with ``"bp": "e"``, to the innermost slice of its thread enclosing its
+    timestamp; another end to the next slice of its thread starting at or after it."""
+    if point["ph"] == "s" or point.get("bp") == "e":
+        enclosing = [e for e in slices if e["ts"] <= point["ts"] < e["ts"] + e["dur"]]
+        return max(enclosing, key=lambda e: e["ts"], default=None)
+    later = [e for e in slices if e["ts"] >= point["ts"]]
+    return min(later, key=lambda e: e["ts"], default=None)
+
+
+def _bound_by_devtools(point: dict, slices: list[dict]) -> dict | None:
+    """The slice DevTools binds it to (front_end/models/trace/handlers/FlowsHandler.ts): the first
+    event of the same thread and category whose timestamp equals the point's."""
+    return next((e for e in slices if e["ts"] == point["ts"] and e["cat"] == point["cat"]), None)
+
+
+def _packet_slices(trace: dict) -> dict[int, tuple[dict, dict]]:
+    """Per flow id, the send and receive slices of its packet (flows are numbered in the order of
+    the send slices, each flow point written right after its slice)."""
+    out: dict[int, tuple[dict, dict]] = {}
+    events = trace["traceEvents"]
+    for k, e in enumerate(events):
+        if e["ph"] == "f":
+            start = next(s for s in events[:k] if s["ph"] == "s" and s["id"] == e["id"])
+            send = events[events.index(start) - 1]
+            out[e["id"]] = (send, events[k - 1])
+    return out
+
+
+def test_flows_bind_to_the_slices_of_their_packet_by_the_format_and_by_devtools(trace: dict) -> None:
     starts = {e["id"]: e for e in trace["traceEvents"] if e["ph"] == "s"}
     ends = {e["id"]: e for e in trace["traceEvents"] if e["ph"] == "f"}
     assert len(starts) == sum(e["ph"] == "s" for e in trace["traceEvents"])  # ids unique
     assert set(starts) == set(ends)
     slices = _slices(trace)
-    for flow_id, s in starts.items():
-        f = ends[flow_id]
-        assert s["ts"] <= f["ts"]
-        for point in (s, f):
-            inside = [e for e in slices[(point["pid"], point["tid"])] if e["ts"] < point["ts"] < e["ts"] + e["dur"]]
-            assert len(inside) == 1 and inside[0]["cat"] == "noc", point
+    packets = _packet_slices(trace)
+    assert set(packets) == set(starts)
+    tiles = {  # pid → "x,y" from the process names ("tile (1,0)", "tile (0,0) I/O")
+        e["pid"]: e["args"]["name"].split("(")[1].split(")")[0]
+        for e in trace["traceEvents"]
+        if e["name"] == "process_name"
+    }
+    for flow_id, (send, receive) in packets.items():
+        # the slices written just before the points are one packet's: leaving the tile it came from,
+        # reaching the tile it went to
+        assert send["cat"] == receive["cat"] == "noc" and send["ph"] == receive["ph"] == "X"
+        assert tiles[send["pid"]] == receive["args"]["from"] and tiles[receive["pid"]] == send["args"]["to"]
+        assert send["args"]["flits"] == receive["args"]["flits"]
+        assert send["ts"] <= receive["ts"] and send["dur"] > 0 and receive["dur"] > 0
+        for point, mine in ((starts[flow_id], send), (ends[flow_id], receive)):
+            assert (point["pid"], point["tid"]) == (mine["pid"], mine["tid"])
+            thread = slices[(point["pid"], point["tid"])]
+            assert _bound_by_the_format(point, thread) is mine, point
+            assert _bound_by_devtools(point, thread) is mine, point
+
+
+@needs_chromium
+def test_devtools_trace_model_reports_every_flow(trace: dict, tmp_path: Path) -> None:
+    """Chromium's DevTools, given the trace, reports one flow per packet joining its two slices."""
+    flows = devtools_flows(trace["traceEvents"], tmp_path)
+    packets = _packet_slices(trace)
+    assert len(packets) > 50
+    shown = sorted(tuple((e["name"], e["ts"], e["pid"], e["tid"], e["ph"]) for e in flow) for flow in flows)
+    expected = sorted(tuple((e["name"], e["ts"], e["pid"], e["tid"], "X") for e in pair) for pair in packets.values())
+    assert shown == expected
 
 
 def test_job_slices_equal_the_job_records(trace: dict, chip_flight: ChipReplay) -> None:

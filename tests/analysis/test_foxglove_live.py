@@ -14,12 +14,13 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from mcap_ros2._dynamic import generate_dynamic
+from mcap.records import Schema
+from mcap_ros2.decoder import DecoderFactory
 from websockets.sync.client import connect
 
 from robosoc.control.flight import ROW_FIELDS
 from robosoc.outputs.foxglove_live import LiveFlight, LiveFlightError
-from robosoc.outputs.ros2_flight import TOPICS
+from robosoc.outputs.ros2_flight import START_NS, TOPICS
 
 SUBPROTOCOL = "foxglove.sdk.v1"
 MESSAGE_DATA = 0x01  # binary opcode of a message (Foxglove WebSocket protocol)
@@ -93,13 +94,22 @@ def test_a_client_gets_the_channels_and_messages_equal_to_the_rows(host_flight: 
                 stop.set()
                 publisher.join(WAIT_S)
     channel = subscriptions[subscription]
-    decoded = generate_dynamic(channel["schemaName"], channel["schema"])[channel["schemaName"]](payload)
-    times = np.round(rows[:, ROW_FIELDS.index("t")] * 1e9).astype(np.int64)
-    assert ns in times  # a row's simulated time
+    schema = Schema(id=1, name=channel["schemaName"], encoding=channel["schemaEncoding"],
+                    data=channel["schema"].encode())  # fmt: skip
+    decoder = DecoderFactory().decoder_for(channel["encoding"], schema)
+    assert decoder is not None
+    decoded = decoder(payload)
+    # a row's simulated time after the start time, 2026-01-01T00:00:00Z, as in flight.mcap
+    times = 1_767_225_600 * 10**9 + np.round(rows[:, ROW_FIELDS.index("t")] * 1e9).astype(np.int64)
+    assert ns in times
     row = dict(zip(ROW_FIELDS, rows[list(times).index(ns)], strict=True))
-    if hasattr(decoded, "header"):
-        assert decoded.header.stamp.sec * 10**9 + decoded.header.stamp.nanosec == ns
+    headers = [t.header for t in getattr(decoded, "transforms", [])] or [getattr(decoded, "header", None)]
+    for header in filter(None, headers):
+        assert header.stamp.sec * 10**9 + header.stamp.nanosec == ns
     topic = next(t for t in TOPICS if t.name == channel["topic"])
+    if topic.name == "/tf":  # the true pose first
+        translation = decoded.transforms[0].transform.translation
+        assert (translation.x, translation.y, translation.z) == (row["x"], row["y"], row["z"])
     for path, (column, factor) in topic.columns.items():
         node = decoded
         for key in path.split("."):
@@ -130,7 +140,7 @@ def test_fly_foxglove_serves_the_flight_and_writes_its_logs(tmp_path: Path) -> N
         with connect(url, subprotocols=[SUBPROTOCOL], open_timeout=WAIT_S) as ws:
             _subscribe(ws, _advertised(ws))
             _, ns, payload = _first_message(ws)  # the flight goes at real-time pace: 3 s to catch it
-            assert payload and 0 <= ns <= 3 * 10**9
+            assert payload and START_NS <= ns <= START_NS + 3 * 10**9
         rest = fly.stdout.read()
         assert fly.wait(timeout=120) == 0, rest
     for name in ("flight.csv", "flight.mcap", "report.html"):

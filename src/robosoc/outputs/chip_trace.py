@@ -11,6 +11,13 @@ One process per tile (``tile (x,y)``), with these threads:
   first flit's arrival to the cycle the receiver sees it, joined by a flow arrow (the I/O tile has
   only these).
 
+A flow's points are at the starts of its two slices, each written right after its slice: the
+start (``s``) binds to the send slice, which encloses it, the end (``f``, ``"bp": "e"``) to the
+receive slice, which encloses it too (the Trace Event Format's rules, which Perfetto follows), and
+Chromium's DevTools binds a flow point only to a slice of the same thread and category that starts
+at the point's very timestamp.  Points inside the slices (as before) bind in Perfetto but DevTools
+draws none of them.
+
 Timestamps are microseconds of simulated time from the chip's reset (``cycle × clock``).  The
 events come from :mod:`robosoc.cosim.chip_timeline` and the job records of the replay harness.
 """
@@ -166,7 +173,8 @@ def chip_trace(
                 trace.slice(xy, tid, thread, "waiting", "job", j.release_cycle, j.start_cycle)
             if j.completion_cycle > j.start_cycle:
                 trace.slice(xy, tid, thread, "running", "job", j.start_cycle, j.completion_cycle)
-    # NoC packets: a slice at each end (lanes where they overlap), a flow between them
+    # NoC packets: a slice at each end (lanes where they overlap), a flow from the start of one to
+    # the start of the other (each point after its slice, at the slice's own timestamp)
     sends = sorted(timeline.packets, key=lambda p: p.sent)
     send_lane = _lanes_by(sends, lambda p: p.src, lambda p: (p.sent, p.sent + p.flits))
     delivered = sorted((p for p in sends if p.first is not None and p.visible is not None), key=lambda p: p.first)
@@ -178,12 +186,12 @@ def chip_trace(
         trace.slice(p.src, tid, "NoC send", name, "noc", p.sent, p.sent + p.flits, **args)
         if p.first is None or p.visible is None:
             continue
-        trace.flow("s", flow_id, p.src, tid, p.sent + p.flits / 2)
+        trace.flow("s", flow_id, p.src, tid, p.sent)
         tid = THREAD_NOC_RECEIVE + 10 * receive_lane[id(p)]
         args = {"from": f"{p.src[0]},{p.src[1]}", "flits": p.flits, "latency_cycles": p.visible - p.sent}
         name = f"packet from ({p.src[0]},{p.src[1]})"
         trace.slice(p.dest, tid, "NoC receive", name, "noc", p.first, p.visible, **args)
-        trace.flow("f", flow_id, p.dest, tid, (p.first + p.visible) / 2)
+        trace.flow("f", flow_id, p.dest, tid, p.first)
     other = {"clock_ns": clock_ns, "events_lost": timeline.lost, "end_cycle": timeline.end_cycle}
     other.update(metadata or {})
     return {"traceEvents": trace.events, "displayTimeUnit": "ns", "otherData": other}
