@@ -46,6 +46,12 @@ def test_the_clock_of_a_scenario() -> None:
     assert (fast.steps_per_sample, fast.sample_count) == (4, 125)
 
 
+def test_the_smallest_schedule_is_one_sample_of_one_step() -> None:
+    clock = FlightClock(steps_per_sample=1, sample_count=1)
+    assert list(clock.samples()) == [0] and list(clock.steps(0)) == [(0, PHYSICS_STEP_NS)]
+    assert clock.duration_ns == clock.sample_period_ns == PHYSICS_STEP_NS
+
+
 @pytest.mark.parametrize(("steps", "count", "field"), [(0, 3, "steps_per_sample"), (10, 0, "sample_count")])
 def test_an_empty_schedule_is_refused(steps: int, count: int, field: str) -> None:
     with pytest.raises(ValueError, match=f"^{field}: must be at least 1"):
