@@ -16,7 +16,6 @@ from typing import Any
 from robosoc.output_files import save_figure
 from robosoc.sweep.point import OK, metric
 
-TASKS = ("estimator", "pid")
 RESPONSE = "tasks.{task}.response_us_mean"
 ENERGY = "tasks.{task}.energy_nj_mean"
 
@@ -134,7 +133,10 @@ def write_sweep_plots(
     out = folder / "plots"
     out.mkdir(parents=True, exist_ok=True)
     plots = []
-    for task in TASKS:
+    tasks = dict.fromkeys(  # every task any point ran (a sweep may fly several projects), in order
+        task for r in records if r["status"] == OK for task in (r.get("summary") or {}).get("tasks") or {}
+    )
+    for task in tasks:
         path = out / f"pareto-{task}.png"
         plots.append((f"{task}: Pareto front", path, _png(pareto_figure(records, varied, task), path, 100)))
     for field in varied:
