@@ -22,7 +22,8 @@ PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 
 
 def record(arith: str, seed: int, response: float | None, energy: float | None, **extra: object) -> dict:
-    tasks = {"estimator": {"response_us_mean": response, "energy_nj_mean": energy}}
+    figures = {"response_us_mean": response, "energy_nj_mean": energy}
+    tasks = {"estimator": figures, "pid": figures}
     values = {"firmware.arith": arith, **extra}
     return {"status": OK, "values": values, "seed": seed, "summary": {"tasks": tasks}, "error": ""}
 
@@ -236,6 +237,16 @@ def test_write_sweep_plots_makes_the_plots_folder_and_its_parents(tmp_path: Path
     assert [p.name for _, p, _ in plots] == ["pareto-estimator.png", "pareto-pid.png"]
     again = write_sweep_plots(out, RECORDS, [], [])  # an existing folder is fine
     assert [p for _, p, _ in again] == [p for _, p, _ in plots]
+
+
+def test_a_pareto_plot_per_task_that_ran_in_order_of_appearance(tmp_path: Path):
+    """The tasks are those in the points' summaries (a project's own, two projects' together); a
+    failed point's are not looked at."""
+    mine = {"status": OK, "values": {}, "seed": 1, "error": "",
+            "summary": {"tasks": {"controller": {"response_us_mean": 5.0, "energy_nj_mean": 2.0}}}}  # fmt: skip
+    failed = {**mine, "status": FAILED, "summary": {"tasks": {"ghost": {}}}}
+    plots = write_sweep_plots(tmp_path, [mine, failed, *RECORDS], [], [])
+    assert [p.name for _, p, _ in plots] == ["pareto-controller.png", "pareto-estimator.png", "pareto-pid.png"]
 
 
 def test_each_written_plot_is_the_figure_of_its_own_task_field_and_metric(tmp_path: Path):
