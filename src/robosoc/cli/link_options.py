@@ -22,6 +22,7 @@ from robosoc.cosim.link import Address, parse_address
 
 __all__ = [
     "DEFAULT_PORT",
+    "Address",
     "Bind",
     "ConnectTimeout",
     "Faults",

@@ -82,7 +82,7 @@ def check_memory(name: str, needed: int, what: str) -> None:
         )
 
 
-def describe(value: float) -> str:
+def describe(value: int | float) -> str:
     """A bound as people read it: ``2**62``, ``2**63-1``, ``10**10``, ``4096``, ``0.001``."""
     if isinstance(value, int) and value >= 10**7 and str(value).rstrip("0") == "1":
         return f"10**{len(str(value)) - 1}"
@@ -114,8 +114,8 @@ def check_int(name: str, value: object, lo: int | None = None, hi: int | None = 
             rule = f"must be between {describe(lo)} and {describe(hi)}{_unit(unit)}"
         elif lo is not None:
             rule = f"must be >= {describe(lo)}{_unit(unit)}"
-        else:
-            rule = f"must be <= {describe(hi)}{_unit(unit)}"  # type: ignore[arg-type]
+        elif hi is not None:
+            rule = f"must be <= {describe(hi)}{_unit(unit)}"
         raise ValueError(f"{name}: {rule}, got {v}")
     return v
 

@@ -38,11 +38,14 @@ import math
 import typing
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from robosoc.config.ranges import check_seed
 from robosoc.config.scenario import ScenarioConfig
 from robosoc.config.validate import ConfigError, from_mapping, read_toml_mapping
+
+if TYPE_CHECKING:
+    from _typeshed import DataclassInstance
 
 SEED_FIELD = "seed"
 """The scenario's seed: a sweep sets it from its ``seeds`` list, never from a grid or a point."""
@@ -80,14 +83,14 @@ def nest(assignment: Assignment | dict[str, Any]) -> dict[str, Any]:
     return tree
 
 
-def field_names(cls: type = ScenarioConfig, prefix: str = "") -> list[str]:
+def field_names(cls: type[DataclassInstance] | DataclassInstance = ScenarioConfig, prefix: str = "") -> list[str]:
     """Every dotted field of ``cls``, nested dataclasses descended."""
     names: list[str] = []
     hints = typing.get_type_hints(cls)
     for f in dataclasses.fields(cls):
         hint = hints[f.name]
         if dataclasses.is_dataclass(hint):
-            names.extend(field_names(hint, f"{prefix}{f.name}."))  # type: ignore[arg-type]
+            names.extend(field_names(hint, f"{prefix}{f.name}."))
         else:
             names.append(f"{prefix}{f.name}")
     return names

@@ -21,9 +21,12 @@ import tomllib
 import types
 import typing
 from pathlib import Path
-from typing import Any, TypeVar
+from typing import TYPE_CHECKING, Any, TypeVar
 
-T = TypeVar("T")
+if TYPE_CHECKING:
+    from _typeshed import DataclassInstance
+
+T = TypeVar("T", bound="DataclassInstance")
 
 
 class ConfigError(ValueError):
@@ -64,10 +67,10 @@ def _convert(value: Any, hint: Any, path: str, where: str, base: Any = None) -> 
         if value not in args:
             raise ConfigError(where, path, f"must be one of {', '.join(map(repr, args))}, got {value!r}")
         return value
-    if dataclasses.is_dataclass(hint):
+    if isinstance(hint, type) and dataclasses.is_dataclass(hint):  # a class, never an instance
         if not isinstance(value, dict):
             raise ConfigError(where, path, f"expected a table, got {type(value).__name__}")
-        return _build(hint, value, path, where, base if isinstance(base, hint) else None)  # type: ignore[arg-type]
+        return _build(hint, value, path, where, base if isinstance(base, hint) else None)
     if origin is tuple:
         if not isinstance(value, list | tuple):
             raise ConfigError(where, path, f"expected a list, got {type(value).__name__}")
@@ -97,7 +100,7 @@ def _convert(value: Any, hint: Any, path: str, where: str, base: Any = None) -> 
 
 def _build(cls: type[T], data: dict[str, Any], path: str, where: str, base: T | None) -> T:
     hints = typing.get_type_hints(cls)
-    fields = {f.name: f for f in dataclasses.fields(cls) if f.init}  # type: ignore[arg-type]
+    fields = {f.name: f for f in dataclasses.fields(cls) if f.init}
     unknown = sorted(set(data) - set(fields))
     if unknown:
         raise ConfigError(where, _join(path, unknown[0]), f"unknown field (known: {', '.join(sorted(fields))})")
@@ -117,9 +120,9 @@ def _build(cls: type[T], data: dict[str, Any], path: str, where: str, base: T | 
         raise
     except (ValueError, TypeError) as exc:
         text = str(exc)
-        field, sep, reason = text.partition(": ")
-        if sep and field.replace(".", "").replace("_", "").replace("[", "").replace("]", "").isalnum():
-            raise ConfigError(where, _join(path, field), reason) from exc
+        named, sep, reason = text.partition(": ")
+        if sep and named.replace(".", "").replace("_", "").replace("[", "").replace("]", "").isalnum():
+            raise ConfigError(where, _join(path, named), reason) from exc
         raise ConfigError(where, path, text) from exc
 
 
@@ -204,7 +207,7 @@ def load_toml_named(cls: type[T], path: str | Path, section: str | None = None) 
 def replace_checked(obj: T, **changes: Any) -> T:
     """``dataclasses.replace`` that re-runs validation and reports errors as :class:`ConfigError`."""
     try:
-        return dataclasses.replace(obj, **changes)  # type: ignore[type-var]
+        return dataclasses.replace(obj, **changes)
     except ConfigError:
         raise
     except (ValueError, TypeError) as exc:

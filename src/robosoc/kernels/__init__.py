@@ -33,7 +33,7 @@ def _numba_cache_dir() -> Path:
 
 
 if not os.environ.get("NUMBA_CACHE_DIR"):
-    numba.config.CACHE_DIR = str(_numba_cache_dir())
+    numba.config.CACHE_DIR = str(_numba_cache_dir())  # type: ignore[attr-defined]  # numba.config sets its settings with globals().update()
 
 
 def compiled_or_cached(kernel: numba.core.dispatcher.Dispatcher) -> bool:
@@ -43,4 +43,4 @@ def compiled_or_cached(kernel: numba.core.dispatcher.Dispatcher) -> bool:
         return True
     func = kernel.py_func
     index = f"{func.__module__.rsplit('.', 1)[-1]}.{func.__qualname__}-*.nbi"  # numba's index file of it
-    return any(Path(numba.config.CACHE_DIR).rglob(index))
+    return any(Path(numba.config.CACHE_DIR).rglob(index))  # type: ignore[attr-defined]  # numba.config sets its settings with globals().update()

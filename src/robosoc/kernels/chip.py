@@ -556,7 +556,7 @@ def _take_deliveries(st, book, noc):
 
 
 @njit(cache=True, inline="always")
-def _run_awake(core, tiles, until, jit_tables, jit_on, jit_params, one, rest):  # type: ignore[no-untyped-def]
+def _run_awake(core, tiles, until, jit_tables, jit_on, jit_params, one, rest):
     """Run ``tiles`` to ``until``: each translating tile alone in the dispatch loop, the interpreted
     ones together (through ``interpret_cores``, the dispatch loop's own copy of the interpreter:
     numba compiles one, and one variant of the chip loop whatever the engine)."""
@@ -575,16 +575,14 @@ def _run_awake(core, tiles, until, jit_tables, jit_on, jit_params, one, rest):  
 
 
 @njit(cache=True, inline="always")
-def _check_translated(core, t, jit_tables, jit_on) -> None:  # type: ignore[no-untyped-def]
+def _check_translated(core, t, jit_tables, jit_on) -> None:
     """Forget tile ``t``'s translations if a word they were made from changed (a DMA into code)."""
     if jit_on[t] != 0:
         forget_if_changed(jit_tables[t], row(core.m32, t), row(core.dec, t))
 
 
 @njit(cache=True, nogil=True)
-def run_chip(  # type: ignore[no-untyped-def]
-    core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int, jit_on, jit_tables, jit_params
-) -> int:
+def run_chip(core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int, jit_on, jit_tables, jit_params) -> int:
     """Advance the whole chip to cycle ``until`` or an event that needs the host (CHIP_* in gst).
 
     Tiles with ``jit_on[t]`` run translated code from ``jit_tables[t]``

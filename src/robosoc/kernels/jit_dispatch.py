@@ -26,7 +26,7 @@ changed (a pass over those words, so not after every interpreted stretch).
 
 from __future__ import annotations
 
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 from llvmlite import ir
@@ -151,20 +151,36 @@ def empty_tables(words: int = 1) -> JitArrays:
     )
 
 
-@intrinsic
-def call_region(typingctx, fn, ctx, regs, mem, cnt, cyc, limit, blk):  # type: ignore[no-untyped-def]
-    """Call the region function at native address ``fn`` (array addresses, cycle, limit, block); its X_* code."""
-    sig = types.int32(types.int64, *([types.int64] * 7))
+if TYPE_CHECKING:
+    # what the dispatch loop sees (numba's stubs type the call of an @intrinsic as taking the typing
+    # context too and as never returning)
+    def call_region(
+        fn: int | np.integer,
+        ctx: int | np.integer,
+        regs: int | np.integer,
+        mem: int | np.integer,
+        cnt: int | np.integer,
+        cyc: int | np.integer,
+        limit: int | np.integer,
+        blk: int | np.integer,
+    ) -> int: ...
 
-    def codegen(context, builder, signature, args):  # type: ignore[no-untyped-def]
-        i64 = ir.IntType(64)
-        ptrs = [i64.as_pointer(), ir.IntType(32).as_pointer(), ir.IntType(8).as_pointer(), i64.as_pointer()]
-        fnty = ir.FunctionType(ir.IntType(32), [*ptrs, i64, i64, i64])
-        f = builder.inttoptr(args[0], fnty.as_pointer())
-        call_args = [builder.inttoptr(a, t) for a, t in zip(args[1:5], ptrs, strict=True)]
-        return builder.call(f, [*call_args, *args[5:8]])
+else:
 
-    return sig, codegen
+    @intrinsic
+    def call_region(typingctx, fn, ctx, regs, mem, cnt, cyc, limit, blk):
+        """Call the region function at native address ``fn`` (array addresses, cycle, limit, block); its X_* code."""
+        sig = types.int32(types.int64, *([types.int64] * 7))
+
+        def codegen(context, builder, signature, args):
+            i64 = ir.IntType(64)
+            ptrs = [i64.as_pointer(), ir.IntType(32).as_pointer(), ir.IntType(8).as_pointer(), i64.as_pointer()]
+            fnty = ir.FunctionType(ir.IntType(32), [*ptrs, i64, i64, i64])
+            f = builder.inttoptr(args[0], fnty.as_pointer())
+            call_args = [builder.inttoptr(a, t) for a, t in zip(args[1:5], ptrs, strict=True)]
+            return builder.call(f, [*call_args, *args[5:8]])
+
+        return sig, codegen
 
 
 @njit(cache=True)
@@ -190,7 +206,7 @@ def flush_counts(jt: JitArrays, opc_t: np.ndarray, ctr_t: np.ndarray) -> None:
 
 
 @njit(cache=True)
-def set_tables(tables, t: int, jt: JitArrays) -> None:  # type: ignore[no-untyped-def]
+def set_tables(tables, t: int, jt: JitArrays) -> None:
     """``tables[t] = jt`` for a numba typed list of tables (compiled and cached here: the typed
     list's own ``__setitem__`` compiles in every process and costs a dispatch per call)."""
     tables[t] = jt

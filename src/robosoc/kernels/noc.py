@@ -44,7 +44,8 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from robosoc.config.chip import ARBITERS, MIN_PACKET_FLITS
+from robosoc.config.chip import ARBITERS
+from robosoc.config.chip import MIN_PACKET_FLITS as MIN_PACKET_FLITS  # the chip kernel reads it here
 from robosoc.kernels.core_layout import NEVER
 
 # ports (Hermes order)
