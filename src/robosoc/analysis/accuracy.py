@@ -27,7 +27,7 @@ from robosoc.config.vehicle import VehicleConfig, vehicle_preset
 from robosoc.control.flight import ROW_FIELDS
 from robosoc.control.host import HostController
 from robosoc.control.setpoint import Setpoint
-from robosoc.host.packets import FLAG_ARMED, SENSOR
+from robosoc.host.packets import FLAG_ARMED, SENSOR, array, scalar
 
 TRUTH_QUATERNION = tuple(ROW_FIELDS.index(c) for c in ("qw", "qx", "qy", "qz"))
 """Columns of the true attitude in a flight row."""
@@ -68,11 +68,11 @@ def golden_replay(
         p = SENSOR.unpack(sensor_packet(rows[k], k, dt_us))
         sample = SimpleNamespace(
             gyro=np.array(p["gyro"]), accel=np.array(p["accel"]), mag=np.array(p["mag"]),
-            baro_altitude=float(p["baro_altitude"]),  # type: ignore[arg-type]
+            baro_altitude=float(scalar(p, "baro_altitude")),
         )  # fmt: skip
-        sp, ff = p["setpoint"], p["height_feedforward"]
-        on = bool(int(p["flags"]) & FLAG_ARMED)  # type: ignore[call-overload]
-        setpoint = Setpoint(sp[0], sp[1], sp[2], sp[3], on, ff[0], ff[1])  # type: ignore[index]
+        sp, ff = array(p, "setpoint"), array(p, "height_feedforward")
+        on = bool(int(scalar(p, "flags")) & FLAG_ARMED)
+        setpoint = Setpoint(sp[0], sp[1], sp[2], sp[3], on, ff[0], ff[1])
         pwm[k] = host.step(sample, setpoint)
         q[k], h[k], v[k], armed[k] = host.ekf.quaternion, host.altitude.height, host.altitude.velocity, on
     return GoldenRun(q, h, v, pwm, armed)

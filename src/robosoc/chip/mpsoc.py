@@ -10,6 +10,7 @@ programs, talks to the I/O tile and turns counters into per-tile and per-task re
 
 from __future__ import annotations
 
+import functools
 import time
 import warnings
 from collections.abc import Callable, Sequence
@@ -316,7 +317,7 @@ class MPSoC:
         bad = ((state == kc.K_RUN) | (state == kc.K_SLEEP)) & ((off % 4 != 0) | (off < 0) | (off >= st[:, S_CODE_SIZE]))
         for t in np.flatnonzero(bad):
             xy = self.config.tile_xy(int(t))
-            check_pc(self.cores, int(t), lambda pc, xy=xy: self.symbolize(xy, pc), f"tile {xy}: ")
+            check_pc(self.cores, int(t), functools.partial(self.symbolize, xy), f"tile {xy}: ")
         jit = self._jit
         while True:
             jit.prepare(self)

@@ -211,7 +211,7 @@ class Mesh:
                 value out of range, or ``at_cycle`` in the past.
         """
         cfg = self.config
-        src, dst = tuple(src), tuple(dst)
+        src, dst = (*src,), (*dst,)  # tuples even if given lists (as tuple(), keeping the pair type)
         for name, xy in (("src", src), ("dst", dst)):
             if len(xy) != 2 or not cfg.contains(xy):
                 raise ValueError(f"{name}: tile {xy} is outside the {cfg.width}x{cfg.height} mesh")

@@ -80,9 +80,9 @@ class ChipTranslation:
         if situation is not None and situation == self._prepared:
             # nothing new for any tile (a per-tile look cost a sleeping 16x16 chip 1 ms per step):
             # only auto's threshold moves with the run time
-            live = next((tr for tr in self.translators if tr is not None), None)
-            if live is not None:
-                self._set_threshold(live)
+            first = next((tr for tr in self.translators if tr is not None), None)
+            if first is not None:
+                self._set_threshold(first)
             return
         busy = self._busy(chip) if self.engine.waits_for_busy_tiles else None
         new: list[int] = []

@@ -61,7 +61,8 @@ class ActuatorHold:
                 self._to = tuple(float(v) for v in pwm)
                 self._start, self._span = due, span
         value = self._value(step)
-        return tuple(min(255, max(0, round(v))) for v in value)  # type: ignore[return-value]
+        m0, m1, m2, m3 = (min(255, max(0, round(v))) for v in value)
+        return (m0, m1, m2, m3)
 
     def _value(self, step: int) -> tuple[float, ...]:
         if self.mode == "zoh":

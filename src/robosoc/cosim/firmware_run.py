@@ -152,7 +152,7 @@ class FirmwareRun:
     def inject(self, sample: SampleInput) -> None:
         """Send ``sample`` from the I/O tile to the firmware's sensor input at ``sample.cycle``."""
         tile, port = self.image.sensor
-        io = images.tile_address(tuple(self.chip_config.io_tile))  # type: ignore[arg-type]
+        io = images.tile_address(self.chip_config.io_tile)
         for payload in images.message_packets(sample.payload, port, src_tile=io, src_port=port, seq=sample.seq):
             self.chip.inject(tile, payload, sample.cycle)
         self.samples.append(sample)
@@ -179,8 +179,8 @@ class FirmwareRun:
             if message.port != self.image.actuator_port:
                 continue
             values = packets.PWM.unpack(message.data)
-            pwm = tuple(int(v) for v in values["pwm"])  # type: ignore[union-attr]
-            fresh.append(PwmCommand(int(values["seq"]), pwm, message.cycle))  # type: ignore[arg-type]
+            m0, m1, m2, m3 = (int(v) for v in packets.array(values, "pwm"))
+            fresh.append(PwmCommand(int(packets.scalar(values, "seq")), (m0, m1, m2, m3), message.cycle))
         self.commands += fresh
         return fresh
 

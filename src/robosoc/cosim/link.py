@@ -96,7 +96,7 @@ def resolve(address: Address) -> tuple[int, tuple]:
     """
     try:
         ipaddress.ip_address(address.host)
-        flags = socket.AI_NUMERICHOST
+        flags: int = socket.AI_NUMERICHOST
     except ValueError:
         flags = 0
     try:

@@ -294,7 +294,8 @@ class HostLockstepController:
         self._fresh = None
 
     def sense(self, k: int, t_ns: int, sample: SensorSample, setpoint: Setpoint, row: np.ndarray) -> None:
-        self._fresh = tuple(int(v) for v in self.host.step(sample, setpoint))  # type: ignore[assignment]
+        m0, m1, m2, m3 = (int(v) for v in self.host.step(sample, setpoint))
+        self._fresh = (m0, m1, m2, m3)
 
     def advance(self, t_ns: int) -> Pwm | None:
         fresh, self._fresh = self._fresh, None

@@ -31,7 +31,7 @@ from robosoc.records import SampleInput
 def sensor_packet(row: np.ndarray, seq: int, dt_us: int) -> bytes:
     """The sensor packet of one flight row (columns :data:`ROW_FIELDS`): its sample and setpoint."""
     col = dict(zip(ROW_FIELDS, (float(v) for v in row), strict=True))
-    values = {
+    values: dict[str, packets.Value] = {
         "kind": packets.SENSOR.kind,
         "flags": packets.FLAG_ARMED if col["armed"] > 0.5 else 0,
         "seq": seq,

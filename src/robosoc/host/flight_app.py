@@ -71,8 +71,8 @@ def defines(fw: FirmwareConfig) -> dict[str, str | int | None]:
         **arith_defines(fw.arith),
         "OS_TICK_CYCLES": fw.tick_cycles,
         "OS_SCHED_POLICY": "OS_SCHED_EDF" if fw.scheduler == "edf" else "OS_SCHED_RM",
-        "APP_EST_TILE": images.tile_address(tuple(fw.ekf_tile)),
-        "APP_PID_TILE": images.tile_address(tuple(fw.pid_tile)),
+        "APP_EST_TILE": images.tile_address(fw.ekf_tile),
+        "APP_PID_TILE": images.tile_address(fw.pid_tile),
         "APP_PERIODIC": int(fw.release == "periodic"),
         "APP_PERIOD_TICKS": fw.period_ticks,
     }
@@ -111,7 +111,7 @@ def image(
 
 def app_tiles(fw: FirmwareConfig) -> list[tuple[int, int]]:
     """The tiles to load the ELF on (one, if both tasks share it)."""
-    est, pid = tuple(fw.ekf_tile), tuple(fw.pid_tile)
+    est, pid = fw.ekf_tile, fw.pid_tile
     return [est] if est == pid else [est, pid]
 
 
@@ -130,7 +130,7 @@ def task_ids(fw: FirmwareConfig, xy: tuple[int, int]) -> dict[str, int]:
 def sensor_payloads(packet: bytes, fw: FirmwareConfig, chip: ChipConfig, seq: int) -> list[list[int]]:
     """The payloads for :meth:`MPSoC.inject` carrying one sensor packet to the estimator's port."""
     return images.message_packets(
-        packet, SENSOR_PORT, src_tile=images.tile_address(tuple(chip.io_tile)), src_port=SENSOR_PORT, seq=seq
+        packet, SENSOR_PORT, src_tile=images.tile_address(chip.io_tile), src_port=SENSOR_PORT, seq=seq
     )
 
 
@@ -186,12 +186,12 @@ def read_estimate(chip: MPSoC, fw: FirmwareConfig, sample: int = -1) -> ChipEsti
     """
     from robosoc.program.dwarf import member_offset
 
-    xy = tuple(fw.ekf_tile)
-    t = chip.config.tile_index(xy)  # type: ignore[arg-type]
+    xy = fw.ekf_tile
+    t = chip.config.tile_index(xy)
     program = chip.programs.get(t)
     if program is None:
         raise ValueError(f"tile {xy} has no program loaded")
-    stats = read_app_stats(chip, xy)  # type: ignore[arg-type]
+    stats = read_app_stats(chip, xy)
     base = program.address_of(EST_STATE_SYMBOL)
     fmt = "<i" if fw.arith == "fixed" else "<f"
     scale = 1.0 / 65536.0 if fw.arith == "fixed" else 1.0

@@ -156,6 +156,30 @@ class PacketFormat:
         return out
 
 
+def scalar(values: Mapping[str, Value], name: str) -> int | float:
+    """Field ``name`` of unpacked ``values``, a one-value field.
+
+    Raises:
+        TypeError: the field is an array.
+    """
+    value = values[name]
+    if isinstance(value, tuple):
+        raise TypeError(f"{name}: an array field, not one value")
+    return value
+
+
+def array(values: Mapping[str, Value], name: str) -> tuple[int, ...] | tuple[float, ...]:
+    """Field ``name`` of unpacked ``values``, an array field.
+
+    Raises:
+        TypeError: the field holds one value.
+    """
+    value = values[name]
+    if not isinstance(value, tuple):
+        raise TypeError(f"{name}: a one-value field, not an array")
+    return value
+
+
 def _encode(f: Field, value: float) -> int:
     if f.type == "q16":
         scaled = round(float(value) * Q16_ONE)

@@ -177,7 +177,8 @@ def chip_trace(
     # the start of the other (each point after its slice, at the slice's own timestamp)
     sends = sorted(timeline.packets, key=lambda p: p.sent)
     send_lane = _lanes_by(sends, lambda p: p.src, lambda p: (p.sent, p.sent + p.flits))
-    delivered = sorted((p for p in sends if p.first is not None and p.visible is not None), key=lambda p: p.first)
+    delivered = [p for p in sends if p.first is not None and p.visible is not None]
+    delivered.sort(key=lambda p: p.first or 0)  # (first is never None here)
     receive_lane = _lanes_by(delivered, lambda p: p.dest, lambda p: (p.first, p.visible))
     for flow_id, p in enumerate(sends, start=1):
         tid = THREAD_NOC_SEND + 10 * send_lane[id(p)]
@@ -192,7 +193,7 @@ def chip_trace(
         name = f"packet from ({p.src[0]},{p.src[1]})"
         trace.slice(p.dest, tid, "NoC receive", name, "noc", p.first, p.visible, **args)
         trace.flow("f", flow_id, p.dest, tid, p.first)
-    other = {"clock_ns": clock_ns, "events_lost": timeline.lost, "end_cycle": timeline.end_cycle}
+    other: dict[str, object] = {"clock_ns": clock_ns, "events_lost": timeline.lost, "end_cycle": timeline.end_cycle}
     other.update(metadata or {})
     return {"traceEvents": trace.events, "displayTimeUnit": "ns", "otherData": other}
 

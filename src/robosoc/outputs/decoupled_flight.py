@@ -221,6 +221,7 @@ class _Side:
         child.close()
         self.record: dict[str, Any] | None = None
         self.error: tuple[str, str] | None = None
+        self.address: Address | None = None  # where the physics side listens, once it says
         self.open = True
 
     def receive(self) -> list[tuple]:
@@ -329,7 +330,7 @@ def _handle(side: _Side, message: tuple, say: Callable[[str], None], on_progress
     elif kind == "error":
         side.error = (message[1], message[2])
     elif kind == "listening":
-        side.address = message[1]  # type: ignore[attr-defined]
+        side.address = message[1]
 
 
 def _await_listening(side: _Side, timeout_s: float, say: Callable[[str], None]) -> Address:
@@ -338,8 +339,8 @@ def _await_listening(side: _Side, timeout_s: float, say: Callable[[str], None]) 
         wait([side.conn, side.process.sentinel], timeout=0.2)
         for message in side.receive():
             _handle(side, message, say, None)
-        if getattr(side, "address", None) is not None:
-            return side.address  # type: ignore[attr-defined,no-any-return]
+        if side.address is not None:
+            return side.address
         if side.error is not None:
             raise SideFailed(side.name, side.error[0], side.error[1])
         if not side.process.is_alive() and not side.conn.poll():

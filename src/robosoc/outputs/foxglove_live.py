@@ -11,6 +11,7 @@ own pace.
 from __future__ import annotations
 
 import time
+from collections.abc import Callable, Mapping
 
 import foxglove
 import numpy as np
@@ -50,7 +51,7 @@ class LiveFlight:
         self.pace = pace
         self.start_ns = start_ns
         self._channels: dict[str, foxglove.Channel] = {}
-        self._encoders = {}
+        self._encoders: dict[str, Callable[[Mapping[str, object]], bytes]] = {}
         for topic in TOPICS:
             text = message_definition(topic.datatype)
             schema = foxglove.Schema(name=topic.datatype, encoding=ROS2_SCHEMA_ENCODING, data=text.encode())

@@ -229,8 +229,8 @@ def _energy_breakdowns(summary: dict) -> list[str]:
     for key, value in energy.items():
         if not isinstance(value, dict):
             continue
-        numbers = {str(k): finite(v) for k, v in value.items()}
-        numbers = {k: v for k, v in numbers.items() if v is not None}
+        read = {str(k): finite(v) for k, v in value.items()}
+        numbers = {k: v for k, v in read.items() if v is not None}
         if not numbers:
             continue
         if key == "tiles_uj":

@@ -22,6 +22,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -223,7 +224,7 @@ _INDEX = {name: i for i, name in enumerate(ROW_FIELDS)}
 
 def _set(message: dict, path: str, value: object) -> None:
     *parents, leaf = path.split(".")
-    node = message
+    node: Any = message  # nested messages: dicts, and lists of numbers
     for key in parents:
         node = node[key]
     if isinstance(node, list):

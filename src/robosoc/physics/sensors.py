@@ -22,7 +22,7 @@ a seed fixes the stream bit for bit.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -100,10 +100,10 @@ class SensorModel:
         self._white_sigma = [*config.accel_sigma, *config.gyro_sigma, *([config.mag_sigma] * 3), config.baro_sigma]
         self._rng = np.random.default_rng(0)
         self.bias = [0.0] * 10
-        self._prev_velocity = (0.0, 0.0, 0.0)
-        self._prev_quat = (1.0, 0.0, 0.0, 0.0)
+        self._prev_velocity: tuple[float, ...] = (0.0, 0.0, 0.0)
+        self._prev_quat: tuple[float, ...] = (1.0, 0.0, 0.0, 0.0)
 
-    def reset(self, rng: np.random.Generator, velocity: Sequence[float], quaternion: Sequence[float]) -> None:
+    def reset(self, rng: np.random.Generator, velocity: Iterable[float], quaternion: Iterable[float]) -> None:
         """Draw the initial biases and start a window at the current state."""
         self._rng = rng
         if self.config.noise:

@@ -65,7 +65,8 @@ class Quadrotor:
             ValueError: not four integers in 0..255.
         """
         self.propulsion.set_pwm(pwm)
-        self.pwm = tuple(int(v) for v in pwm)  # type: ignore[assignment]
+        m0, m1, m2, m3 = (int(v) for v in pwm)  # four: set_pwm checked them
+        self.pwm = (m0, m1, m2, m3)
 
     def sensors(self) -> SensorSample:
         """The latest sensor sample (taken at the last sensor tick, ``sample.time``)."""

@@ -21,6 +21,7 @@ firmware builds a sweep needs are made here before any worker starts (:func:`pre
 
 from __future__ import annotations
 
+import functools
 import multiprocessing
 import signal
 import threading
@@ -99,7 +100,9 @@ def prepare(config: SweepConfig, points: list[Point], on_status: Callable[[str],
             continue
         seen.add(token)
         try:
-            prepare_chip(scenario.chip, lambda s=scenario, v=vehicle: flight_app.build(s.firmware, v, s), on_status)
+            prepare_chip(
+                scenario.chip, functools.partial(flight_app.build, scenario.firmware, vehicle, scenario), on_status
+            )
         except Exception:
             continue
 

@@ -30,6 +30,7 @@ import threading
 from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import asdict, dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -270,10 +271,10 @@ def summarise(
     )  # fmt: skip
 
 
-_progress: multiprocessing.queues.Queue | None = None  # type: ignore[name-defined]
+_progress: multiprocessing.queues.Queue | None = None
 
 
-def _init_worker(progress: multiprocessing.queues.Queue) -> None:  # type: ignore[name-defined]
+def _init_worker(progress: multiprocessing.queues.Queue) -> None:
     global _progress
     _progress = progress
 
@@ -445,7 +446,7 @@ def default_workers() -> int:
 def to_json(result: TableResult) -> dict:
     """The table as plain data (NaN as None), for ``table.json``."""
 
-    def clean(value: object) -> object:
+    def clean(value: Any) -> Any:  # JSON-like data, of the shape of its input
         if isinstance(value, float):
             return None if math.isnan(value) else value
         if isinstance(value, dict):
@@ -465,7 +466,7 @@ def to_json(result: TableResult) -> dict:
             d["tasks"][task]["seed_response_ms"] = seed.response_ms if seed else None
             d["tasks"][task]["seed_energy_nj"] = seed.energy_nj if seed else None
         runs.append(d)
-    return clean(  # type: ignore[return-value]
+    return clean(
         {
             "schema": 1,
             "spec": {k: v for k, v in asdict(result.spec).items() if k != "project" or v},  # the built-in: no key
