@@ -26,7 +26,7 @@ if TYPE_CHECKING:
     from robosoc.chip.engines import Engine
 
 
-def _build(source: str, mul: bool, defines: dict[str, object]):
+def _build(source: str, mul: bool, defines: dict[str, str | int | None]):
     from robosoc.firmware import FIRMWARE_DIR
     from robosoc.program.elf import load_elf
     from robosoc.toolchain import build_elf

@@ -8,6 +8,7 @@ Both are built on :class:`RobosocGroup`, whose ``main`` runs every command throu
 from __future__ import annotations
 
 import sys
+from collections.abc import Sequence
 from typing import Any
 
 import typer
@@ -16,21 +17,30 @@ from typer.core import TyperGroup
 from robosoc.cli import exit_codes
 from robosoc.cli.errors import PROGRAM, command_path, run_guarded
 
+# the attribute naming the command an exception left, read by run_guarded (exceptions do not declare it)
+_COMMAND_TAG = "robosoc_command"
+
 
 class RobosocGroup(TyperGroup):
     """A typer group whose commands fail the robosoc way (see :mod:`robosoc.cli.errors`)."""
 
-    def main(  # type: ignore[override]
+    def main(
         self,
-        args: Any = None,
+        args: Sequence[str] | None = None,
         prog_name: str | None = None,
         complete_var: str | None = None,
         standalone_mode: bool = True,
+        windows_expand_args: bool = True,
         **extra: Any,
     ) -> Any:
         def call() -> object:
             return super(RobosocGroup, self).main(
-                args=args, prog_name=PROGRAM, complete_var=complete_var, standalone_mode=False, **extra
+                args=args,
+                prog_name=PROGRAM,
+                complete_var=complete_var,
+                standalone_mode=False,
+                windows_expand_args=windows_expand_args,
+                **extra,
             )
 
         code = run_guarded(call)
@@ -38,20 +48,21 @@ class RobosocGroup(TyperGroup):
             sys.exit(code)
         return code
 
-    def invoke(self, ctx: typer.Context) -> Any:
+    def invoke(self, ctx: typer.Context) -> Any:  # type: ignore[override]  # typer passes its typer.Context, declares a private base
         try:
             return super().invoke(ctx)
         except BrokenPipeError:
             raise typer.Exit(exit_codes.BROKEN_PIPE) from None
         except BaseException as exc:
             # the innermost group names the command: "robosoc bench noc"
-            if not hasattr(exc, "robosoc_command") and not isinstance(exc, typer.Exit | SystemExit):
+            if not hasattr(exc, _COMMAND_TAG) and not isinstance(exc, typer.Exit | SystemExit):
                 sub = ctx.invoked_subcommand
-                exc.robosoc_command = command_path(ctx) + (f" {sub}" if sub else "")  # type: ignore[attr-defined]
+                command = command_path(ctx) + (f" {sub}" if sub else "")
+                setattr(exc, _COMMAND_TAG, command)
                 if isinstance(exc, KeyboardInterrupt):
                     from robosoc.cli.errors import print_error
 
-                    print_error(exc.robosoc_command, "interrupted")  # type: ignore[attr-defined]
+                    print_error(command, "interrupted")
                     raise typer.Exit(exit_codes.INTERRUPTED) from None
             raise
 

@@ -24,7 +24,7 @@ import os
 import sys
 import traceback
 from collections.abc import Callable
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, TypeGuard
 
 from robosoc.cli import exit_codes
 from robosoc.output_files import NotRegularFileError
@@ -92,7 +92,8 @@ def _click_message(exc: click.ClickException) -> str:
     return _lower_first(exc.message)
 
 
-def _is_click_exception(exc: BaseException) -> bool:
+def _is_click_exception(exc: BaseException) -> TypeGuard[click.ClickException]:
+    # click's class or its copy in typer (typer._click), with the same interface: known by name
     return any(cls.__name__ == "ClickException" for cls in type(exc).__mro__)
 
 
@@ -146,7 +147,7 @@ def run_guarded(main: Callable[[], object], default_command: str = PROGRAM) -> i
             return exit_codes.INTERRUPTED
         if _is_click_exception(exc):
             command = command_path(getattr(exc, "ctx", None)) if getattr(exc, "ctx", None) else default_command
-            print_error(command, _click_message(exc))  # type: ignore[arg-type]
+            print_error(command, _click_message(exc))
             _stderr_write(f"(see '{command} --help')\n")
             return int(getattr(exc, "exit_code", exit_codes.USAGE)) or exit_codes.USAGE
         if isinstance(exc, OSError) and exc.errno == errno.EPIPE:

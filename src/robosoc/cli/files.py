@@ -28,9 +28,11 @@ from robosoc.cli.errors import CliError
 from robosoc.output_files import not_regular
 
 if TYPE_CHECKING:
+    from _typeshed import DataclassInstance
+
     from robosoc.program.elf import Program, Region
 
-T = TypeVar("T")
+T = TypeVar("T", bound="DataclassInstance")
 
 __all__ = [
     "input_dir",

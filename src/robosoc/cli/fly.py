@@ -8,7 +8,7 @@ import dataclasses
 import math
 import time
 from pathlib import Path
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
@@ -19,6 +19,11 @@ from robosoc.cli.errors import CliError
 from robosoc.cli.project_check import check_project
 from robosoc.cli.scenario_flags import FLY, ResolvedScenario, ScenarioFlags, resolve, takes_scenario
 from robosoc.config.scenario import ScenarioConfig
+
+if TYPE_CHECKING:
+    from rich.progress import Progress, TaskID
+
+    from robosoc.physics.render import FrameSink, OffscreenRenderer
 
 VIDEO_FPS = 25.0
 
@@ -194,9 +199,9 @@ class FlightProgress:
         self.duration_s = duration_s
         self.rate_hz = rate_hz
         self.samples = round(duration_s * rate_hz)
-        self.progress = None
-        self.spinner = None
-        self.task = None
+        self.progress: Progress | None = None
+        self.spinner: Progress | None = None
+        self.task: TaskID | None = None
         self.start = 0.0
 
     def status(self, text: str) -> None:
@@ -237,6 +242,7 @@ class FlightProgress:
         simulated = (k + 1) / self.rate_hz
         elapsed = time.perf_counter() - self.start
         rtf = f"{simulated / elapsed:.2f}x real time" if elapsed > 0.2 else ""
+        assert self.task is not None  # added with the bar
         self.progress.update(self.task, completed=k + 1, sim=f"{simulated:.2f}/{self.duration_s:g} s", rtf=rtf)
 
     def stop(self) -> None:
@@ -251,8 +257,8 @@ class _VideoState:
 
     def __init__(self, console, video: Path) -> None:
         self.console = console
-        self.renderer = None
-        self.sink = None
+        self.renderer: OffscreenRenderer | None = None
+        self.sink: FrameSink | None = None
         from robosoc.physics.render import FrameSink, RenderUnavailable, find_backend
 
         try:

@@ -17,14 +17,17 @@ from __future__ import annotations
 import dataclasses
 import re
 from collections.abc import Callable, Sequence
-from typing import Any, TypeVar
+from typing import TYPE_CHECKING, Any, TypeVar
 
 import typer
 
 from robosoc.cli.errors import CliError
 from robosoc.config import ranges
 
-T = TypeVar("T")
+if TYPE_CHECKING:
+    from _typeshed import DataclassInstance
+
+T = TypeVar("T", bound="DataclassInstance")
 
 __all__ = [
     "choice",
@@ -190,7 +193,7 @@ def override(config: T, changes: dict[str, tuple[str, Any]], sources: Sequence[s
     """
     for option, (field, value) in changes.items():
         try:
-            config = dataclasses.replace(config, **{field: value})  # type: ignore[type-var]
+            config = dataclasses.replace(config, **{field: value})
         except (ValueError, TypeError) as exc:
             text = str(exc)
             for name, (other, _) in changes.items():

@@ -6,7 +6,7 @@ import json
 import sys
 import warnings
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
@@ -312,7 +312,7 @@ def _chip_config(ctx: typer.Context, mul: bool, sram_size: int, mesh: str | None
             config = ChipConfig(width=w, height=h, tile=TileConfig(multiplier=mul, sram_bytes=sram_size))
         except ValueError as exc:  # the only rule across the two: the SRAM of all tiles together
             raise options.fail("--sram-size", f"{exc.args[0].partition(': ')[2]} (with --mesh {w}x{h})") from exc
-    changes = {}
+    changes: dict[str, tuple[str, Any]] = {}
     if off:
         changes["--off"] = ("powered_off", tuple(options.parse_tile("--off", t) for t in off))
     if chip_file is None or options.given(ctx, "errata"):

@@ -53,7 +53,7 @@ __all__ = [
 
 #: Router models: the Hermes RTL's single switch controller, or one idealised arbiter per output port.
 Arbiter = Literal["hermes", "per-output"]
-ARBITERS: tuple[str, ...] = get_args(Arbiter)
+ARBITERS: tuple[Arbiter, ...] = get_args(Arbiter)
 #: Cycles an uncontended header spends at the head of an input buffer before it crosses (in the next
 #: cycle) on the Hermes RTL: 5 cycles per router, measured (platform.md §4, docs/noc.md).
 HERMES_ROUTING_LATENCY = 4
