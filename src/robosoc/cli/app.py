@@ -48,7 +48,8 @@ class RobosocGroup(TyperGroup):
             sys.exit(code)
         return code
 
-    def invoke(self, ctx: typer.Context) -> Any:  # type: ignore[override]  # typer passes its typer.Context, declares a private base
+    # typer calls it with a typer.Context and declares the base class, which typer keeps private
+    def invoke(self, ctx: typer.Context) -> Any:  # type: ignore[override]  # given a typer.Context
         try:
             return super().invoke(ctx)
         except BrokenPipeError:

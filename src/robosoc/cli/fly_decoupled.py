@@ -101,8 +101,12 @@ def fly_decoupled_run(
             "injected faults per datagram, each direction: "
             + ", ".join(f"{k} {v:g}" for k, v in link.faults.as_dict().items() if v)
         )
-    temporary = tempfile.TemporaryDirectory(prefix="robosoc-decoupled-") if out is None else None
-    folder = out if out is not None else Path(temporary.name)  # type: ignore[union-attr]
+    temporary: tempfile.TemporaryDirectory[str] | None = None
+    if out is None:
+        temporary = tempfile.TemporaryDirectory(prefix="robosoc-decoupled-")
+        folder = Path(temporary.name)
+    else:
+        folder = out
     progress = Progress(
         TextColumn("flight"),
         BarColumn(),
@@ -166,8 +170,8 @@ def fly_decoupled_run(
             if len(rows):
                 plot_flight(rows, out / FLIGHT_PNG, title=f"{scenario.name}, seed {seed}, decoupled")
         plain(console, f"run folder: {out} (flight.csv, jobs.csv, summary.json, link-*.log)")
-    else:
-        temporary.cleanup()  # type: ignore[union-attr]
+    elif temporary is not None:  # (always, without an out folder)
+        temporary.cleanup()
     if flight.ended != "done":
         note(console, f"{flight.message}")
     end_of_side(flight.ended, flight.message, str(out) if out else "")

@@ -20,7 +20,7 @@ from robosoc.cli.console import make_console, note, plain
 from robosoc.cli.errors import CliError
 
 if TYPE_CHECKING:
-    from rich.console import Console
+    from rich.console import Console, JustifyMethod
 
     from robosoc.chip.function_profile import FunctionProfile
 
@@ -45,9 +45,12 @@ def print_profile(console: Console, profile: FunctionProfile, top: int = 10, tit
             f"{totals[xy]['energy_pj'] / 1e6:.3f} uJ",
             title_justify="left",
         )
-        for name, justify in (("task", "left"), ("function", "left"), ("cycles", "right"), ("%", "right"),
-                              ("instructions", "right"), ("energy nJ", "right")):  # fmt: skip
-            table.add_column(name, justify=justify)  # type: ignore[arg-type]
+        columns: tuple[tuple[str, JustifyMethod], ...] = (
+            ("task", "left"), ("function", "left"), ("cycles", "right"), ("%", "right"), ("instructions", "right"),
+            ("energy nJ", "right"),
+        )  # fmt: skip
+        for name, justify in columns:
+            table.add_column(name, justify=justify)
         for task in tasks:
             mine = [r for r in profile.rows if r.tile == xy and r.task == task]
             task_cycles = sum(r.cycles for r in mine) or 1

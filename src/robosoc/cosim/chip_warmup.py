@@ -49,7 +49,7 @@ def numba_cache_dir() -> Path:
 
     import robosoc.kernels  # noqa: F401  (sets numba's cache folder)
 
-    return Path(numba.config.CACHE_DIR)  # type: ignore[attr-defined]  # numba.config sets its settings with globals().update()
+    return Path(numba.config.CACHE_DIR)  # type: ignore[attr-defined]  # numba.config: made at run time
 
 
 def kernels_cached() -> bool:

@@ -32,8 +32,9 @@ def _numba_cache_dir() -> Path:
     return cache_root() / "numba" / kernel_digest()
 
 
+# numba.config makes its settings at run time (globals().update()), unseen by numba's stubs
 if not os.environ.get("NUMBA_CACHE_DIR"):
-    numba.config.CACHE_DIR = str(_numba_cache_dir())  # type: ignore[attr-defined]  # numba.config sets its settings with globals().update()
+    numba.config.CACHE_DIR = str(_numba_cache_dir())  # type: ignore[attr-defined]  # numba.config: made at run time
 
 
 def compiled_or_cached(kernel: numba.core.dispatcher.Dispatcher) -> bool:
@@ -43,4 +44,5 @@ def compiled_or_cached(kernel: numba.core.dispatcher.Dispatcher) -> bool:
         return True
     func = kernel.py_func
     index = f"{func.__module__.rsplit('.', 1)[-1]}.{func.__qualname__}-*.nbi"  # numba's index file of it
-    return any(Path(numba.config.CACHE_DIR).rglob(index))  # type: ignore[attr-defined]  # numba.config sets its settings with globals().update()
+    cache = Path(numba.config.CACHE_DIR)  # type: ignore[attr-defined]  # numba.config: made at run time
+    return any(cache.rglob(index))

@@ -66,8 +66,9 @@ def find_x27_writes(program: Program, allowed_function: str = IRQ_ENTRY_SYMBOL) 
             addr = seg.addr + offset
             if allowed_range is not None and allowed_range[0] <= addr < allowed_range[1]:
                 continue
-            kind = lookup(word).name  # type: ignore[union-attr]  # writes_register found its row
-            found.append(X27Write(addr, word, program.symbolize(addr), kind, reg))
+            row = lookup(word)
+            assert row is not None  # writes_register found its row
+            found.append(X27Write(addr, word, program.symbolize(addr), row.name, reg))
     return found
 
 
