@@ -30,6 +30,8 @@ from robosoc.config.scenario import CONTROLLERS, MAX_VEHICLES
 from robosoc.config.vehicle import VEHICLE_PRESETS
 
 if TYPE_CHECKING:
+    from _typeshed import DataclassInstance
+
     from robosoc.config.scenario import ScenarioConfig
 
 FLY = "fly"
@@ -223,6 +225,7 @@ def resolve(flags: ScenarioFlags) -> ResolvedScenario:
     for names in by_field.values():
         if len(names) > 1:
             raise options.fail(names[0], f"cannot be combined with {' or '.join(names[1:])}")
+    named: tuple[str, ...]
     if flags.path is None:
         config, named = ScenarioConfig(), ()
     else:
@@ -238,7 +241,7 @@ def resolve(flags: ScenarioFlags) -> ResolvedScenario:
     return ResolvedScenario(config, flags.path, tuple(given), tuple(sources))
 
 
-C = TypeVar("C")
+C = TypeVar("C", bound="DataclassInstance")
 
 
 def resolve_section(flags: ScenarioFlags, base: C, section: str) -> C:
@@ -279,18 +282,15 @@ def _named(text: str, changes: dict[str, tuple[str, Any]]) -> str:
     return text
 
 
-F = TypeVar("F", bound=Callable[..., Any])
-
-
 def takes_scenario(
     command: str, *, scenario_option_hidden: bool = False, scenario_file: bool = True
-) -> Callable[[F], F]:
+) -> Callable[[Callable[..., Any]], Callable[..., Any]]:
     """Give the typer command ``command`` the scenario file (``SCENARIO`` after the command's own
     arguments, or ``--scenario``; not with ``scenario_file=False``) and the rows of :data:`FLAGS`
     it takes, as options after its own; the function receives them as one keyword argument
     ``flags`` (:class:`ScenarioFlags`)."""
 
-    def wrap(func: F) -> F:
+    def wrap(func: Callable[..., Any]) -> Callable[..., Any]:  # a function of another signature
         signature = inspect.signature(func, eval_str=True)  # typer reads the annotations as objects
         own = [p.replace(kind=_KW) for p in signature.parameters.values() if p.name != "flags"]
         mine = flags_of(command)
@@ -318,8 +318,10 @@ def takes_scenario(
             parameters = [*arguments, scenario_arg, *rest, scenario_opt, *extra]
         else:
             parameters = [*arguments, *rest, *extra]
-        command_with_scenario.__signature__ = signature.replace(parameters=parameters)  # type: ignore[attr-defined]
-        return command_with_scenario  # type: ignore[return-value]
+        # typer reads the command's signature with inspect, which honours __signature__ (not declared on functions)
+        typed = signature.replace(parameters=parameters)
+        command_with_scenario.__signature__ = typed  # type: ignore[attr-defined]  # inspect reads it, undeclared
+        return command_with_scenario
 
     return wrap
 

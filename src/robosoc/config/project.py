@@ -203,26 +203,26 @@ class FirmwareProject:
         ports: dict[tuple[tuple[int, int], int], int] = {}
         per_tile: dict[tuple[int, int], int] = {}
         for i, task in enumerate(self.tasks):
-            tile = tuple(task.tile)
-            per_tile[tile] = per_tile.get(tile, 0) + 1  # type: ignore[index]
-            if per_tile[tile] > MAX_TASKS:  # type: ignore[index]
+            tile = (*task.tile,)  # a tuple even if given a list (as tuple(), keeping the pair type)
+            per_tile[tile] = per_tile.get(tile, 0) + 1
+            if per_tile[tile] > MAX_TASKS:
                 raise ValueError(f"tasks[{i}].tile: more than {MAX_TASKS} tasks on tile {list(tile)}")
             if task.port is None:
                 continue
             key = (tile, task.port)
             if key in ports:
-                other = self.tasks[ports[key]].name  # type: ignore[index]
+                other = self.tasks[ports[key]].name
                 raise ValueError(f"tasks[{i}].port: port {task.port} of tile {list(tile)} is taken by task {other!r}")
-            ports[key] = i  # type: ignore[index]
+            ports[key] = i
         seen: dict[str, int] = {}
         for i, message in enumerate(self.messages):
             if message.name in seen:
                 raise ValueError(f"messages[{i}].name: {message.name!r} is also messages[{seen[message.name]}]")
             seen[message.name] = i
-            for key in ("source", "destination"):
-                end = getattr(message, key)
+            for which in ("source", "destination"):
+                end = getattr(message, which)
                 if end != IO and end not in names:
-                    raise ValueError(f"messages[{i}].{key}: no task {end!r} (tasks: {', '.join(names)}, or {IO!r})")
+                    raise ValueError(f"messages[{i}].{which}: no task {end!r} (tasks: {', '.join(names)}, or {IO!r})")
             if message.destination != IO:
                 task = self.tasks[names[message.destination]]
                 if task.port != message.port:
