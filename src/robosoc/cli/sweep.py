@@ -99,7 +99,7 @@ def sweep_command(
     # a scheduler's workers are counted once connected (run_sweep says how many), not os.cpu_count() here
     where = (
         f"Dask at {escape(dask)}"
-        if remote
+        if remote and dask is not None
         else f"{'a Dask LocalCluster' if dask else 'a local pool'} of {workers} workers"
     )
     console.print(

@@ -16,7 +16,10 @@ import dataclasses
 import math
 import numbers
 import os
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
+
+if TYPE_CHECKING:
+    from _typeshed import DataclassInstance
 
 __all__ = [
     "CLOCK_PERIOD_NS",
@@ -264,7 +267,7 @@ floats, a vector, has the range for each element).  Checked in each dataclass's 
 that every float field of every configuration dataclass is listed."""
 
 
-def check_fields(obj: object) -> None:
+def check_fields(obj: DataclassInstance) -> None:
     """Check every field of the dataclass ``obj`` listed in :data:`FLOAT_FIELDS` (``None`` passes:
     an optional field left out).
 
@@ -272,7 +275,7 @@ def check_fields(obj: object) -> None:
         ValueError: ``"<field>: must be in [lo, hi] unit, got v"`` (``"<field>[i]: ..."`` in a vector).
     """
     owner = type(obj).__name__
-    for f in dataclasses.fields(obj):  # type: ignore[arg-type]
+    for f in dataclasses.fields(obj):
         rule = FLOAT_FIELDS.get(f"{owner}.{f.name}")
         if rule is None:
             continue

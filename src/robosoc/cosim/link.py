@@ -18,7 +18,7 @@ import socket
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TextIO
+from typing import IO
 
 import numpy as np
 
@@ -112,7 +112,7 @@ class LinkLog:
 
     def __init__(self, path: Path | None) -> None:
         self.path = path
-        self._file: TextIO | None = open_in_place(path, "w", encoding="utf-8") if path is not None else None
+        self._file: IO[str] | None = open_in_place(path, "w", encoding="utf-8") if path is not None else None
         self._start = time.monotonic()
 
     def write(self, event: str) -> None:

@@ -226,6 +226,7 @@ class CoreTables:
                 self._install_known()
                 self._remember_install()
             self._new_code()
+        assert self._jt is not None  # made above or by _install_as_before
         return self._jt
 
     def _key(self) -> Build:
@@ -413,6 +414,7 @@ class CoreTables:
         if slots_added:
             self._commit_slots()
         jt = self._jt
+        assert jt is not None
         self._jt = jt = jt._replace(tpcs=np.concatenate(pcs), twords=np.concatenate(words))
         jt.ctx[CTX_WORDS] = len(jt.tpcs)
 
