@@ -21,7 +21,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from robosoc.firmware import KERNEL_DIR, PORT_DIR, kernel_runtime_sources
-from robosoc.toolchain import build_elf
+from robosoc.toolchain import DEFAULT_SRAM_SIZE, build_elf
 
 if TYPE_CHECKING:
     from robosoc.chip.mpsoc import MPSoC
@@ -77,7 +77,7 @@ def build(
         defines=dict(defines or {}),
         include_dirs=[*include_dirs, KERNEL_DIR, PORT_DIR],
         runtime=False,
-        **({"sram_size": sram_size} if sram_size is not None else {}),
+        sram_size=sram_size if sram_size is not None else DEFAULT_SRAM_SIZE,  # build_elf's default
     )
 
 
