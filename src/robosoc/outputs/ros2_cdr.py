@@ -18,6 +18,7 @@ from __future__ import annotations
 import struct
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
+from typing import Any
 
 _PRIMITIVES: dict[str, str] = {
     "bool": "?", "byte": "B", "char": "B", "int8": "b", "uint8": "B", "int16": "h", "uint16": "H",
@@ -80,14 +81,14 @@ class _Writer:
         pad = -(len(self.data) - len(_HEADER)) % size
         self.data += b"\x00" * pad
 
-    def primitive(self, kind: str, value: object) -> None:
+    def primitive(self, kind: str, value: Any) -> None:  # a number of the kind the definition names
         code = _PRIMITIVES[kind]
         size = struct.calcsize(code)
         self.align(size)
         if kind == "bool":
             value = bool(value)
         elif code in "bBhHiIqQ":
-            value = int(value)  # type: ignore[call-overload]
+            value = int(value)
         self.data += struct.pack("<" + code, value)
 
     def string(self, value: str) -> None:
@@ -122,13 +123,13 @@ class CdrEncoder:
 
         return encode
 
-    def _message(self, out: _Writer, datatype: str, message: Mapping[str, object]) -> None:
+    def _message(self, out: _Writer, datatype: str, message: Mapping[str, Any]) -> None:
         for f in self._fields[datatype]:
             value = message.get(f.name, f.default)
             if f.length is None:
                 self._value(out, f.kind, value)
                 continue
-            items = list(value) if value is not None else []  # type: ignore[call-overload]
+            items = list(value) if value is not None else []
             if f.length < 0:
                 out.primitive("uint32", len(items))
             elif value is None:
@@ -138,13 +139,13 @@ class CdrEncoder:
             for item in items:
                 self._value(out, f.kind, item)
 
-    def _value(self, out: _Writer, kind: str, value: object) -> None:
+    def _value(self, out: _Writer, kind: str, value: Any) -> None:  # of the type the definitions give it
         if kind == "string":
             out.string("" if value is None else str(value))
         elif kind in _PRIMITIVES:
             out.primitive(kind, 0 if value is None else value)
         else:
-            self._message(out, kind, value if value is not None else {})  # type: ignore[arg-type]
+            self._message(out, kind, value if value is not None else {})
 
 
 __all__ = ["CdrEncoder", "parse_fields"]
