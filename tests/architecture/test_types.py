@@ -1,7 +1,7 @@
 """mypy over src/robosoc is clean, with the configuration of ``[tool.mypy]`` in pyproject.toml.
 
 The test runs ``python -m mypy`` of this interpreter in the repository, as a developer would
-(docs/testing.md).  Its cache is mypy's default ``.mypy_cache`` there: a first run checks the 173
+(docs/testing.md).  Its cache is mypy's default ``.mypy_cache`` there: a first run checks the ~170
 modules in about 20 s (the shared 2-core machine, 2026-11-28), a run with a warm cache in about 1 s.
 """
 
