@@ -72,6 +72,7 @@ def test_steps_per_period_tolerates_only_rounding():
     assert steps_per_period(1.0 / (dt * (1 + 0.5e-9)), dt) == 1
     assert steps_per_period(2000.0, dt) is None  # less than one step per period
     assert steps_per_period(0.0, dt) is None and steps_per_period(float("nan"), dt) is None
+    assert steps_per_period(1 / 1.8e305, dt) is None  # a period that overflows (was an OverflowError)
 
 
 def test_scenario_controller_is_checked_when_built_directly():

@@ -100,6 +100,8 @@ def steps_per_period(rate_hz: float, dt_s: float = PHYSICS_DT_S) -> int | None:
     if not (math.isfinite(rate_hz) and rate_hz > 0):
         return None
     steps = 1.0 / (rate_hz * dt_s)
+    if not math.isfinite(steps):  # a rate so low that its period overflows (update_s of 1e305 s)
+        return None
     whole = round(steps)
     if whole < 1 or abs(steps - whole) > 1e-9 * max(1.0, steps):
         return None
