@@ -73,6 +73,7 @@ def test_steps_per_period_tolerates_only_rounding():
     assert steps_per_period(2000.0, dt) is None  # less than one step per period
     assert steps_per_period(0.0, dt) is None and steps_per_period(float("nan"), dt) is None
     assert steps_per_period(1 / 1.8e305, dt) is None  # a period that overflows (was an OverflowError)
+    assert steps_per_period(5e-324, dt) is None  # a rate whose product with dt is 0 (was a ZeroDivisionError)
 
 
 def test_scenario_controller_is_checked_when_built_directly():

@@ -99,9 +99,10 @@ def steps_per_period(rate_hz: float, dt_s: float = PHYSICS_DT_S) -> int | None:
     """Physics steps per period of ``rate_hz``, or ``None`` if it is not a whole number."""
     if not (math.isfinite(rate_hz) and rate_hz > 0):
         return None
-    steps = 1.0 / (rate_hz * dt_s)
-    if not math.isfinite(steps):  # a rate so low that its period overflows (update_s of 1e305 s)
+    per_step = rate_hz * dt_s  # periods per physics step
+    if per_step <= 0 or not math.isfinite(1.0 / per_step):  # a rate so low that its period overflows
         return None
+    steps = 1.0 / per_step
     whole = round(steps)
     if whole < 1 or abs(steps - whole) > 1e-9 * max(1.0, steps):
         return None
