@@ -149,3 +149,34 @@ def test_decoupled_summary_numbers() -> None:
     assert _number(None, 100, "cm") == "n/a"
     assert _number(float("nan"), 100, "cm") == "n/a"
     assert _number(float("inf"), 1, "deg") == "n/a"
+
+
+def test_an_error_about_a_field_names_who_set_it(tmp_path: Path) -> None:
+    no_mul = tmp_path / "no-mul.toml"  # a chip whose cores have no multiplier, and a build without it
+    no_mul.write_text("[firmware]\nmultiplier = false\n[chip.tile]\nmultiplier = false\n")
+    with pytest.raises(CliError) as caught:
+        resolved(argument=no_mul, mul=True)  # the scenario's own check, on a field the option set
+    assert caught.value.message == (
+        "--mul/--no-mul: the build uses the multiplier but the ekf_tile [0, 1] has none (chip.tile or chip.tiles) "
+        f"(with {no_mul})"
+    )
+    with pytest.raises(CliError) as caught:
+        resolved(argument=no_mul, arith="double")  # the firmware table's own check
+    assert caught.value.message == f"--arith: must be one of 'float', 'fixed', got 'double' (with {no_mul})"
+    flight = resolve(ScenarioFlags.of(None, no_mul, {"seed": 3}))
+    assert flight.source_of("seed") == "--seed"
+    assert flight.source_of("firmware.multiplier") == f"{no_mul}: firmware.multiplier"
+    assert resolve(ScenarioFlags.of(None, None, {})).source_of("firmware.project") == "firmware.project"
+
+
+def test_firmware_commands_take_the_firmware_rows_alone() -> None:
+    from robosoc.cli.scenario_flags import FIRMWARE, resolve_section
+    from robosoc.config.firmware import FirmwareConfig
+
+    assert {f.option for f in flags_of(FIRMWARE)} == {"--arith", "--mul/--no-mul"}
+    base = FirmwareConfig(period_ticks=5)
+    got = resolve_section(ScenarioFlags.of(None, None, {"arith": "float", "mul": False}), base, "firmware")
+    assert (got.arith, got.multiplier, got.period_ticks) == ("float", False, 5)
+    assert resolve_section(ScenarioFlags.of(None, None, {"arith": None}), base, "firmware") == base
+    with pytest.raises(CliError, match=r"^--arith: must be one of"):
+        resolve_section(ScenarioFlags.of(None, None, {"arith": "double"}), base, "firmware")

@@ -249,7 +249,7 @@ def resolve_section(flags: ScenarioFlags, base: C, section: str) -> C:
     the given rows of ``section`` applied; errors name the option."""
     given = [flag for flag in flags.given() if flag.section == section]
     changes = {flag.option: (flag.field.partition(".")[2], flags.values[flag.param]) for flag in given}
-    return options.override(base, changes, [str(flags.path)] if flags.path is not None else [])
+    return options.override(base, changes)
 
 
 def override(config: C, changes: dict[str, tuple[str, Any]], sources: list[str]) -> C:
