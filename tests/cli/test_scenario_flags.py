@@ -11,14 +11,23 @@ from __future__ import annotations
 
 import dataclasses
 from pathlib import Path
-from typing import Any
+from typing import Annotated, Any
 
 import pytest
 import typer
 from typer.testing import CliRunner
 
 from robosoc.cli.errors import CliError
-from robosoc.cli.scenario_flags import FLAGS, FLY, SERVE_CHIP, ScenarioFlags, flags_of, resolve, takes_scenario
+from robosoc.cli.scenario_flags import (
+    FIRMWARE,
+    FLAGS,
+    FLY,
+    SERVE_CHIP,
+    ScenarioFlags,
+    flags_of,
+    resolve,
+    takes_scenario,
+)
 from robosoc.cli.serve import _out
 from robosoc.config.scenario import ScenarioConfig
 
@@ -180,3 +189,41 @@ def test_firmware_commands_take_the_firmware_rows_alone() -> None:
     assert resolve_section(ScenarioFlags.of(None, None, {"arith": None}), base, "firmware") == base
     with pytest.raises(CliError, match=r"^--arith: must be one of"):
         resolve_section(ScenarioFlags.of(None, None, {"arith": "double"}), base, "firmware")
+
+
+def test_the_decorator_places_the_scenario_file_after_the_commands_own_arguments(tmp_path: Path) -> None:
+    """SCENARIO comes after the command's own arguments, --scenario is shown unless hidden, the
+    annotations written as text are read, and a parameter that clashes with a flag is refused."""
+    app = typer.Typer()
+    seen: list[tuple[Any, ...]] = []
+
+    @app.command()
+    @takes_scenario(SERVE_CHIP, scenario_option_hidden=True)
+    def hidden(flags: ScenarioFlags, name: Annotated[str, typer.Argument(metavar="NAME")], count: int = 1) -> None:
+        seen.append((name, count, flags.path, flags.label, resolve(flags).config.duration_s))
+
+    @app.command()
+    @takes_scenario(FIRMWARE, scenario_file=False)
+    def bare(flags: ScenarioFlags, top: int = 3) -> None:
+        seen.append((top, dict(flags.values)))
+
+    scenario = tmp_path / "s.toml"
+    scenario.write_text("duration_s = 2.0\n")
+    runner = CliRunner()
+    result = runner.invoke(app, ["hidden", "first", str(scenario), "--count", "4"])
+    assert result.exit_code == 0, result.output
+    assert seen.pop() == ("first", 4, scenario, None, 2.0)
+    result = runner.invoke(app, ["hidden", "first", "--scenario", str(scenario)])
+    assert result.exit_code == 0 and seen.pop() == ("first", 1, scenario, "--scenario", 2.0)
+    shown = runner.invoke(app, ["hidden", "--help"]).output
+    assert "NAME" in shown and "SCENARIO" in shown and "--scenario" not in shown and "--arith" in shown
+    assert shown.index("NAME") < shown.index("SCENARIO") and "Scenario TOML file" in shown
+    assert runner.invoke(app, ["bare", "--arith", "float"]).exit_code == 0
+    assert seen.pop() == (3, {"arith": "float", "mul": None})
+    bare_help = runner.invoke(app, ["bare", "--help"]).output
+    assert "SCENARIO" not in bare_help and "--scenario" not in bare_help and "--seed" not in bare_help
+
+    def clashing(flags: ScenarioFlags, seed: int = 0) -> None: ...
+
+    with pytest.raises(TypeError, match=r"clashing: parameters \['seed'\] belong to the scenario flags"):
+        takes_scenario(FLY)(clashing)
