@@ -59,11 +59,11 @@ def test_a_bad_flight_row_before_the_last_names_its_line(tmp_path: Path) -> None
     path.write_text(_flight_text([_row(0), _row(1)[:3], _row(2)]))
     with pytest.raises(RunFolderError) as caught:
         read_flight_rows(path, [])
-    assert str(caught.value) == f"{path}: line 3: 3 values, expected {len(ROW_FIELDS)}"
+    assert str(caught.value) == f"{path}: row 2 (line 3): 3 values, expected {len(ROW_FIELDS)}"
     bad = _row(1)
     bad[4] = "fast"
     path.write_text(_flight_text([_row(0), bad, _row(2)]))
-    with pytest.raises(RunFolderError, match=r"flight\.csv: line 3: could not convert string to float: 'fast'$"):
+    with pytest.raises(RunFolderError, match=r"flight\.csv: row 2 \(line 3\), column roll: 'fast' is not a number$"):
         read_flight_rows(path, [])
 
 
@@ -113,7 +113,7 @@ def test_a_job_with_a_bad_number_names_its_column(tmp_path: Path) -> None:
     path.write_text(_jobs_text([job, _job("pid", "1,0", 2)]))
     with pytest.raises(RunFolderError) as caught:
         read_jobs(path, [])
-    assert str(caught.value).startswith(f"{path}: column {number}: ") and "soon" in str(caught.value)
+    assert str(caught.value).startswith(f"{path}: row 1 (line 2), column {number}: ") and "soon" in str(caught.value)
 
 
 def test_a_run_folder_reads_every_file_and_its_vehicles_in_number_order(tmp_path: Path) -> None:
@@ -197,7 +197,10 @@ def test_a_bad_profile_is_skipped_with_a_note(tmp_path: Path) -> None:
     assert run.notes == [f"profile.json: skipped: not a robosoc profile (rows with {PROFILE_KEYS})"]
     profile.write_text(json.dumps({"rows": "none"}))
     assert read_run_folder(tmp_path).notes == run.notes
-    good = {"rows": [dict.fromkeys(PROFILE_KEYS.split(", "), 0)], "totals": {}}
+    good = {
+        "rows": [dict.fromkeys(PROFILE_KEYS.split(", "), 0) | {"tile": "0,0", "task_name": "pid", "function": "main"}],
+        "totals": {},
+    }
     profile.write_text(json.dumps(good))
     run = read_run_folder(tmp_path)
     assert run.profile == good and run.notes == []

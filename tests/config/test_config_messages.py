@@ -110,8 +110,12 @@ def test_a_fixed_length_tuple_takes_exactly_its_length():
 def test_a_sweep_point_that_breaks_the_scenario_names_the_sweep_file_and_keeps_the_base(tmp_path: Path):
     path = tmp_path / "s.toml"
     path.write_text('[base]\nduration_s = 4.0\n[[points]]\n"firmware.ekf_tile" = [5, 5]\n')
+    with pytest.raises(ConfigError) as info:  # a listed point is checked before anything runs
+        load_sweep(path)
+    assert str(info.value).startswith(f"{path}: points[0]: firmware.ekf_tile")
+    path.write_text('[base]\nduration_s = 4.0\n[[points]]\nvehicles = 2\n')
     config = load_sweep(path)
-    (point,) = config.assignments()
+    point = (("firmware.ekf_tile", [5, 5]),)
     with pytest.raises(ConfigError) as info:
         config.scenario(point)
     assert str(info.value).startswith(f"{path}: firmware.ekf_tile")

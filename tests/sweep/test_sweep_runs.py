@@ -10,6 +10,7 @@ from pathlib import Path
 import pytest
 
 from robosoc.config.sweep import load_sweep
+from robosoc.config.validate import ConfigError
 from robosoc.sweep.plan import plan
 from robosoc.sweep.point import FAILED, OK
 from robosoc.sweep.runner import run_sweep
@@ -104,24 +105,37 @@ def test_interrupted_sweep_resumes_with_only_the_missing_points(tmp_path):
 def test_failed_points_are_recorded_and_do_not_stop_the_sweep(tmp_path):
     sweep = tmp_path / "s.toml"
     # 4 ms is one sensor period at the base's 250 Hz but none at 100 Hz: that point is an invalid
-    # combination; the other listed point maps the PID to a tile outside the 2x2 chip
+    # combination; the PID on tile 3,0 is valid on the 4-wide chip only: with the 2-wide base, an
+    # invalid combination (a listed point is checked as a whole, and is valid with one combination)
     sweep.write_text(
         "[base]\nduration_s = 0.03\n[base.sensors]\nrate_hz = 250.0\n[grid]\nduration_s = [0.004, 0.03]\n"
+        '"chip.width" = [2, 4]\n'
         '[[points]]\n"sensors.rate_hz" = 100.0\n'
         '[[points]]\n"firmware.pid_tile" = [3, 0]\n'
     )
     config = load_sweep(sweep)
     outcome = run_sweep(config, tmp_path / "out", workers=1)
     status = {json.dumps(r["values"]): (r["status"], r["error"]) for r in outcome.records.values()}
-    assert status[json.dumps({"duration_s": 0.03, "sensors.rate_hz": 100.0})][0] == OK
-    short = status[json.dumps({"duration_s": 0.004, "sensors.rate_hz": 100.0})]
-    assert short[0] == FAILED and short[1].startswith("invalid combination") and "sensor period" in short[1]
+    assert status[json.dumps({"duration_s": 0.03, "chip.width": 2, "sensors.rate_hz": 100.0})][0] == OK
+    for width in (2, 4):
+        short = status[json.dumps({"duration_s": 0.004, "chip.width": width, "sensors.rate_hz": 100.0})]
+        assert short[0] == FAILED and short[1].startswith("invalid combination") and "sensor period" in short[1]
+    assert status[json.dumps({"duration_s": 0.03, "chip.width": 4, "firmware.pid_tile": [3, 0]})][0] == OK
     for duration in (0.004, 0.03):
-        bad = status[json.dumps({"duration_s": duration, "firmware.pid_tile": [3, 0]})]
+        bad = status[json.dumps({"duration_s": duration, "chip.width": 2, "firmware.pid_tile": [3, 0]})]
         assert bad[0] == FAILED and bad[1].startswith("invalid combination") and "pid_tile" in bad[1]
-    assert len(outcome.failures) == 3
+    assert len(outcome.failures) == 4
     # --retry-failed runs exactly the failed ones again
-    assert run_sweep(config, tmp_path / "out", workers=1, retry_failed=True).ran == 3
+    assert run_sweep(config, tmp_path / "out", workers=1, retry_failed=True).ran == 4
+
+
+def test_a_listed_point_invalid_in_every_combination_is_refused_before_running(tmp_path):
+    sweep = tmp_path / "s.toml"
+    sweep.write_text('[grid]\nduration_s = [0.03, 0.05]\n[[points]]\n"firmware.pid_tile" = [3, 0]\n')
+    with pytest.raises(ConfigError, match=r"points\[0\]: firmware.pid_tile: \[3, 0\] is outside the 2x2 mesh"):
+        load_sweep(sweep)
+    sweep.write_text('[[points]]\n"chip.width" = 4\n"firmware.pid_tile" = [3, 0]\n')  # valid together
+    assert load_sweep(sweep).points == ((("chip.width", 4), ("firmware.pid_tile", [3, 0])),)
 
 
 def test_cli_sweep_writes_table_plots_and_page(tmp_path):

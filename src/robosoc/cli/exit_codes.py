@@ -18,6 +18,8 @@ PROGRAM_FAILED = 4
 #: ``--peer-timeout`` (or never answered within ``--connect-timeout``) or ended early; what was
 #: done so far is written.
 PEER_LOST = 5
+#: ``robosoc sweep``: every run of the sweep failed (each with its reason in the table).
+ALL_FAILED = 3
 #: Interrupted (Ctrl-C); whatever was written so far is kept.
 INTERRUPTED = 130
 #: The reader of the output went away (``robosoc ... | head``), as a shell reports SIGPIPE.
@@ -41,6 +43,12 @@ SERVE_EPILOG = (
     "never answered within --connect-timeout, or ended early, 130 interrupted."
 )
 
+SWEEP_EPILOG = (
+    "Exit codes: 0 success (some points may have failed: see the table), 1 internal error (a bug: please "
+    "report it), 2 usage or input error (also: the output folder is in use by another sweep, a record in it "
+    "is malformed, or it cannot be written), 3 every run failed, 130 interrupted (the finished points are kept)."
+)
+
 RUN_EPILOG = (
     "Exit codes: 0 the program exited with 0, 1 internal error (a bug: please report it), "
     "2 usage or input error, 3 the simulator stopped the program (fault, cycle budget, no progress), "
@@ -50,6 +58,7 @@ RUN_EPILOG = (
 )
 
 __all__ = [
+    "ALL_FAILED",
     "BROKEN_PIPE",
     "EPILOG",
     "EXIT_CODE_PROGRAM",
@@ -63,5 +72,6 @@ __all__ = [
     "RUN_EPILOG",
     "SERVE_EPILOG",
     "SIMULATOR_STOP",
+    "SWEEP_EPILOG",
     "USAGE",
 ]

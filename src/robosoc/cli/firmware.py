@@ -118,7 +118,7 @@ def firmware_replay(
     """
     from rich.progress import Progress
 
-    from robosoc.control.flight_log import read_flight_log
+    from robosoc.control.flight_log import FlightLogError, read_flight_log
     from robosoc.cosim.replay import built_in_rows, replay
     from robosoc.outputs.run_folder import JOBS_CSV, SUMMARY_JSON
 
@@ -132,8 +132,10 @@ def firmware_replay(
         files.read_text(path, None, "flight log")  # a readable UTF-8 file, or an error naming it
         try:
             rows = read_flight_log(path)
-        except ValueError as exc:
-            raise CliError(str(exc) if str(exc).startswith(str(path)) else f"{path}: {exc}") from exc
+        except FlightLogError as exc:
+            raise CliError(str(exc)) from None
+        if len(rows) == 0:
+            raise CliError(f"{path}: no rows after the header: nothing to replay")
     else:
         rows = built_in_rows(seconds, seed)
     console = make_console(stderr=True)

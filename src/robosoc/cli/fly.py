@@ -5,6 +5,7 @@ lockstep), write the run folder and print a summary table (the run itself is
 from __future__ import annotations
 
 import dataclasses
+import json
 import math
 import time
 from pathlib import Path
@@ -166,11 +167,9 @@ def _fly(console, config: ScenarioConfig, out: Path | None, video: Path | None, 
             config, out, on_sample=on_sample, on_status=progress.status, on_row=_live_rows(live), plot=True,
             profile=profile,
         )  # fmt: skip
-    except KeyboardInterrupt:
+    except KeyboardInterrupt as exc:
         progress.stop()
-        note(
-            console, "interrupted" + (f"; the flight so far is in {out} (summary.json: complete false)" if out else "")
-        )
+        note(console, interrupted_message(out, exc))
         raise typer.Exit(exit_codes.INTERRUPTED) from None
     except ToolchainError as exc:  # a compile error (file and line), or a program that cannot fit
         progress.stop()
@@ -188,6 +187,27 @@ def _fly(console, config: ScenarioConfig, out: Path | None, video: Path | None, 
     if video_state is not None and video_state.sink is not None and video_state.sink.frames:
         plain(console, f"video: {video_state.sink.path} ({video_state.sink.frames} frames at {VIDEO_FPS:g} fps)")
     return flight
+
+
+def interrupted_message(out: Path | None, exc: KeyboardInterrupt) -> str:
+    """What a Ctrl-C left, read from the run folder's ``summary.json`` itself, so that the message
+    and the file agree whenever the interruption came (before, during or after the flight)."""
+    from robosoc.cosim.interrupts import InterruptedAfterFlight
+
+    if out is None:
+        return "interrupted"
+    path = out / "summary.json"
+    try:
+        complete = json.loads(path.read_text(encoding="utf-8")).get("complete")
+    except (OSError, ValueError, AttributeError):
+        complete = None
+    if complete is True:
+        missing = getattr(exc, "missing", []) if isinstance(exc, InterruptedAfterFlight) else []
+        left = f"; not written: {', '.join(missing)}" if missing else ""
+        return f"interrupted after the flight: it is complete in {out} (summary.json: complete true){left}"
+    if complete is False:
+        return f"interrupted; the flight so far is in {out} (summary.json: complete false)"
+    return f"interrupted before the flight; nothing flown (no summary.json in {out})"
 
 
 class FlightProgress:

@@ -8,7 +8,6 @@ both print the table below and write ``profile.json`` and ``profile.csv``.
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
 
@@ -72,14 +71,14 @@ def print_profile(console: Console, profile: FunctionProfile, top: int = 10, tit
 
 
 def _read_summary(path: Path) -> dict[str, Any]:
-    text = files.read_text(path, None, "JSON file")
+    """A vehicle's ``summary.json``, its shape checked before anything is flown."""
+    from robosoc.outputs.run_folder import RunFolderError, read_summary
+
+    files.read_text(path, None, "JSON file")  # readable UTF-8, or an error naming the file
     try:
-        data = json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise CliError(f"{path}: not JSON: {exc}") from None
-    if not isinstance(data, dict):
-        raise CliError(f"{path}: expected a JSON object (a run's summary.json)")
-    return data
+        return read_summary(path)
+    except RunFolderError as exc:
+        raise CliError(str(exc)) from None
 
 
 @app.command("profile", epilog=exit_codes.EPILOG)

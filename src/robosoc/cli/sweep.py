@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+from contextlib import ExitStack
 from pathlib import Path
 from typing import Annotated
 
@@ -42,7 +43,7 @@ def _check_dask(ctx: typer.Context, param: typer.CallbackParam, value: str | Non
         raise options.fail(options.option_name(param), str(exc)) from None
 
 
-@app.command("sweep", epilog=exit_codes.EPILOG)
+@app.command("sweep", epilog=exit_codes.SWEEP_EPILOG)
 def sweep_command(
     file: Annotated[Path, typer.Argument(help="The sweep file (TOML; docs/sweeps.md).", show_default=False)],
     workers: Annotated[
@@ -66,14 +67,9 @@ def sweep_command(
     retry_failed: Annotated[bool, typer.Option("--retry-failed", help="Run the points that failed again.")] = False,
 ) -> None:
     """Fly every point of a sweep file; store each as it finishes; table, Pareto plots and an HTML page."""
-    from rich.markup import escape
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
-
     from robosoc.config.sweep import sweep_from_mapping
     from robosoc.config.validate import ConfigError
-    from robosoc.sweep.plots import sweep_html, write_sweep_plots
-    from robosoc.sweep.point import OK
-    from robosoc.sweep.runner import run_sweep
+    from robosoc.sweep.store import FolderInUse, RecordError, SweepStore
 
     console = make_console()
     files.input_file(file, None, "sweep file")
@@ -92,9 +88,46 @@ def sweep_command(
         raise options.fail("--workers", f"a Dask scheduler ({dask}) brings its own workers: give --workers without it")
     if workers is None:
         workers = os.cpu_count() or 1
+    with ExitStack() as held:
+        try:
+            store = SweepStore(out)
+            held.enter_context(store.lock())  # before anything is written into the folder
+            store.records()  # every record readable, before the long work
+        except FolderInUse as exc:
+            raise CliError(f"--out: {exc}") from None
+        except RecordError as exc:
+            raise CliError(str(exc)) from None
+        except OSError as exc:
+            raise CliError(f"--out: {_os_error(exc)}") from None
+        _sweep(console, config, file, out, total, workers, dask, retry_failed)
+
+
+def _os_error(exc: OSError) -> str:
+    """An OSError as the user reads it: the file, then what is wrong (``runs/x/points.csv: no space left``)."""
+    reason = exc.strerror.lower() if exc.strerror else str(exc)
+    where = exc.filename if exc.filename is not None else None
+    return f"{where}: {reason}" if where is not None else reason
+
+
+def _sweep(
+    console, config, file: Path, out: Path, total: int, workers: int, dask: str | None, retry_failed: bool
+) -> None:
+    """The sweep itself, with the folder held."""
+    from rich.markup import escape
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
+
+    from robosoc.sweep.plots import sweep_html, write_sweep_plots
+    from robosoc.sweep.point import OK
+    from robosoc.sweep.runner import SchedulerError, run_sweep
+    from robosoc.sweep.store import RecordError
+
+    remote = dask is not None and dask != "local"
     copy = out / "sweep.toml"
-    if not copy.exists() or copy.read_bytes() != file.read_bytes():
-        output_files.write_atomic(copy, file.read_bytes())
+    try:
+        if not copy.exists() or copy.read_bytes() != file.read_bytes():
+            output_files.write_atomic(copy, file.read_bytes())
+    except OSError as exc:
+        raise CliError(f"--out: {_os_error(exc)}") from None
 
     # a scheduler's workers are counted once connected (run_sweep says how many), not os.cpu_count() here
     where = (
@@ -143,13 +176,20 @@ def sweep_command(
         except KeyboardInterrupt:
             note(console, f"interrupted; the finished points are kept in {out}: run the same command to resume")
             raise typer.Exit(exit_codes.INTERRUPTED) from None
-        except OSError as exc:
-            raise CliError(f"--dask: cannot reach the scheduler at {dask}: {exc}") from None
+        except SchedulerError as exc:
+            raise CliError(f"--dask: {exc}") from None
+        except RecordError as exc:
+            raise CliError(str(exc)) from None
+        except OSError as exc:  # the output folder: full, removed, made read-only meanwhile
+            raise CliError(f"--out: {_os_error(exc)}") from None
 
     records = [outcome.records[p.key] for p in outcome.points if p.key in outcome.records]
-    plots = write_sweep_plots(out, records, config.varied(), config.metrics)
-    page = out / "sweep.html"
-    output_files.write_atomic(page, sweep_html(f"sweep {config.name}", records, plots, outcome.table.read_text()))
+    try:
+        plots = write_sweep_plots(out, records, config.varied(), config.metrics)
+        page = out / "sweep.html"
+        output_files.write_atomic(page, sweep_html(f"sweep {config.name}", records, plots, outcome.table.read_text()))
+    except OSError as exc:
+        raise CliError(f"--out: {_os_error(exc)}") from None
     ok = sum(1 for r in records if r["status"] == OK)
     console.print(f"{outcome.ran} runs now, {outcome.skipped} done before; {ok} ok, {len(records) - ok} failed")
     for record in outcome.failures:
@@ -157,3 +197,6 @@ def sweep_command(
             escape(f"  failed: point {record['index']} {record['values']} seed {record['seed']}: {record['error']}")
         )
     plain(console, f"table: {outcome.table}  plots: {out / 'plots'}  page: {page}")
+    if records and not ok:
+        note(console, f"every one of the {len(records)} runs failed")
+        raise typer.Exit(exit_codes.ALL_FAILED)

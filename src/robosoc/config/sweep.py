@@ -165,6 +165,36 @@ def _list_of(value: Any, where: str, key: str, kind: type, what: str) -> list[An
     return value
 
 
+def _check_point(
+    point: dict[str, Any], grid: list[tuple[str, tuple[Value, ...]]], base: ScenarioConfig, where: str
+) -> None:
+    """Check a listed point's values before anything runs, as the grid's are: the point as a whole
+    (its values are meant together: ``chip.width = 4`` with a task on tile 3,0) against the base
+    scenario.  If it is invalid there but a grid is given, it must be valid with at least one grid
+    combination (the others are failed points, recorded); raises :class:`ConfigError` otherwise."""
+    try:
+        from_mapping(ScenarioConfig, nest(point), where, base=base)
+        return
+    except ConfigError as alone:
+        if not grid:
+            raise
+        first = alone
+    combos: list[dict[str, Any]] = [{}]
+    for name, values in grid:  # the grid is at most MAX_POINTS combinations (checked when the plan is made)
+        if name in point:  # the point's own value wins
+            continue
+        combos = [{**c, name: v} for c in combos for v in values]
+        if len(combos) > MAX_POINTS:
+            raise first
+    for combo in combos:
+        try:
+            from_mapping(ScenarioConfig, nest({**combo, **point}), where, base=base)
+            return
+        except ConfigError:
+            continue
+    raise first
+
+
 def sweep_from_mapping(data: dict[str, Any], where: str, folder: Path, default_name: str) -> SweepConfig:
     """Validate a parsed sweep file (``folder`` resolves a relative ``scenario`` path)."""
     known = {"name", "scenario", "seeds", "metrics", "base", "grid", "points"}
@@ -217,6 +247,7 @@ def sweep_from_mapping(data: dict[str, Any], where: str, folder: Path, default_n
             raise ConfigError(where, f"points[{i}]", "an empty point: name at least one field")
         for key in flat:
             check_field(key, where, f"points[{i}].{key}")
+        _check_point(flat, grid, base, f"{where}: points[{i}]")
         points.append(tuple(flat.items()))
 
     seeds = tuple(_list_of(data.get("seeds", [1]), where, "seeds", int, "seeds (integers)"))
@@ -229,6 +260,8 @@ def sweep_from_mapping(data: dict[str, Any], where: str, folder: Path, default_n
     if len(set(seeds)) != len(seeds):
         raise ConfigError(where, "seeds", f"a seed is listed twice: {list(seeds)}")
     metrics = tuple(_list_of(data.get("metrics", list(DEFAULT_METRICS)), where, "metrics", str, "dotted names"))
+    if len(set(metrics)) != len(metrics):
+        raise ConfigError(where, "metrics", f"a metric is listed twice: {list(metrics)}")
 
     config = SweepConfig(name, base, tuple(base_data.items()), tuple(grid), tuple(points), seeds, metrics, where)
     total = config.point_count() * len(seeds)  # counted, not built: a grid of 10**10 points never exists

@@ -6,6 +6,7 @@ every row up to the interruption.  Columns are :data:`robosoc.control.flight.ROW
 
 from __future__ import annotations
 
+import csv
 from collections.abc import Sequence
 from pathlib import Path
 from types import TracebackType
@@ -66,24 +67,116 @@ def header_problem(header: Sequence[str], expected: Sequence[str]) -> str | None
     return "; ".join(parts)
 
 
-def read_flight_log(path: Path) -> np.ndarray:
-    """Read a CSV flight log back into an array with the columns of :data:`ROW_FIELDS`.
+MAX_FLIGHT_S = 3600.0
+"""Latest time a flight row can have [s]: the longest flight robosoc flies (``fly --duration``)."""
+
+NAN_ALLOWED = tuple(name for name in ROW_FIELDS if name.startswith("est_"))
+"""Columns that may hold NaN: the controller's estimate, unknown while it stays on the chip."""
+
+
+PACKET_COLUMNS = (
+    *(f"{sensor}_{axis}" for sensor in ("gyro", "accel", "mag") for axis in "xyz"),
+    "baro_altitude",
+    *(f"sp_{name}" for name in ("roll", "pitch", "yaw", "height", "height_rate", "height_accel")),
+)
+"""Columns a replay packs into the firmware's sensor packet, whose fields are Q16.16
+(:data:`robosoc.host.packets.SENSOR`): they must fit in -32768 .. 32768 - 2**-16."""
+Q16_LOW, Q16_HIGH = -(2**15), 2**15 - 2**-16
+
+
+class FlightLogError(ValueError):
+    """A flight log that is not one: ``"<file>: row <k> (line <n>), column <name>: <reason>"``."""
+
+
+def _where(where: str, k: int, column: str | None = None) -> str:
+    place = f"{where}: row {k + 1} (line {k + 2})"
+    return f"{place}, column {column}" if column else place
+
+
+def check_flight_rows(rows: np.ndarray, where: str = "rows") -> np.ndarray:
+    """``rows`` if they are a flight (columns :data:`ROW_FIELDS`), else :class:`FlightLogError`
+    naming ``where``, the row and the column.
+
+    Every cell is finite, except NaN in the estimate's columns (:data:`NAN_ALLOWED`); the sensor
+    and setpoint columns fit the firmware's packet (:data:`PACKET_COLUMNS`); the times are in
+    0..:data:`MAX_FLIGHT_S` s and increase from row to row.  This is the one check of a
+    flight log's contents, for every reader (``report``, ``firmware replay``, ``report --mcap``,
+    the decoupled mode's log) and for :func:`robosoc.cosim.replay.samples_from_rows`.
+    """
+    rows = np.asarray(rows, dtype=float)
+    if rows.ndim != 2 or rows.shape[1] != len(ROW_FIELDS):
+        raise FlightLogError(f"{where}: a flight has {len(ROW_FIELDS)} columns (robosoc.control.flight.ROW_FIELDS)")
+    bad = ~np.isfinite(rows)
+    for name in NAN_ALLOWED:
+        c = ROW_FIELDS.index(name)
+        bad[:, c] &= ~np.isnan(rows[:, c])
+    if bad.any():
+        k, c = (int(i) for i in np.argwhere(bad)[0])
+        raise FlightLogError(f"{_where(where, k, ROW_FIELDS[c])}: {rows[k, c]}: expected a finite number")
+    for name in PACKET_COLUMNS:
+        c = ROW_FIELDS.index(name)
+        wide = np.flatnonzero((rows[:, c] < Q16_LOW) | (rows[:, c] > Q16_HIGH))
+        if len(wide):
+            k = int(wide[0])
+            raise FlightLogError(
+                f"{_where(where, k, name)}: {float(rows[k, c])!r} is outside the Q16.16 range of the firmware's "
+                f"sensor packet ({Q16_LOW}..{Q16_HIGH:.5f})"
+            )
+    times = rows[:, 0]
+    out_of_range = np.flatnonzero((times < 0) | (times > MAX_FLIGHT_S))
+    if len(out_of_range):
+        k = int(out_of_range[0])
+        raise FlightLogError(f"{_where(where, k, 't')}: {float(times[k])!r} s is outside 0..{MAX_FLIGHT_S:g} s")
+    back = np.flatnonzero(np.diff(times) <= 0)
+    if len(back):
+        k = int(back[0]) + 1
+        raise FlightLogError(
+            f"{_where(where, k, 't')}: {float(times[k])!r} s is not after the row before ({float(times[k - 1])!r} s): "
+            "times must increase"
+        )
+    return rows
+
+
+def read_flight_log(path: Path, notes: list[str] | None = None) -> np.ndarray:
+    """Read a CSV flight log back into an array with the columns of :data:`ROW_FIELDS`, checked by
+    :func:`check_flight_rows`.
+
+    Args:
+        notes: given, a last line cut short (an interrupted flight) is skipped with a note there;
+            without, it is an error.
 
     Raises:
-        ValueError: the header does not match (the message names the missing columns), or a row has
-            another number of values or one that is not a number (the message names the line).
+        FlightLogError: the header is not a flight log's, or a row is bad (names the file, row, column).
+        OSError, UnicodeDecodeError: the file cannot be read.
     """
-    with path.open(encoding="utf-8") as handle:
-        header = handle.readline().strip().split(",")
-        problem = header_problem(header, ROW_FIELDS)
+    with path.open(encoding="utf-8", newline="") as handle:
+        reader = csv.reader(handle)
+        header = next(reader, None)
+        problem = header_problem(header or [], ROW_FIELDS)
         if problem is not None:
-            raise ValueError(f"{path}: not a robosoc flight log ({problem})")
-        for number, line in enumerate(handle, start=2):
-            count = line.count(",") + 1
-            if line.strip() and count != len(ROW_FIELDS):
-                raise ValueError(f"{path}: line {number}: {count} values, expected {len(ROW_FIELDS)}")
+            raise FlightLogError(f"{path}: not a robosoc flight log ({problem})")
+        lines = list(reader)
+    width = len(ROW_FIELDS)
+    for k, line in enumerate(lines):
+        if len(line) != width:
+            if notes is not None and k == len(lines) - 1:
+                notes.append(f"{path.name}: last line incomplete (interrupted flight?), skipped")
+                lines.pop()
+                break
+            raise FlightLogError(f"{_where(str(path), k)}: {len(line)} values, expected {width}")
     try:
-        data = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
-    except ValueError as exc:
-        raise ValueError(f"{path}: {exc}") from None
-    return data.reshape(-1, len(ROW_FIELDS))
+        rows = np.array(lines, dtype=float).reshape(-1, width)
+    except ValueError:
+        for k, line in enumerate(lines):
+            for c, cell in enumerate(line):
+                try:
+                    float(cell)
+                except ValueError:
+                    if notes is not None and k == len(lines) - 1:
+                        notes.append(f"{path.name}: last line incomplete (interrupted flight?), skipped")
+                        return check_flight_rows(np.array(lines[:-1], dtype=float).reshape(-1, width), str(path))
+                    raise FlightLogError(
+                        f"{_where(str(path), k, ROW_FIELDS[c])}: {cell[:40]!r} is not a number"
+                    ) from None
+        raise
+    return check_flight_rows(rows, str(path))

@@ -13,7 +13,11 @@ the readings the physics side sends (docs/decoupled.md):
 * **latency compensation**: each reading is injected from the I/O tile at the cycle of its
   timestamp when the chip is not past it (whenever it arrived), else at the current cycle (counted
   late); a reading older than one already injected is dropped (counted stale: it would go back in
-  time).  Readings repeated by the physics side for redundancy are dropped quietly;
+  time).  Readings repeated by the physics side for redundancy are dropped quietly; a reading
+  outside the flight (after the scenario's duration, or numbered past its last sample) is dropped
+  and counted (``outside``): believed, it would have the chip simulate until its time;
+* the physics' silence is checked while the chip simulates as well as while it waits (``peer_timeout_s``);
+  hellos go out every ``heartbeat_s``, never faster, whatever arrives meanwhile;
 * each PWM command that reaches the I/O tile is sent at once with the chip time it arrived, plus
   the ``resend`` commands before it; on reaching its limit the chip sends its time (a command
   datagram, so the physics side knows every earlier command is out) and repeats it every
@@ -77,8 +81,12 @@ class _PeerSilent(Exception):
 class _Chip:
     """State of the chip side during a flight (the helpers of :func:`serve_chip`)."""
 
-    def __init__(self, run: FirmwareRun, link: UdpLink, config: LinkConfig, period_ns: int, log: LinkLog) -> None:
+    def __init__(
+        self, run: FirmwareRun, link: UdpLink, config: LinkConfig, period_ns: int, log: LinkLog, samples: int
+    ) -> None:
         self.run, self.link, self.config, self.period_ns, self.log = run, link, config, period_ns, log
+        self.samples = samples  # the physics sends readings 0 .. samples-1, at k * period_ns
+        self.flight_ns = samples * period_ns  # the flight's end: no reading, and no bye's end, lies past it
         self.first = run.first_cycle
         self.clock_ns = run.clock_ns
         self.pending: dict[int, Reading] = {}
@@ -87,7 +95,7 @@ class _Chip:
         self.newest_t: int | None = None
         self.end_ns: int | None = None
         self.peer_bye: Bye | None = None
-        self.counts = {"received": 0, "injected": 0, "late": 0, "stale": 0, "repeated": 0}
+        self.counts = {"received": 0, "injected": 0, "late": 0, "stale": 0, "repeated": 0, "outside": 0}
         self.recent: deque[Command] = deque(maxlen=min(MAX_COMMANDS, config.resend + 16))
         self.commands_sent = 0
         self.last_send = time.monotonic()
@@ -105,6 +113,14 @@ class _Chip:
             body = d.body
             if isinstance(body, SensorBatch):
                 for r in body.readings:
+                    if r.t_ns >= self.flight_ns or r.k >= self.samples:
+                        self.counts["outside"] += 1  # believed, it would make the chip simulate until then
+                        self.log.write(
+                            f"reading {r.k} (t={r.t_ns} ns) dropped: outside the flight "
+                            f"({self.samples} readings, {self.flight_ns} ns)",
+                            "outside the flight",
+                        )
+                        continue
                     if r.k in self.seen:
                         self.counts["repeated"] += 1
                         continue
@@ -112,13 +128,24 @@ class _Chip:
                     self.counts["received"] += 1
                     if r.k < self.newest_k:
                         self.counts["stale"] += 1
-                        self.log.write(f"reading {r.k} dropped: older than reading {self.newest_k}, injected")
+                        self.log.write(
+                            f"reading {r.k} dropped: older than reading {self.newest_k}, injected", "stale reading"
+                        )
                     else:
                         self.pending[r.k] = r
             elif isinstance(body, Bye):
                 self.peer_bye = body
-                self.end_ns = body.end_ns
+                self.end_ns = min(body.end_ns, self.flight_ns)  # a bye cannot extend the flight
         return bool(got)
+
+    def check_peer(self) -> None:
+        """End (:class:`_PeerSilent`) once the physics has been silent for ``peer_timeout_s``:
+        checked while the chip simulates too, not only while it waits."""
+        silent = self.link.silent_for(time.monotonic())
+        if silent > self.config.peer_timeout_s:
+            raise _PeerSilent(
+                f"no datagram from the physics for {silent:.1f} s (--peer-timeout {self.config.peer_timeout_s:g})"
+            )
 
     def send(self, fresh: int) -> None:
         """A command datagram: the chip's time and the newest ``fresh + resend`` commands."""
@@ -140,7 +167,9 @@ class _Chip:
         del self.pending[k]
         if cycle < self.run.cycle:
             self.counts["late"] += 1
-            self.log.write(f"reading {k} (t={r.t_ns} ns) injected late, at chip time {self.now_ns()} ns")
+            self.log.write(
+                f"reading {k} (t={r.t_ns} ns) injected late, at chip time {self.now_ns()} ns", "late reading"
+            )
             cycle = self.run.cycle
         if self.run.samples:
             self.run.close_period()
@@ -178,11 +207,7 @@ class _Chip:
         if self.reported_ns != self.now_ns() or time.monotonic() - self.last_send >= self.config.heartbeat_s:
             self.send(0)
         self.take(self.config.heartbeat_s)
-        silent = self.link.silent_for(time.monotonic())
-        if silent > self.config.peer_timeout_s:
-            raise _PeerSilent(
-                f"no datagram from the physics for {silent:.1f} s (--peer-timeout {self.config.peer_timeout_s:g})"
-            )
+        self.check_peer()
 
 
 def serve_chip(
@@ -240,13 +265,18 @@ def serve_chip(
         run = FirmwareRun(fw, scenario_image(scenario, vehicle), chip=scenario.chip, first_cycle=DEFAULT_FIRST_CYCLE)
         say("booting the chip (compiling the chip kernels on a fresh install) ...")
         run.run_to(DEFAULT_FIRST_CYCLE)
-        state = _Chip(run, link, config, period_ns, log)
+        samples = round(scenario.duration_s * scenario.sensors.rate_hz)  # as the physics side counts them
+        state = _Chip(run, link, config, period_ns, log, samples)
         say(f"waiting for the physics at {peer} ...")
         hello = Hello(scenario_digest(scenario, vehicle), period_ns)
         deadline = time.monotonic() + config.connect_timeout_s
+        last_hello = -math.inf
         while not state.pending and state.end_ns is None:
-            link.send_control(hello)
-            state.take(config.heartbeat_s)
+            now = time.monotonic()
+            if now - last_hello >= config.heartbeat_s:  # every heartbeat, however much garbage arrives
+                link.send_control(hello)
+                last_hello = now
+            state.take(max(0.0, last_hello + config.heartbeat_s - time.monotonic()))
             if time.monotonic() > deadline:
                 raise _PeerSilent(
                     f"no sensor data from the physics at {peer} within --connect-timeout {config.connect_timeout_s:g} s"
@@ -256,6 +286,8 @@ def serve_chip(
         cpu_start = time.process_time()
         while True:
             state.take(0.0)
+            if state.end_ns is None:
+                state.check_peer()
             if state.peer_bye is not None and state.peer_bye.reason is not ByeReason.DONE:
                 ended, message = Ended.PEER_ENDED, f"the physics said bye ({state.peer_bye.reason.name.lower()})"
                 break

@@ -141,7 +141,9 @@ class _Flight:
                     now = self.arrival_step()
                     if step < now:
                         self.late += 1
-                        self.log.write(f"command {c.seq} (left at {c.left_ns} ns) applied late, at step {now}")
+                        self.log.write(
+                            f"command {c.seq} (left at {c.left_ns} ns) applied late, at step {now}", "late command"
+                        )
                         step = now
                     self.hold.schedule(step, c.pwm)
             elif isinstance(body, Bye):

@@ -39,7 +39,7 @@ from robosoc.cosim.link_counters import Arrival, ReceiveCounts
 from robosoc.cosim.link_faults import FaultInjector
 from robosoc.output_files import open_in_place
 
-__all__ = ["Address", "LinkError", "LinkLog", "UdpLink", "parse_address"]
+__all__ = ["MAX_LINES_PER_KIND", "Address", "LinkError", "LinkLog", "UdpLink", "parse_address"]
 
 #: Stream of the run's seed that drives each direction's faults ("one seed drives every random number").
 FAULT_STREAM = {"physics": 0x5EED_0001, "chip": 0x5EED_0002}
@@ -107,22 +107,45 @@ def resolve(address: Address) -> tuple[int, tuple]:
     return family, sockaddr
 
 
-class LinkLog:
-    """The side's log file (or nothing): ``<seconds since start> <event>`` per line, flushed."""
+MAX_LINES_PER_KIND = 100
+"""Lines a link log gives each kind of repeated event (a rejected datagram, a gap, a hello sent ...):
+after that they are only counted, and the count is the log's last line for that kind.  A peer (or
+anyone) sending garbage at line rate cannot fill the disk."""
 
-    def __init__(self, path: Path | None) -> None:
+
+class LinkLog:
+    """The side's log file (or nothing): ``<seconds since start> <event>`` per line, flushed.
+
+    Events of a ``kind`` (the per-datagram ones) get at most ``per_kind`` lines; the rest are
+    counted, said once when the limit is reached and totalled when the log is closed.
+    """
+
+    def __init__(self, path: Path | None, per_kind: int = MAX_LINES_PER_KIND) -> None:
         self.path = path
         self._file: IO[str] | None = open_in_place(path, "w", encoding="utf-8") if path is not None else None
         self._start = time.monotonic()
+        self.per_kind = per_kind
+        self.lines: dict[str, int] = {}
+        self.suppressed: dict[str, int] = {}
 
-    def write(self, event: str) -> None:
+    def write(self, event: str, kind: str | None = None) -> None:
         if self._file is None or self._file.closed:
             return
+        if kind is not None:
+            seen = self.lines.get(kind, 0) + 1
+            self.lines[kind] = seen
+            if seen > self.per_kind:
+                self.suppressed[kind] = self.suppressed.get(kind, 0) + 1
+                return
+            if seen == self.per_kind:
+                event += f" (the {self.per_kind}th '{kind}' line: further ones are counted, not logged)"
         self._file.write(f"{time.monotonic() - self._start:10.4f} {event}\n")
         self._file.flush()
 
     def close(self) -> None:
-        if self._file is not None:
+        if self._file is not None and not self._file.closed:
+            for kind, count in self.suppressed.items():
+                self.write(f"{kind}: {count} more not logged")
             self._file.close()
 
 
@@ -206,7 +229,7 @@ class UdpLink:
             self.sock.sendto(data, self.peer)
         except OSError as exc:  # the peer's port closed (ICMP), buffer full, network down: keep going
             self.send_errors += 1
-            self.log.write(f"send error: {exc}")
+            self.log.write(f"send error: {exc}", "send error")
 
     def send_data(self, body: SensorBatch | CommandBatch) -> None:
         """Send ``body`` as the next data datagram, through the fault injector."""
@@ -221,7 +244,7 @@ class UdpLink:
             for wire in self.injector.flush():
                 self._sendto(wire)
         self._sendto(encode(body))
-        self.log.write(f"sent {_describe(body)}")
+        self.log.write(f"sent {_describe(body)}", f"sent {type(body).__name__.lower()}")
 
     # --- receiving ----------------------------------------------------------------------------
 
@@ -231,7 +254,7 @@ class UdpLink:
             ready, _, _ = select.select([self.sock], [], [], max(0.0, timeout))
         except (OSError, ValueError) as exc:
             self.receive_errors += 1
-            self.log.write(f"receive error: {exc}")
+            self.log.write(f"receive error: {exc}", "receive error")
             return []
         out: list[Datagram] = []
         while ready:
@@ -241,7 +264,7 @@ class UdpLink:
                 break
             except OSError as exc:  # e.g. ECONNREFUSED after an ICMP port unreachable
                 self.receive_errors += 1
-                self.log.write(f"receive error: {exc}")
+                self.log.write(f"receive error: {exc}", "receive error")
                 break
             item = self._take(data, source)
             if item is not None:
@@ -251,17 +274,19 @@ class UdpLink:
     def _take(self, data: bytes, source: tuple) -> Datagram | None:
         if self.peer is not None and source[:2] != self.peer[:2]:
             self.foreign += 1
-            self.log.write(f"dropped {len(data)} bytes from {source[0]}:{source[1]}, not the peer")
+            self.log.write(f"dropped {len(data)} bytes from {source[0]}:{source[1]}, not the peer", "foreign")
             return None
         result = decode(data)
         if isinstance(result, Rejected):
             self.counts.reject(result.reason)
-            self.log.write(f"rejected {result.size} bytes: {result.reason.value}: {result.detail}")
+            self.log.write(f"rejected {result.size} bytes: {result.reason.value}: {result.detail}", "rejected")
             return None
         if self.peer is None:
             if result.kind is not Kind.HELLO:
                 self.foreign += 1
-                self.log.write(f"dropped {_describe(result.body)} from {source[0]}:{source[1]} before any hello")
+                self.log.write(
+                    f"dropped {_describe(result.body)} from {source[0]}:{source[1]} before any hello", "foreign"
+                )
                 return None
             self.peer = source
             self.log.write(f"peer is {source[0]}:{source[1]}")
@@ -274,16 +299,16 @@ class UdpLink:
                     self.log.write(
                         f"lost {tail} datagram(s) at the end: #{self.counts.highest + 1}..#{result.body.data_sent - 1}"
                     )
-            self.log.write(f"received {_describe(result.body)}")
+            self.log.write(f"received {_describe(result.body)}", f"received {type(result.body).__name__.lower()}")
             return result
         arrival, gap = self.counts.arrive(result.seq)
         if gap:
-            self.log.write(f"lost {gap} datagram(s): #{result.seq - gap}..#{result.seq - 1}")
+            self.log.write(f"lost {gap} datagram(s): #{result.seq - gap}..#{result.seq - 1}", "lost")
         if arrival == Arrival.DUPLICATE:
-            self.log.write(f"duplicate #{result.seq} dropped")
+            self.log.write(f"duplicate #{result.seq} dropped", "duplicate")
             return None
         if arrival == Arrival.LATE:
-            self.log.write(f"#{result.seq} arrived late (after #{self.counts.highest})")
+            self.log.write(f"#{result.seq} arrived late (after #{self.counts.highest})", "late")
         return result
 
     def silent_for(self, now: float) -> float:

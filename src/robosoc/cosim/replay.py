@@ -51,13 +51,13 @@ def samples_from_rows(rows: np.ndarray, clock_ns: float, first_cycle: int = DEFA
     """Sensor messages of a flight (rows with the columns of :data:`ROW_FIELDS`, e.g. a flight log).
 
     Raises:
-        ValueError: a column is missing (an old log without the sensor columns) or times go back.
+        ValueError: a column is missing (an old log without the sensor columns), a value is not
+            finite, or a time is out of range or goes back (:func:`robosoc.control.flight_log.check_flight_rows`).
     """
-    if rows.ndim != 2 or rows.shape[1] != len(ROW_FIELDS):
-        raise ValueError(f"a flight has {len(ROW_FIELDS)} columns (robosoc.control.flight.ROW_FIELDS)")
+    from robosoc.control.flight_log import check_flight_rows
+
+    rows = check_flight_rows(rows, "rows")  # finite, times in 0..3600 s and increasing
     times = rows[:, ROW_FIELDS.index("t")]
-    if len(times) and (np.diff(times) <= 0).any():
-        raise ValueError("sample times must increase")
     out = []
     for k in range(len(rows)):
         t = float(times[k])

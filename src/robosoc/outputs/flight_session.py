@@ -42,6 +42,7 @@ from robosoc.control.flight import ROW_FIELDS
 from robosoc.control.flight_log import CsvFlightLog
 from robosoc.control.host import HostController
 from robosoc.cosim.firmware_run import ReplayResult
+from robosoc.cosim.interrupts import InterruptedAfterFlight, deferred_interrupt, remove_partials
 from robosoc.cosim.lockstep import (
     ChipController,
     HostLockstepController,
@@ -60,6 +61,20 @@ from robosoc.outputs.run_folder import (
 from robosoc.outputs.run_summary import fleet_summary, vehicle_summary, write_summary
 from robosoc.physics import World
 from robosoc.physics.clock import FlightClock
+
+EXTRA_FILES = ("flight.png", "flight.mcap", "report.html")
+"""What :func:`fly_scenario` writes after the summary (a chip flight recording its timeline also
+``chip-trace.json``): an interruption there leaves the flight complete without them."""
+RUN_FILES = (
+    "summary.json",
+    "scenario.toml",
+    "jobs.csv",
+    "profile.json",
+    "profile.csv",
+    *EXTRA_FILES,
+    "chip-trace.json",
+)
+"""The files of a run folder written to a scratch name first (whose leftovers are removed)."""
 
 SPACING_M = 3.0
 """Distance between neighbouring spawn points of a fleet [m]: the vehicles fly the same plan, so
@@ -159,12 +174,17 @@ def fly_scenario(
     Raises:
         KeyboardInterrupt, or whatever stopped the flight (a firmware fault: ChipError, CoreError),
         after ``summary.json`` with ``"complete": false`` has been written next to the rows flown.
+        robosoc.cosim.interrupts.InterruptedAfterFlight: Ctrl-C after the flight was complete and
+        its ``summary.json`` (``"complete": true``) written, while the plots and logs were being
+        written (it names those not written).  Either way no scratch file (``*.partial``) is left.
     """
     say = on_status or (lambda _text: None)
     vehicles = fleet_vehicles(scenario)
     count = len(vehicles)
-    controllers = _controllers(scenario, say, profile)
     folders = [vehicle_folder(out, i, count) for i in range(count)] if out is not None else []
+    for folder in {*folders, *([out] if out is not None else [])}:  # an earlier run's summary must not
+        (folder / SUMMARY_JSON).unlink(missing_ok=True)  # speak for this one, even if it stops at once
+    controllers = _controllers(scenario, say, profile)
     csv_logs: list[CsvFlightLog] = []
     if out is not None:
         out.mkdir(parents=True, exist_ok=True)
@@ -188,17 +208,35 @@ def fly_scenario(
             log.close()
         stopped = "interrupted" if isinstance(exc, KeyboardInterrupt) else f"{type(exc).__name__}: {exc}"
         try:
-            _conclude(scenario, vehicles, controllers, flown, host_s, stopped, folders, out, plot, logs)
+            flight = _summarize(scenario, vehicles, controllers, flown, host_s, stopped, folders, out)
+            _extras(scenario, vehicles, controllers, flight, folders, plot, logs)
+        except KeyboardInterrupt:  # a second Ctrl-C: the summary (complete false) is written first
+            pass
         except Exception as inner:
             exc.add_note(f"the summary of the flight so far could not be written: {type(inner).__name__}: {inner}")
+        finally:
+            remove_partials([*folders, *([out] if out is not None else [])], RUN_FILES)
         raise
     host_s = time.perf_counter() - start
     for log in csv_logs:
         log.close()
-    return _conclude(scenario, vehicles, controllers, flown, host_s, None, folders, out, plot, logs)
+    flight = None
+    try:
+        flight = _summarize(scenario, vehicles, controllers, flown, host_s, None, folders, out)
+        _extras(scenario, vehicles, controllers, flight, folders, plot, logs)
+    except KeyboardInterrupt:
+        if flight is None and out is not None and not (out / SUMMARY_JSON).exists():
+            raise  # not after the summary: an ordinary interruption
+        wanted = [n for n in EXTRA_FILES if (plot and n == "flight.png") or (logs and n != "flight.png")]
+        missing = [name for name in wanted if any(not (f / name).exists() for f in folders)]
+        raise InterruptedAfterFlight(missing) from None
+    finally:
+        remove_partials([*folders, *([out] if out is not None else [])], RUN_FILES)
+    assert flight is not None
+    return flight
 
 
-def _conclude(
+def _summarize(
     scenario: ScenarioConfig,
     vehicles: list[VehicleConfig],
     controllers: list[LockstepController],
@@ -207,11 +245,24 @@ def _conclude(
     stopped: str | None,
     folders: list[Path],
     out: Path | None,
-    plot: bool,
-    logs: bool,
 ) -> ScenarioFlight:
-    """Summaries (complete or not), jobs.csv, plots and the logs people open (flight.mcap,
-    chip-trace.json, report.html) of the rows flown; written when ``out`` is set."""
+    """Summaries (complete or not) and job records of the rows flown; ``summary.json``, ``jobs.csv``
+    and the profile written when ``out`` is set.  Ctrl-C waits until they are (a summary.json
+    always says what the flight was)."""
+    with deferred_interrupt():
+        return _summaries(scenario, vehicles, controllers, flown, host_s, stopped, folders, out)
+
+
+def _summaries(
+    scenario: ScenarioConfig,
+    vehicles: list[VehicleConfig],
+    controllers: list[LockstepController],
+    flown: list[list[np.ndarray]],
+    host_s: float,
+    stopped: str | None,
+    folders: list[Path],
+    out: Path | None,
+) -> ScenarioFlight:
     complete = stopped is None
     rows = [np.array(r).reshape(-1, len(ROW_FIELDS)) for r in flown]
     samples = min(len(r) for r in rows)
@@ -239,17 +290,6 @@ def _conclude(
             if result.profile is not None:
                 write_profile(result.profile, folder)  # before the report, which shows it
         write_summary(summary, folder / SUMMARY_JSON)
-        if plot and len(rows[i]):
-            from robosoc.control.flight_plot import plot_flight
-
-            title = f"{scenario.name}, seed {scenario.seed}" + (f", vehicle {i + 1}" if len(vehicles) > 1 else "")
-            plot_flight(rows[i], folder / FLIGHT_PNG, title=title)
-        if logs and len(rows[i]):
-            from robosoc.outputs.run_logs import write_run_logs
-
-            run = controller.run if isinstance(controller, ChipController) else None
-            metadata = {"scenario": scenario.name, "seed": scenario.seed, "vehicle": i + 1}
-            write_run_logs(folder, rows[i], run, result, metadata)
     if len(vehicles) == 1:
         top = summaries[0]
     else:
@@ -265,3 +305,29 @@ def _conclude(
         if out is not None:
             write_summary(top, out / SUMMARY_JSON)
     return ScenarioFlight(top, rows, results, out)
+
+
+def _extras(
+    scenario: ScenarioConfig,
+    vehicles: list[VehicleConfig],
+    controllers: list[LockstepController],
+    flight: ScenarioFlight,
+    folders: list[Path],
+    plot: bool,
+    logs: bool,
+) -> None:
+    """The files people open, from the rows and the written summary: ``flight.png`` and the logs
+    (``flight.mcap``, ``chip-trace.json``, ``report.html``); interruptible."""
+    for i, (folder, controller) in enumerate(zip(folders, controllers, strict=False)):
+        rows, result = flight.rows[i], flight.results[i]
+        if plot and len(rows):
+            from robosoc.control.flight_plot import plot_flight
+
+            title = f"{scenario.name}, seed {scenario.seed}" + (f", vehicle {i + 1}" if len(vehicles) > 1 else "")
+            plot_flight(rows, folder / FLIGHT_PNG, title=title)
+        if logs and len(rows):
+            from robosoc.outputs.run_logs import write_run_logs
+
+            run = controller.run if isinstance(controller, ChipController) else None
+            metadata = {"scenario": scenario.name, "seed": scenario.seed, "vehicle": i + 1}
+            write_run_logs(folder, rows, run, result, metadata)

@@ -80,7 +80,7 @@ def flight_csv_to_mcap(csv_path: Path, mcap_path: Path, start_ns: int = START_NS
     Raises:
         ValueError: the CSV is not a robosoc flight log.
     """
-    return write_flight_mcap(read_flight_log(csv_path), mcap_path, start_ns)
+    return write_flight_mcap(read_flight_log(csv_path, []), mcap_path, start_ns)
 
 
 __all__ = ["LIBRARY", "OFFERED_QOS_PROFILES", "flight_csv_to_mcap", "write_flight_mcap"]

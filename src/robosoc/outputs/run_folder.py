@@ -22,8 +22,7 @@ import numpy as np
 
 from robosoc import output_files
 from robosoc.chip.function_profile import FunctionProfile
-from robosoc.control.flight import ROW_FIELDS
-from robosoc.control.flight_log import header_problem
+from robosoc.control.flight_log import FlightLogError, header_problem, read_flight_log
 from robosoc.records import JobRecord
 
 FLIGHT_CSV = "flight.csv"
@@ -82,6 +81,26 @@ def write_profile(profile: FunctionProfile, folder: Path) -> tuple[Path, Path]:
 _TEXT_JOB_FIELDS = ("task", "tile")
 
 
+def _whole(v: object) -> bool:
+    return isinstance(v, int) and not isinstance(v, bool) and v >= 0
+
+
+def _real(v: object) -> bool:
+    return isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)
+
+
+_PROFILE_ROW = {
+    "tile": (lambda v: v is None or isinstance(v, str), "a tile 'x,y' or null"),
+    "task": (lambda v: v is None or _whole(v), "a task number or null"),
+    "task_name": (lambda v: v is None or isinstance(v, str), "a string or null"),
+    "function": (lambda v: isinstance(v, str), "a function name"),
+    "cycles": (_whole, "a whole number"),
+    "instructions": (_whole, "a whole number"),
+    "energy_nj": (_real, "a finite number"),
+}
+"""The fields of a ``profile.json`` row the report uses, and what each must be."""
+
+
 class RunFolderError(ValueError):
     """The folder is not a run folder, or one of its files is not what its name says."""
 
@@ -111,27 +130,13 @@ def read_flight_rows(path: Path, notes: list[str]) -> np.ndarray:
     """The rows of a flight log; a last line cut short (an interrupted flight) is skipped with a note.
 
     Raises:
-        RunFolderError: the header is not the flight log's, or a row other than the last is bad.
+        RunFolderError: the header is not the flight log's, or a row is bad
+            (:func:`robosoc.control.flight_log.read_flight_log`: names the row and the column).
     """
-    with path.open(encoding="utf-8", newline="") as handle:
-        reader = csv.reader(handle)
-        header = next(reader, None)
-        problem = "empty file" if header is None else header_problem(header, ROW_FIELDS)
-        if problem is not None:
-            raise RunFolderError(f"{path}: not a robosoc flight log ({problem})")
-        lines = list(reader)
-    rows = []
-    for k, line in enumerate(lines):
-        try:
-            if len(line) != len(ROW_FIELDS):
-                raise ValueError(f"{len(line)} values, expected {len(ROW_FIELDS)}")
-            rows.append([float(v) for v in line])
-        except ValueError as exc:
-            if k == len(lines) - 1:
-                notes.append(f"{path.name}: last line incomplete (interrupted flight?), skipped")
-                break
-            raise RunFolderError(f"{path}: line {k + 2}: {exc}") from None
-    return np.array(rows, dtype=float).reshape(-1, len(ROW_FIELDS))
+    try:
+        return read_flight_log(path, notes)
+    except FlightLogError as exc:
+        raise RunFolderError(str(exc)) from None
 
 
 def read_jobs(path: Path, notes: list[str]) -> dict[str, np.ndarray]:
@@ -150,20 +155,61 @@ def read_jobs(path: Path, notes: list[str]) -> dict[str, np.ndarray]:
     if lines and len(lines[-1]) != len(JOB_CSV_FIELDS):
         notes.append(f"{path.name}: last line incomplete, skipped")
         lines = lines[:-1]
+    for k, line in enumerate(lines):
+        if len(line) != len(JOB_CSV_FIELDS):
+            raise RunFolderError(
+                f"{path}: row {k + 1} (line {k + 2}): {len(line)} values, expected {len(JOB_CSV_FIELDS)}"
+            )
     columns: dict[str, np.ndarray] = {}
     for i, name in enumerate(JOB_CSV_FIELDS):
         values = [line[i] for line in lines]
+        if name in _TEXT_JOB_FIELDS:
+            columns[name] = np.array(values, dtype=str)
+            continue
         try:
-            columns[name] = np.array(values, dtype=str if name in _TEXT_JOB_FIELDS else float)
-        except ValueError as exc:
-            raise RunFolderError(f"{path}: column {name}: {exc}") from None
+            columns[name] = np.array(values, dtype=float)
+        except ValueError:
+            k = next(k for k, v in enumerate(values) if not _parses(v))
+            raise RunFolderError(
+                f"{path}: row {k + 1} (line {k + 2}), column {name}: {values[k][:40]!r} is not a number"
+            ) from None
+        bad = np.flatnonzero(~np.isfinite(columns[name]) | (columns[name] < 0))
+        if len(bad):
+            k = int(bad[0])
+            raise RunFolderError(
+                f"{path}: row {k + 1} (line {k + 2}), column {name}: {values[k]}: expected a finite number >= 0"
+            )
     return columns
 
 
-def _read_summary(path: Path) -> dict:
+def _parses(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
+def read_summary(path: Path) -> dict:
+    """A run's ``summary.json``, its shape checked (:func:`robosoc.outputs.run_summary.check_summary`).
+
+    Raises:
+        RunFolderError: not UTF-8, not JSON, or a field of the wrong kind (names the file and field).
+    """
+    from robosoc.outputs.run_summary import SummaryError, load_summary
+
+    try:
+        return load_summary(path.read_text(encoding="utf-8"), str(path))
+    except UnicodeDecodeError as exc:
+        raise RunFolderError(f"{path}: not JSON: not UTF-8 text: {exc}") from None
+    except SummaryError as exc:
+        raise RunFolderError(str(exc)) from None
+
+
+def _read_json(path: Path) -> dict:
     try:
         data = json.loads(path.read_text(encoding="utf-8"))
-    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+    except (UnicodeDecodeError, json.JSONDecodeError, RecursionError) as exc:
         raise RunFolderError(f"{path}: not JSON: {exc}") from None
     if not isinstance(data, dict):
         raise RunFolderError(f"{path}: expected a JSON object")
@@ -174,15 +220,20 @@ def _read_profile(path: Path, notes: list[str]) -> dict | None:
     """``profile.json`` if it is one (rows with tile, task, function, cycles, instructions, energy),
     else None with a note: the profile is an extra, a bad one does not stop the report."""
     try:
-        data = _read_summary(path)
+        data = _read_json(path)
     except RunFolderError as exc:
         notes.append(f"{PROFILE_JSON}: skipped: {exc}")
         return None
     rows = data.get("rows")
-    keys = ("tile", "task", "task_name", "function", "cycles", "instructions", "energy_nj")
+    keys = tuple(_PROFILE_ROW)
     if not isinstance(rows, list) or not all(isinstance(r, dict) and all(k in r for k in keys) for r in rows):
         notes.append(f"{PROFILE_JSON}: skipped: not a robosoc profile (rows with {', '.join(keys)})")
         return None
+    for i, row in enumerate(rows):
+        for key, (test, kind) in _PROFILE_ROW.items():
+            if not test(row[key]):
+                notes.append(f"{PROFILE_JSON}: skipped: rows[{i}].{key}: expected {kind}, got {row[key]!r:.40}")
+                return None
     return data
 
 
@@ -204,7 +255,7 @@ def read_run_folder(path: Path) -> RunFolder:
         if (path / JOBS_CSV).is_file():
             run.jobs = read_jobs(path / JOBS_CSV, run.notes)
         if (path / SUMMARY_JSON).is_file():
-            run.summary = _read_summary(path / SUMMARY_JSON)
+            run.summary = read_summary(path / SUMMARY_JSON)
         if (path / SCENARIO_TOML).is_file():
             run.scenario_text = (path / SCENARIO_TOML).read_text(encoding="utf-8")
         if (path / PROFILE_JSON).is_file():
@@ -254,6 +305,7 @@ __all__ = [
     "read_flight_rows",
     "read_jobs",
     "read_run_folder",
+    "read_summary",
     "write_jobs_csv",
     "write_profile",
 ]

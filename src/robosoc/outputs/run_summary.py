@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -62,6 +63,8 @@ __all__ = [
     "HOST_TIMING_KEYS",
     "SCHEMA",
     "TASK_KEYS",
+    "SummaryError",
+    "check_summary",
     "chip_figures",
     "cycle_figures",
     "energy_figures",
@@ -69,6 +72,8 @@ __all__ = [
     "fleet_summary",
     "flight_summary",
     "json_safe",
+    "load_summary",
+    "metric_error",
     "task_figures",
     "vehicle_summary",
     "write_summary",
@@ -260,3 +265,205 @@ def write_summary(summary: dict[str, Any], path: Path) -> None:
     a reader never sees half a file."""
     text = json.dumps(json_safe(summary), indent=2, allow_nan=False) + "\n"
     output_files.write_atomic(path, text)
+
+
+# --- reading a summary.json back ----------------------------------------------------------------
+#
+# A summary.json read back (robosoc report, robosoc profile, a sweep's records) is input: its
+# shape is checked here, in one place, before anything uses it.  Every field robosoc writes has a
+# kind; a field may be missing (an older robosoc, a host flight) or null (NaN), and fields robosoc
+# does not know are kept as they are.  The same table says which dotted names a sweep can tabulate.
+
+MAX_JSON_DEPTH = 32
+"""Deepest nesting of objects and lists accepted in a summary (robosoc writes 4 levels)."""
+
+
+class SummaryError(ValueError):
+    """A ``summary.json`` that is not one: ``"<file>: <dotted.field>: <reason>"``."""
+
+
+class _Kind:
+    """A JSON value kind: a name for messages, a test, and (objects and maps) what is inside."""
+
+    def __init__(self, name: str, test=None, fields=None, each=None, keys=None, keys_text: str = "") -> None:
+        self.name, self.test, self.fields, self.each, self.keys, self.keys_text = (
+            name,
+            test,
+            fields,
+            each,
+            keys,
+            keys_text,
+        )
+
+    def metric(self) -> bool:
+        """Whether a value of this kind can be a sweep metric (a number or a flag)."""
+        return self.name in (NUMBER.name, INTEGER.name, BOOLEAN.name)
+
+
+def _is_number(v: object) -> bool:
+    return isinstance(v, int | float) and not isinstance(v, bool)
+
+
+NUMBER = _Kind("a number or null", lambda v: v is None or _is_number(v))
+INTEGER = _Kind("an integer or null", lambda v: v is None or (isinstance(v, int) and not isinstance(v, bool)))
+BOOLEAN = _Kind("true or false", lambda v: isinstance(v, bool))
+TEXT = _Kind("a string", lambda v: isinstance(v, str))
+ANY = _Kind("any value", lambda v: True)
+TILE_KEY = re.compile(r"\d+,\d+")
+TASK_KEY = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+
+
+def _object(fields: dict[str, _Kind], nullable: bool = True) -> _Kind:
+    return _Kind(
+        "an object" + (" or null" if nullable else ""),
+        lambda v: (nullable and v is None) or isinstance(v, dict),
+        fields=fields,
+    )
+
+
+def _map(each: _Kind, keys: re.Pattern[str] | tuple[str, ...] | None = None, keys_text: str = "") -> _Kind:
+    return _Kind(
+        "an object or null", lambda v: v is None or isinstance(v, dict), each=each, keys=keys, keys_text=keys_text
+    )
+
+
+def _list(each: _Kind) -> _Kind:
+    return _Kind("a list", lambda v: isinstance(v, list), each=each)
+
+
+_TASK = _object({key: INTEGER if key in ("jobs", "deadline_misses") else NUMBER for key in TASK_KEYS} | {
+    "exec_cycles_max": NUMBER, "kernel_energy_share": NUMBER})  # fmt: skip
+_VEHICLE_FIELDS: dict[str, _Kind] = {
+    "schema": INTEGER,
+    "complete": BOOLEAN,
+    "stopped": _Kind("a string or null", lambda v: v is None or isinstance(v, str)),
+    "scenario": TEXT,
+    "seed": INTEGER,
+    "controller": TEXT,
+    "mode": TEXT,
+    "firmware": _Kind(  # an object (fly), the build's label (firmware replay --out) or null (host)
+        "an object, a string or null",
+        lambda v: v is None or isinstance(v, dict | str),
+        fields={
+            "build": TEXT,
+            "arith": TEXT,
+            "multiplier": BOOLEAN,
+            "release": TEXT,
+            "scheduler": TEXT,
+            "ekf_tile": _list(INTEGER),
+            "pid_tile": _list(INTEGER),
+        },
+    ),
+    "chip": _object({"width": INTEGER, "height": INTEGER, "clock_ns": NUMBER}),
+    "simulated_s": NUMBER,
+    "host_s": NUMBER,
+    "real_time_factor": NUMBER,
+    "flight": _object(
+        {
+            "hover_rms_m": NUMBER,
+            "hover_max_m": NUMBER,
+            "overshoot_m": NUMBER,
+            "tracking_rms_deg": _object({"roll": NUMBER, "pitch": NUMBER, "yaw": NUMBER}),
+            "step_rise_s": _list(_object({"axis": TEXT, "time_s": NUMBER, "rise_s": NUMBER}, nullable=False)),
+            "attitude_estimate_rms_deg": NUMBER,
+            "height_estimate_rms_m": NUMBER,
+        }
+    ),
+    "tasks": _map(_TASK, TASK_KEY, "TASK: estimator, pid or a firmware project's task"),
+    "deadline_misses": INTEGER,
+    "energy": _object({"total_uj": NUMBER, "tiles_uj": _map(NUMBER, TILE_KEY, "X,Y"), "noc_uj": NUMBER}),
+    "cycles": _object({"chip": INTEGER, "tiles": _map(INTEGER, TILE_KEY, "X,Y")}),
+    "min_separation_m": NUMBER,
+}
+SUMMARY = _object(_VEHICLE_FIELDS, nullable=False)
+_VEHICLE_FIELDS["vehicles"] = _list(SUMMARY)
+
+
+def _describe(value: object) -> str:
+    kind = {dict: "an object", list: "a list", str: "the string", bool: "", type(None): ""}.get(type(value), "")
+    shown = json.dumps(value, allow_nan=True)
+    if len(shown) > 40:
+        shown = shown[:37] + "..."
+    return f"{kind} {shown}".strip() if kind in ("the string", "") else kind
+
+
+def _check(value: object, kind: _Kind, where: str, field: str) -> None:
+    if not kind.test(value):
+        raise SummaryError(f"{where}: {field or '(top level)'}: expected {kind.name}, got {_describe(value)}")
+    if isinstance(value, float) and not math.isfinite(value):
+        raise SummaryError(f"{where}: {field}: expected a finite number or null, got {value}")
+    if isinstance(value, dict):
+        for key, item in value.items():
+            inner = kind.fields.get(key) if kind.fields is not None else kind.each
+            if inner is not None:
+                _check(item, inner, where, f"{field}.{key}" if field else key)
+    elif isinstance(value, list) and kind.each is not None:
+        for i, item in enumerate(value):
+            _check(item, kind.each, where, f"{field}[{i}]")
+
+
+def _depth(value: object) -> int:
+    """How deeply ``value`` nests (iteratively: a hostile file cannot exhaust the stack)."""
+    deepest, todo = 0, [(value, 1)]
+    while todo:
+        node, level = todo.pop()
+        if isinstance(node, dict | list):
+            deepest = max(deepest, level)
+            if level <= MAX_JSON_DEPTH:
+                todo.extend((v, level + 1) for v in (node.values() if isinstance(node, dict) else node))
+    return deepest
+
+
+def check_summary(data: object, where: str) -> dict[str, Any]:
+    """``data`` if it has the shape of a run's ``summary.json`` (module docstring), else
+    :class:`SummaryError` naming ``where`` and the dotted field: ``runs/x/summary.json: chip: expected
+    an object or null, got the string "2x2"``."""
+    if _depth(data) > MAX_JSON_DEPTH:
+        raise SummaryError(f"{where}: nested more than {MAX_JSON_DEPTH} levels deep: not a robosoc summary")
+    if not isinstance(data, dict):
+        raise SummaryError(f"{where}: expected a JSON object (a run's summary.json)")
+    _check(data, SUMMARY, where, "")
+    return data  # type: ignore[return-value]
+
+
+def _no_constant(name: str) -> None:
+    raise ValueError(f"{name} is not a JSON number (robosoc writes null)")
+
+
+def load_summary(text: str, where: str) -> dict[str, Any]:
+    """The summary in ``text`` (a ``summary.json``'s contents), checked by :func:`check_summary`.
+
+    Raises:
+        SummaryError: not JSON, NaN or Infinity in it, or a field of the wrong kind (names ``where``).
+    """
+    try:
+        data = json.loads(text, parse_constant=_no_constant)
+    except RecursionError:
+        raise SummaryError(f"{where}: nested too deeply: not a robosoc summary") from None
+    except ValueError as exc:  # JSONDecodeError, and NaN / Infinity
+        raise SummaryError(f"{where}: not JSON: {exc}") from None
+    return check_summary(data, where)
+
+
+def metric_error(name: str) -> str | None:
+    """Why ``name`` is not a dotted number field of ``summary.json`` a sweep can tabulate, or None."""
+    kind = SUMMARY
+    parts = name.split(".")
+    for i, part in enumerate(parts):
+        parent = ".".join(parts[:i]) or "summary.json"
+        if kind.fields is not None:
+            inner = kind.fields.get(part) if part != "vehicles" else None
+            known = ", ".join(k for k in kind.fields if k != "vehicles")
+        elif kind.each is not None and kind.keys is not None:
+            fits = kind.keys.fullmatch(part) if isinstance(kind.keys, re.Pattern) else part in kind.keys
+            inner = kind.each if fits else None
+            known = kind.keys_text
+        else:
+            inner, known = None, ""
+        if inner is None:
+            has = f" ({parent} has: {known})" if known else f" ({parent} is a single value)"
+            return f"{name!r} is not a field of summary.json{has}"
+        kind = inner
+    if not kind.metric():
+        return f"{name!r} is not a number of summary.json (it is {kind.name}): name one of its fields"
+    return None

@@ -60,8 +60,24 @@ def point_key(base: ScenarioConfig, assignment: Assignment, seed: int) -> str:
     return hashlib.sha256(text.encode()).hexdigest()[:KEY_DIGITS]
 
 
+def check_metrics(config: SweepConfig) -> None:
+    """Raise :class:`ConfigError` (naming ``metrics[i]`` and the fields where the name went wrong)
+    for a metric that is not a number of ``summary.json``: it would be an empty column."""
+    from robosoc.outputs.run_summary import metric_error  # the summary's shape, in one place
+
+    for i, metric in enumerate(config.metrics):
+        reason = metric_error(metric)
+        if reason is not None:
+            raise ConfigError(config.source, f"metrics[{i}]", reason)
+
+
 def plan(config: SweepConfig) -> list[Point]:
-    """The sweep's points: assignments in file order, each with every seed."""
+    """The sweep's points: assignments in file order, each with every seed.
+
+    Raises:
+        ConfigError: two points are the same run, or a metric is not in ``summary.json`` (:func:`check_metrics`).
+    """
+    check_metrics(config)
     points: list[Point] = []
     seen: dict[str, Point] = {}
     for assignment in config.assignments():
@@ -76,4 +92,4 @@ def plan(config: SweepConfig) -> list[Point]:
     return points
 
 
-__all__ = ["KEY_DIGITS", "Point", "plan", "point_key"]
+__all__ = ["KEY_DIGITS", "Point", "check_metrics", "plan", "point_key"]

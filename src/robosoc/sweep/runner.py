@@ -23,8 +23,10 @@ from __future__ import annotations
 
 import functools
 import multiprocessing
+import os
 import signal
 import threading
+import time
 from collections.abc import Callable, Iterator
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
@@ -71,10 +73,48 @@ class SweepOutcome:
 Progress = Callable[[Point, dict[str, Any]], None]
 
 
-def warm_worker() -> None:
-    """Import what a point needs once per worker process; Ctrl-C belongs to the driving process."""
+PR_SET_PDEATHSIG = 1
+"""prctl(2) option: the signal a process gets when its parent dies (Linux)."""
+
+
+def die_with_parent(parent: int) -> None:
+    """Make this process end when ``parent`` does, even by SIGKILL: SIGKILL on the parent's death
+    (Linux's PR_SET_PDEATHSIG), and, where that is not to be had, a thread watching the parent."""
+    if os.getppid() != parent:  # the parent died before we got here
+        os._exit(1)
+    try:
+        import ctypes
+
+        libc = ctypes.CDLL(None, use_errno=True)
+        if libc.prctl(PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0) == 0:
+            if os.getppid() != parent:  # died between the check and the prctl
+                os._exit(1)
+            return
+    except (OSError, AttributeError):
+        pass
+    watch_parent(parent)
+
+
+def watch_parent(parent: int, every_s: float = 1.0) -> threading.Thread:
+    """A daemon thread that ends this process (``os._exit``) once ``parent`` is gone."""
+
+    def watch() -> None:
+        while os.getppid() == parent:
+            time.sleep(every_s)
+        os._exit(1)
+
+    thread = threading.Thread(target=watch, name="robosoc-parent-watch", daemon=True)
+    thread.start()
+    return thread
+
+
+def warm_worker(parent: int | None = None) -> None:
+    """Import what a point needs once per worker process; Ctrl-C belongs to the driving process,
+    and the worker ends with it (``parent``: its pid, also when it is killed)."""
     if threading.current_thread() is threading.main_thread():  # a Dask worker may run this in a thread
         signal.signal(signal.SIGINT, signal.SIG_IGN)
+    if parent is not None:
+        die_with_parent(parent)
     import robosoc.outputs.flight_session  # noqa: F401  (physics, chip and firmware: once per process)
 
 
@@ -107,6 +147,15 @@ def prepare(config: SweepConfig, points: list[Point], on_status: Callable[[str],
             continue
 
 
+class SchedulerError(Exception):
+    """The Dask scheduler (or a LocalCluster) could not be reached or started."""
+
+    def __init__(self, address: str, cause: BaseException) -> None:
+        super().__init__(f"cannot reach the scheduler at {address}: {cause}" if address != LOCAL else
+                         f"cannot start a Dask LocalCluster: {cause}")  # fmt: skip
+        self.address = address
+
+
 class _LocalPool:
     """Points on a process pool; rebuilt when a worker dies."""
 
@@ -116,7 +165,10 @@ class _LocalPool:
 
     def _new(self) -> ProcessPoolExecutor:
         return ProcessPoolExecutor(
-            self.workers, mp_context=multiprocessing.get_context("spawn"), initializer=warm_worker
+            self.workers,
+            mp_context=multiprocessing.get_context("spawn"),
+            initializer=warm_worker,
+            initargs=(os.getpid(),),
         )
 
     def run(self, config: SweepConfig, todo: list[Point]) -> Iterator[tuple[Point, PointResult]]:
@@ -162,11 +214,17 @@ class _DaskPool:
         from dask.distributed import Client, LocalCluster
 
         self.cluster = None
-        if address == LOCAL:
-            self.cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=":0")
-            self.client = Client(self.cluster)
-        else:
-            self.client = Client(address, timeout="20s")
+        try:
+            if address == LOCAL:
+                self.cluster = LocalCluster(
+                    n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=":0"
+                )
+                self.client = Client(self.cluster)
+            else:
+                self.client = Client(address, timeout="20s")
+        except (OSError, TimeoutError) as exc:
+            raise SchedulerError(address, exc) from exc
+        if address != LOCAL:
             count = self.workers()
             on_status(f"the Dask scheduler at {address} has {count} worker{'s' if count != 1 else ''}")
         self.client.run(warm_worker)
@@ -228,9 +286,27 @@ def run_sweep(
 
     Raises:
         KeyboardInterrupt: after stopping the workers; every point finished so far is kept.
+        robosoc.sweep.store.FolderInUse: another sweep runs in ``out`` (its pid is said).
+        robosoc.sweep.store.RecordError: a record in ``out/results`` is not one (names the file).
+        SchedulerError: ``dask`` could not be reached or started.
     """
     points = plan(config)
     store = SweepStore(out)
+    with store.lock():
+        return _run(config, store, points, workers, dask, retry_failed, on_start, on_point, on_status)
+
+
+def _run(
+    config: SweepConfig,
+    store: SweepStore,
+    points: list[Point],
+    workers: int,
+    dask: str | None,
+    retry_failed: bool,
+    on_start: Callable[[int, int], None] | None,
+    on_point: Progress | None,
+    on_status: Callable[[str], None] | None,
+) -> SweepOutcome:
     records = store.records()
     if retry_failed:
         for key in [k for k, r in records.items() if r["status"] == FAILED]:
@@ -262,4 +338,4 @@ def run_sweep(
     return SweepOutcome(points, records, ran, len(points) - len(todo), table)
 
 
-__all__ = ["LOCAL", "SweepOutcome", "prepare", "run_sweep", "warm_worker"]
+__all__ = ["LOCAL", "SchedulerError", "SweepOutcome", "die_with_parent", "prepare", "run_sweep", "warm_worker"]
