@@ -149,5 +149,5 @@ def test_a_flight_log_missing_a_column_names_it_and_a_short_row_names_its_line(t
     path.write_text(",".join(ROW_FIELDS) + f"\n{row}\n{row[:-2]}\n{row}\n")
     with pytest.raises(ValueError) as info:
         read_flight_log(path)
-    assert str(info.value) == f"{path}: line 3: {len(ROW_FIELDS) - 1} values, expected {len(ROW_FIELDS)}"
+    assert str(info.value) == f"{path}: row 2 (line 3): {len(ROW_FIELDS) - 1} values, expected {len(ROW_FIELDS)}"
     assert "usecols" not in str(info.value)

@@ -152,7 +152,7 @@ def read_flight_log(path: Path, notes: list[str] | None = None) -> np.ndarray:
     with path.open(encoding="utf-8", newline="") as handle:
         reader = csv.reader(handle)
         header = next(reader, None)
-        problem = header_problem(header or [], ROW_FIELDS)
+        problem = "empty file" if header is None else header_problem(header, ROW_FIELDS)
         if problem is not None:
             raise FlightLogError(f"{path}: not a robosoc flight log ({problem})")
         lines = list(reader)
