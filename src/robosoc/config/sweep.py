@@ -24,7 +24,8 @@ A sweep file is TOML::
 Field names are the scenario's (``robosoc scenario show``), dotted; a name that is not a field
 is an error naming the sweep file and the key.  Each grid value is checked alone against the
 base scenario before anything runs, and each listed point as a whole (with a grid: valid with
-at least one grid combination), so a wrong type or an out-of-range value stops the sweep at once; a *combination* that is invalid (a task mapped outside a smaller mesh, say) is a failed
+at least one grid combination), so a wrong type or an out-of-range value stops the sweep at
+once; a *combination* that is invalid (a task mapped outside a smaller mesh, say) is a failed
 point, recorded with its reason, and the sweep goes on.
 
 When both ``grid`` and ``points`` are given, every listed point is combined with every grid
