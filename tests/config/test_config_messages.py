@@ -113,7 +113,7 @@ def test_a_sweep_point_that_breaks_the_scenario_names_the_sweep_file_and_keeps_t
     with pytest.raises(ConfigError) as info:  # a listed point is checked before anything runs
         load_sweep(path)
     assert str(info.value).startswith(f"{path}: points[0]: firmware.ekf_tile")
-    path.write_text('[base]\nduration_s = 4.0\n[[points]]\nvehicles = 2\n')
+    path.write_text("[base]\nduration_s = 4.0\n[[points]]\nvehicles = 2\n")
     config = load_sweep(path)
     point = (("firmware.ekf_tile", [5, 5]),)
     with pytest.raises(ConfigError) as info:
