@@ -208,8 +208,8 @@ def fly_scenario(
             log.close()
         stopped = "interrupted" if isinstance(exc, KeyboardInterrupt) else f"{type(exc).__name__}: {exc}"
         try:
-            flight = _summarize(scenario, vehicles, controllers, flown, host_s, stopped, folders, out)
-            _extras(scenario, vehicles, controllers, flight, folders, plot, logs)
+            so_far = _summarize(scenario, vehicles, controllers, flown, host_s, stopped, folders, out)
+            _extras(scenario, vehicles, controllers, so_far, folders, plot, logs)
         except KeyboardInterrupt:  # a second Ctrl-C: the summary (complete false) is written first
             pass
         except Exception as inner:
@@ -220,12 +220,12 @@ def fly_scenario(
     host_s = time.perf_counter() - start
     for log in csv_logs:
         log.close()
-    flight = None
+    flight: ScenarioFlight | None = None
     try:
         flight = _summarize(scenario, vehicles, controllers, flown, host_s, None, folders, out)
         _extras(scenario, vehicles, controllers, flight, folders, plot, logs)
     except KeyboardInterrupt:
-        if flight is None and out is not None and not (out / SUMMARY_JSON).exists():
+        if out is not None and not (out / SUMMARY_JSON).exists():
             raise  # not after the summary: an ordinary interruption
         wanted = [n for n in EXTRA_FILES if (plot and n == "flight.png") or (logs and n != "flight.png")]
         missing = [name for name in wanted if any(not (f / name).exists() for f in folders)]

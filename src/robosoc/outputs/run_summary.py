@@ -423,7 +423,7 @@ def check_summary(data: object, where: str) -> dict[str, Any]:
     if not isinstance(data, dict):
         raise SummaryError(f"{where}: expected a JSON object (a run's summary.json)")
     _check(data, SUMMARY, where, "")
-    return data  # type: ignore[return-value]
+    return data
 
 
 def _no_constant(name: str) -> None:
