@@ -199,6 +199,9 @@ OPTIONS: dict[tuple[str, str], Spec] = {
     ("table", "--firmware"): Spec("in_dir"),
     ("fly", "--firmware"): Spec("in_dir"),
     ("serve chip", "--firmware"): Spec("in_dir"),
+    ("firmware build", "--firmware"): Spec("in_dir"),
+    ("firmware size", "--firmware"): Spec("in_dir"),
+    ("firmware replay", "--firmware"): Spec("in_dir"),
     ("new", "DIR"): Spec("out_dir"),
     ("new", "--template"): Spec("choice", choices=("blank", "quadrotor")),
 }

@@ -193,3 +193,20 @@ def test_a_project_is_linked_for_its_tiles_sram_and_one_too_large_is_a_build_err
     small = invoke("fly", scenario, "--no-out")
     assert small.exit_code == exit_codes.USAGE and "the firmware does not build" in small.output
     assert "does not fit in SRAM of 16384 bytes" in small.output and "Traceback" not in small.output
+
+
+def test_the_firmware_commands_build_measure_and_replay_a_project(tmp_path: Path) -> None:
+    assert invoke("new", tmp_path / "p").exit_code == 0
+    built = invoke("firmware", "build", "--firmware", tmp_path / "p", "--arith", "float", "-o", tmp_path / "p.elf")
+    assert built.exit_code == 0, built.output
+    assert (tmp_path / "p.elf").read_bytes()[:4] == b"\x7fELF"
+    size = invoke("firmware", "size", "--firmware", tmp_path / "p", "--top", "200")
+    assert size.exit_code == 0 and "controller_on_message" in size.output and "est_packet_step" in size.output
+    out = tmp_path / "replay"
+    replayed = invoke("firmware", "replay", "--firmware", tmp_path / "p", "--seconds", "0.5", "--out", out)
+    assert replayed.exit_code == 0, replayed.output
+    assert json.loads((out / "summary.json").read_text())["tasks"]["controller"]["jobs"] == 50
+    source = tmp_path / "p" / "controller.c"
+    source.write_text(source.read_text().replace("pid_init(&pid);", "pid_init(&pid)"))
+    broken = invoke("firmware", "build", "--firmware", tmp_path / "p")
+    assert broken.exit_code == exit_codes.USAGE and "controller.c:" in broken.output

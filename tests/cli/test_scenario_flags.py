@@ -182,7 +182,7 @@ def test_firmware_commands_take_the_firmware_rows_alone() -> None:
     from robosoc.cli.scenario_flags import FIRMWARE, resolve_section
     from robosoc.config.firmware import FirmwareConfig
 
-    assert {f.option for f in flags_of(FIRMWARE)} == {"--arith", "--mul/--no-mul"}
+    assert {f.option for f in flags_of(FIRMWARE)} == {"--arith", "--mul/--no-mul", "--firmware"}
     base = FirmwareConfig(period_ticks=5)
     got = resolve_section(ScenarioFlags.of(None, None, {"arith": "float", "mul": False}), base, "firmware")
     assert (got.arith, got.multiplier, got.period_ticks) == ("float", False, 5)
@@ -219,7 +219,7 @@ def test_the_decorator_places_the_scenario_file_after_the_commands_own_arguments
     assert "NAME" in shown and "SCENARIO" in shown and "--scenario" not in shown and "--arith" in shown
     assert shown.index("NAME") < shown.index("SCENARIO") and "Scenario TOML file" in shown
     assert runner.invoke(app, ["bare", "--arith", "float"]).exit_code == 0
-    assert seen.pop() == (3, {"arith": "float", "mul": None})
+    assert seen.pop() == (3, {"arith": "float", "mul": None, "firmware": None})
     bare_help = runner.invoke(app, ["bare", "--help"]).output
     assert "SCENARIO" not in bare_help and "--scenario" not in bare_help and "--seed" not in bare_help
 

@@ -13,8 +13,10 @@ from robosoc.cli import exit_codes, files, options
 from robosoc.cli.app import firmware_app
 from robosoc.cli.console import make_console, plain
 from robosoc.cli.errors import CliError
+from robosoc.cli.project_check import check_project
 from robosoc.cli.scenario_flags import FIRMWARE, ScenarioFlags, resolve_section, takes_scenario
 from robosoc.config.firmware import FirmwareConfig
+from robosoc.config.scenario import ScenarioConfig
 
 if TYPE_CHECKING:
     from robosoc.cosim.firmware_run import ReplayResult
@@ -23,15 +25,28 @@ Config = Annotated[Path | None, typer.Option("--config", help="Firmware configur
 
 
 def _firmware(flags: ScenarioFlags, config: Path | None) -> FirmwareConfig:
-    """The configuration: defaults, the file's fields, then the options the user gave."""
+    """The configuration: defaults, the file's fields, then the options the user gave; a firmware
+    project it names (``--firmware DIR``) checked before anything is built."""
     fw = files.load_toml(FirmwareConfig, config, "--config")[0] if config is not None else FirmwareConfig()
-    return resolve_section(flags, fw, "firmware")
+    fw = resolve_section(flags, fw, "firmware")
+    if fw.project:
+        check_project(ScenarioConfig(firmware=fw, chip=fw.default_chip()), "--firmware")
+    return fw
 
 
 def _build(fw: FirmwareConfig) -> Path:
-    from robosoc.host import flight_app
+    """The ELF of ``fw``: the built-in application, or the project it names.
 
-    return flight_app.build(fw)
+    Raises:
+        CliError: the compiler failed (file and line) or the program cannot fit.
+    """
+    from robosoc.host.scenario_image import firmware_image
+    from robosoc.toolchain import ToolchainError
+
+    try:
+        return firmware_image(fw).elf
+    except ToolchainError as exc:
+        raise CliError(f"the firmware does not build: {exc}") from exc
 
 
 @firmware_app.command("build", epilog=exit_codes.EPILOG)

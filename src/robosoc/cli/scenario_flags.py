@@ -146,7 +146,7 @@ FLAGS: tuple[ScenarioFlag, ...] = (
     ScenarioFlag("--arith", "arith", "firmware.arith", Arith, (FLY, SERVE_CHIP, FIRMWARE)),
     ScenarioFlag("--mul/--no-mul", "mul", "firmware.multiplier", Mul, (FLY, SERVE_CHIP, FIRMWARE)),
     ScenarioFlag("--engine", "engine", "chip.engine", Engine, (FLY,)),
-    ScenarioFlag("--firmware", "firmware", "firmware.project", Firmware, (FLY, SERVE_CHIP)),
+    ScenarioFlag("--firmware", "firmware", "firmware.project", Firmware, (FLY, SERVE_CHIP, FIRMWARE)),
 )
 """Every flag that sets a scenario field."""
 
