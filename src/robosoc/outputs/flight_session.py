@@ -51,8 +51,11 @@ from robosoc.cosim.lockstep import (
 )
 from robosoc.outputs.run_folder import (
     FLIGHT_CSV,
+    FLIGHT_MCAP,
     FLIGHT_PNG,
     JOBS_CSV,
+    REPORT_HTML,
+    RUN_FILES,
     SCENARIO_TOML,
     SUMMARY_JSON,
     write_jobs_csv,
@@ -62,18 +65,10 @@ from robosoc.outputs.run_summary import fleet_summary, vehicle_summary, write_su
 from robosoc.physics import World
 from robosoc.physics.clock import FlightClock
 
-EXTRA_FILES = ("flight.png", "flight.mcap", "report.html")
+EXTRA_FILES = (FLIGHT_PNG, FLIGHT_MCAP, REPORT_HTML)
 """What :func:`fly_scenario` writes after the summary (a chip flight recording its timeline also
 ``chip-trace.json``): an interruption there leaves the flight complete without them."""
-RUN_FILES = (
-    "summary.json",
-    "scenario.toml",
-    "jobs.csv",
-    "profile.json",
-    "profile.csv",
-    *EXTRA_FILES,
-    "chip-trace.json",
-)
+SCRATCH_FILES = tuple(name for name in RUN_FILES if name != FLIGHT_CSV)  # the log is written row by row
 """The files of a run folder written to a scratch name first (whose leftovers are removed)."""
 
 SPACING_M = 3.0
@@ -215,7 +210,7 @@ def fly_scenario(
         except Exception as inner:
             exc.add_note(f"the summary of the flight so far could not be written: {type(inner).__name__}: {inner}")
         finally:
-            remove_partials([*folders, *([out] if out is not None else [])], RUN_FILES)
+            remove_partials([*folders, *([out] if out is not None else [])], SCRATCH_FILES)
         raise
     host_s = time.perf_counter() - start
     for log in csv_logs:
@@ -227,15 +222,16 @@ def fly_scenario(
     except KeyboardInterrupt:
         if out is not None and not (out / SUMMARY_JSON).exists():
             raise  # not after the summary: an ordinary interruption
-        wanted = [n for n in EXTRA_FILES if (plot and n == "flight.png") or (logs and n != "flight.png")]
+        wanted = [n for n in EXTRA_FILES if (plot and n == FLIGHT_PNG) or (logs and n != FLIGHT_PNG)]
         missing = [name for name in wanted if any(not (f / name).exists() for f in folders)]
         raise InterruptedAfterFlight(missing) from None
     finally:
-        remove_partials([*folders, *([out] if out is not None else [])], RUN_FILES)
+        remove_partials([*folders, *([out] if out is not None else [])], SCRATCH_FILES)
     assert flight is not None
     return flight
 
 
+@deferred_interrupt()  # Ctrl-C waits until they are written: a summary.json always says what the flight was
 def _summarize(
     scenario: ScenarioConfig,
     vehicles: list[VehicleConfig],
@@ -247,22 +243,7 @@ def _summarize(
     out: Path | None,
 ) -> ScenarioFlight:
     """Summaries (complete or not) and job records of the rows flown; ``summary.json``, ``jobs.csv``
-    and the profile written when ``out`` is set.  Ctrl-C waits until they are (a summary.json
-    always says what the flight was)."""
-    with deferred_interrupt():
-        return _summaries(scenario, vehicles, controllers, flown, host_s, stopped, folders, out)
-
-
-def _summaries(
-    scenario: ScenarioConfig,
-    vehicles: list[VehicleConfig],
-    controllers: list[LockstepController],
-    flown: list[list[np.ndarray]],
-    host_s: float,
-    stopped: str | None,
-    folders: list[Path],
-    out: Path | None,
-) -> ScenarioFlight:
+    and the profile written when ``out`` is set."""
     complete = stopped is None
     rows = [np.array(r).reshape(-1, len(ROW_FIELDS)) for r in flown]
     samples = min(len(r) for r in rows)
