@@ -210,3 +210,14 @@ def test_the_firmware_commands_build_measure_and_replay_a_project(tmp_path: Path
     source.write_text(source.read_text().replace("pid_init(&pid);", "pid_init(&pid)"))
     broken = invoke("firmware", "build", "--firmware", tmp_path / "p")
     assert broken.exit_code == exit_codes.USAGE and "controller.c:" in broken.output
+
+
+def test_profile_refuses_a_run_whose_scenario_names_a_project_that_is_gone(tmp_path: Path) -> None:
+    assert invoke("new", tmp_path / "p").exit_code == 0
+    run = tmp_path / "run"
+    assert invoke("fly", "--firmware", tmp_path / "p", "--duration", "0.05", "--out", run).exit_code == 0
+    scenario = run / "scenario.toml"
+    scenario.write_text(scenario.read_text().replace(str(tmp_path / "p"), str(tmp_path / "gone")))  # edited by hand
+    result = invoke("profile", run)
+    assert result.exit_code == exit_codes.USAGE and "Traceback" not in result.output
+    assert f"{scenario}: firmware.project: no folder {tmp_path / 'gone'}" in " ".join(result.output.split())

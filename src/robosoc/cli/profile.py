@@ -90,15 +90,18 @@ def profile_command(run_dir: RunDir, top: Top = 10) -> None:
     from robosoc.chip.mpsoc import ChipError
     from robosoc.chip.single import CoreError
     from robosoc.cli.fly import FlightProgress
+    from robosoc.cli.project_check import check_project
     from robosoc.cli.scenario import load_scenario
     from robosoc.outputs.flight_session import fly_scenario, vehicle_folder
     from robosoc.outputs.run_folder import PROFILE_CSV, PROFILE_JSON, SCENARIO_TOML, SUMMARY_JSON, write_profile
+    from robosoc.toolchain import ToolchainError
 
     folder = files.input_dir(run_dir, None)
     for name in (SCENARIO_TOML, SUMMARY_JSON):
         if not (folder / name).exists():
             raise CliError(f"{run_dir}: has no {name}: not a robosoc fly run folder")
     config, _ = load_scenario(folder / SCENARIO_TOML, None)
+    check_project(config, f"{folder / SCENARIO_TOML}: firmware.project")
     if config.controller != "chip":
         raise CliError(f"{run_dir}: flown with controller = {config.controller!r}: no firmware to profile")
     count = config.vehicles
@@ -123,6 +126,8 @@ def profile_command(run_dir: RunDir, top: Top = 10) -> None:
         raise typer.Exit(exit_codes.INTERRUPTED) from None
     except (ChipError, CoreError) as exc:
         raise CliError(f"the firmware failed on the chip: {exc}", code=exit_codes.SIMULATOR_STOP) from exc
+    except ToolchainError as exc:  # the project's C edited since the flight
+        raise CliError(f"the firmware does not build: {exc}") from exc
     finally:
         progress.stop()
     for i, (result, where, summary) in enumerate(zip(flight.results, folders, summaries, strict=True)):
