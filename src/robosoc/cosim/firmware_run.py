@@ -152,8 +152,7 @@ class FirmwareRun:
     def inject(self, sample: SampleInput) -> None:
         """Send ``sample`` from the I/O tile to the firmware's sensor input at ``sample.cycle``."""
         tile, port = self.image.sensor
-        io = images.tile_address(self.chip_config.io_tile)
-        for payload in images.message_packets(sample.payload, port, src_tile=io, src_port=port, seq=sample.seq):
+        for payload in images.io_packets(sample.payload, port, self.chip_config.io_tile, sample.seq):
             self.chip.inject(tile, payload, sample.cycle)
         self.samples.append(sample)
         self._sample_cycles.append(sample.cycle)

@@ -129,9 +129,7 @@ def task_ids(fw: FirmwareConfig, xy: tuple[int, int]) -> dict[str, int]:
 
 def sensor_payloads(packet: bytes, fw: FirmwareConfig, chip: ChipConfig, seq: int) -> list[list[int]]:
     """The payloads for :meth:`MPSoC.inject` carrying one sensor packet to the estimator's port."""
-    return images.message_packets(
-        packet, SENSOR_PORT, src_tile=images.tile_address(chip.io_tile), src_port=SENSOR_PORT, seq=seq
-    )
+    return images.io_packets(packet, SENSOR_PORT, chip.io_tile, seq)
 
 
 def sample_cycle(k: int, period_us: int = SAMPLE_PERIOD_US, clock_period_ns: float = 4.0) -> int:

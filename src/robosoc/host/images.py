@@ -244,6 +244,12 @@ class Message:
     cycle: int
 
 
+def io_packets(data: bytes, port: int, io_tile: tuple[int, int], seq: int) -> list[list[int]]:
+    """The payloads carrying one message from the I/O tile at ``io_tile`` to ``port`` (its source
+    port the same), for :meth:`MPSoC.inject`."""
+    return message_packets(data, port, src_tile=tile_address(io_tile), src_port=port, seq=seq)
+
+
 def message_packets(
     data: bytes,
     port: int,
