@@ -188,8 +188,8 @@ def _summarise_case(armed_from: int):
     """Eight samples 1000 cycles apart (at 4 ns), armed from ``armed_from``; measured over 4 iterations."""
     from robosoc.analysis.accuracy import GoldenRun
     from robosoc.control.flight import ROW_FIELDS
-    from robosoc.cosim.firmware_run import ReplayResult
-    from robosoc.host.flight_app import ChipEstimate
+    from robosoc.cosim.firmware_run import ReplayResult, TelemetryRead
+    from robosoc.host.telemetry import ESTIMATE_QUATERNION
     from robosoc.records import PwmCommand, SampleInput
 
     n = 8
@@ -214,9 +214,9 @@ def _summarise_case(armed_from: int):
     pid = _job(0, (1.0, 1.0, 1.0, 1.0), 100, 200)
     jobs.append(dataclass_replace(pid, release_cycle=samples[3].cycle, completion_cycle=samples[3].cycle + 200))
     quaternions = {1: (0, 1, 0, 0), 2: (1, 0, 0, 0), 3: (0.6, 0.8, 0, 0), 5: (1, 0, 0, 0), 7: (0, 1, 0, 0)}
-    estimates = [ChipEstimate(k, k, q, 0.0, 0.0) for k, q in quaternions.items()]
+    estimates = [TelemetryRead(k, dict(zip(ESTIMATE_QUATERNION, q, strict=True))) for k, q in quaternions.items()]
     fw = table_one.build_config("fixed", True, "periodic")
-    result = ReplayResult(fw, 4.0, samples, commands, jobs, {}, {}, {}, {}, 9100, 1.25, estimates=estimates)
+    result = ReplayResult(fw, 4.0, samples, commands, jobs, {}, {}, {}, {}, 9100, 1.25, telemetry=estimates)
     return table_one.summarise(result, rows, golden, 4, "replay")
 
 

@@ -1,4 +1,4 @@
-"""The estimate probe: the chip's estimator state read from its tile's memory, no cycle spent."""
+"""Telemetry: the chip's estimator state read from its tile's memory between jobs, no cycle spent."""
 
 import math
 
@@ -10,10 +10,12 @@ from robosoc.config.firmware import FirmwareConfig
 from robosoc.config.scenario import ScenarioConfig
 from robosoc.config.vehicle import vehicle_preset
 from robosoc.control.flight import ROW_FIELDS
+from robosoc.cosim import firmware_run
 from robosoc.cosim.lockstep import fly_chip
 from robosoc.cosim.replay import built_in_rows, replay
 from robosoc.host import flight_app
-from robosoc.program.dwarf import member_offset
+from robosoc.host.telemetry import ESTIMATE_QUATERNION
+from robosoc.program.dwarf import member_offset, type_size, variable_field
 from robosoc.program.elf import ElfError
 
 WINDOW = slice(280, 330)
@@ -30,6 +32,14 @@ def test_dwarf_offsets_match_the_c_layout() -> None:
     assert member_offset(elf, "est_t", "alt.v") == (ekf_bytes + 8, 4)
     with pytest.raises(ElfError, match=r"est_t\.nothing"):
         member_offset(elf, "est_t", "nothing")
+    # the same through the variable that holds it, and the kernel's task table by its type
+    assert variable_field(elf, "app_est", "alt.h") == (ekf_bytes + 4, 4)
+    assert variable_field(elf, "app_est", "") == (0, type_size(elf, "est_t"))
+    assert type_size(elf, "os_tcb") == 128  # the kernel's _Static_assert says so
+    with pytest.raises(ElfError, match=r"no variable 'nowhere'"):
+        variable_field(elf, "nowhere")
+    with pytest.raises(ElfError, match=r"no member 'alt.x'.*ekf, alt"):
+        variable_field(elf, "app_est", "alt.x")
 
 
 @pytest.fixture(scope="module")
@@ -42,15 +52,14 @@ def test_chip_estimate_follows_the_golden_ekf(rows: np.ndarray, arith: str, boun
     fw = FirmwareConfig(arith=arith)
     plain = replay(rows[WINDOW.start - 280 :], fw)  # the whole stream: the firmware calibrates first
     gold = golden_replay(rows)
-    by_sample = {e.sample: e for e in plain.estimates}
+    by_sample = {r.sample: r.values for r in plain.telemetry}
     ks = [k for k in range(WINDOW.start, WINDOW.stop) if k in by_sample]
     assert ks == list(range(WINDOW.start, WINDOW.stop))  # event release: every period's close
-    chip_q = np.array([by_sample[k].quaternion for k in ks])
-    assert np.abs(chip_q - gold.quaternion[ks]).max() < bound_q
-    heights = np.array([by_sample[k].height for k in ks])
-    assert np.abs(heights - gold.height[ks]).max() < bound_h
     # event release: the estimate read at the close of period k is the one after sample k
-    assert all(by_sample[k].jobs == k + 1 for k in ks)
+    chip_q = np.array([[by_sample[k][n] for n in ESTIMATE_QUATERNION] for k in ks])
+    assert np.abs(chip_q - gold.quaternion[ks]).max() < bound_q
+    heights = np.array([by_sample[k]["est_height"] for k in ks])
+    assert np.abs(heights - gold.height[ks]).max() < bound_h
     assert gold.armed[ks].any() and not gold.armed[ks].all()  # the window spans the take-off
 
 
@@ -59,10 +68,11 @@ def test_the_probe_costs_no_cycle(rows: np.ndarray, monkeypatch: pytest.MonkeyPa
     short = rows[:6]
     probed = replay(short, FirmwareConfig())
     calls = []
-    fake = flight_app.ChipEstimate(0, 10**9, (1.0, 0.0, 0.0, 0.0), 0.0, 0.0)
-    monkeypatch.setattr(flight_app, "read_estimate", lambda *a, **k: calls.append(a) or fake)  # reads nothing
+    fake = {"est_height": 0.0}
+    monkeypatch.setattr(firmware_run, "read_telemetry", lambda *a, **k: calls.append(a) or fake)  # reads nothing
     unprobed = replay(short, FirmwareConfig())
-    assert len(calls) == len(probed.estimates) == len(short) and unprobed.estimates == [fake] * len(calls)
+    assert len(calls) == len(probed.telemetry) == len(short)
+    assert [r.values for r in unprobed.telemetry] == [fake] * len(calls)
     assert [(j.release_cycle, j.completion_cycle, j.exec_cycles) for j in probed.jobs] == [
         (j.release_cycle, j.completion_cycle, j.exec_cycles) for j in unprobed.jobs
     ]
@@ -76,9 +86,10 @@ def test_lockstep_rows_carry_the_chips_estimate() -> None:
     est = flight.rows[:, cols]
     assert np.isnan(est[0]).all()  # nothing read before the first sample's period closed
     assert not np.isnan(est[1:]).any()
-    by_sample = {e.sample: e for e in flight.run.estimates}
+    by_sample = {r.sample: r.values for r in flight.run.telemetry}
     for k in range(1, len(flight.rows)):
         e = by_sample[k - 1]  # row k holds the newest estimate at t_k: sample k - 1's
-        assert tuple(est[k, :4]) == pytest.approx(e.quaternion, abs=0)
-        assert est[k, 4] == e.height
-    assert all(math.isclose(np.linalg.norm(e.quaternion), 1.0, abs_tol=1e-3) for e in by_sample.values())
+        assert tuple(est[k, :4]) == tuple(e[n] for n in ESTIMATE_QUATERNION)
+        assert est[k, 4] == e["est_height"]
+    norms = [np.linalg.norm([e[n] for n in ESTIMATE_QUATERNION]) for e in by_sample.values()]
+    assert all(math.isclose(n, 1.0, abs_tol=1e-3) for n in norms)

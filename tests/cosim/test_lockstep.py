@@ -72,10 +72,10 @@ def test_each_command_is_held_from_its_arrival_step_on(flight: ChipFlight) -> No
 
 
 def test_rows_carry_the_chips_estimate_one_sample_behind(flight: ChipFlight) -> None:
-    """The estimate probe (host reads of the estimator tile): row k holds sample k - 1's estimate."""
+    """Telemetry (host reads of the estimator tile): row k holds sample k - 1's estimate."""
     height = column(flight.rows, "est_height")
     assert np.isnan(height[0]) and not np.isnan(height[1:]).any()
-    by_sample = {e.sample: e.height for e in flight.run.estimates}
+    by_sample = {r.sample: r.values["est_height"] for r in flight.run.telemetry}
     assert [by_sample[k - 1] for k in range(1, len(height))] == list(height[1:])
     assert not np.isnan(column(flight.rows, "z")).any()
 

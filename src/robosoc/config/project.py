@@ -30,6 +30,12 @@ A project is a folder with C sources and a ``robosoc.toml``::
     source = "io"                    # "io" (the host's I/O tile) or a task's name
     destination = "ping"             # "io" or a task's name
 
+    [[telemetry]]                    # values the host reads from a task's memory (no simulated cycle)
+    name = "est_height"              # the column in flight.csv and the MCAP topic's field
+    task = "ping"                    # read from this task's tile between its jobs
+    value = "state.alt.h"            # a variable, its members and an element: x, x.a.b, x.v[2]
+    type = "real"                    # "real" (float or Q16.16 as built), "f32", "q16", "i32", "u32"
+
 The firmware's ``main`` is generated from the task table (:mod:`robosoc.host.project_main`): on
 each tile it calls the ``init`` of the tasks mapped there and creates them with the kernel, in
 the order of the file.  Errors name the file and the dotted key (``tasks[1].port``).
@@ -48,7 +54,17 @@ from robosoc.config.firmware import ARITH_CHOICES
 from robosoc.config.validate import ConfigError, from_mapping, read_toml_mapping
 from robosoc.firmware import LIBRARIES
 
-__all__ = ["IO", "PROJECT_FILE", "FirmwareProject", "MessageSpec", "ProjectInfo", "TaskSpec", "load_project"]
+__all__ = [
+    "IO",
+    "PROJECT_FILE",
+    "TELEMETRY_TYPES",
+    "FirmwareProject",
+    "MessageSpec",
+    "ProjectInfo",
+    "TaskSpec",
+    "TelemetrySpec",
+    "load_project",
+]
 
 PROJECT_FILE = "robosoc.toml"
 IO = "io"
@@ -58,6 +74,9 @@ MAX_TASKS = 14
 ``OS_MAX_TASKS`` in firmware/kernel/os_config.h, which a build sets when a tile has more than its
 default)."""
 MAX_PORT = 255
+TELEMETRY_TYPES = ("real", "f32", "q16", "i32", "u32")
+"""A telemetry value's C type: ``real`` is real_t (soft-float ``float`` or Q16.16 by the build)."""
+_TELEMETRY_VALUE = re.compile(r"([A-Za-z_][A-Za-z0-9_]*)((?:\.[A-Za-z_][A-Za-z0-9_]*)*)(?:\[([0-9]{1,6})\])?")
 
 _IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 _DEFINE = re.compile(r"[A-Za-z_][A-Za-z0-9_]*(=.*)?", re.DOTALL)
@@ -151,6 +170,44 @@ class MessageSpec:
 
 
 @dataclass(frozen=True)
+class TelemetrySpec:
+    """A named value a task publishes to the logs: read by the host from the task's memory at the
+    close of each sensor period (a host read: it costs the chip no cycle)."""
+
+    name: str
+    task: str
+    value: str
+    type: str = "real"
+
+    def __post_init__(self) -> None:
+        _identifier("name", self.name, "it names a column of flight.csv")
+        match = _TELEMETRY_VALUE.fullmatch(self.value)
+        if match is None:
+            raise ValueError(f"value: a variable, then .member parts and one optional [index], got {self.value!r}")
+        if self.type not in TELEMETRY_TYPES:
+            raise ValueError(f"type: must be one of {', '.join(map(repr, TELEMETRY_TYPES))}, got {self.type!r}")
+
+    @property
+    def variable(self) -> str:
+        """The C variable (a global or file-scope static of the project's sources)."""
+        return self.value.split(".", 1)[0].split("[", 1)[0]
+
+    @property
+    def member(self) -> str:
+        """The dotted member path inside the variable ("" for the variable itself)."""
+        match = _TELEMETRY_VALUE.fullmatch(self.value)
+        assert match is not None  # checked in __post_init__
+        return match.group(2)[1:]
+
+    @property
+    def index(self) -> int:
+        """The element of an array member (0 when no index is given)."""
+        match = _TELEMETRY_VALUE.fullmatch(self.value)
+        assert match is not None
+        return int(match.group(3) or 0)
+
+
+@dataclass(frozen=True)
 class ProjectInfo:
     """The ``[project]`` table: name, sources and the builds the project supports."""
 
@@ -190,6 +247,7 @@ class FirmwareProject:
     project: ProjectInfo = field(default_factory=ProjectInfo)
     tasks: tuple[TaskSpec, ...] = ()
     messages: tuple[MessageSpec, ...] = ()
+    telemetry: tuple[TelemetrySpec, ...] = ()
     folder: str = "."
 
     def __post_init__(self) -> None:
@@ -230,6 +288,14 @@ class FirmwareProject:
                         f"messages[{i}].port: {message.destination!r} takes its messages on port {task.port}, "
                         f"got {message.port}"
                     )
+
+        published: dict[str, int] = {}
+        for i, value in enumerate(self.telemetry):
+            if value.name in published:
+                raise ValueError(f"telemetry[{i}].name: {value.name!r} is also telemetry[{published[value.name]}]")
+            published[value.name] = i
+            if value.task not in names:
+                raise ValueError(f"telemetry[{i}].task: no task {value.task!r} (tasks: {', '.join(names)})")
 
     @property
     def task_names(self) -> tuple[str, ...]:

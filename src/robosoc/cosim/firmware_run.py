@@ -43,12 +43,22 @@ from robosoc.config.chip import ChipConfig
 from robosoc.config.firmware import FirmwareConfig
 from robosoc.host import flight_app, images, packets
 from robosoc.host.firmware_image import FirmwareImage
+from robosoc.host.telemetry import read_telemetry
 from robosoc.kernels.chip import K_TASK
 from robosoc.program.elf import load_elf
 from robosoc.records import JobRecord, PwmCommand, SampleInput
 
 #: Cycle of the first sample's injection: the firmware has booted by then.
 DEFAULT_FIRST_CYCLE = flight_app.FIRST_SAMPLE_CYCLE
+
+
+@dataclass(frozen=True)
+class TelemetryRead:
+    """The telemetry values read at the close of sample period ``sample`` (those of sleeping tiles:
+    :func:`robosoc.host.telemetry.read_telemetry`)."""
+
+    sample: int
+    values: dict[str, float]
 
 
 @dataclass
@@ -66,8 +76,8 @@ class ReplayResult:
     cycles: int
     host_seconds: float
     dropped: list[str] = field(default_factory=list)
-    #: the estimator's state at the close of each sample period in which no estimator job was mid-way
-    estimates: list[flight_app.ChipEstimate] = field(default_factory=list)
+    #: the firmware's telemetry, read at the close of each sample period (where a tile slept)
+    telemetry: list[TelemetryRead] = field(default_factory=list)
     #: the exact per-function profile (a run made with ``profile=True``)
     profile: FunctionProfile | None = None
 
@@ -133,7 +143,9 @@ class FirmwareRun:
         self._previous = _snapshot(self.chip, self.tiles, self.model)
         self._seen = dict.fromkeys(self.tiles, 0)
         self._logged: list[tuple[tuple[int, int], images.JobRecord, int]] = []  # (tile, record, period)
-        self.estimates: list[flight_app.ChipEstimate] = []
+        self.telemetry: list[TelemetryRead] = []
+        #: the newest value of each telemetry name read so far
+        self.latest: dict[str, float] = {}
         self._start = time.perf_counter()
 
     @property
@@ -195,18 +207,18 @@ class FirmwareRun:
 
     def close_period(self) -> None:
         """End the period of the last injected sample (the chip is at the next sample's cycle):
-        snapshot the counters, collect the jobs the kernels logged, and read the estimator's state
-        (:func:`flight_app.read_estimate`, a host read: no cycle) unless a job is mid-way.
+        snapshot the counters, collect the jobs the kernels logged, and read the telemetry of every
+        sleeping tile (:func:`robosoc.host.telemetry.read_telemetry`, a host read: no cycle).
 
         Raises:
             RuntimeError: a tile's job log overflowed since the last call.
         """
         current = _snapshot(self.chip, self.tiles, self.model)
-        if self.image.estimator is not None:
-            estimate = flight_app.read_estimate(self.chip, self.fw, len(self.samples) - 1)
-            # consistent unless a job is mid-way: every sample estimated, or the tile asleep
-            if estimate.jobs >= len(self.samples) or self.chip.state(self.image.estimator) == "sleeping":
-                self.estimates.append(estimate)
+        if self.image.telemetry:
+            values = read_telemetry(self.chip, self.image.telemetry)
+            if values:
+                self.telemetry.append(TelemetryRead(len(self.samples) - 1, values))
+                self.latest.update(values)
         self._periods.append(_delta(self._previous, current))
         self._previous = current
         for xy in self.tiles:
@@ -274,7 +286,7 @@ class FirmwareRun:
             firmware=self.fw, clock_ns=chip_.clock_ns, samples=list(samples), commands=list(self.commands),
             jobs=jobs, kernel_stats={xy: images.read_stats(chip_, xy) for xy in self.tiles}, counters=counters,
             task_energy_pj=task_energy, energy_pj=total, cycles=chip_.cycle, host_seconds=seconds,
-            estimates=list(self.estimates), profile=self.function_profile() if chip_.cores.profiling else None,
+            telemetry=list(self.telemetry), profile=self.function_profile() if chip_.cores.profiling else None,
         )  # fmt: skip
 
 

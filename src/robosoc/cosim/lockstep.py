@@ -41,7 +41,6 @@ import numpy as np
 from robosoc.chip.energy import EnergyModel
 from robosoc.config.scenario import ScenarioConfig
 from robosoc.config.vehicle import VehicleConfig
-from robosoc.control import quaternion
 from robosoc.control.flight import ROW_FIELDS, flight_row
 from robosoc.control.host import Estimate, HostController
 from robosoc.control.setpoint import Setpoint, setpoint_at
@@ -49,6 +48,7 @@ from robosoc.cosim.firmware_run import DEFAULT_FIRST_CYCLE, FirmwareRun, ReplayR
 from robosoc.cosim.replay import sensor_packet
 from robosoc.host.firmware_image import FirmwareImage
 from robosoc.host.scenario_image import scenario_image
+from robosoc.host.telemetry import estimate_of
 from robosoc.physics import SensorSample, World
 from robosoc.physics.clock import PHYSICS_STEP_NS, FlightClock
 from robosoc.records import PwmCommand, SampleInput
@@ -189,12 +189,11 @@ class ChipController:
 
     @property
     def estimate(self) -> Estimate:
-        """The newest estimate read from the estimator tile (:attr:`FirmwareRun.estimates`)."""
-        if self.run is None or not self.run.estimates:
+        """The newest estimate the firmware published (its telemetry of the estimate's names,
+        :func:`robosoc.host.telemetry.estimate_of`), NaN where it publishes none."""
+        if self.run is None or not self.run.latest:
             return UNKNOWN_ESTIMATE
-        e = self.run.estimates[-1]
-        q = np.array(e.quaternion)
-        return Estimate(q, quaternion.to_euler(q), e.height, e.vertical_velocity)
+        return estimate_of(self.run.latest)
 
 
 def fly_lockstep(

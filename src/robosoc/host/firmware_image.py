@@ -17,12 +17,13 @@ from pathlib import Path
 
 from robosoc.config.chip import ChipConfig
 from robosoc.config.firmware import FirmwareConfig
-from robosoc.config.project import IO, FirmwareProject
+from robosoc.config.project import IO, PROJECT_FILE, FirmwareProject
 from robosoc.config.scenario import ScenarioConfig
 from robosoc.config.vehicle import VehicleConfig
 from robosoc.host.control_params import control_include_dir
 from robosoc.host.project_build import build_project
 from robosoc.host.project_main import TASK_REFUSED_EXIT, Tile, task_ids
+from robosoc.host.telemetry import TelemetryProbe, resolve_telemetry
 
 __all__ = ["FirmwareImage", "project_image"]
 
@@ -36,8 +37,8 @@ class FirmwareImage:
         tasks: per tile (in load order), the TASK_ID of each task by name.
         sensor: (tile, port) the I/O tile sends each sensor packet to.
         actuator_port: the I/O tile's port the PWM packets arrive on.
-        estimator: the tile whose estimator state the host reads after each period (the built-in
-            application's), or None: the flight's estimate columns stay empty.
+        telemetry: the values the host reads from the chip after each period
+            (:mod:`robosoc.host.telemetry`; the estimate columns of ``flight.csv`` among them).
         project: the project's name, or "" for the built-in application.
     """
 
@@ -45,7 +46,7 @@ class FirmwareImage:
     tasks: Mapping[Tile, Mapping[str, int]]
     sensor: tuple[Tile, int]
     actuator_port: int
-    estimator: Tile | None = None
+    telemetry: tuple[TelemetryProbe, ...] = ()
     project: str = ""
     #: the project's tasks in the order of its file (how a refused task's exit code names it)
     task_order: tuple[str, ...] = ()
@@ -82,6 +83,7 @@ def project_image(
         ValueError: the project has no single message from the I/O tile (the sensor packets) and to
             it (the PWM commands), or does not support the build (the key named).
         CompileError: the compiler failed.
+        TelemetryError: a ``[[telemetry]]`` value is not in the program (file and key named).
     """
     inputs, outputs = project.inputs(), project.outputs()
     if len(inputs) != 1 or len(outputs) != 1:
@@ -99,9 +101,13 @@ def project_image(
         sram_size=min(chip.tile_config(xy).sram_bytes for xy in project.tiles()) if chip is not None else None,
     )
     tiles = project.tiles()
+    where = str(project.path(PROJECT_FILE))
+    ids = {xy: task_ids(project, xy) for xy in tiles}
+    task_tiles = {name: (xy, tid) for xy, named in ids.items() for name, tid in named.items()}
     return FirmwareImage(
         elf=elf,
-        tasks={xy: task_ids(project, xy) for xy in tiles},
+        tasks=ids,
+        telemetry=resolve_telemetry(project.telemetry, elf, fw.arith, task_tiles, where),
         sensor=((int(sensor.tile[0]), int(sensor.tile[1])), inputs[0].port),
         actuator_port=outputs[0].port,
         project=project.project.name,

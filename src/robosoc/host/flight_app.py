@@ -24,6 +24,7 @@ from typing import TYPE_CHECKING
 
 from robosoc.config.chip import ChipConfig
 from robosoc.config.firmware import FirmwareConfig
+from robosoc.config.project import TelemetrySpec
 from robosoc.config.scenario import ScenarioConfig
 from robosoc.config.vehicle import VehicleConfig
 from robosoc.firmware import (
@@ -40,6 +41,7 @@ from robosoc.host import images
 from robosoc.host.control_params import control_include_dir
 from robosoc.host.firmware_image import FirmwareImage
 from robosoc.host.packets import ESTIMATE_PORT, PWM_PORT, SENSOR_PORT
+from robosoc.host.telemetry import resolve_telemetry
 
 if TYPE_CHECKING:
     from robosoc.chip.mpsoc import MPSoC
@@ -52,6 +54,13 @@ _APP_STATS_FIELDS = (
     "pid_jobs", "pid_foreign", "pid_empty", "pid_stale", "send_errors",
 )  # fmt: skip
 _APP_STATS = struct.Struct("<" + "I" * len(_APP_STATS_FIELDS))
+
+TELEMETRY = (
+    *(TelemetrySpec(f"est_q{c}", "estimator", f"app_est.ekf.x[{i}]") for i, c in enumerate("wxyz")),
+    TelemetrySpec("est_height", "estimator", "app_est.alt.h"),
+    TelemetrySpec("est_vz", "estimator", "app_est.alt.v"),
+)
+"""The estimator's state the host reads after each period (the flight log's estimate columns)."""
 
 SAMPLE_PERIOD_US = 10_000
 """The sensor period of the default scenario (100 Hz)."""
@@ -100,12 +109,13 @@ def image(
     """The flight application built for ``fw`` (:func:`build`) with its tasks, sensor input and
     actuator port: what the host needs to fly it."""
     estimator = (int(fw.ekf_tile[0]), int(fw.ekf_tile[1]))
+    elf = build(fw, vehicle, scenario)
     return FirmwareImage(
-        elf=build(fw, vehicle, scenario),
+        elf=elf,
         tasks={xy: task_ids(fw, xy) for xy in app_tiles(fw)},
         sensor=(estimator, SENSOR_PORT),
         actuator_port=PWM_PORT,
-        estimator=estimator,
+        telemetry=resolve_telemetry(TELEMETRY, elf, fw.arith, {"estimator": (estimator, images.FIRST_TASK_ID)}),
     )
 
 
@@ -154,55 +164,6 @@ class AppStats:
     send_errors: int
 
 
-EST_STATE_SYMBOL = "app_est"
-"""The estimator task's state (``est_t app_est`` in flight_app.c), read by :func:`read_estimate`."""
-
-
-@dataclass(frozen=True)
-class ChipEstimate:
-    """The estimator task's state estimate as it stands in the estimator tile's memory.
-
-    ``sample`` is the index of the sample period at whose close it was read; ``jobs`` the
-    estimates the task had computed by then (``app_stats.est_jobs``)."""
-
-    sample: int
-    jobs: int
-    quaternion: tuple[float, float, float, float]  # w, x, y, z
-    height: float  # [m]
-    vertical_velocity: float  # [m/s]
-
-
-def read_estimate(chip: MPSoC, fw: FirmwareConfig, sample: int = -1) -> ChipEstimate:
-    """The estimator's quaternion, height and vertical speed, read from the estimator tile's memory
-    by symbol and DWARF member offsets: a host read that costs the chip no cycle.
-
-    Read it while the estimator task is not mid-job (e.g. while its tile sleeps), or the fields
-    may come from two different steps.
-
-    Raises:
-        ValueError: no flight application on the estimator tile, or main has not run.
-    """
-    from robosoc.program.dwarf import member_offset
-
-    xy = fw.ekf_tile
-    t = chip.config.tile_index(xy)
-    program = chip.programs.get(t)
-    if program is None:
-        raise ValueError(f"tile {xy} has no program loaded")
-    stats = read_app_stats(chip, xy)
-    base = program.address_of(EST_STATE_SYMBOL)
-    fmt = "<i" if fw.arith == "fixed" else "<f"
-    scale = 1.0 / 65536.0 if fw.arith == "fixed" else 1.0
-
-    def real(member: str, index: int = 0) -> float:
-        offset, _ = member_offset(program.path, "est_t", member)
-        (value,) = struct.unpack(fmt, chip.cores.read(base + offset + 4 * index, 4, tile=t))
-        return float(value) * scale
-
-    quaternion = (real("ekf.x", 0), real("ekf.x", 1), real("ekf.x", 2), real("ekf.x", 3))
-    return ChipEstimate(sample, stats.est_jobs, quaternion, real("alt.h"), real("alt.v"))
-
-
 def read_app_stats(chip: MPSoC, xy: tuple[int, int]) -> AppStats:
     """The application's counters on tile ``xy``.
 
@@ -229,19 +190,16 @@ __all__ = [
     "APP_SOURCE",
     "APP_STATS_SYMBOL",
     "ESTIMATE_PORT",
-    "EST_STATE_SYMBOL",
     "FIRST_SAMPLE_CYCLE",
     "PWM_PORT",
     "SAMPLE_PERIOD_US",
     "SENSOR_PORT",
     "AppStats",
-    "ChipEstimate",
     "app_tiles",
     "build",
     "defines",
     "image",
     "read_app_stats",
-    "read_estimate",
     "sample_cycle",
     "sensor_payloads",
     "task_ids",

@@ -101,6 +101,85 @@ def _byte_size(die: DIE) -> int:
     return 0
 
 
+@functools.lru_cache(maxsize=64)
+def _variables(path: str, mtime_ns: int, name: str) -> list[dict[str, tuple[int, int]]]:
+    """The layouts of every variable called ``name`` defined at file scope (a global, or a static
+    of one compilation unit): for each, (dotted member path) -> (byte offset, byte size), with
+    "" the whole variable."""
+    found = []
+    with open(path, "rb") as handle:
+        elf = ELFFile(handle)
+        if not elf.has_dwarf_info():
+            raise ElfError(f"{path}: no DWARF debug information (build with -g)")
+        for cu in elf.get_dwarf_info().iter_CUs():
+            for die in cu.get_top_DIE().iter_children():
+                if die.tag != "DW_TAG_variable" or "DW_AT_declaration" in die.attributes:
+                    continue
+                if _name(die) != name and not (
+                    "DW_AT_specification" in die.attributes
+                    and _name(die.get_DIE_from_attribute("DW_AT_specification")) == name
+                ):
+                    continue
+                holder = die
+                if "DW_AT_type" not in holder.attributes and "DW_AT_specification" in holder.attributes:
+                    holder = holder.get_DIE_from_attribute("DW_AT_specification")
+                kind = _strip(holder.get_DIE_from_attribute("DW_AT_type"))
+                out: dict[str, tuple[int, int]] = {"": (0, _byte_size(kind))}
+                if kind.tag in _STRUCT_TAGS:
+                    _walk(kind, "", 0, out)
+                found.append(out)
+    return found
+
+
+def variable_field(path: Path | str, variable: str, member: str = "") -> tuple[int, int]:
+    """(byte offset from the variable's address, byte size) of ``member`` (dotted, "" for the whole
+    variable) of the file-scope variable ``variable``.
+
+    Raises:
+        ElfError: no debug information, no such variable or member, or two variables of that name
+            (statics of two files): the message names the file.
+    """
+    p = Path(path)
+    layouts = _variables(str(p), p.stat().st_mtime_ns, variable)
+    if not layouts:
+        raise ElfError(f"{p}: no variable {variable!r} in the debug information (a global or a file-scope static)")
+    if len(layouts) > 1:
+        raise ElfError(f"{p}: {len(layouts)} variables are called {variable!r} (statics of several files): rename one")
+    found = layouts[0].get(member)
+    if found is None:
+        members = ", ".join(m for m in layouts[0] if m and "." not in m) or "none"
+        raise ElfError(f"{p}: variable {variable!r} has no member {member!r} (its members: {members})")
+    return found
+
+
+@functools.lru_cache(maxsize=64)
+def _type_size(path: str, mtime_ns: int, type_name: str) -> int:
+    with open(path, "rb") as handle:
+        elf = ELFFile(handle)
+        if not elf.has_dwarf_info():
+            raise ElfError(f"{path}: no DWARF debug information (build with -g)")
+        for cu in elf.get_dwarf_info().iter_CUs():
+            for die in cu.get_top_DIE().iter_children():
+                if die.tag in (*_STRUCT_TAGS, "DW_TAG_typedef") and _name(die) == type_name:
+                    size = _byte_size(_strip(die))
+                    if size:
+                        return size
+    return 0
+
+
+def type_size(path: Path | str, type_name: str) -> int:
+    """Bytes of the struct or typedef ``type_name`` (``sizeof``).
+
+    Raises:
+        ElfError: no debug information or no such type (the message names the file).
+    """
+    p = Path(path)
+    size = _type_size(str(p), p.stat().st_mtime_ns, type_name)
+    if not size:
+        raise ElfError(f"{p}: no type {type_name!r} in the debug information")
+    return size
+
+
 def member_offset(path: Path | str, type_name: str, member: str) -> tuple[int, int]:
     """(byte offset, byte size) of ``member`` (dotted: ``"alt.h"``) in the struct type ``type_name``.
 
@@ -114,4 +193,4 @@ def member_offset(path: Path | str, type_name: str, member: str) -> tuple[int, i
     return found
 
 
-__all__ = ["member_offset"]
+__all__ = ["member_offset", "type_size", "variable_field"]

@@ -46,6 +46,7 @@ from robosoc.config.firmware import RELEASE_CHOICES, FirmwareConfig
 from robosoc.config.scenario import ScenarioConfig
 from robosoc.config.vehicle import VehicleConfig
 from robosoc.control.flight import ROW_FIELDS
+from robosoc.host.telemetry import ESTIMATE_QUATERNION
 
 TASKS = ("estimator", "pid")
 """The firmware's tasks (the seed's EKF and PID)."""
@@ -252,7 +253,11 @@ def summarise(
     latency = [
         (commands[k].cycle - result.samples[k].cycle) * result.clock_ns / 1000.0 for k in window if k in commands
     ]
-    estimates = {e.sample: e.quaternion for e in result.estimates if e.sample in window}
+    estimates = {
+        r.sample: tuple(r.values[n] for n in ESTIMATE_QUATERNION)
+        for r in result.telemetry
+        if r.sample in window and all(n in r.values for n in ESTIMATE_QUATERNION)
+    }
     have = sorted(estimates)
     chip_q = np.array([estimates[k] for k in have]).reshape(-1, 4)
     ks = np.array(have, dtype=np.int64)

@@ -1,0 +1,181 @@
+"""Telemetry: named values a firmware publishes to the logs, read from the chip's memory by the host.
+
+A project declares them (``[[telemetry]]`` in its robosoc.toml: a name, the task, a C variable
+with members and an element, and a type); :func:`resolve_telemetry` finds each one's address in the
+built ELF through its symbol table and DWARF debug information, and :func:`read_telemetry` reads
+them from the simulated memory.  A host read costs the chip no cycle and changes nothing in it.
+
+When: at the close of each sensor period (:class:`robosoc.cosim.firmware_run.FirmwareRun`), the
+values of every task that has no job active then (the kernel's ``job_active`` flag in its task
+table, read the same way), so a value is never half updated; a task mid-job keeps its previous
+values until a later close.
+
+Names: the flight log's estimate columns (``est_qw``, ``est_qx``, ``est_qy``, ``est_qz``,
+``est_height``; ``est_vz`` for the vertical speed) are filled from the telemetry of those names,
+the way the built-in application's estimate reaches ``flight.csv``; any other name becomes a
+column of its own after the flight log's columns.
+"""
+
+from __future__ import annotations
+
+import math
+import struct
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from robosoc.config.project import TelemetrySpec
+from robosoc.control import quaternion
+from robosoc.control.host import Estimate
+from robosoc.program.dwarf import member_offset, type_size, variable_field
+from robosoc.program.elf import ElfError, load_elf
+from robosoc.toolchain.errors import ToolchainError
+
+if TYPE_CHECKING:
+    from robosoc.chip.mpsoc import MPSoC
+
+__all__ = [
+    "ESTIMATE_HEIGHT",
+    "ESTIMATE_NAMES",
+    "ESTIMATE_QUATERNION",
+    "ESTIMATE_VERTICAL_SPEED",
+    "TelemetryError",
+    "TelemetryProbe",
+    "estimate_of",
+    "read_telemetry",
+    "resolve_telemetry",
+]
+
+Tile = tuple[int, int]
+VALUE_BYTES = 4
+"""Every telemetry type is one 32-bit word."""
+ESTIMATE_QUATERNION = ("est_qw", "est_qx", "est_qy", "est_qz")
+"""Telemetry names of the estimated attitude quaternion (w, x, y, z): the flight log's columns."""
+ESTIMATE_HEIGHT = "est_height"
+ESTIMATE_VERTICAL_SPEED = "est_vz"
+ESTIMATE_NAMES = (*ESTIMATE_QUATERNION, ESTIMATE_HEIGHT, ESTIMATE_VERTICAL_SPEED)
+"""Telemetry names that fill the flight log's estimate columns rather than columns of their own."""
+TCB_SYMBOL = "os_tcb"
+TCB_TYPE = "os_tcb"
+_Q16 = 1.0 / 65536.0
+#: struct code and scale of each type (``real`` by the build's arithmetic)
+_DECODE: dict[str, tuple[str, float]] = {
+    "f32": ("<f", 1.0), "q16": ("<i", _Q16), "i32": ("<i", 1.0), "u32": ("<I", 1.0)
+}  # fmt: skip
+
+
+class TelemetryError(ToolchainError):
+    """A declared telemetry value is not in the built program (a build error: the project file
+    and its key are named)."""
+
+    def __init__(self, where: str, key: str, reason: str) -> None:
+        super().__init__(f"{where}: {key}: {reason}" if where else f"{key}: {reason}")
+
+
+@dataclass(frozen=True)
+class JobFlag:
+    """Where the kernel keeps whether a task's job is active: ``job_active`` of the task's entry in
+    ``os_tcb`` (the entry whose ``id`` is the task's TASK_ID), found through DWARF."""
+
+    task_id: int
+    table: int  # address of os_tcb
+    entries: int  # its length
+    entry_bytes: int
+    id_offset: int
+    active_offset: int
+
+    def active(self, chip: MPSoC, tile: Tile) -> bool:
+        """Whether the task has a job released and not completed (mid-way) on ``tile`` now."""
+        t = chip.config.tile_index(tile)
+        for i in range(1, self.entries):  # [0] is the idle task
+            entry = self.table + i * self.entry_bytes
+            if chip.cores.read(entry + self.id_offset, 1, tile=t)[0] == self.task_id:
+                return chip.cores.read(entry + self.active_offset, 1, tile=t)[0] != 0
+        return True  # not created yet: nothing to read
+
+
+@dataclass(frozen=True)
+class TelemetryProbe:
+    """Where one telemetry value lies on the chip, how to decode it, and its task's job flag."""
+
+    name: str
+    tile: Tile
+    address: int
+    code: str  # struct format of the word
+    scale: float  # value = word * scale
+    job: JobFlag
+
+    def decode(self, word: bytes) -> float:
+        (value,) = struct.unpack(self.code, word)
+        return float(value) * self.scale
+
+
+def resolve_telemetry(
+    specs: Sequence[TelemetrySpec],
+    elf: Path,
+    arith: str,
+    tiles: Mapping[str, tuple[Tile, int]],
+    where: str = "",
+) -> tuple[TelemetryProbe, ...]:
+    """The probes of ``specs`` in ``elf`` (built with real_t ``arith``), each on the tile of its task
+    (``tiles``: task name -> (tile, TASK_ID there)).
+
+    Raises:
+        TelemetryError: a value that is not in the ELF (no such variable or member, an index past the
+            array's end, not a 32-bit word), naming ``where`` (the project file) and the key.
+    """
+    if not specs:
+        return ()
+    program = load_elf(elf)
+    table = program.address_of(TCB_SYMBOL)
+    entry_bytes = type_size(elf, TCB_TYPE)
+    entries = variable_field(elf, TCB_SYMBOL)[1] // entry_bytes
+    id_offset, _ = member_offset(elf, TCB_TYPE, "id")
+    active_offset, _ = member_offset(elf, TCB_TYPE, "job_active")
+    out = []
+    for i, spec in enumerate(specs):
+        key = f"telemetry[{i}].value"
+        try:
+            offset, size = variable_field(elf, spec.variable, spec.member)
+            base = program.address_of(spec.variable)
+        except ElfError as exc:
+            reason = str(exc).removeprefix(f"{elf}: ")  # the cached ELF's path says nothing to the author
+            raise TelemetryError(where, key, f"{spec.value!r}: {reason}") from None
+        if size < VALUE_BYTES * (spec.index + 1):
+            raise TelemetryError(
+                where, key, f"{spec.value!r} is {size} bytes: not a 32-bit value (or its index is past the end)"
+            )
+        if size != VALUE_BYTES and "[" not in spec.value:
+            raise TelemetryError(where, key, f"{spec.value!r} is {size} bytes: name a 32-bit member or give an [index]")
+        kind = spec.type if spec.type != "real" else ("q16" if arith == "fixed" else "f32")
+        code, scale = _DECODE[kind]
+        address = base + offset + VALUE_BYTES * spec.index
+        tile, task_id = tiles[spec.task]
+        flag = JobFlag(task_id, table, entries, entry_bytes, id_offset, active_offset)
+        out.append(TelemetryProbe(spec.name, tile, address, code, scale, flag))
+    return tuple(out)
+
+
+def read_telemetry(chip: MPSoC, probes: Sequence[TelemetryProbe]) -> dict[str, float]:
+    """The values of the probes whose task has no job active now (the others are not read: their
+    job may be half-way through updating them)."""
+    values: dict[str, float] = {}
+    quiet: dict[tuple[Tile, int], bool] = {}
+    for probe in probes:
+        key = (probe.tile, probe.job.task_id)
+        if key not in quiet:
+            quiet[key] = not probe.job.active(chip, probe.tile)
+        if quiet[key]:
+            t = chip.config.tile_index(probe.tile)
+            values[probe.name] = probe.decode(chip.cores.read(probe.address, VALUE_BYTES, tile=t))
+    return values
+
+
+def estimate_of(values: Mapping[str, float]) -> Estimate:
+    """The state estimate that telemetry ``values`` publish (NaN for what they do not name)."""
+    q = np.array([values.get(name, math.nan) for name in ESTIMATE_QUATERNION])
+    height = values.get(ESTIMATE_HEIGHT, math.nan)
+    return Estimate(q, quaternion.to_euler(q), height, values.get(ESTIMATE_VERTICAL_SPEED, math.nan))
