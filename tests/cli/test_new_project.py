@@ -142,7 +142,10 @@ def test_table_measures_a_projects_tasks_in_the_builds_it_supports(tmp_path: Pat
     assert data["orderings"] == [] and data["spec"]["project"] == str(tmp_path / "p")
     assert all(t["seed_response_ms"] is None for run in data["runs"] for t in run["tasks"].values())
     assert "fixed-no-mul" in result.output  # its column, empty
-    assert invoke("table", "--firmware", tmp_path / "p", "--release", "both").exit_code == exit_codes.USAGE
+    # the release is the scenario's for a project with its own main (this one), its robosoc.toml's otherwise
+    assert invoke("new", tmp_path / "b").exit_code == 0
+    refused = invoke("table", "--firmware", tmp_path / "b", "--release", "both")
+    assert refused.exit_code == exit_codes.USAGE and "ROBOSOC_RELEASE_PERIODIC" in refused.output
 
 
 def _broken(tmp_path: Path, before: str, insert: str) -> Path:

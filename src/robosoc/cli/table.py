@@ -72,14 +72,15 @@ def table(
     from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
     from robosoc.sweep import table_one
+    from robosoc.sweep.table_one import OWN_RELEASE
 
     folder = files.output_dir(out, "--out", names=("table.csv", "table.json")) if out is not None else None
     project = ""
     if firmware is not None:
-        if release != "event":
-            raise options.fail("--release", "a project's tasks have their own release (its robosoc.toml)")
         project = str(firmware.absolute())
-        load_checked(project, FirmwareConfig(project=project).default_chip(), "--firmware")
+        checked = load_checked(project, FirmwareConfig(project=project).default_chip(), "--firmware")
+        if release != "event" and not checked.project.main:
+            raise options.fail("--release", OWN_RELEASE)
     spec = table_one.TableSpec(
         iterations=iterations,
         releases=("event", "periodic") if release == "both" else (release,),

@@ -10,6 +10,8 @@ A project is a folder with C sources and a ``robosoc.toml``::
     libraries = ["estimator", "pid"] # robosoc's C libraries to link (math is always linked)
     arith = ["float", "fixed"]       # the builds the project supports (real_t soft-float / Q16.16)
     multiplier = [true, false]
+    main = ""                        # "": robosoc generates main() from [[tasks]]; or the source
+                                     # (one of ``sources``) whose own main() creates the tasks
 
     [[tasks]]                        # one table per task; created in this order on their tiles
     name = "ping"                    # a C identifier: how tables and reports name the task
@@ -218,6 +220,7 @@ class ProjectInfo:
     libraries: tuple[str, ...] = ()
     arith: tuple[str, ...] = ARITH_CHOICES
     multiplier: tuple[bool, ...] = (True, False)
+    main: str = ""
 
     def __post_init__(self) -> None:
         if not self.name or not re.fullmatch(r"[A-Za-z0-9_.-]+", self.name):
@@ -237,6 +240,8 @@ class ProjectInfo:
             raise ValueError(f"arith: each one of {', '.join(map(repr, ARITH_CHOICES))}, got {list(self.arith)}")
         if not self.multiplier:
             raise ValueError("multiplier: at least one of true, false")
+        if self.main and self.main not in self.sources:
+            raise ValueError(f"main: must be one of the sources (the file that defines main()), got {self.main!r}")
 
 
 @dataclass(frozen=True)

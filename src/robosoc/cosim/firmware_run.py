@@ -212,7 +212,14 @@ class FirmwareRun:
 
         Raises:
             RuntimeError: a tile's job log overflowed since the last call.
+            ChipError: after the first period, a task the kernel does not hold (refused by the
+                kernel, or never created by a project's own ``main``).
         """
+        if not self._periods and self.image.task_table is not None:  # booted: main has created its tasks
+            table = self.image.task_table
+            problem = self.image.missing_tasks({xy: table.created(self.chip, xy) for xy in self.tiles})
+            if problem:
+                raise ChipError(problem, None)
         current = _snapshot(self.chip, self.tiles, self.model)
         if self.image.telemetry:
             values = read_telemetry(self.chip, self.image.telemetry)

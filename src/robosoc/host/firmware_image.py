@@ -21,8 +21,9 @@ from robosoc.config.project import IO, PROJECT_FILE, FirmwareProject
 from robosoc.config.scenario import ScenarioConfig
 from robosoc.config.vehicle import VehicleConfig
 from robosoc.host.control_params import control_include_dir
-from robosoc.host.project_build import build_project
+from robosoc.host.project_build import build_project, firmware_defines
 from robosoc.host.project_main import TASK_REFUSED_EXIT, Tile, task_ids
+from robosoc.host.task_table import TaskTable
 from robosoc.host.telemetry import TelemetryProbe, resolve_telemetry
 
 __all__ = ["FirmwareImage", "project_image"]
@@ -47,6 +48,8 @@ class FirmwareImage:
     sensor: tuple[Tile, int]
     actuator_port: int
     telemetry: tuple[TelemetryProbe, ...] = ()
+    #: the kernel's task table, to check after boot that main created the tasks of ``tasks``
+    task_table: TaskTable | None = None
     project: str = ""
     #: the project's tasks in the order of its file (how a refused task's exit code names it)
     task_order: tuple[str, ...] = ()
@@ -54,6 +57,19 @@ class FirmwareImage:
     @property
     def tiles(self) -> list[Tile]:
         return list(self.tasks)
+
+    def missing_tasks(self, created: dict[Tile, list[int]]) -> str:
+        """What is wrong with the tasks the kernels hold after boot (``created``: TASK_IDs per
+        tile), or "" when every tile holds exactly the tasks of :attr:`tasks`."""
+        for xy, ids in self.tasks.items():
+            have = created.get(xy, [])
+            for name, tid in ids.items():
+                if tid not in have:
+                    return f"tile {xy}: the kernel refused task {name!r} (no task slot or no memory for its stack)"
+            extra = sorted(set(have) - set(ids.values()))
+            if extra:
+                return f"tile {xy}: main created tasks the project does not declare (TASK_IDs {extra})"
+        return ""
 
     def exit_reason(self, code: int) -> str:
         """Why the firmware ended on a tile with exit code ``code`` (it never should)."""
@@ -96,7 +112,7 @@ def project_image(
         project,
         arith=fw.arith,
         multiplier=fw.multiplier,
-        tick_cycles=fw.tick_cycles,
+        settings=firmware_defines(fw),
         include_dirs=[control_include_dir(vehicle, scenario)],
         sram_size=min(chip.tile_config(xy).sram_bytes for xy in project.tiles()) if chip is not None else None,
     )
@@ -108,6 +124,7 @@ def project_image(
         elf=elf,
         tasks=ids,
         telemetry=resolve_telemetry(project.telemetry, elf, fw.arith, task_tiles, where),
+        task_table=TaskTable.of(elf),
         sensor=((int(sensor.tile[0]), int(sensor.tile[1])), inputs[0].port),
         actuator_port=outputs[0].port,
         project=project.project.name,

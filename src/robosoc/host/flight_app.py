@@ -41,6 +41,7 @@ from robosoc.host import images
 from robosoc.host.control_params import control_include_dir
 from robosoc.host.firmware_image import FirmwareImage
 from robosoc.host.packets import ESTIMATE_PORT, PWM_PORT, SENSOR_PORT
+from robosoc.host.task_table import TaskTable
 from robosoc.host.telemetry import resolve_telemetry
 
 if TYPE_CHECKING:
@@ -116,6 +117,7 @@ def image(
         sensor=(estimator, SENSOR_PORT),
         actuator_port=PWM_PORT,
         telemetry=resolve_telemetry(TELEMETRY, elf, fw.arith, {"estimator": (estimator, images.FIRST_TASK_ID)}),
+        task_table=TaskTable.of(elf),
     )
 
 

@@ -6,8 +6,9 @@ calls each task's ``init`` and creates the task with the kernel (``os_task_event
 ``os_task_periodic``), then starts the kernel.  A task the kernel refuses ends the program with
 exit code :data:`TASK_REFUSED_EXIT` + the task's index, which the host reports by task name.
 :func:`header_text` writes ``robosoc_project.h``: for every task ``ROBOSOC_TASK_<NAME>_TILE`` (its NoC
-address), for every message ``ROBOSOC_MSG_<NAME>_TILE`` and ``ROBOSOC_MSG_<NAME>_PORT`` (where to
-``os_send`` it), so the C sources name no tile or port of their own.
+address), ``_STACK_BYTES``, ``_DEADLINE_TICKS`` and ``_PORT`` (an event task's), for every message
+``ROBOSOC_MSG_<NAME>_TILE`` and ``ROBOSOC_MSG_<NAME>_PORT`` (where to ``os_send`` it), so the C
+sources name no tile or port of their own.
 
 One image serves every tile: ``main`` reads ``os_tile()``.  The generated files live in the project
 cache, one folder per distinct text, so builds stay cached.
@@ -66,7 +67,12 @@ def header_text(project: FirmwareProject, mapping: Mapping[str, Tile] | None = N
         f"#define ROBOSOC_TASKS {len(project.tasks)}",
     ]
     for task in project.tasks:
-        lines.append(f"#define ROBOSOC_TASK_{task.name.upper()}_TILE {_address(_tile_of(project, mapping, task))}")
+        name = task.name.upper()
+        lines.append(f"#define ROBOSOC_TASK_{name}_TILE {_address(_tile_of(project, mapping, task))}")
+        lines.append(f"#define ROBOSOC_TASK_{name}_STACK_BYTES {task.stack_bytes}u")
+        lines.append(f"#define ROBOSOC_TASK_{name}_DEADLINE_TICKS {task.deadline_ticks}u")
+        if task.port is not None:
+            lines.append(f"#define ROBOSOC_TASK_{name}_PORT {task.port}u")
     for message in project.messages:
         name = message.name.upper()
         if message.destination == IO:

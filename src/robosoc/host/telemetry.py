@@ -30,7 +30,8 @@ import numpy as np
 from robosoc.config.project import TelemetrySpec
 from robosoc.control import quaternion
 from robosoc.control.host import Estimate
-from robosoc.program.dwarf import member_offset, type_size, variable_field
+from robosoc.host.task_table import TaskTable
+from robosoc.program.dwarf import variable_field
 from robosoc.program.elf import ElfError, load_elf
 from robosoc.toolchain.errors import ToolchainError
 
@@ -58,8 +59,6 @@ ESTIMATE_HEIGHT = "est_height"
 ESTIMATE_VERTICAL_SPEED = "est_vz"
 ESTIMATE_NAMES = (*ESTIMATE_QUATERNION, ESTIMATE_HEIGHT, ESTIMATE_VERTICAL_SPEED)
 """Telemetry names that fill the flight log's estimate columns rather than columns of their own."""
-TCB_SYMBOL = "os_tcb"
-TCB_TYPE = "os_tcb"
 _Q16 = 1.0 / 65536.0
 #: struct code and scale of each type (``real`` by the build's arithmetic)
 _DECODE: dict[str, tuple[str, float]] = {
@@ -76,37 +75,17 @@ class TelemetryError(ToolchainError):
 
 
 @dataclass(frozen=True)
-class JobFlag:
-    """Where the kernel keeps whether a task's job is active: ``job_active`` of the task's entry in
-    ``os_tcb`` (the entry whose ``id`` is the task's TASK_ID), found through DWARF."""
-
-    task_id: int
-    table: int  # address of os_tcb
-    entries: int  # its length
-    entry_bytes: int
-    id_offset: int
-    active_offset: int
-
-    def active(self, chip: MPSoC, tile: Tile) -> bool:
-        """Whether the task has a job released and not completed (mid-way) on ``tile`` now."""
-        t = chip.config.tile_index(tile)
-        for i in range(1, self.entries):  # [0] is the idle task
-            entry = self.table + i * self.entry_bytes
-            if chip.cores.read(entry + self.id_offset, 1, tile=t)[0] == self.task_id:
-                return chip.cores.read(entry + self.active_offset, 1, tile=t)[0] != 0
-        return True  # not created yet: nothing to read
-
-
-@dataclass(frozen=True)
 class TelemetryProbe:
-    """Where one telemetry value lies on the chip, how to decode it, and its task's job flag."""
+    """Where one telemetry value lies on the chip, how to decode it, and its task (TASK_ID in the
+    kernel's table, whose job flag says when the value may be read)."""
 
     name: str
     tile: Tile
     address: int
     code: str  # struct format of the word
     scale: float  # value = word * scale
-    job: JobFlag
+    task_id: int
+    table: TaskTable
 
     def decode(self, word: bytes) -> float:
         (value,) = struct.unpack(self.code, word)
@@ -130,11 +109,7 @@ def resolve_telemetry(
     if not specs:
         return ()
     program = load_elf(elf)
-    table = program.address_of(TCB_SYMBOL)
-    entry_bytes = type_size(elf, TCB_TYPE)
-    entries = variable_field(elf, TCB_SYMBOL)[1] // entry_bytes
-    id_offset, _ = member_offset(elf, TCB_TYPE, "id")
-    active_offset, _ = member_offset(elf, TCB_TYPE, "job_active")
+    table = TaskTable.of(elf)
     out = []
     for i, spec in enumerate(specs):
         key = f"telemetry[{i}].value"
@@ -154,8 +129,7 @@ def resolve_telemetry(
         code, scale = _DECODE[kind]
         address = base + offset + VALUE_BYTES * spec.index
         tile, task_id = tiles[spec.task]
-        flag = JobFlag(task_id, table, entries, entry_bytes, id_offset, active_offset)
-        out.append(TelemetryProbe(spec.name, tile, address, code, scale, flag))
+        out.append(TelemetryProbe(spec.name, tile, address, code, scale, task_id, table))
     return tuple(out)
 
 
@@ -165,9 +139,9 @@ def read_telemetry(chip: MPSoC, probes: Sequence[TelemetryProbe]) -> dict[str, f
     values: dict[str, float] = {}
     quiet: dict[tuple[Tile, int], bool] = {}
     for probe in probes:
-        key = (probe.tile, probe.job.task_id)
+        key = (probe.tile, probe.task_id)
         if key not in quiet:
-            quiet[key] = not probe.job.active(chip, probe.tile)
+            quiet[key] = not probe.table.job_active(chip, probe.tile, probe.task_id)
         if quiet[key]:
             t = chip.config.tile_index(probe.tile)
             values[probe.name] = probe.decode(chip.cores.read(probe.address, VALUE_BYTES, tile=t))

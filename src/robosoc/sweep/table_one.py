@@ -48,6 +48,10 @@ from robosoc.config.vehicle import VehicleConfig
 from robosoc.control.flight import ROW_FIELDS
 from robosoc.host.telemetry import ESTIMATE_QUATERNION
 
+OWN_RELEASE = (
+    "the tasks of a project whose main() robosoc generates have the release of its robosoc.toml; "
+    "a project with its own main reads the scenario's as ROBOSOC_RELEASE_PERIODIC"
+)
 TASKS = ("estimator", "pid")
 """The firmware's tasks (the seed's EKF and PID)."""
 SEED_TASK_NAMES = {"estimator": "EKF", "pid": "PID"}
@@ -121,7 +125,10 @@ class TableSpec:
 
     def __post_init__(self) -> None:
         if self.project and self.releases != ("event",):
-            raise ValueError("releases: a project's tasks have their own release (its robosoc.toml)")
+            from robosoc.config.project import load_project
+
+            if not load_project(self.project).project.main:
+                raise ValueError(f"releases: {OWN_RELEASE}")
         if not 1 <= self.iterations <= 10_000:
             raise ValueError(f"iterations: must be between 1 and 10000, got {self.iterations}")
         if not self.releases or any(r not in RELEASE_CHOICES for r in self.releases):
