@@ -224,3 +224,29 @@ def test_profile_refuses_a_run_whose_scenario_names_a_project_that_is_gone(tmp_p
     result = invoke("profile", run)
     assert result.exit_code == exit_codes.USAGE and "Traceback" not in result.output
     assert f"{scenario}: firmware.project: no folder {tmp_path / 'gone'}" in " ".join(result.output.split())
+
+
+def test_a_firmware_that_stops_commanding_marks_the_run(tmp_path: Path) -> None:
+    """The controller answers samples 0..29 only: from sample 30 no PWM command reaches the I/O tile,
+    so 20 periods (0.2 s at 100 Hz) of silence, at least the timeout of 15."""
+    assert invoke("new", tmp_path / "p").exit_code == 0
+    source = tmp_path / "p" / "controller.c"
+    quiet = "    if (in.seq >= 30u) {\n        return; /* gone quiet */\n    }\n    os_send(ROBOSOC_MSG_PWM_TILE"
+    source.write_text(source.read_text().replace("    os_send(ROBOSOC_MSG_PWM_TILE", quiet))
+    scenario = tmp_path / "s.toml"
+    scenario.write_text('duration_s = 0.5\n[firmware]\nproject = "p"\ncommand_timeout_periods = 15\n')
+    result = invoke("fly", scenario, "--out", tmp_path / "out")
+    assert result.exit_code == 0, result.output
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    silence = summary["no_actuator_command"]
+    assert silence["periods"] == 20 and silence["from_s"] == pytest.approx(0.30)
+    assert silence["seconds"] == pytest.approx(0.20, abs=1e-9)  # to the end of the run, 0.5 s
+    assert "no actuator command for 0.20 s from t = 0.30 s" in " ".join(result.output.split())
+    # the motors held the last command: every PWM column from 0.3 s on equals that of 0.29 s
+    rows = np.genfromtxt(tmp_path / "out" / "flight.csv", delimiter=",", names=True)
+    held = rows[(rows["t"] >= 0.3)]
+    last = rows[np.searchsorted(rows["t"], 0.295)]
+    assert all((held[f"pwm{i}"] == last[f"pwm{i}"]).all() for i in range(4))
+    scenario.write_text(scenario.read_text().replace("= 15", "= 21"))  # longer than the silence: not marked
+    assert invoke("fly", scenario, "--out", tmp_path / "out2").exit_code == 0
+    assert "no_actuator_command" not in json.loads((tmp_path / "out2" / "summary.json").read_text())

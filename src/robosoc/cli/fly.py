@@ -369,6 +369,15 @@ def print_summary(console, summary: dict[str, Any]) -> None:
         row("deadline misses", lambda v: str(v.get("deadline_misses")))
         row("chip energy", lambda v: _fmt((v.get("energy") or {}).get("total_uj"), 1e-3, 2, "mJ"))
     console.print(table)
+    for i, v in enumerate(vehicles):
+        quiet = v.get("no_actuator_command")
+        if quiet:
+            who = f"vehicle {i + 1}: " if many else ""
+            plain(
+                console,
+                f"{who}no actuator command for {quiet['seconds']:.2f} s from t = {quiet['from_s']:.2f} s "
+                f"({quiet['periods']} sensor periods; the motors held the last command)",
+            )
     status = "" if summary.get("complete", True) else f" (incomplete: {summary.get('stopped')})"
     extra = f"; closest approach {_fmt(summary.get('min_separation_m'), 1, 2, 'm')}" if many else ""
     plain(

@@ -11,6 +11,7 @@ loadable from TOML with :func:`load_firmware_config`, whose errors name the file
     period_ticks = 10        # periodic release: the tasks' period (and relative deadline) in ticks
     ekf_tile = [0, 1]
     pid_tile = [1, 0]
+    command_timeout_periods = 10  # sensor periods without an actuator command before a run is marked
     project = ""             # a firmware project's folder (its robosoc.toml names the tasks and
                              # their tiles; ekf_tile, pid_tile and release are the built-in's)
 
@@ -57,6 +58,9 @@ class FirmwareConfig:
             relative deadline of event-released jobs too.
         ekf_tile: the tile of the estimator task.
         pid_tile: the tile of the PID task (may equal ``ekf_tile``).
+        command_timeout_periods: this many sensor periods in a row without an actuator command
+            reaching the I/O tile mark the run (``summary.json``: ``"no_actuator_command"``; the
+            motors hold the last command meanwhile).
         project: the folder of a firmware project to fly instead of the built-in application
             (docs/firmware-projects.md); in a scenario file, relative to the file's folder.
     """
@@ -69,6 +73,7 @@ class FirmwareConfig:
     period_ticks: int = 10
     ekf_tile: tuple[int, int] = (0, 1)
     pid_tile: tuple[int, int] = (1, 0)
+    command_timeout_periods: int = 10
     project: str = ""
 
     def __post_init__(self) -> None:
@@ -80,6 +85,10 @@ class FirmwareConfig:
             raise ValueError(f"tick_cycles: must be a multiple of 16 from {low} to {high}, got {self.tick_cycles}")
         if not 1 <= self.period_ticks <= 1_000_000:
             raise ValueError(f"period_ticks: must be between 1 and 1000000, got {self.period_ticks}")
+        if not 1 <= self.command_timeout_periods <= 1_000_000:
+            raise ValueError(
+                f"command_timeout_periods: must be between 1 and 1000000, got {self.command_timeout_periods}"
+            )
         for name in ("ekf_tile", "pid_tile"):
             xy = getattr(self, name)
             if len(xy) != 2 or min(xy) < 0:

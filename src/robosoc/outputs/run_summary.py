@@ -11,7 +11,8 @@ key names, NaN written as ``null``)::
                 "height_estimate_rms_m"},
      "tasks": {"estimator": {...}, "pid": {...}} | null, "deadline_misses": 0 | null,
      "energy": {"total_uj", "tiles_uj": {"x,y": ...}, "noc_uj"} | null,
-     "cycles": {"chip", "tiles": {"x,y": ...}} | null}
+     "cycles": {"chip", "tiles": {"x,y": ...}} | null,
+     "no_actuator_command": {"seconds", "from_s", "periods"}}   # only when the firmware went quiet
 
 ``complete`` is false for a flight that was interrupted or crashed: the figures are those of the
 rows flown so far, and ``"stopped"`` says why.  The flight figures are
@@ -161,6 +162,38 @@ def cycle_figures(result: ReplayResult) -> dict[str, Any]:
     return {"chip": result.cycles, "tiles": {f"{x},{y}": c["cycles"] for (x, y), c in result.counters.items()}}
 
 
+def command_silence(result: ReplayResult, timeout_periods: int) -> dict[str, Any] | None:
+    """The longest run of sensor periods in which no actuator command reached the I/O tile, if it
+    is ``timeout_periods`` or longer (else None): ``{"seconds", "from_s", "periods"}``, the time
+    counted from the start of its first period to the end of its last (the motors held the last
+    command all along).  A period is [sample k's injection, sample k + 1's); the last one ends
+    where the run ended."""
+    samples = result.samples
+    if not samples:
+        return None
+    ends = [s.cycle for s in samples[1:]] + [max(result.cycles, samples[-1].cycle)]
+    arrivals = sorted(c.cycle for c in result.commands)
+    longest = (0, 0)  # (periods, first period)
+    run, first, j = 0, 0, 0
+    for k, (sample, end) in enumerate(zip(samples, ends, strict=True)):
+        while j < len(arrivals) and arrivals[j] < sample.cycle:
+            j += 1
+        answered = j < len(arrivals) and arrivals[j] < end
+        if answered:
+            run = 0
+            continue
+        if run == 0:
+            first = k
+        run += 1
+        if run > longest[0]:
+            longest = (run, first)
+    periods, k0 = longest
+    if periods < timeout_periods:
+        return None
+    seconds = (ends[k0 + periods - 1] - samples[k0].cycle) * result.clock_ns * 1e-9
+    return {"seconds": seconds, "from_s": samples[k0].time_s, "periods": periods}
+
+
 def vehicle_summary(
     scenario: ScenarioConfig,
     rows: np.ndarray,
@@ -193,6 +226,9 @@ def vehicle_summary(
         "energy": energy_figures(result) if result is not None else None,
         "cycles": cycle_figures(result) if result is not None else None,
     }
+    silence = command_silence(result, scenario.firmware.command_timeout_periods) if result is not None else None
+    if silence is not None:
+        summary["no_actuator_command"] = silence  # the run is marked: the firmware went quiet
     return _with_reason(summary, stopped)
 
 
@@ -374,6 +410,7 @@ _VEHICLE_FIELDS: dict[str, _Kind] = {
     "energy": _object({"total_uj": NUMBER, "tiles_uj": _map(NUMBER, TILE_KEY, "X,Y"), "noc_uj": NUMBER}),
     "cycles": _object({"chip": INTEGER, "tiles": _map(INTEGER, TILE_KEY, "X,Y")}),
     "min_separation_m": NUMBER,
+    "no_actuator_command": _object({"seconds": NUMBER, "from_s": NUMBER, "periods": INTEGER}),
 }
 SUMMARY = _object(_VEHICLE_FIELDS, nullable=False)
 _VEHICLE_FIELDS["vehicles"] = _list(SUMMARY)
