@@ -9,37 +9,65 @@ loadable from TOML with :func:`load_firmware_config`, whose errors name the file
     scheduler = "edf"        # "edf" or "rm"
     tick_cycles = 262144     # the kernel's tick (the seed's 1 ms at 250 MHz)
     period_ticks = 10        # periodic release: the tasks' period (and relative deadline) in ticks
-    ekf_tile = [0, 1]
-    pid_tile = [1, 0]
     command_timeout_periods = 10  # sensor periods without an actuator command before a run is marked
-    project = ""             # a firmware project's folder (its robosoc.toml names the tasks and
-                             # their tiles; ekf_tile, pid_tile and release are the built-in's)
+    project = ""             # a firmware project's folder ("": the shipped quadrotor project)
 
-The defaults are the seed's case study on its 2×2 chip: the I/O tile at (0, 0), the estimator
-(EKF and altitude filter) on (0, 1), the PID controller on (1, 0), the fourth tile powered off
-(see :func:`seed_chip`), Q16.16 with the multiplier.
+    [[placement]]            # optional, any number: move a task of the project to another tile
+    task = "estimator"
+    tile = [1, 1]
+
+The defaults are the seed's case study on its 2×2 chip: the shipped ``quadrotor`` project (the
+estimator, EKF and altitude filter, on (0, 1), the PID controller on (1, 0)), the I/O tile at
+(0, 0), the fourth tile powered off (see :func:`seed_chip`), Q16.16 with the multiplier.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from robosoc.config.chip import ChipConfig
 from robosoc.config.validate import load_toml
+from robosoc.firmware import TEMPLATES_DIR
 
-__all__ = ["ARITH_CHOICES", "RELEASE_CHOICES", "SCHEDULER_CHOICES", "FirmwareConfig", "load_firmware_config"]
+if TYPE_CHECKING:
+    from robosoc.config.project import FirmwareProject
+
+__all__ = [
+    "ARITH_CHOICES",
+    "DEFAULT_PROJECT",
+    "RELEASE_CHOICES",
+    "SCHEDULER_CHOICES",
+    "FirmwareConfig",
+    "Placement",
+    "load_firmware_config",
+]
 
 ARITH_CHOICES = ("float", "fixed")
 RELEASE_CHOICES = ("event", "periodic")
 SCHEDULER_CHOICES = ("edf", "rm")
 #: The kernel's tick must be a multiple of 16 cycles in this range (kernel/os_config.h explains why).
 TICK_CYCLES_RANGE = (4096, 1 << 30)
+DEFAULT_PROJECT = TEMPLATES_DIR / "quadrotor"
+"""The firmware a scenario flies unless it names a project: the seed's estimator and PID tasks."""
 
 
 def _choice(name: str, value: str, choices: tuple[str, ...]) -> None:
     if value not in choices:
         raise ValueError(f"{name}: must be one of {', '.join(map(repr, choices))}, got {value!r}")
+
+
+@dataclass(frozen=True)
+class Placement:
+    """A task of the project moved to another tile than its robosoc.toml gives."""
+
+    task: str
+    tile: tuple[int, int]
+
+    def __post_init__(self) -> None:
+        if len(self.tile) != 2 or min(self.tile) < 0:
+            raise ValueError(f"tile: must be a tile [x, y] with x, y >= 0, got {list(self.tile)}")
 
 
 @dataclass(frozen=True)
@@ -56,13 +84,12 @@ class FirmwareConfig:
         tick_cycles: the kernel's tick in core cycles.
         period_ticks: period and relative deadline of the tasks in ticks (periodic release); the
             relative deadline of event-released jobs too.
-        ekf_tile: the tile of the estimator task.
-        pid_tile: the tile of the PID task (may equal ``ekf_tile``).
         command_timeout_periods: this many sensor periods in a row without an actuator command
             reaching the I/O tile mark the run (``summary.json``: ``"no_actuator_command"``; the
             motors hold the last command meanwhile).
-        project: the folder of a firmware project to fly instead of the built-in application
-            (docs/firmware-projects.md); in a scenario file, relative to the file's folder.
+        project: the folder of the firmware project to fly (docs/firmware-projects.md; in a
+            scenario file, relative to the file's folder); "" for the shipped quadrotor project.
+        placement: tasks of the project moved to other tiles (by task name).
     """
 
     arith: str = "fixed"
@@ -71,10 +98,9 @@ class FirmwareConfig:
     scheduler: str = "edf"
     tick_cycles: int = 262144
     period_ticks: int = 10
-    ekf_tile: tuple[int, int] = (0, 1)
-    pid_tile: tuple[int, int] = (1, 0)
     command_timeout_periods: int = 10
     project: str = ""
+    placement: tuple[Placement, ...] = ()
 
     def __post_init__(self) -> None:
         _choice("arith", self.arith, ARITH_CHOICES)
@@ -89,33 +115,76 @@ class FirmwareConfig:
             raise ValueError(
                 f"command_timeout_periods: must be between 1 and 1000000, got {self.command_timeout_periods}"
             )
-        for name in ("ekf_tile", "pid_tile"):
-            xy = getattr(self, name)
-            if len(xy) != 2 or min(xy) < 0:
-                raise ValueError(f"{name}: must be a tile [x, y] with x, y >= 0, got {list(xy)}")
+        seen: dict[str, int] = {}
+        for i, moved in enumerate(self.placement):
+            if moved.task in seen:
+                raise ValueError(f"placement[{i}].task: {moved.task!r} is also placement[{seen[moved.task]}]")
+            seen[moved.task] = i
 
     @property
     def label(self) -> str:
         """``fixed+mul``, ``float-no-mul``...: how tables and file names name a build."""
         return f"{self.arith}{'+mul' if self.multiplier else '-no-mul'}"
 
+    @property
+    def project_folder(self) -> Path:
+        """The project's folder: :attr:`project`, or the shipped quadrotor project."""
+        return Path(self.project) if self.project else DEFAULT_PROJECT
+
+    @property
+    def mapping(self) -> dict[str, tuple[int, int]]:
+        """The tasks :attr:`placement` moves, by name, to their tiles."""
+        return {moved.task: (int(moved.tile[0]), int(moved.tile[1])) for moved in self.placement}
+
+    def load_project(self) -> FirmwareProject:
+        """The project this build flies, its placement checked against its tasks.
+
+        Raises:
+            ConfigError: the project file is missing or wrong (file and key named).
+            ValueError: a placement names no task of the project (``placement[i].task``).
+        """
+        from robosoc.config.project import load_project
+
+        project = load_project(self.project_folder)
+        for i, moved in enumerate(self.placement):
+            if moved.task not in project.task_names:
+                raise ValueError(
+                    f"placement[{i}].task: the project {project.project.name!r} has no task {moved.task!r} "
+                    f"(its tasks: {', '.join(project.task_names)})"
+                )
+        return project
+
+    def tiles(self) -> list[tuple[int, int]]:
+        """The tiles the project's tasks run on, with :attr:`placement` applied."""
+        return self.load_project().tiles(self.mapping)
+
     def check_chip(self, chip: ChipConfig) -> None:
-        """Raise ValueError unless both task tiles are powered core tiles of ``chip``."""
-        for name in ("ekf_tile", "pid_tile"):
-            x, y = getattr(self, name)
-            xy = (int(x), int(y))
+        """Raise ValueError unless every task's tile is a powered core tile of ``chip``, with the
+        multiplier if the build uses it (the task and tile named)."""
+        project = self.load_project()
+        for i, moved in enumerate(self.placement):
+            xy = (int(moved.tile[0]), int(moved.tile[1]))
             problem = chip.core_tile_problem(xy)
             if problem:
-                raise ValueError(f"{name}: {list(xy)} {problem}")
+                raise ValueError(f"placement[{i}].tile: {list(xy)} ({moved.task}) {problem}")
+        project.check_chip(chip, self.mapping)
+        if self.multiplier:
+            for task in project.tasks:
+                xy = self.mapping.get(task.name, (int(task.tile[0]), int(task.tile[1])))
+                if not chip.tile_config(xy).multiplier:
+                    raise ValueError(
+                        f"multiplier: the build uses the multiplier but task {task.name!r} runs on {list(xy)}, "
+                        "which has none (chip.tile or chip.tiles)"
+                    )
 
     def default_chip(self) -> ChipConfig:
-        """The chip a replay runs on when none is given: the seed's for the built-in application
-        (:meth:`seed_chip`), the seed's 2×2 with every core tile powered for a project."""
+        """The chip a replay runs on when none is given: the seed's for the shipped project
+        (:meth:`seed_chip`), the seed's 2×2 with every core tile powered for another project."""
         return ChipConfig(width=2, height=2, io_tile=(0, 0)) if self.project else self.seed_chip()
 
     def seed_chip(self) -> ChipConfig:
         """The seed's 2×2 chip for this mapping: I/O tile (0, 0), every unused core tile powered off."""
-        used = {tuple(self.ekf_tile), tuple(self.pid_tile)}
+        used = set(self.tiles())
         off = tuple(xy for xy in ((0, 1), (1, 0), (1, 1)) if xy not in used)
         return ChipConfig(width=2, height=2, io_tile=(0, 0), powered_off=off)
 

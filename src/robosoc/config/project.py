@@ -348,10 +348,11 @@ class FirmwareProject:
             with_or_not = "with" if multiplier else "without"
             raise ValueError(f"multiplier: the project {info.name!r} has no build {with_or_not} the multiplier")
 
-    def check_chip(self, chip: ChipConfig) -> None:
-        """Raise ValueError unless every task's tile is a powered core tile of ``chip``."""
+    def check_chip(self, chip: ChipConfig, mapping: Mapping[str, tuple[int, int]] | None = None) -> None:
+        """Raise ValueError unless every task's tile (``mapping`` moving some) is a powered core
+        tile of ``chip``."""
         for i, task in enumerate(self.tasks):
-            xy = (int(task.tile[0]), int(task.tile[1]))
+            xy = (mapping or {}).get(task.name, (int(task.tile[0]), int(task.tile[1])))
             problem = chip.core_tile_problem(xy)
             if problem:
                 raise ValueError(f"tasks[{i}].tile: {list(xy)} ({task.name}) {problem}")

@@ -3,7 +3,7 @@
 The half of a co-simulation that does not need the physics, shared by the replay of a log
 (:mod:`robosoc.cosim.replay`), the lockstep flight and the decoupled chip side: every sensor sample
 becomes a message from the I/O tile, injected at the cycle of its timestamp; the chip runs the
-firmware (the estimator and PID tasks of :mod:`robosoc.host.flight_app`); what comes back is the PWM
+firmware (a project's tasks, :mod:`robosoc.host.firmware_image`); what comes back is the PWM
 command of each sample with the cycle it reached the I/O tile, and one record per job of each task.
 
 Time: sample k (timestamp t_k seconds) is injected in cycle ``first_cycle + round(t_k / clock)``;
@@ -41,15 +41,15 @@ from robosoc.chip.mpsoc import ChipError, MPSoC
 from robosoc.chip.single import CoreError
 from robosoc.config.chip import ChipConfig
 from robosoc.config.firmware import FirmwareConfig
-from robosoc.host import flight_app, images, packets
-from robosoc.host.firmware_image import FirmwareImage
+from robosoc.host import images, packets
+from robosoc.host.firmware_image import FIRST_SAMPLE_CYCLE, FirmwareImage
 from robosoc.host.telemetry import read_telemetry
 from robosoc.kernels.chip import K_TASK
 from robosoc.program.elf import load_elf
 from robosoc.records import JobRecord, PwmCommand, SampleInput
 
 #: Cycle of the first sample's injection: the firmware has booted by then.
-DEFAULT_FIRST_CYCLE = flight_app.FIRST_SAMPLE_CYCLE
+DEFAULT_FIRST_CYCLE = FIRST_SAMPLE_CYCLE
 
 
 @dataclass(frozen=True)
@@ -100,7 +100,7 @@ class FirmwareRun:
 
     Args:
         fw: the firmware build and task mapping.
-        elf: its image (:func:`robosoc.host.flight_app.build`), built once by the caller.
+        image: the firmware (:func:`robosoc.host.scenario_image.firmware_image`), built once by the caller.
         chip: the chip (default: :meth:`FirmwareConfig.default_chip`).
         energy: the energy model (default: the packaged coefficients).
         first_cycle: cycle of the first sample's injection.
@@ -123,8 +123,7 @@ class FirmwareRun:
         self.fw = fw
         self.image = image
         self.chip_config = chip or self.fw.default_chip()
-        if not image.project:
-            self.fw.check_chip(self.chip_config)  # a project's tiles are checked when it is loaded
+        self.fw.check_chip(self.chip_config)
         self.model = energy or EnergyModel.load()
         self.first_cycle = first_cycle
         self.chip = MPSoC(self.chip_config)

@@ -6,7 +6,7 @@ chip is run to the cycle of each step's end, so neither side ever waits on the h
 flight is as fast as the host allows and bit-for-bit repeatable.
 
 Time mapping: ``t_ns`` is cycle ``first_cycle + round(t_ns / clock_ns)`` of the chip
-(:func:`ChipController.cycle_of`); ``first_cycle`` (:data:`flight_app.FIRST_SAMPLE_CYCLE`) leaves
+(:func:`ChipController.cycle_of`); ``first_cycle`` (:data:`robosoc.host.firmware_image.FIRST_SAMPLE_CYCLE`) leaves
 the firmware its boot, as in the replay harness.
 
 Per sensor sample k, taken at ``t_k`` (a multiple of the sensor period):
@@ -23,7 +23,7 @@ Per sensor sample k, taken at ``t_k`` (a multiple of the sensor period):
 
 The row's PWM columns are the command in force during the sample's first physics step.  The chip's
 state estimate never leaves the chip (only PWM messages reach the I/O tile); the host reads it from
-the estimator tile's memory at each sample period's close (:func:`flight_app.read_estimate`, no
+the estimator tile's memory at each sample period's close (telemetry, :mod:`robosoc.host.telemetry`; no
 simulated cycle), so row k's estimate columns hold the chip's newest estimate at ``t_k``: that of
 sample k - 1 (the chip has not yet run sample k), NaN before the first.
 """
@@ -86,7 +86,7 @@ UNKNOWN_ESTIMATE = Estimate(np.full(4, math.nan), np.full(3, math.nan), math.nan
 
 
 class ChipController:
-    """The flight firmware on the chip (:mod:`robosoc.host.flight_app`) as a lockstep controller.
+    """A scenario's firmware project on the chip as a lockstep controller.
 
     Args:
         scenario, vehicle: what is flown (the firmware's control parameters come from them), by

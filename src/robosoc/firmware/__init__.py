@@ -18,7 +18,6 @@ Layout (all plain files inside the package):
   (:func:`estimator_sources`).
 - ``app/estimator.[ch]``: the estimator task's work: calibration while disarmed, then EKF and
   altitude filter per sample, sensor packet in, estimate packet out (:func:`estimator_sources`).
-- ``app/flight_app.c``: the flight application's ``main`` (:mod:`robosoc.host.flight_app`).
 - ``app/pid.[ch]``, ``app/mixer.[ch]``: the PID task's control law and mixer (:func:`pid_sources`).
   They and the altitude filter include ``robosoc_control.h``, generated from the Python configs by
   :mod:`robosoc.host.control_params` (pass :func:`~robosoc.host.control_params.control_include_dir`

@@ -5,8 +5,7 @@ setpoint, the sample's sequence number and time stamp) to ``sensor`` (a tile and
 firmware answers with one PWM packet carrying the same sequence number on ``actuator_port`` of the
 I/O tile.  Until a command arrives the motors hold the last one.  :class:`FirmwareImage` holds the
 ELF, the tiles to load it on, each tile's task ids by name (how job records are named), and that
-contract; the built-in flight application makes one (:func:`robosoc.host.flight_app.image`), and
-so does any firmware project (:func:`project_image`).
+contract; :func:`project_image` makes one for a firmware project.
 """
 
 from __future__ import annotations
@@ -26,7 +25,20 @@ from robosoc.host.project_main import TASK_REFUSED_EXIT, Tile, task_ids
 from robosoc.host.task_table import TaskTable
 from robosoc.host.telemetry import TelemetryProbe, resolve_telemetry
 
-__all__ = ["FirmwareImage", "project_image"]
+__all__ = ["FIRST_SAMPLE_CYCLE", "SAMPLE_PERIOD_US", "FirmwareImage", "project_image", "sample_cycle"]
+
+SAMPLE_PERIOD_US = 10_000
+"""The sensor period of the default scenario (100 Hz)."""
+FIRST_SAMPLE_CYCLE = 500_000
+"""Cycle at which the host injects sample 0: every tile has started its kernel well before
+(``os_start`` runs within the first 100,000 cycles; ``images.read_stats().start_cycle`` tells)."""
+
+
+def sample_cycle(k: int, period_us: int = SAMPLE_PERIOD_US, clock_period_ns: float = 4.0) -> int:
+    """The cycle at which sample ``k`` (taken at k · period) leaves the I/O tile:
+    :data:`FIRST_SAMPLE_CYCLE` + k · period in cycles (10 ms = 2,500,000 cycles at 4 ns)."""
+    per_sample = round(period_us * 1000 / clock_period_ns)
+    return FIRST_SAMPLE_CYCLE + k * per_sample
 
 
 @dataclass(frozen=True)
@@ -91,9 +103,10 @@ def project_image(
     scenario: ScenarioConfig | None = None,
     chip: ChipConfig | None = None,
 ) -> FirmwareImage:
-    """Build ``project`` for ``fw``'s build (arithmetic, multiplier, kernel tick), with the control
-    parameters of ``vehicle`` flying ``scenario`` in reach of its C (``robosoc_control.h``), linked
-    for the smallest SRAM of ``chip``'s tiles it runs on (default: the toolchain's 2 MiB).
+    """Build ``project`` for ``fw``'s build (arithmetic, multiplier, kernel settings) with its tasks
+    placed as ``fw.placement`` moves them, the control parameters of ``vehicle`` flying ``scenario``
+    in reach of its C (``robosoc_control.h``), linked for the smallest SRAM of ``chip``'s tiles it
+    runs on (default: the toolchain's 2 MiB).
 
     Raises:
         ValueError: the project has no single message from the I/O tile (the sensor packets) and to
@@ -107,25 +120,26 @@ def project_image(
             f"messages: a flying project has one message from {IO!r} (the sensor packets) and one to {IO!r} "
             f"(the PWM commands), got {len(inputs)} and {len(outputs)}"
         )
-    sensor = project.task(inputs[0].destination)
+    mapping = fw.mapping
+    tiles = project.tiles(mapping)
     elf = build_project(
         project,
         arith=fw.arith,
         multiplier=fw.multiplier,
+        mapping=mapping,
         settings=firmware_defines(fw),
         include_dirs=[control_include_dir(vehicle, scenario)],
-        sram_size=min(chip.tile_config(xy).sram_bytes for xy in project.tiles()) if chip is not None else None,
+        sram_size=min(chip.tile_config(xy).sram_bytes for xy in tiles) if chip is not None else None,
     )
-    tiles = project.tiles()
     where = str(project.path(PROJECT_FILE))
-    ids = {xy: task_ids(project, xy) for xy in tiles}
+    ids = {xy: task_ids(project, xy, mapping) for xy in tiles}
     task_tiles = {name: (xy, tid) for xy, named in ids.items() for name, tid in named.items()}
     return FirmwareImage(
         elf=elf,
         tasks=ids,
         telemetry=resolve_telemetry(project.telemetry, elf, fw.arith, task_tiles, where),
         task_table=TaskTable.of(elf),
-        sensor=((int(sensor.tile[0]), int(sensor.tile[1])), inputs[0].port),
+        sensor=(task_tiles[inputs[0].destination][0], inputs[0].port),
         actuator_port=outputs[0].port,
         project=project.project.name,
         task_order=project.task_names,

@@ -1,14 +1,13 @@
-"""The firmware a flight runs: the built-in flight application, or the firmware project that
-``[firmware] project`` names (a folder with a robosoc.toml), built once for the flight."""
+"""The firmware a flight runs: the firmware project that ``[firmware] project`` names (a folder with
+a robosoc.toml; by default the shipped quadrotor project), its tasks placed as ``[[firmware.placement]]``
+moves them, built once for the flight."""
 
 from __future__ import annotations
 
 from robosoc.config.chip import ChipConfig
 from robosoc.config.firmware import FirmwareConfig
-from robosoc.config.project import load_project
 from robosoc.config.scenario import ScenarioConfig
 from robosoc.config.vehicle import VehicleConfig
-from robosoc.host import flight_app
 from robosoc.host.firmware_image import FirmwareImage, project_image
 
 __all__ = ["firmware_image", "scenario_image"]
@@ -20,8 +19,8 @@ def firmware_image(
     scenario: ScenarioConfig | None = None,
     chip: ChipConfig | None = None,
 ) -> FirmwareImage:
-    """Build ``fw``'s firmware (its project's, or the built-in application) with the controller
-    parameters of ``vehicle`` flying ``scenario``; a project's tasks are checked against ``chip``.
+    """Build ``fw``'s firmware project with the controller parameters of ``vehicle`` flying
+    ``scenario``; its tasks, placed, are checked against ``chip``.
 
     Raises:
         ConfigError: the project file is wrong (file and key named).
@@ -29,11 +28,9 @@ def firmware_image(
             not support.
         CompileError: the compiler failed (file and line named).
     """
-    if not fw.project:
-        return flight_app.image(fw, vehicle, scenario)
-    project = load_project(fw.project)
+    project = fw.load_project()
     if chip is not None:
-        project.check_chip(chip)
+        fw.check_chip(chip)
     return project_image(project, fw, vehicle, scenario, chip)
 
 

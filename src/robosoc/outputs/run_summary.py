@@ -135,13 +135,13 @@ def task_figures(result: ReplayResult) -> dict[str, dict[str, float]]:
 
 
 def firmware_figures(fw: FirmwareConfig) -> dict[str, Any]:
-    """The ``firmware`` object: the build and its task mapping (a project's folder instead of the
-    built-in application's mapping)."""
-    common = {"build": fw.label, "arith": fw.arith, "multiplier": fw.multiplier}
-    if fw.project:
-        return {**common, "scheduler": fw.scheduler, "project": fw.project}
-    return {**common, "release": fw.release, "scheduler": fw.scheduler, "ekf_tile": list(fw.ekf_tile),
-            "pid_tile": list(fw.pid_tile)}  # fmt: skip
+    """The ``firmware`` object: the build, the project ("" for the shipped quadrotor project) and
+    the tile each of its tasks ran on."""
+    project = fw.load_project()
+    mapping = fw.mapping
+    tiles = {t.name: list(mapping.get(t.name, (int(t.tile[0]), int(t.tile[1])))) for t in project.tasks}
+    return {"build": fw.label, "arith": fw.arith, "multiplier": fw.multiplier, "release": fw.release,
+            "scheduler": fw.scheduler, "project": fw.project, "tiles": tiles}  # fmt: skip
 
 
 def chip_figures(chip: ChipConfig, result: ReplayResult | None) -> dict[str, Any]:
@@ -386,8 +386,8 @@ _VEHICLE_FIELDS: dict[str, _Kind] = {
             "multiplier": BOOLEAN,
             "release": TEXT,
             "scheduler": TEXT,
-            "ekf_tile": _list(INTEGER),
-            "pid_tile": _list(INTEGER),
+            "project": TEXT,
+            "tiles": _map(_list(INTEGER), TASK_KEY, "TASK: a task of the project"),
         },
     ),
     "chip": _object({"width": INTEGER, "height": INTEGER, "clock_ns": NUMBER}),

@@ -124,7 +124,7 @@ def prepare(config: SweepConfig, points: list[Point], on_status: Callable[[str],
     from robosoc.config.validate import ConfigError, from_mapping
     from robosoc.config.vehicle import vehicle_preset
     from robosoc.cosim.chip_warmup import prepare_chip
-    from robosoc.host import flight_app
+    from robosoc.host.scenario_image import scenario_image
 
     seen: set[str] = set()
     for point in points:
@@ -140,9 +140,7 @@ def prepare(config: SweepConfig, points: list[Point], on_status: Callable[[str],
             continue
         seen.add(token)
         try:
-            prepare_chip(
-                scenario.chip, functools.partial(flight_app.build, scenario.firmware, vehicle, scenario), on_status
-            )
+            prepare_chip(scenario.chip, functools.partial(scenario_image, scenario, vehicle), on_status)
         except Exception:
             continue
 

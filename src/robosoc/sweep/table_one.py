@@ -4,7 +4,7 @@
     runs = measure_table(TableSpec(iterations=100, releases=("event", "periodic")))
     for line in format_table(runs): print(line)
 
-Each build is the flight firmware (:mod:`robosoc.host.flight_app`) on the seed's 2×2 chip, fed
+Each build is the flight firmware (the shipped quadrotor project) on the seed's 2×2 chip, fed
 either the built-in sensor stream (:func:`robosoc.cosim.replay.built_in_rows`, replayed: every build
 gets the same samples) or flown closed-loop (:func:`robosoc.cosim.lockstep.fly_chip`).  The stream
 starts with the flight plan's calibration on the ground; the measured window is the ``iterations``
