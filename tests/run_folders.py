@@ -21,7 +21,7 @@ from robosoc.control.flight_log import CsvFlightLog
 from robosoc.control.host import HostController
 from robosoc.cosim.firmware_run import FirmwareRun, ReplayResult
 from robosoc.cosim.replay import samples_from_rows
-from robosoc.host import flight_app
+from robosoc.host.scenario_image import firmware_image
 from robosoc.outputs.run_folder import write_jobs_csv
 from robosoc.outputs.run_summary import task_summary
 
@@ -79,7 +79,7 @@ def chip_replay(seconds: float = CHIP_SECONDS) -> ChipReplay:
     :func:`robosoc.cosim.replay.replay` does it, keeping the firmware run for its timeline."""
     rows = host_rows(seconds, seed=6)
     fw = FirmwareConfig()
-    run = FirmwareRun(fw, flight_app.image(fw))
+    run = FirmwareRun(fw, firmware_image(fw))
     samples = samples_from_rows(rows, run.clock_ns)
     period = samples[1].cycle - samples[0].cycle
     for k, sample in enumerate(samples):
@@ -103,7 +103,7 @@ def write_chip_run(folder: Path, chip: ChipReplay) -> Path:
     fw = result.firmware
     summary = {
         "schema": 1, "complete": True, "scenario": "default", "seed": 6, "controller": "chip", "mode": "lockstep",
-        "firmware": {"build": fw.label, "ekf_tile": list(fw.ekf_tile), "pid_tile": list(fw.pid_tile)},
+        "firmware": {"build": fw.label, "project": fw.project, "tiles": {"estimator": [0, 1], "pid": [1, 0]}},
         "chip": {"width": 2, "height": 2, "clock_ns": result.clock_ns},
         "simulated_s": CHIP_SECONDS, "host_s": result.host_seconds, "real_time_factor": None,
         "tasks": task_summary(result.jobs, result.clock_ns), "deadline_misses": result.deadline_misses,

@@ -17,7 +17,7 @@ import pytest
 
 from headless_chromium import BROWSER, devtools_flows
 from robosoc.cosim.chip_timeline import timeline_of
-from robosoc.host import flight_app, images
+from robosoc.host import images
 from robosoc.outputs.chip_trace import run_trace, write_chip_trace
 from run_folders import ChipReplay
 
@@ -189,7 +189,7 @@ def test_packets_are_the_messages_the_host_exchanged(chip_flight: ChipReplay) ->
     timeline = timeline_of(run.chip, run.tiles)
     io = timeline.io_tile
     injected = sum(
-        len(flight_app.sensor_payloads(s.payload, run.fw, run.chip_config, seq=s.seq)) for s in result.samples
+        len(images.io_packets(s.payload, run.image.sensor[1], run.chip_config.io_tile, s.seq)) for s in result.samples
     )
     assert sum(p.src == io for p in timeline.packets) == injected
     assert sum(p.dest == io and p.visible is not None for p in timeline.packets) == len(result.commands)

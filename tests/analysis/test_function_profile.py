@@ -23,7 +23,6 @@ from robosoc.chip.function_profile import (
     summary_mismatches,
 )
 from robosoc.chip.single import SingleCoreSoC
-from robosoc.config.firmware import FirmwareConfig
 from robosoc.config.scenario import FlightPlan, ScenarioConfig
 from robosoc.config.vehicle import vehicle_preset
 from robosoc.control.flight import fly
@@ -97,8 +96,7 @@ def test_rows_are_consistent_and_other_rows_hold_no_instructions(replays) -> Non
 
 def test_each_task_shows_its_own_functions(replays) -> None:
     result, _ = replays
-    fw = FirmwareConfig()
-    ekf, pid = tuple(fw.ekf_tile), tuple(fw.pid_tile)
+    ekf, pid = (0, 1), (1, 0)  # the quadrotor project's tiles (its robosoc.toml)
 
     def functions(tile, task_name):
         return {r.function for r in result.profile.rows if r.tile == tile and r.task_name == task_name}

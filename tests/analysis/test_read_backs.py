@@ -30,7 +30,7 @@ from robosoc.sweep.store import RecordError, SweepStore, check_record
 SUMMARY = {
     "schema": 1, "complete": True, "scenario": "default", "seed": 1, "controller": "chip", "mode": "lockstep",
     "firmware": {"build": "fixed+mul", "arith": "fixed", "multiplier": True, "release": "event", "scheduler": "edf",
-                 "ekf_tile": [0, 1], "pid_tile": [1, 0]},
+                 "project": "", "tiles": {"estimator": [0, 1], "pid": [1, 0]}},
     "chip": {"width": 2, "height": 2, "clock_ns": 4.0},
     "simulated_s": 0.3, "host_s": 59.5, "real_time_factor": 0.005,
     "flight": {"hover_rms_m": None, "hover_max_m": None, "overshoot_m": 0.0,

@@ -42,7 +42,7 @@ def job(
 
 def result() -> ReplayResult:
     """Two estimator jobs and one PID job on a 2x2 chip; the second estimator job misses its deadline."""
-    fw = FirmwareConfig(arith="float", multiplier=False, ekf_tile=(0, 1), pid_tile=(1, 0))
+    fw = FirmwareConfig(arith="float", multiplier=False)
     jobs = [
         job("estimator", (0, 1), 0, 1000, 1010, 3010, True, 8000.0),  # response 2010 cycles
         job("estimator", (0, 1), 1, 5000, 5020, 9990, False, 16000.0),  # response 4990 cycles
@@ -70,8 +70,8 @@ def test_a_chip_vehicle_summary_holds_the_hand_worked_figures():
         "multiplier": False,
         "release": scenario.firmware.release,
         "scheduler": scenario.firmware.scheduler,
-        "ekf_tile": [0, 1],
-        "pid_tile": [1, 0],
+        "project": "",
+        "tiles": {"estimator": [0, 1], "pid": [1, 0]},
     }
     assert summary["chip"] == {"width": 2, "height": 2, "clock_ns": CLOCK_NS}
     assert (summary["simulated_s"], summary["host_s"], summary["real_time_factor"]) == (2.0, 0.5, 4.0)

@@ -27,7 +27,8 @@ from robosoc.config.scenario import ScenarioConfig
 from robosoc.config.vehicle import vehicle_preset
 from robosoc.cosim.firmware_run import FirmwareRun, ReplayResult, noc_traffic_pj
 from robosoc.cosim.replay import samples_from_rows
-from robosoc.host import flight_app, images
+from robosoc.host import images
+from robosoc.host.scenario_image import firmware_image
 from robosoc.kernels import chip as kc
 from robosoc.kernels import noc as nk
 from robosoc.kernels.core_layout import S_CYCLE
@@ -68,7 +69,7 @@ def tile_counts(run: FirmwareRun, xy: tuple[int, int]) -> dict[str, int]:
 def replay(fw: FirmwareConfig, arbiter: str = "hermes", profile: bool = False) -> tuple[FirmwareRun, ReplayResult]:
     """Ten samples into the firmware, as :func:`robosoc.cosim.replay.replay` feeds them."""
     chip = dataclasses.replace(fw.seed_chip(), noc=NocConfig(arbiter=arbiter))
-    run = FirmwareRun(fw, flight_app.image(fw), chip=chip, profile=profile)
+    run = FirmwareRun(fw, firmware_image(fw), chip=chip, profile=profile)
     samples = samples_from_rows(host_rows(SECONDS, seed=6), run.clock_ns)
     period = samples[1].cycle - samples[0].cycle
     for k, sample in enumerate(samples):
@@ -117,7 +118,7 @@ def test_task_energies_are_every_task_of_every_tile(replayed) -> None:
         t = chip.config.tile_index(xy)
         tasks = set(np.flatnonzero(chip.acc[t].any(axis=1)).tolist())
         # the kernel, the idle task and the tile's application task
-        assert tasks == {images.KERNEL_TASK_ID, images.IDLE_TASK_ID, *flight_app.task_ids(run.fw, xy).values()}
+        assert tasks == {images.KERNEL_TASK_ID, images.IDLE_TASK_ID, *run.image.tasks[xy].values()}
         want |= {(xy, task) for task in tasks}
         mine = [pj for (where, _), pj in result.task_energy_pj.items() if where == xy]
         assert math.fsum(mine) == pytest.approx(result.energy_pj[f"tile {xy}"], rel=1e-12)
@@ -130,15 +131,15 @@ def test_job_shares_add_up_to_each_tiles_energy_and_the_nocs_traffic(replayed) -
     run, result = replayed
     # one estimator job and one PID job per sample, each in the period of its sample: every period's
     # counters are shared out, and the jobs' shares add up to the whole run
-    assert [(j.task, j.tile) for j in result.jobs].count(("estimator", run.fw.ekf_tile)) == len(result.samples)
-    assert [(j.task, j.tile) for j in result.jobs].count(("pid", run.fw.pid_tile)) == len(result.samples)
+    assert [(j.task, j.tile) for j in result.jobs].count(("estimator", (0, 1))) == len(result.samples)
+    assert [(j.task, j.tile) for j in result.jobs].count(("pid", (1, 0))) == len(result.samples)
     assert not any(j.spans_periods for j in result.jobs)
     for xy in run.tiles:
         jobs = [j for j in result.jobs if j.tile == xy]
         for part, task in (("kernel", images.KERNEL_TASK_ID), ("idle", images.IDLE_TASK_ID)):
             got = math.fsum(j.energy_pj[part] for j in jobs)
             assert got == pytest.approx(result.task_energy_pj[(xy, task)], rel=1e-9), (xy, part)
-        (app_task,) = flight_app.task_ids(run.fw, xy).values()
+        (app_task,) = run.image.tasks[xy].values()
         got = math.fsum(j.energy_pj["task"] for j in jobs)
         assert got == pytest.approx(result.task_energy_pj[(xy, app_task)], rel=1e-9)
         # task + kernel + idle of the tile's jobs: the tile's energy
@@ -164,7 +165,7 @@ def test_jobs_of_one_task_in_one_period_share_its_counters() -> None:
     per_period = Counter((j.task, bisect.bisect_right(starts, j.release_cycle)) for j in result.jobs)
     assert max(per_period.values()) >= 2
     for xy in run.tiles:
-        ((name, task),) = flight_app.task_ids(run.fw, xy).items()
+        ((name, task),) = run.image.tasks[xy].items()
         jobs = [j for j in result.jobs if j.tile == xy]
         assert {j.task for j in jobs} == {name}
         got = math.fsum(j.energy_pj["task"] for j in jobs)

@@ -140,25 +140,28 @@ def test_where_the_host_stops_the_chip_changes_nothing():
     # inside a long single-core quantum and ran ahead of the packet sent to it).
     from robosoc.config.firmware import FirmwareConfig
     from robosoc.cosim.replay import built_in_rows, samples_from_rows
-    from robosoc.host import flight_app, images
+    from robosoc.host import images
+    from robosoc.host.scenario_image import firmware_image
 
     fw = FirmwareConfig()
-    program = load_elf(flight_app.build(fw))
+    image = firmware_image(fw)
+    program = load_elf(image.elf)
+    (tile, port) = image.sensor
     samples = samples_from_rows(built_in_rows(0.03, seed=1), 4.0)
     end = samples[-1].cycle + 2_500_000
 
     def run(steps):
         chip = MPSoC(fw.seed_chip())
-        for xy in flight_app.app_tiles(fw):
+        for xy in image.tiles:
             chip.load(xy, program)
         for k, s in enumerate(samples):
-            for payload in flight_app.sensor_payloads(s.payload, fw, chip.config, seq=k):
-                chip.inject(tuple(fw.ekf_tile), payload, s.cycle)
+            for payload in images.io_packets(s.payload, port, chip.config.io_tile, k):
+                chip.inject(tile, payload, s.cycle)
         for c in steps:
             chip.step(c)
         chip.finish_accounting()
-        logs = {xy: images.read_job_log(chip, xy).records for xy in flight_app.app_tiles(fw)}
-        return logs, {xy: chip.counters(xy) for xy in flight_app.app_tiles(fw)}, chip.received()
+        logs = {xy: images.read_job_log(chip, xy).records for xy in image.tiles}
+        return logs, {xy: chip.counters(xy) for xy in image.tiles}, chip.received()
 
     one_call = run([end])
     assert sum(len(r) for r in one_call[0].values()) == 2 * len(samples)

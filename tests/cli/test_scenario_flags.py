@@ -166,8 +166,8 @@ def test_an_error_about_a_field_names_who_set_it(tmp_path: Path) -> None:
     with pytest.raises(CliError) as caught:
         resolved(argument=no_mul, mul=True)  # the scenario's own check, on a field the option set
     assert caught.value.message == (
-        "--mul/--no-mul: the build uses the multiplier but the ekf_tile [0, 1] has none (chip.tile or chip.tiles) "
-        f"(with {no_mul})"
+        "--mul/--no-mul: the build uses the multiplier but task 'estimator' runs on [0, 1], which has none "
+        f"(chip.tile or chip.tiles) (with {no_mul})"
     )
     with pytest.raises(CliError) as caught:
         resolved(argument=no_mul, arith="double")  # the firmware table's own check

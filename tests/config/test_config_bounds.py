@@ -109,9 +109,9 @@ def test_check_field_names_the_parent_table_of_a_deep_field():
         check_field("chip.noc.bogus", "s.toml", "grid.x")
     assert str(info.value).startswith("s.toml: grid.x: 'chip.noc.bogus' is not a scenario field (chip.noc has: ")
     with pytest.raises(ConfigError) as info:
-        check_field("firmware.ekf_tile.x", "s.toml", "k")
+        check_field("firmware.project.x", "s.toml", "k")
     assert str(info.value) == (
-        "s.toml: k: 'firmware.ekf_tile.x' is not a scenario field (firmware.ekf_tile has: none: it is not a table)"
+        "s.toml: k: 'firmware.project.x' is not a scenario field (firmware.project has: none: it is not a table)"
     )
 
 

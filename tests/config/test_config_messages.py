@@ -87,41 +87,44 @@ def test_scenario_controller_must_be_chip_or_host():
 def test_a_multiplier_build_needs_the_multiplier_on_both_task_tiles():
     no_mul_at_ekf = {"chip": {"tiles": [{"x": 0, "y": 1, "multiplier": False}]}}
     assert scenario_error(no_mul_at_ekf) == (
-        "s.toml: firmware.multiplier: the build uses the multiplier but the ekf_tile [0, 1] has none "
-        "(chip.tile or chip.tiles)"
+        "s.toml: firmware.multiplier: the build uses the multiplier but task 'estimator' runs on [0, 1], which has "
+        "none (chip.tile or chip.tiles)"
     )
     no_mul_at_pid = {"chip": {"tiles": [{"x": 1, "y": 0, "multiplier": False}]}}
-    assert "the pid_tile [1, 0] has none" in scenario_error(no_mul_at_pid)
+    assert "task 'pid' runs on [1, 0], which has none" in scenario_error(no_mul_at_pid)
     # without the multiplier in the build, or with it turned off on another tile, all is well
     from_mapping(ScenarioConfig, {**no_mul_at_ekf, "firmware": {"multiplier": False}})
     from_mapping(ScenarioConfig, {"chip": {"tiles": [{"x": 1, "y": 1, "multiplier": False}]}})
 
 
 def test_a_fixed_length_tuple_takes_exactly_its_length():
-    assert (
-        scenario_error({"firmware": {"ekf_tile": [1, 0, 0]}}) == "s.toml: firmware.ekf_tile: expected 2 values, got 3"
-    )
-    assert scenario_error({"firmware": {"ekf_tile": [1]}}) == "s.toml: firmware.ekf_tile: expected 2 values, got 1"
-    assert scenario_error({"firmware": {"ekf_tile": [1, "a"]}}) == (
-        "s.toml: firmware.ekf_tile[1]: expected an integer, got 'a'"
+    def placed(tile: list) -> dict:
+        return {"firmware": {"placement": [{"task": "estimator", "tile": tile}]}}
+
+    assert scenario_error(placed([1, 0, 0])) == "s.toml: firmware.placement[0].tile: expected 2 values, got 3"
+    assert scenario_error(placed([1])) == "s.toml: firmware.placement[0].tile: expected 2 values, got 1"
+    assert scenario_error(placed([1, "a"])) == "s.toml: firmware.placement[0].tile[1]: expected an integer, got 'a'"
+    assert scenario_error({"firmware": {"placement": [{"task": "ekf", "tile": [1, 1]}]}}) == (
+        "s.toml: firmware.placement[0].task: the project 'quadrotor' has no task 'ekf' (its tasks: estimator, pid)"
     )
 
 
 def test_a_sweep_point_that_breaks_the_scenario_names_the_sweep_file_and_keeps_the_base(tmp_path: Path):
     path = tmp_path / "s.toml"
-    path.write_text('[base]\nduration_s = 4.0\n[[points]]\n"firmware.ekf_tile" = [5, 5]\n')
+    placement = '[{task = "estimator", tile = [5, 5]}]'
+    path.write_text(f'[base]\nduration_s = 4.0\n[[points]]\n"firmware.placement" = {placement}\n')
     with pytest.raises(ConfigError) as info:  # a listed point is checked before anything runs
         load_sweep(path)
-    assert str(info.value).startswith(f"{path}: points[0]: firmware.ekf_tile")
+    assert str(info.value).startswith(f"{path}: points[0]: firmware.placement[0].tile: [5, 5] (estimator)")
     path.write_text("[base]\nduration_s = 4.0\n[[points]]\nvehicles = 2\n")
     config = load_sweep(path)
-    point = (("firmware.ekf_tile", [5, 5]),)
+    point = (("firmware.placement", [{"task": "estimator", "tile": [5, 5]}]),)
     with pytest.raises(ConfigError) as info:
         config.scenario(point)
-    assert str(info.value).startswith(f"{path}: firmware.ekf_tile")
+    assert str(info.value).startswith(f"{path}: firmware.placement[0].tile")
     with pytest.raises(ConfigError) as info:
         config.scenario(point, where="point 0")
-    assert str(info.value).startswith("point 0: firmware.ekf_tile")
+    assert str(info.value).startswith("point 0: firmware.placement[0].tile")
     assert config.scenario((("vehicles", 2),)).duration_s == 4.0
 
 

@@ -6,7 +6,7 @@ import pytest
 
 from robosoc.config import ConfigError
 from robosoc.config.chip import ChipConfig
-from robosoc.config.firmware import FirmwareConfig, load_firmware_config
+from robosoc.config.firmware import FirmwareConfig, Placement, load_firmware_config
 
 
 def test_defaults_are_the_seed_case_study():
@@ -26,7 +26,8 @@ def test_defaults_are_the_seed_case_study():
         ({"tick_cycles": 1000}, "tick_cycles: must be a multiple of 16 from 4096"),
         ({"tick_cycles": 262145}, "tick_cycles: must be a multiple of 16"),
         ({"period_ticks": 0}, "period_ticks: must be between 1 and 1000000"),
-        ({"ekf_tile": (-1, 0)}, "ekf_tile: must be a tile"),
+        ({"placement": (Placement("estimator", (0, 1)), Placement("estimator", (1, 0)))}, r"placement\[1\].task"),
+        ({"command_timeout_periods": 0}, "command_timeout_periods: must be between 1 and 1000000"),
     ],
 )
 def test_bad_values_name_the_field(changes, message):
@@ -35,12 +36,19 @@ def test_bad_values_name_the_field(changes, message):
 
 
 def test_a_task_on_the_io_tile_or_a_powered_off_tile_is_refused():
-    with pytest.raises(ValueError, match=r"pid_tile: \[0, 0\] is the I/O tile"):
-        FirmwareConfig(pid_tile=(0, 0)).check_chip(ChipConfig())
-    with pytest.raises(ValueError, match=r"ekf_tile: \[1, 1\] is powered off"):
-        FirmwareConfig(ekf_tile=(1, 1)).check_chip(ChipConfig(powered_off=((1, 1),)))
-    with pytest.raises(ValueError, match=r"ekf_tile: \[3, 0\] is outside the 2x2 mesh"):
-        FirmwareConfig(ekf_tile=(3, 0)).check_chip(ChipConfig())
+    def placed(task: str, tile: tuple[int, int]) -> FirmwareConfig:
+        return FirmwareConfig(placement=(Placement(task, tile),))
+
+    with pytest.raises(ValueError, match=r"placement\[0\].tile: \[0, 0\] \(pid\) is the I/O tile"):
+        placed("pid", (0, 0)).check_chip(ChipConfig())
+    with pytest.raises(ValueError, match=r"placement\[0\].tile: \[1, 1\] \(estimator\) is powered off"):
+        placed("estimator", (1, 1)).check_chip(ChipConfig(powered_off=((1, 1),)))
+    with pytest.raises(ValueError, match=r"placement\[0\].tile: \[3, 0\] \(estimator\) is outside the 2x2 mesh"):
+        placed("estimator", (3, 0)).check_chip(ChipConfig())
+    # a task the placement leaves where its project puts it is checked there
+    with pytest.raises(ValueError, match=r"tasks\[1\].tile: \[1, 0\] \(pid\) is powered off"):
+        placed("estimator", (1, 1)).check_chip(ChipConfig(powered_off=((1, 0),)))
+    assert placed("estimator", (1, 1)).seed_chip().powered_off == ((0, 1),)  # the unused tile is off
 
 
 def test_toml_overrides_only_what_it_names(tmp_path: Path):

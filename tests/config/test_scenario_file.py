@@ -11,7 +11,7 @@ from typer.testing import CliRunner
 
 from robosoc.cli import app
 from robosoc.config.chip import ChipConfig, TileConfig, TileOverride
-from robosoc.config.firmware import FirmwareConfig
+from robosoc.config.firmware import FirmwareConfig, Placement
 from robosoc.config.scenario import ScenarioConfig, scenario_toml
 from robosoc.config.validate import ConfigError, from_mapping, load_toml
 
@@ -26,6 +26,10 @@ def test_the_default_scenario_flies_fixed_mul_firmware_on_the_seeds_2x2_chip() -
     assert (s.chip.width, s.chip.height, s.chip.io_tile, s.chip.powered_off) == (2, 2, (0, 0), ((1, 1),))
 
 
+def _placed(task: str, tile: str) -> str:
+    return f'[[firmware.placement]]\ntask = "{task}"\ntile = {tile}\n'
+
+
 @pytest.mark.parametrize(
     ("text", "field", "reason"),
     [
@@ -33,9 +37,11 @@ def test_the_default_scenario_flies_fixed_mul_firmware_on_the_seeds_2x2_chip() -
         ("colour = 3\n", "colour", "unknown field"),
         ('vehicles = "two"\n', "vehicles", "expected an integer"),
         ("[chip]\nwidth = 2.5\n", "chip.width", "expected an integer"),
-        ("[firmware]\nekf_tile = [3, 3]\n", "firmware.ekf_tile", "outside the 2x2 mesh"),
-        ("[firmware]\npid_tile = [1, 1]\n", "firmware.pid_tile", "powered off"),
-        ("[firmware]\nekf_tile = [0, 0]\n", "firmware.ekf_tile", "the I/O tile"),
+        (_placed("estimator", "[3, 3]"), "firmware.placement[0].tile", "outside the 2x2 mesh"),
+        (_placed("pid", "[1, 1]"), "firmware.placement[0].tile", "powered off"),
+        (_placed("estimator", "[0, 0]"), "firmware.placement[0].tile", "the I/O tile"),
+        (_placed("ekf", "[1, 1]"), "firmware.placement[0].task", "has no task 'ekf'"),
+        ('[firmware]\nproject = "/nowhere"\n', "firmware.project", "no folder /nowhere"),
         ('controller = "chp"\n', "controller", "must be one of 'chip', 'host'"),
         ("vehicles = 17\n", "vehicles", "between 1 and 16"),
         ("seed = -1\n", "seed", "between 0 and 2**63-1"),
@@ -58,9 +64,9 @@ def test_a_bad_scenario_file_is_rejected_naming_file_and_field(tmp_path: Path, t
 
 def test_moving_a_task_to_the_fourth_tile_needs_it_powered_on(tmp_path: Path) -> None:
     path = tmp_path / "moved.toml"
-    path.write_text("[firmware]\npid_tile = [1, 1]\n[chip]\npowered_off = [[1, 0]]\n")
+    path.write_text(_placed("pid", "[1, 1]") + "[chip]\npowered_off = [[1, 0]]\n")
     s = load_toml(ScenarioConfig, path)
-    assert s.firmware.pid_tile == (1, 1) and s.chip.powered_off == ((1, 0),)
+    assert s.firmware.mapping == {"pid": (1, 1)} and s.chip.powered_off == ((1, 0),)
 
 
 def _odd_scenario() -> ScenarioConfig:
@@ -77,7 +83,12 @@ def _odd_scenario() -> ScenarioConfig:
         seed=2**63 - 1,
         vehicles=3,
         controller="host",
-        firmware=FirmwareConfig(arith="float", multiplier=False, scheduler="rm", ekf_tile=(2, 0), pid_tile=(2, 0)),
+        firmware=FirmwareConfig(
+            arith="float",
+            multiplier=False,
+            scheduler="rm",
+            placement=(Placement("estimator", (2, 0)), Placement("pid", (2, 0))),
+        ),
         chip=chip,
     )
 

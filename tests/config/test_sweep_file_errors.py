@@ -93,11 +93,14 @@ def test_a_grid_value_is_checked_against_the_base_not_the_defaults(tmp_path):
     (The base's keys are quoted dotted names, as the grid's may be.)
     """
     path = tmp_path / "s.toml"
-    path.write_text('[base]\n"chip.width" = 4\n"chip.height" = 2\n[grid]\n"firmware.ekf_tile" = [[3, 0], [1, 0]]\n')
+    moves = '[[{task = "estimator", tile = [3, 0]}], [{task = "estimator", tile = [1, 0]}]]'
+    path.write_text(f'[base]\n"chip.width" = 4\n"chip.height" = 2\n[grid]\n"firmware.placement" = {moves}\n')
     config = load_sweep(path)
     assert config.base.chip.width == 4
-    assert config.grid == (("firmware.ekf_tile", ([3, 0], [1, 0])),)
-    assert config.scenario(config.assignments()[0]).firmware.ekf_tile == (3, 0)
+    assert config.grid == (
+        ("firmware.placement", ([{"task": "estimator", "tile": [3, 0]}], [{"task": "estimator", "tile": [1, 0]}])),
+    )
+    assert config.scenario(config.assignments()[0]).firmware.mapping == {"estimator": (3, 0)}
 
 
 def test_the_base_scenario_file_is_read_and_its_errors_name_it(tmp_path):

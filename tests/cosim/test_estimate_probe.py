@@ -13,7 +13,7 @@ from robosoc.control.flight import ROW_FIELDS
 from robosoc.cosim import firmware_run
 from robosoc.cosim.lockstep import fly_chip
 from robosoc.cosim.replay import built_in_rows, replay
-from robosoc.host import flight_app
+from robosoc.host.scenario_image import firmware_image
 from robosoc.host.telemetry import ESTIMATE_QUATERNION
 from robosoc.program.dwarf import member_offset, type_size, variable_field
 from robosoc.program.elf import ElfError
@@ -23,7 +23,7 @@ WINDOW = slice(280, 330)
 
 
 def test_dwarf_offsets_match_the_c_layout() -> None:
-    elf = flight_app.build(FirmwareConfig())
+    elf = firmware_image(FirmwareConfig()).elf
     # est_t starts with ekf_t: x[7], p[49], mag_reference[3] (4-byte reals), then alt_t: reference, h, v
     assert member_offset(elf, "est_t", "ekf.x") == (0, 7 * 4)
     ekf_bytes = (7 + 49 + 3) * 4

@@ -96,7 +96,8 @@ def test_summary_keys_and_task_figures_equal_the_job_records(two_runs: list[Path
     assert summary["schema"] == 1 and summary["complete"] is True and summary["mode"] == "lockstep"
     assert summary["controller"] == "chip" and summary["seed"] == 7 and summary["scenario"] == "default"
     assert summary["chip"] == {"width": 2, "height": 2, "clock_ns": 4.0}
-    assert summary["firmware"]["ekf_tile"] == [0, 1] and summary["firmware"]["pid_tile"] == [1, 0]
+    assert summary["firmware"]["tiles"] == {"estimator": [0, 1], "pid": [1, 0]}
+    assert summary["firmware"]["project"] == ""  # the shipped quadrotor project
     assert summary["simulated_s"] == pytest.approx(1.3)
     assert summary["real_time_factor"] == pytest.approx(summary["simulated_s"] / summary["host_s"])
     # the chip's estimate, read by the probe, is in the rows: its errors are figures, and small

@@ -21,7 +21,7 @@ from robosoc.cosim.lockstep import (
     fly_lockstep,
 )
 from robosoc.cosim.replay import replay
-from robosoc.host import flight_app
+from robosoc.host.firmware_image import FIRST_SAMPLE_CYCLE
 from robosoc.physics.clock import PHYSICS_STEP_NS
 
 # calibration on the ground until 3 s, then the take-off climb (1 m in 1.5 s): 0.7 s of it
@@ -53,7 +53,7 @@ def test_fixed_mul_firmware_takes_off_and_follows_the_climb(flight: ChipFlight) 
 def test_a_pwm_command_comes_back_for_every_sample_every_10_ms(flight: ChipFlight) -> None:
     commands = flight.run.commands
     assert [c.seq for c in commands] == list(range(len(flight.rows)))
-    first = flight_app.FIRST_SAMPLE_CYCLE
+    first = FIRST_SAMPLE_CYCLE
     for k, c in enumerate(commands):
         # within the sample's first physics step (1 ms = 250,000 cycles): the estimator and PID jobs
         # of fixed+mul answer within 0.85 ms on the default flight (0.72 + 0.09 ms at most)

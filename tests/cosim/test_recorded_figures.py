@@ -3,8 +3,9 @@
 ``recorded/builtin_figures.json`` holds what ``robosoc fly --out DIR`` and ``robosoc table --out DIR``
 wrote at commit fb6a385, before the flight firmware became an ordinary project (issue 32): the
 summary's figures (less the host's timing and the ``firmware`` object, whose keys were renamed),
-Table I's JSON, and the digests of ``jobs.csv``, ``flight.csv`` and ``table.csv``.  Every figure must
-come out the same today, bit for bit.
+Table I's JSON, and the digests of ``jobs.csv``, ``flight.csv`` and ``table.csv``; and the digest of
+``table.csv`` for both releases (``--release both --iterations 20``, recorded at 14bda7e, whose
+built-in application was still fb6a385's).  Every figure must come out the same today, bit for bit.
 """
 
 from __future__ import annotations
@@ -34,17 +35,18 @@ def _sha256(path: Path) -> str:
     return hashlib.sha256(path.read_bytes()).hexdigest()
 
 
-@pytest.mark.parametrize("command", ["fly", "table"])
-def test_default_figures_are_those_recorded_before_the_move(tmp_path: Path, command: str) -> None:
-    result = CliRunner().invoke(app, [command, "--out", str(tmp_path)])
+@pytest.mark.parametrize("key", ["fly", "table", "table_both_20"])
+def test_default_figures_are_those_recorded_before_the_move(tmp_path: Path, key: str) -> None:
+    recorded = RECORDED[key]
+    command = key.split("_")[0]
+    result = CliRunner().invoke(app, [command, *recorded.get("args", []), "--out", str(tmp_path)])
     assert result.exit_code == 0, result.output
-    recorded = RECORDED[command]
     if command == "fly":
         summary = _figures(json.loads((tmp_path / "summary.json").read_text()))
         assert isinstance(summary, dict)
         summary.pop("firmware")
         assert summary == recorded["summary"]
-    else:
+    elif "json" in recorded:
         assert _figures(json.loads((tmp_path / "table.json").read_text())) == recorded["json"]
     for name, digest in recorded["sha256"].items():
         assert _sha256(tmp_path / name) == digest, name

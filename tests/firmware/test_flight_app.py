@@ -1,6 +1,7 @@
-"""The flight application end to end on the seed's chip (fw.seed_chip(), MPSoC): 2 s of a recorded
-host flight's sensor messages injected from the I/O tile at their sample cycles (1 s of
-calibration on the ground, then 1 s of flight after arming), the PWM messages collected.
+"""The flight firmware (the shipped quadrotor project) end to end on the seed's chip
+(fw.seed_chip(), MPSoC): 2 s of a recorded host flight's sensor messages injected from the I/O
+tile at their sample cycles (1 s of calibration on the ground, then 1 s of flight after arming),
+the PWM messages collected.
 
 Checked in all four builds with event release: one PWM message per sample with its seq, PWM within
 one count of HostController (float64, on the same quantised samples) on >= 99 % of samples, no
@@ -10,12 +11,12 @@ foreign and malformed packets, and both tasks on one tile.
 
 import numpy as np
 import pytest
-from app_chip import ChipRun, run_app
+from app_chip import ChipRun, read_app_stats, run_app
 from app_data import Golden, SensorRecord, golden, record_flight
 
-from robosoc.config.firmware import FirmwareConfig
+from robosoc.config.firmware import FirmwareConfig, Placement
 from robosoc.host import images
-from robosoc.host.flight_app import FIRST_SAMPLE_CYCLE, read_app_stats, task_ids
+from robosoc.host.firmware_image import FIRST_SAMPLE_CYCLE
 from robosoc.host.packets import PWM, SENSOR_PORT
 
 MATCH_SHARE = 0.99
@@ -49,8 +50,9 @@ def test_event_release_flies_like_the_golden_model(flight: tuple[SensorRecord, G
     assert np.all(run.pwm[~record.armed] == 0)
     share = _match_share(run, gold)
     assert share >= MATCH_SHARE, share
-    for xy, name in ((fw.ekf_tile, "estimator"), (fw.pid_tile, "pid")):
-        task = task_ids(fw, xy)[name]
+    for name in ("estimator", "pid"):
+        xy = run.tile_of(name)
+        task = run.image.tasks[xy][name]
         stats = images.read_stats(run.chip, xy)
         assert stats.start_cycle < FIRST_SAMPLE_CYCLE
         assert stats.jobs(task) == record.steps and stats.misses(task) == 0
@@ -65,23 +67,23 @@ def test_event_release_flies_like_the_golden_model(flight: tuple[SensorRecord, G
         responses = [r.response for r in jobs]
         print(f"{fw.label} {name}: response mean {np.mean(responses):.0f} max {max(responses)} cycles, "
               f"asleep {counters['sleep_cycle'] / counters['cycles']:.1%}")  # fmt: skip
-    assert read_app_stats(run.chip, fw.ekf_tile).est_jobs == record.steps
-    assert read_app_stats(run.chip, fw.pid_tile).pid_jobs == record.steps
+    assert read_app_stats(run.chip, run.tile_of("estimator")).est_jobs == record.steps
+    assert read_app_stats(run.chip, run.tile_of("pid")).pid_jobs == record.steps
     # the PWM message leaves within the sample period
     assert max(run.arrival[k] - (FIRST_SAMPLE_CYCLE + k * 2_500_000) for k in range(record.steps)) < 2_500_000
 
 
 def test_periodic_release_takes_the_newest_sample(flight: tuple[SensorRecord, Golden]) -> None:
     record, _ = flight
-    # the seed's periodic tasks: 10 ticks of 262,144 cycles, slower than the 2,500,000-cycle samples
+    # robosoc's periodic release: 10 ticks of 262,144 cycles, slower than the 2,500,000-cycle samples
     fw = FirmwareConfig(release="periodic")
     run = run_app(fw, record)
-    est = read_app_stats(run.chip, fw.ekf_tile)
-    pid = read_app_stats(run.chip, fw.pid_tile)
+    est = read_app_stats(run.chip, run.tile_of("estimator"))
+    pid = read_app_stats(run.chip, run.tile_of("pid"))
     assert est.est_jobs + est.est_stale in (record.steps - 1, record.steps)  # the last may still wait
     assert est.est_stale > 0 and pid.pid_jobs == len(run.seq)
     assert run.seq == sorted(set(run.seq)), "PWM messages carry increasing sequence numbers"
-    for xy in (fw.ekf_tile, fw.pid_tile):
+    for xy in run.image.tiles:
         stats = images.read_stats(run.chip, xy)
         assert stats.misses(images.FIRST_TASK_ID) == 0
         jobs = [r for r in images.read_job_log(run.chip, xy).records if r.task == images.FIRST_TASK_ID]
@@ -101,15 +103,15 @@ def test_foreign_and_malformed_packets_are_counted_and_dropped(flight: tuple[Sen
     bad_header = [[io << 8, SENSOR_PORT << 8, 0, 92, 0x1234]]
     run = run_app(fw, record, extra={50: wrong_kind, 120: short, 150: bad_header})
     assert run.seq == clean.seq and np.array_equal(run.pwm, clean.pwm), "nothing changed"
-    assert read_app_stats(run.chip, fw.ekf_tile).est_foreign == 2
-    assert images.read_stats(run.chip, fw.ekf_tile).pkt_malformed == 1
+    assert read_app_stats(run.chip, run.tile_of("estimator")).est_foreign == 2
+    assert images.read_stats(run.chip, run.tile_of("estimator")).pkt_malformed == 1
 
 
 def test_both_tasks_on_one_tile(flight: tuple[SensorRecord, Golden]) -> None:
     record, gold = flight
-    fw = FirmwareConfig(ekf_tile=(1, 0), pid_tile=(1, 0))
-    assert task_ids(fw, (1, 0)) == {"estimator": 2, "pid": 3}
+    fw = FirmwareConfig(placement=(Placement("estimator", (1, 0)),))
     run = run_app(fw, record)
+    assert run.image.tasks == {(1, 0): {"estimator": 2, "pid": 3}}
     assert run.seq == list(range(record.steps))
     assert _match_share(run, gold) >= MATCH_SHARE
     stats = images.read_stats(run.chip, (1, 0))

@@ -30,6 +30,10 @@ duration_s = 0.05
 """
 
 
+PID_AT_3_0 = '[{task = "pid", tile = [3, 0]}]'
+"""A sweep value moving the quadrotor project's PID task to tile (3, 0)."""
+
+
 def _without_timing(value):
     if isinstance(value, dict):
         return {k: _without_timing(v) for k, v in value.items() if k not in HOST_TIMING}
@@ -111,7 +115,7 @@ def test_failed_points_are_recorded_and_do_not_stop_the_sweep(tmp_path):
         "[base]\nduration_s = 0.03\n[base.sensors]\nrate_hz = 250.0\n[grid]\nduration_s = [0.004, 0.03]\n"
         '"chip.width" = [2, 4]\n'
         '[[points]]\n"sensors.rate_hz" = 100.0\n'
-        '[[points]]\n"firmware.pid_tile" = [3, 0]\n'
+        f'[[points]]\n"firmware.placement" = {PID_AT_3_0}\n'
     )
     config = load_sweep(sweep)
     outcome = run_sweep(config, tmp_path / "out", workers=1)
@@ -120,10 +124,11 @@ def test_failed_points_are_recorded_and_do_not_stop_the_sweep(tmp_path):
     for width in (2, 4):
         short = status[json.dumps({"duration_s": 0.004, "chip.width": width, "sensors.rate_hz": 100.0})]
         assert short[0] == FAILED and short[1].startswith("invalid combination") and "sensor period" in short[1]
-    assert status[json.dumps({"duration_s": 0.03, "chip.width": 4, "firmware.pid_tile": [3, 0]})][0] == OK
+    moved = [{"task": "pid", "tile": [3, 0]}]
+    assert status[json.dumps({"duration_s": 0.03, "chip.width": 4, "firmware.placement": moved})][0] == OK
     for duration in (0.004, 0.03):
-        bad = status[json.dumps({"duration_s": duration, "chip.width": 2, "firmware.pid_tile": [3, 0]})]
-        assert bad[0] == FAILED and bad[1].startswith("invalid combination") and "pid_tile" in bad[1]
+        bad = status[json.dumps({"duration_s": duration, "chip.width": 2, "firmware.placement": moved})]
+        assert bad[0] == FAILED and bad[1].startswith("invalid combination") and "placement[0].tile" in bad[1]
     assert len(outcome.failures) == 4
     # --retry-failed runs exactly the failed ones again
     assert run_sweep(config, tmp_path / "out", workers=1, retry_failed=True).ran == 4
@@ -131,11 +136,14 @@ def test_failed_points_are_recorded_and_do_not_stop_the_sweep(tmp_path):
 
 def test_a_listed_point_invalid_in_every_combination_is_refused_before_running(tmp_path):
     sweep = tmp_path / "s.toml"
-    sweep.write_text('[grid]\nduration_s = [0.03, 0.05]\n[[points]]\n"firmware.pid_tile" = [3, 0]\n')
-    with pytest.raises(ConfigError, match=r"points\[0\]: firmware.pid_tile: \[3, 0\] is outside the 2x2 mesh"):
+    sweep.write_text(f'[grid]\nduration_s = [0.03, 0.05]\n[[points]]\n"firmware.placement" = {PID_AT_3_0}\n')
+    with pytest.raises(
+        ConfigError, match=r"points\[0\]: firmware.placement\[0\].tile: \[3, 0\] \(pid\) is outside the 2x2 mesh"
+    ):
         load_sweep(sweep)
-    sweep.write_text('[[points]]\n"chip.width" = 4\n"firmware.pid_tile" = [3, 0]\n')  # valid together
-    assert load_sweep(sweep).points == ((("chip.width", 4), ("firmware.pid_tile", [3, 0])),)
+    sweep.write_text(f'[[points]]\n"chip.width" = 4\n"firmware.placement" = {PID_AT_3_0}\n')  # valid together
+    moved = [{"task": "pid", "tile": [3, 0]}]
+    assert load_sweep(sweep).points == ((("chip.width", 4), ("firmware.placement", moved)),)
 
 
 def test_cli_sweep_writes_table_plots_and_page(tmp_path):

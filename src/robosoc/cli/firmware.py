@@ -13,10 +13,9 @@ from robosoc.cli import exit_codes, files, options
 from robosoc.cli.app import firmware_app
 from robosoc.cli.console import make_console, plain
 from robosoc.cli.errors import CliError
-from robosoc.cli.project_check import check_project
+from robosoc.cli.project_check import check_firmware
 from robosoc.cli.scenario_flags import FIRMWARE, ScenarioFlags, resolve_section, takes_scenario
 from robosoc.config.firmware import FirmwareConfig
-from robosoc.config.scenario import ScenarioConfig
 
 if TYPE_CHECKING:
     from robosoc.cosim.firmware_run import ReplayResult
@@ -29,8 +28,7 @@ def _firmware(flags: ScenarioFlags, config: Path | None) -> FirmwareConfig:
     project it names (``--firmware DIR``) checked before anything is built."""
     fw = files.load_toml(FirmwareConfig, config, "--config")[0] if config is not None else FirmwareConfig()
     fw = resolve_section(flags, fw, "firmware")
-    if fw.project:
-        check_project(ScenarioConfig(firmware=fw, chip=fw.default_chip()), "--firmware")
+    check_firmware(fw, fw.default_chip(), "--firmware")
     return fw
 
 

@@ -128,8 +128,8 @@ def fly_decoupled_run(
             temporary.cleanup()
         if exc.kind == "link" and exc.side == "physics":
             raise options.fail("--bind", exc.message) from None
-        if exc.kind == "link":
-            raise CliError(f"chip side: {exc.message}") from None
+        if exc.kind in ("link", "build"):
+            raise CliError(f"{exc.side} side: {exc.message}") from None
         raise CliError(f"the {exc.side} side failed:\n{exc.message}", code=exit_codes.INTERNAL_ERROR) from None
     summary = flight.summary
     f = summary["flight"]

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -10,10 +11,13 @@ from robosoc.config.scenario import ScenarioConfig
 
 if TYPE_CHECKING:
     from robosoc.config.chip import ChipConfig
+    from robosoc.config.firmware import FirmwareConfig
     from robosoc.config.project import FirmwareProject
 
 
-def load_checked(folder: str, chip: ChipConfig, source: str) -> FirmwareProject:
+def load_checked(
+    folder: str, chip: ChipConfig, source: str, mapping: Mapping[str, tuple[int, int]] | None = None
+) -> FirmwareProject:
     """The project in ``folder``, its tasks checked against ``chip``; errors start with ``source``
     (the option or the scenario field that named the folder).
 
@@ -28,7 +32,7 @@ def load_checked(folder: str, chip: ChipConfig, source: str) -> FirmwareProject:
         raise CliError(f"{source}: no folder {folder} (robosoc new DIR makes a project)")
     try:
         project = load_project(folder)
-        project.check_chip(chip)
+        project.check_chip(chip, mapping)
     except ConfigError as exc:
         raise CliError(f"{source}: {exc}") from exc
     except ValueError as exc:
@@ -43,11 +47,17 @@ def check_project(config: ScenarioConfig, source: str) -> None:
     Raises:
         CliError: as :func:`load_checked`, or a build the project does not list (the key named).
     """
-    folder = config.firmware.project
+    check_firmware(config.firmware, config.chip, source)
+
+
+def check_firmware(fw: FirmwareConfig, chip: ChipConfig, source: str) -> None:
+    """:func:`check_project` of a firmware configuration and the chip it is to run on."""
+    folder = fw.project
     if not folder:
         return
-    project = load_checked(folder, config.chip, source)
+    project = load_checked(folder, chip, source, fw.mapping)
     try:
-        project.check_build(config.firmware.arith, config.firmware.multiplier)
+        fw.load_project()  # the placement's task names
+        project.check_build(fw.arith, fw.multiplier)
     except ValueError as exc:
         raise CliError(f"{source}: {Path(folder) / 'robosoc.toml'}: {exc}") from exc

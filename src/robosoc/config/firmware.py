@@ -141,10 +141,13 @@ class FirmwareConfig:
 
         Raises:
             ConfigError: the project file is missing or wrong (file and key named).
-            ValueError: a placement names no task of the project (``placement[i].task``).
+            ValueError: no such folder (``project``), or a placement names no task of the project
+                (``placement[i].task``).
         """
         from robosoc.config.project import load_project
 
+        if not self.project_folder.exists():
+            raise ValueError(f"project: no folder {self.project} (robosoc new DIR makes a project)")
         project = load_project(self.project_folder)
         for i, moved in enumerate(self.placement):
             if moved.task not in project.task_names:

@@ -46,6 +46,7 @@ from robosoc.outputs.run_folder import (
     write_jobs_csv,
 )
 from robosoc.outputs.run_summary import write_summary
+from robosoc.toolchain.errors import ToolchainError
 
 __all__ = ["DecoupledFlight", "SideFailed", "fly_decoupled", "run_chip_side", "run_physics_side"]
 
@@ -127,7 +128,8 @@ def run_chip_side(
 
 
 class SideFailed(Exception):
-    """A side could not start or crashed: ``side`` names it, ``kind`` is "link" (its address) or "internal"."""
+    """A side could not start or crashed: ``side`` names it, ``kind`` is "link" (its address),
+    "build" (the firmware) or "internal"."""
 
     def __init__(self, side: str, kind: str, message: str) -> None:
         super().__init__(f"{side} side: {message}")
@@ -179,6 +181,8 @@ def _report(conn: Connection, side: Callable[[], tuple[Any, dict]]) -> None:
         _send(conn, "done", record)
     except LinkError as exc:
         _send(conn, "error", "link", str(exc))
+    except ToolchainError as exc:  # the firmware does not build (a compile error, or too big for SRAM)
+        _send(conn, "error", "build", f"the firmware does not build: {exc}")
     except KeyboardInterrupt:
         _send(conn, "error", "interrupted", "interrupted before the flight")
     except BaseException:
@@ -292,7 +296,7 @@ def fly_decoupled(
             if side.process.is_alive():
                 side.process.terminate()
                 side.process.join(timeout=5.0)
-    failed = [s for s in sides if s.error is not None and s.error[0] in ("link", "internal")]
+    failed = [s for s in sides if s.error is not None and s.error[0] in ("link", "build", "internal")]
     records = {s.name: s.record or _read_record(out / f"{s.name}.json") for s in sides}
     result = DecoupledFlight(
         summary={},
