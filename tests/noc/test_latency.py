@@ -35,7 +35,7 @@ def expected_cycle(start: int, hops: int, rlat: int, length: int) -> int:
     return start + (hops + 1) * (rlat + 1) + length - 1
 
 
-MODES = [("hermes", 4, depth) for depth in (2, 4, 8, 16)] + [
+MODES = [("hermes", 4, depth) for depth in (3, 4, 8, 16)] + [
     ("per-output", rlat, depth) for rlat in (0, 2, 6) for depth in (2, 3, 16)
 ]
 
