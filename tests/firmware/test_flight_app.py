@@ -73,7 +73,8 @@ def test_event_release_flies_like_the_golden_model(flight: tuple[SensorRecord, G
 
 def test_periodic_release_takes_the_newest_sample(flight: tuple[SensorRecord, Golden]) -> None:
     record, _ = flight
-    # the seed's periodic tasks: 10 ticks of 262,144 cycles, slower than the 2,500,000-cycle samples
+    # robosoc's periodic release (the seed releases both tasks on every sensor message): the default 10 ticks of
+    # 262,144 cycles, slower than the 2,500,000-cycle samples
     fw = FirmwareConfig(release="periodic")
     run = run_app(fw, record)
     est = read_app_stats(run.chip, fw.ekf_tile)
@@ -115,3 +116,32 @@ def test_both_tasks_on_one_tile(flight: tuple[SensorRecord, Golden]) -> None:
     stats = images.read_stats(run.chip, (1, 0))
     assert stats.jobs(2) == stats.jobs(3) == record.steps
     assert stats.misses(2) == stats.misses(3) == 0
+
+
+def test_q16_multiply_through_muldi3_gives_the_same_commands_at_a_higher_cost(
+    flight: tuple[SensorRecord, Golden],
+) -> None:
+    """fixed_mul64 = "muldi3" (the 64-bit product through compiler-rt, as HellfireOS): both routines
+    compute the exact 64-bit product, so the fixed-no-mul build sends the same PWM commands, but
+    through the general 64 x 64-bit __muldi3 (about 470 cycles against about 190 for the
+    shift-and-add), so its estimator jobs take longer."""
+    from robosoc.host.flight_app import build
+
+    record, _ = flight
+    runs = {}
+    for routine in ("shift-add", "muldi3"):
+        fw = FirmwareConfig(arith="fixed", multiplier=False, fixed_mul64=routine)
+        assert fw.muldi3 == (routine == "muldi3")
+        runs[routine] = run_app(fw, record)
+    soft, muldi3 = runs["shift-add"], runs["muldi3"]
+    assert np.array_equal(soft.pwm, muldi3.pwm) and soft.seq == muldi3.seq
+    fw = FirmwareConfig(arith="fixed", multiplier=False)
+    task = task_ids(fw, fw.ekf_tile)["estimator"]
+    cycles = {
+        name: sum(r.exec_cycles for r in images.read_job_log(run.chip, fw.ekf_tile).records if r.task == task)
+        for name, run in runs.items()
+    }
+    assert cycles["muldi3"] > 1.2 * cycles["shift-add"], cycles
+    # with the multiplier the option changes nothing: MUL + MULH either way (the same ELF)
+    with_mul = [build(FirmwareConfig(arith="fixed", fixed_mul64=r)) for r in ("shift-add", "muldi3")]
+    assert with_mul[0] == with_mul[1]

@@ -74,7 +74,7 @@ def project_image(
     scenario: ScenarioConfig | None = None,
     chip: ChipConfig | None = None,
 ) -> FirmwareImage:
-    """Build ``project`` for ``fw``'s build (arithmetic, multiplier, kernel tick), with the control
+    """Build ``project`` for ``fw``'s build (arithmetic, multiplier, kernel tick, Q16.16 multiply), with the control
     parameters of ``vehicle`` flying ``scenario`` in reach of its C (``robosoc_control.h``), linked
     for the smallest SRAM of ``chip``'s tiles it runs on (default: the toolchain's 2 MiB).
 
@@ -95,6 +95,7 @@ def project_image(
         arith=fw.arith,
         multiplier=fw.multiplier,
         tick_cycles=fw.tick_cycles,
+        defines=["FIX16_MUL64_MULDI3"] if fw.muldi3 else [],
         include_dirs=[control_include_dir(vehicle, scenario)],
         sram_size=min(chip.tile_config(xy).sram_bytes for xy in project.tiles()) if chip is not None else None,
     )

@@ -66,7 +66,8 @@ def sources() -> tuple[Path, ...]:
 
 
 def defines(fw: FirmwareConfig) -> dict[str, str | int | None]:
-    """The preprocessor defines of ``fw``'s build: real_t, kernel tick and policy, mapping, release."""
+    """The preprocessor defines of ``fw``'s build: real_t, kernel tick and policy, mapping, release, and
+    the Q16.16 multiply routine (``FIX16_MUL64_MULDI3``, fixed point without the multiplier only)."""
     return {
         **arith_defines(fw.arith),
         "OS_TICK_CYCLES": fw.tick_cycles,
@@ -75,6 +76,7 @@ def defines(fw: FirmwareConfig) -> dict[str, str | int | None]:
         "APP_PID_TILE": images.tile_address(fw.pid_tile),
         "APP_PERIODIC": int(fw.release == "periodic"),
         "APP_PERIOD_TICKS": fw.period_ticks,
+        **({"FIX16_MUL64_MULDI3": 1} if fw.muldi3 else {}),  # (absent otherwise: the same build as before)
     }
 
 
