@@ -441,10 +441,13 @@ def measure_table(spec: TableSpec, on_progress: Callable[[str, int, int], None] 
             firmware_image(fw, _vehicle(scenario), scenario, scenario.chip)
     rows = golden = None
     if not spec.closed_loop:
-        from robosoc.cosim.replay import scenario_rows
+        from robosoc.cosim import replay
 
         scenario = spec.scenario()
-        rows = scenario_rows(scenario)  # (the default: the built-in stream, cosim.replay.built_in_rows)
+        if spec.base is None:
+            rows = replay.built_in_rows(scenario.duration_s, spec.seed)
+        else:
+            rows = replay.scenario_rows(scenario)
         golden = golden_replay(rows, scenario)
     if spec.workers == 1:  # (four builds per release mode at least: workers always have work)
         runs = [measure_build(fw, spec, rows, golden, on_progress) for fw in configs]
