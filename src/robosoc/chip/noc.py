@@ -198,7 +198,13 @@ class Mesh:
 
     def single_packet_latency(self, hops: int, length: int) -> int:
         """Uncontended cycles from the first flit entering the source router to the last flit written
-        into the destination receive memory: ``(hops + 1) * (routing_latency + 1) + length - 1``."""
+        into the destination receive memory: ``(hops + 1) * (routing_latency + 1) + length - 1``; with
+        the Hermes buffer's read pointer and 2-flit buffers, where every flit after the first two
+        leaves its buffer two cycles after the previous one, ``(hops + 1) * 5 + 1 + 2 * (length - 2)``
+        (docs/noc.md, "The buffer's read pointer")."""
+        st = self.state
+        if st.cfg[k.C_READ_POINTER] and st.cfg[k.C_DEPTH] == 2:
+            return (hops + 1) * (self.routing_latency + 1) + 1 + 2 * (length - 2)
         return (hops + 1) * (self.routing_latency + 1) + length - 1
 
     # ----------------------------------------------------------------- injection
