@@ -451,6 +451,11 @@ def test_table_text_puts_every_figure_in_its_row_and_column() -> None:
     assert (
         lines[0] == "Table I — periodic release, replay, 7 samples from take-off per build (seed's figure in brackets)"
     )
+    assert lines[1] == (
+        "conditions: scenario built-in (sensor noise on), 2x2 mesh, estimator on (0, 1), pid on (1, 0); Q16.16 "
+        "multiply without the multiplier: shift-and-add (fix16_mul64_soft, robosoc's)"
+    )
+    del lines[1]
     for line, (label, cells) in zip(lines[1:], rows, strict=False):
         assert len(line) == 30 + 4 * 24, line
         assert line[:30].rstrip() == label and line[len(label) : 30].strip() == "", line

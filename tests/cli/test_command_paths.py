@@ -372,7 +372,9 @@ def test_bench_core_names_its_build_and_engine() -> None:
 
 def _routers(text: str) -> list[str]:
     """The router model of each row of bench noc's table."""
-    return [line.split()[0] for line in text.splitlines() if re.match(r"\s*(hermes|per-output)\s+0\.", line)]
+    return [
+        line.split()[0] for line in text.splitlines() if re.match(r"\s*(hermes|hermes-before|per-output)\s+0\.", line)
+    ]
 
 
 def test_bench_noc_rows_per_arbiter_and_plot(tmp_path: Path) -> None:
@@ -389,6 +391,23 @@ def test_bench_noc_rows_per_arbiter_and_plot(tmp_path: Path) -> None:
     big = invoke("bench", "noc", "--size", "16x16", "--cycles", "200000")
     assert big.exit_code == exit_codes.USAGE
     assert big.stderr == "robosoc bench noc: --cycles: at most 195312 on a 16x16 mesh, got 200000\n"
+
+
+def test_bench_noc_compares_the_read_pointer_rules_on_the_same_traffic() -> None:
+    """--compare-read-pointer adds a hermes-before row per load with the packets that moved; 2-flit
+    buffers make every flit leave its buffer empty, so at depth 2 packets do move."""
+    args = ["bench", "noc", "--size", "3x3", "--cycles", "300", "--rates", "0.1", "--arbiter", "hermes"]
+    result = invoke(*args, "--depth", "2", "--packet-flits", "6-12", "--compare-read-pointer", "--rx-hold", "3")
+    assert result.exit_code == 0, result.output
+    assert _routers(result.stdout) == ["hermes", "hermes-before"]
+    assert "6-12-flit packets, depth 2, receivers hold 3 cycles" in result.stdout.replace("\n", " ")
+    before = next(line for line in result.stdout.splitlines() if line.strip().startswith("hermes-before"))
+    moved = int(before.split()[7])
+    packets = int(before.split()[3])
+    assert 0 < moved <= packets
+    bad = invoke(*args, "--packet-flits", "12-6")
+    assert bad.exit_code == exit_codes.USAGE
+    assert bad.stderr == "robosoc bench noc: --packet-flits: expected N or LO-HI with 5 <= LO <= HI <= 64, got '12-6'\n"
 
 
 def test_bench_chip_and_physics_print_their_last_lines() -> None:

@@ -52,7 +52,7 @@ def test_every_row_names_a_field_of_the_scenario_and_a_known_command() -> None:
         for part in flag.field.split("."):
             assert dataclasses.is_dataclass(node) and part in {f.name for f in dataclasses.fields(node)}, flag
             node = getattr(node, part)
-        assert flag.commands and set(flag.commands) <= {"fly", "serve physics", "serve chip", "firmware"}, flag
+        assert flag.commands and set(flag.commands) <= {"fly", "serve physics", "serve chip", "firmware", "table"}, flag
         assert "firmware" not in flag.commands or flag.section == "firmware", flag  # firmware commands: no scenario
     assert len({f.param for f in FLAGS}) == len(FLAGS) and len({f.option for f in FLAGS}) == len(FLAGS)
 
@@ -182,7 +182,7 @@ def test_firmware_commands_take_the_firmware_rows_alone() -> None:
     from robosoc.cli.scenario_flags import FIRMWARE, resolve_section
     from robosoc.config.firmware import FirmwareConfig
 
-    assert {f.option for f in flags_of(FIRMWARE)} == {"--arith", "--mul/--no-mul", "--firmware"}
+    assert {f.option for f in flags_of(FIRMWARE)} == {"--arith", "--mul/--no-mul", "--fixed-mul", "--firmware"}
     base = FirmwareConfig(period_ticks=5)
     got = resolve_section(ScenarioFlags.of(None, None, {"arith": "float", "mul": False}), base, "firmware")
     assert (got.arith, got.multiplier, got.period_ticks) == ("float", False, 5)
@@ -219,7 +219,7 @@ def test_the_decorator_places_the_scenario_file_after_the_commands_own_arguments
     assert "NAME" in shown and "SCENARIO" in shown and "--scenario" not in shown and "--arith" in shown
     assert shown.index("NAME") < shown.index("SCENARIO") and "Scenario TOML file" in shown
     assert runner.invoke(app, ["bare", "--arith", "float"]).exit_code == 0
-    assert seen.pop() == (3, {"arith": "float", "mul": None, "firmware": None})
+    assert seen.pop() == (3, {"arith": "float", "mul": None, "fixed_mul": None, "firmware": None})
     bare_help = runner.invoke(app, ["bare", "--help"]).output
     assert "SCENARIO" not in bare_help and "--scenario" not in bare_help and "--seed" not in bare_help
 
@@ -227,3 +227,11 @@ def test_the_decorator_places_the_scenario_file_after_the_commands_own_arguments
 
     with pytest.raises(TypeError, match=r"clashing: parameters \['seed'\] belong to the scenario flags"):
         takes_scenario(FLY)(clashing)
+
+
+def test_the_fixed_point_multiply_routine_is_a_firmware_row() -> None:
+    """--fixed-mul sets firmware.fixed_mul64 for every command that builds firmware, Table I included."""
+    assert resolved(fixed_mul="muldi3").firmware.fixed_mul64 == "muldi3"
+    assert resolved().firmware.fixed_mul64 == "shift-add"
+    row = next(f for f in FLAGS if f.option == "--fixed-mul")
+    assert row.field == "firmware.fixed_mul64" and set(row.commands) == {"fly", "serve chip", "firmware", "table"}

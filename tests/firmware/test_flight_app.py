@@ -117,3 +117,32 @@ def test_both_tasks_on_one_tile(flight: tuple[SensorRecord, Golden]) -> None:
     stats = images.read_stats(run.chip, (1, 0))
     assert stats.jobs(2) == stats.jobs(3) == record.steps
     assert stats.misses(2) == stats.misses(3) == 0
+
+
+def test_q16_multiply_through_muldi3_gives_the_same_commands_at_a_higher_cost(
+    flight: tuple[SensorRecord, Golden],
+) -> None:
+    """fixed_mul64 = "muldi3" (the 64-bit product through compiler-rt, as HellfireOS): both routines
+    compute the exact 64-bit product, so the fixed-no-mul build sends the same PWM commands, but
+    through the general 64 x 64-bit __muldi3 (about 470 cycles against about 190 for the
+    shift-and-add), so its estimator jobs take longer."""
+    from robosoc.host.scenario_image import firmware_image
+
+    record, _ = flight
+    runs = {}
+    for routine in ("shift-add", "muldi3"):
+        fw = FirmwareConfig(arith="fixed", multiplier=False, fixed_mul64=routine)
+        assert fw.muldi3 == (routine == "muldi3")
+        runs[routine] = run_app(fw, record)
+    soft, muldi3 = runs["shift-add"], runs["muldi3"]
+    assert np.array_equal(soft.pwm, muldi3.pwm) and soft.seq == muldi3.seq
+    xy = soft.tile_of("estimator")
+    task = soft.image.tasks[xy]["estimator"]
+    cycles = {
+        name: sum(r.exec_cycles for r in images.read_job_log(run.chip, xy).records if r.task == task)
+        for name, run in runs.items()
+    }
+    assert cycles["muldi3"] > 1.2 * cycles["shift-add"], cycles
+    # with the multiplier the option changes nothing: MUL + MULH either way (the same ELF)
+    with_mul = [firmware_image(FirmwareConfig(arith="fixed", fixed_mul64=r)).elf for r in ("shift-add", "muldi3")]
+    assert with_mul[0] == with_mul[1]

@@ -9,7 +9,11 @@ first flit entered the source router.
 
 Both router models run on the same traffic: ``hermes`` (the RTL's single switch controller per router)
 and ``per-output`` (one arbiter per output port) with the same per-hop timing (routing latency 4, i.e.
-5 cycles per uncontended router), so the difference is the arbitration alone.
+5 cycles per uncontended router), so the difference is the arbitration alone. With
+``compare_read_pointer`` the Hermes model also runs without its buffer's read-pointer timing
+(``hermes-before``: the model before issue 38, docs/noc.md "The buffer's read pointer"), on the same
+traffic, which shows what the tail-credit rule and the bubble change under load. ``rx_hold`` makes every
+receiver hold its memory that many cycles after each packet (as in the RTL measurement of platform.md §4).
 """
 
 from __future__ import annotations
@@ -40,6 +44,8 @@ class NocBenchmarkRow:
 
     Attributes:
         arbiter: the router model (``config.chip.ARBITERS``).
+        read_pointer: Hermes with its buffer's read-pointer timing (False: ``hermes-before``; always
+            False for per-output routers, which never have it).
         rate: offered load, flits per cycle per tile.
         packets: packets generated (and delivered).
         flits: flits delivered.
@@ -49,9 +55,14 @@ class NocBenchmarkRow:
             in the receive memory.
         sim_cycles: cycles simulated.
         host_seconds: host time of the simulation (kernel plus event collection).
+        rtl_lost_headers: headers that found no room in their crossing cycle (the RTL would have lost
+            them: its timing is only comparable where this is 0).
+        moved: ``hermes-before`` rows: packets whose start or arrival cycle differs from the ``hermes``
+            run on the same traffic (None for other rows).
     """
 
     arbiter: str
+    read_pointer: bool
     rate: float
     packets: int
     flits: int
@@ -60,21 +71,32 @@ class NocBenchmarkRow:
     network_latency: float
     sim_cycles: int
     host_seconds: float
+    rtl_lost_headers: int = 0
+    moved: int | None = None
+
+    @property
+    def model(self) -> str:
+        """The router model as printed: ``hermes``, ``hermes-before`` or ``per-output``."""
+        return "hermes-before" if self.arbiter == "hermes" and not self.read_pointer else self.arbiter
 
     @property
     def flits_per_second(self) -> float:
         return self.flits / self.host_seconds if self.host_seconds > 0 else 0.0
 
 
-def _traffic(mesh: Mesh, rate: float, cycles: int, packet_flits: int, rng: np.random.Generator) -> int:
-    """Queue the random packets; returns how many."""
+def _traffic(
+    mesh: Mesh, rate: float, cycles: int, packet_flits: int | tuple[int, int], rng: np.random.Generator
+) -> int:
+    """Queue the random packets (lengths fixed, or uniform in an inclusive range); returns how many."""
     cfg = mesh.config
     n = cfg.n_tiles
-    arrivals = np.argwhere(rng.random((cycles, n)) < rate / packet_flits)  # rows of (cycle, tile)
+    lo, hi = (packet_flits, packet_flits) if isinstance(packet_flits, int) else packet_flits
+    arrivals = np.argwhere(rng.random((cycles, n)) < 2 * rate / (lo + hi))  # rows of (cycle, tile)
     dests = rng.integers(n - 1, size=len(arrivals))
-    payload = [0] * (packet_flits - 2 - 3)  # the mesh adds the 3-flit tag
-    for (cycle, t), d in zip(arrivals.tolist(), dests.tolist(), strict=True):
+    lengths = [lo] * len(arrivals) if lo == hi else rng.integers(lo, hi + 1, size=len(arrivals)).tolist()
+    for (cycle, t), d, length in zip(arrivals.tolist(), dests.tolist(), lengths, strict=True):
         d = d if d < t else d + 1
+        payload = [0] * (length - 2 - 3)  # the mesh adds the 3-flit tag
         mesh.inject(cfg.tile_xy(t), cfg.tile_xy(d), payload, at_cycle=cycle)
     return len(arrivals)
 
@@ -84,13 +106,15 @@ def run_noc_benchmark(
     height: int = 8,
     rates: tuple[float, ...] = DEFAULT_RATES,
     cycles: int = 10_000,
-    packet_flits: int = 16,
+    packet_flits: int | tuple[int, int] = 16,
     buffer_depth: int = 16,
     routing_latency: int = HERMES_ROUTING_LATENCY,
     seed: int = 1,
     plot_path: str | Path | None = None,
     console: Console | None = None,
     arbiters: tuple[str, ...] = ARBITERS,
+    compare_read_pointer: bool = False,
+    rx_hold: int = 0,
 ) -> list[NocBenchmarkRow]:
     """Run the NoC alone under uniform random traffic at each rate, for each router model, and print a table.
 
@@ -98,27 +122,37 @@ def run_noc_benchmark(
         width, height: mesh size.
         rates: offered loads in flits per cycle per tile.
         cycles: cycles during which traffic is generated (the run continues until all is delivered).
-        packet_flits: flits per packet on the wire (at least 5: header and the 3-flit tag).
+        packet_flits: flits per packet on the wire (at least 5: header and the 3-flit tag), or an inclusive
+            range ``(lo, hi)`` from which each packet's length is drawn uniformly.
         buffer_depth: flits per input buffer (default: the platform's 16).
         routing_latency: of the per-output model (the Hermes model's is fixed at 4).
         seed: traffic seed (the same traffic for every model).
         arbiters: router models to run.
+        compare_read_pointer: also run the Hermes model without its buffer's read-pointer timing
+            (``hermes-before``), for the before/after curves.
+        rx_hold: cycles every receive memory stays held after a delivery (0: freed the next cycle).
         plot_path: if given, a PNG of latency against offered load is written there.
         console: where to print (default: a new rich console).
 
     Returns:
         one :class:`NocBenchmarkRow` per rate. The last printed line is ``noc: <median> Mflits/s``.
     """
-    check_int("packet_flits", packet_flits, 5, 64)
+    lengths = (packet_flits, packet_flits) if isinstance(packet_flits, int) else packet_flits
+    for value in lengths:
+        check_int("packet_flits", value, 5, 64)
+    if lengths[0] > lengths[1]:
+        raise ValueError(f"packet_flits: the range {lengths[0]}-{lengths[1]} is empty")
+    flits_text = str(lengths[0]) if lengths[0] == lengths[1] else f"{lengths[0]}-{lengths[1]}"
     check_int("cycles", cycles, 1, MAX_CYCLES, "cycles")
     check_seed("seed", seed)
+    check_int("rx_hold", rx_hold, 0, 10_000)
     for rate in rates:
         check_float("rates", rate, 0.0, 1.0, lo_open=True)
     for arbiter in arbiters:
         if arbiter not in ARBITERS:
             raise ValueError(f"arbiter: must be one of {', '.join(ARBITERS)}, got {arbiter!r}")
     console = console or Console(width=max(Console().width, 100))  # the table needs ~90 columns
-    configs = {
+    chips = {
         arbiter: ChipConfig(
             width=width,
             height=height,
@@ -131,12 +165,16 @@ def run_noc_benchmark(
         for arbiter in arbiters
         if arbiter in ARBITERS  # all are (checked above): narrows the name to an Arbiter
     }
+    models = [(arbiter, cfg, True) for arbiter, cfg in chips.items()]
+    if compare_read_pointer and "hermes" in chips:
+        models.insert(1, ("hermes", chips["hermes"], False))
 
-    warm = Mesh(next(iter(configs.values())))  # JIT compile (or load from cache) outside the timings
+    warm = Mesh(next(iter(chips.values())))  # JIT compile (or load from cache) outside the timings
     warm.inject((0, 0), (width - 1, height - 1), [1, 2, 3], at_cycle=0)
     warm.run_until_idle(limit=10_000)
 
     rows: list[NocBenchmarkRow] = []
+    timing: dict[float, dict[int, tuple[int, int]]] = {}  # hermes, per rate: packet -> (start, arrival)
     columns = (
         TextColumn("{task.description}"),
         BarColumn(),
@@ -144,11 +182,14 @@ def run_noc_benchmark(
         TimeElapsedColumn(),
     )
     with Progress(*columns, console=console, transient=True) as progress:
-        for (arbiter, cfg), rate in ((item, rate) for item in configs.items() for rate in rates):
+        for (arbiter, cfg, read_pointer), rate in ((model, rate) for model in models for rate in rates):
             rng = np.random.default_rng(seed)
-            mesh = Mesh(cfg, tag_packets=True, event_capacity=8192)
+            mesh = Mesh(
+                cfg, tag_packets=True, event_capacity=8192, rx_free_delay=rx_hold, read_pointer_timing=read_pointer
+            )
             n_packets = _traffic(mesh, rate, cycles, packet_flits, rng)
-            task = progress.add_task(f"{width}x{height} {arbiter} rate {rate:.3f}", total=n_packets)
+            label = arbiter if read_pointer or arbiter != "hermes" else "hermes-before"
+            task = progress.add_task(f"{width}x{height} {label} rate {rate:.3f}", total=n_packets)
             host = 0.0
             chunk = max(1000, cycles // 20)
             while not mesh.idle:
@@ -162,12 +203,19 @@ def run_noc_benchmark(
             deliveries = mesh.deliveries()
             latency_cycles: list[int] = []
             network_cycles: list[int] = []
+            times: dict[int, tuple[int, int]] = {}
             for d in deliveries:
                 assert d.packet_id is not None  # the mesh tags its packets
                 packet = mesh.packet(d.packet_id)
                 assert packet.start is not None  # delivered, so it entered the network
                 latency_cycles.append(d.cycle - packet.ready)
                 network_cycles.append(d.cycle - packet.start)
+                times[d.packet_id] = (packet.start, d.cycle)
+            moved = None
+            if arbiter == "hermes" and read_pointer:
+                timing[rate] = times
+            elif arbiter == "hermes" and rate in timing:
+                moved = sum(times[p] != timing[rate].get(p) for p in times)
             latency = np.array(latency_cycles, dtype=np.float64)
             network = np.array(network_cycles, dtype=np.float64)
             last = max((d.cycle for d in deliveries), default=0) + 1
@@ -175,6 +223,7 @@ def run_noc_benchmark(
             rows.append(
                 NocBenchmarkRow(
                     arbiter=arbiter,
+                    read_pointer=read_pointer and arbiter == "hermes",
                     rate=rate,
                     packets=len(deliveries),
                     flits=flits,
@@ -183,35 +232,43 @@ def run_noc_benchmark(
                     network_latency=float(network.mean()) if deliveries else 0.0,
                     sim_cycles=last,
                     host_seconds=host,
+                    rtl_lost_headers=mesh.rtl_lost_headers,
+                    moved=moved,
                 )
             )
 
     table = Table(
-        title=f"NoC {width}x{height}, uniform random, {packet_flits}-flit packets, depth {buffer_depth}; "
-        f"hermes: the RTL's switch controller, per-output: routing latency {routing_latency}",
+        title=f"NoC {width}x{height}, uniform random, {flits_text}-flit packets, depth {buffer_depth}"
+        + (f", receivers hold {rx_hold} cycles" if rx_hold else "")
+        + f"; hermes: the RTL's switch controller and buffer (hermes-before: without the buffer's read-pointer "
+        f"timing), per-output: routing latency {routing_latency}",
         box=box.SIMPLE_HEAD,
         pad_edge=False,
         caption="load and accept: flits/cycle/tile; lat: mean cycles from generation (net: from the first "
-        "flit entering the source router) to the last flit in the receive memory",
+        "flit entering the source router) to the last flit in the receive memory; lost: headers the RTL "
+        "would have lost (no room in their crossing cycle: robosoc lets them wait); moved: packets whose start "
+        "or arrival cycle differs from the hermes row's",
     )
-    headers = ("router", "load", "accept", "pkts", "lat", "net", "cycles", "host s", "Mflit/s")
+    headers = ("router", "load", "accept", "pkts", "lat", "net", "lost", "moved", "cycles", "host s", "Mflit/s")
     for name in headers:
         table.add_column(name, justify="right", no_wrap=True)
     for r in rows:
         table.add_row(
-            r.arbiter,
+            r.model,
             f"{r.rate:.3f}",
             f"{r.accepted:.3f}",
             str(r.packets),
-            f"{r.latency:.1f}",
-            f"{r.network_latency:.1f}",
+            f"{r.latency:.2f}",
+            f"{r.network_latency:.2f}",
+            str(r.rtl_lost_headers),
+            "" if r.moved is None else str(r.moved),
             str(r.sim_cycles),
             f"{r.host_seconds:.3f}",
             f"{r.flits_per_second / 1e6:.2f}",
         )
     console.print(table)
     if plot_path is not None:
-        _plot(rows, Path(plot_path), f"NoC {width}x{height} uniform random ({packet_flits}-flit packets)")
+        _plot(rows, Path(plot_path), f"NoC {width}x{height} uniform random ({flits_text}-flit packets)")
         console.print(f"plot written to {plot_path}")
     median = float(np.median([r.flits_per_second for r in rows])) if rows else 0.0
     console.print(f"noc: {median / 1e6:.2f} Mflits/s")
@@ -225,11 +282,11 @@ def _plot(rows: list[NocBenchmarkRow], path: Path, title: str) -> None:
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(figsize=(6, 4))
-    for arbiter in dict.fromkeys(r.arbiter for r in rows):
-        mine = [r for r in rows if r.arbiter == arbiter]
+    for model in dict.fromkeys(r.model for r in rows):
+        mine = [r for r in rows if r.model == model]
         rate = [r.rate for r in mine]
-        ax.plot(rate, [r.latency for r in mine], "o-", label=f"{arbiter}: generation to delivery")
-        ax.plot(rate, [r.network_latency for r in mine], "s--", label=f"{arbiter}: in the network")
+        ax.plot(rate, [r.latency for r in mine], "o-", label=f"{model}: generation to delivery")
+        ax.plot(rate, [r.network_latency for r in mine], "s--", label=f"{model}: in the network")
     ax.set_xlabel("offered load (flits / cycle / tile)")
     ax.set_ylabel("average packet latency (cycles)")
     ax.set_yscale("log")

@@ -120,6 +120,10 @@ class Mesh:
             payload (3 flits) so that deliveries name their source and id.
         event_capacity: delivery events buffered by the kernel between two drains.
         reverse_evaluation: evaluate routers in reverse order (results must be identical).
+        read_pointer_timing: the Hermes buffer's read-pointer timing (docs/noc.md, "The buffer's read
+            pointer"); False gives the Hermes model as it was before it (every freed slot usable the
+            next cycle, no bubble), for `robosoc bench noc`'s before/after curves. No effect on
+            per-output routers.
     """
 
     def __init__(
@@ -130,6 +134,7 @@ class Mesh:
         tag_packets: bool = False,
         event_capacity: int = 4096,
         reverse_evaluation: bool = False,
+        read_pointer_timing: bool = True,
     ) -> None:
         self.config = config or ChipConfig()
         if rx_free_delay is not None and rx_free_delay < 0:
@@ -152,6 +157,7 @@ class Mesh:
             rx_auto_free=k.NONE if rx_free_delay is None else rx_free_delay,
             reverse=reverse_evaluation,
             arbiter=noc.arbiter,
+            read_pointer=read_pointer_timing,
         )
         self._rows = 0
         self._deliveries: list[Delivery] = []
@@ -192,7 +198,13 @@ class Mesh:
 
     def single_packet_latency(self, hops: int, length: int) -> int:
         """Uncontended cycles from the first flit entering the source router to the last flit written
-        into the destination receive memory: ``(hops + 1) * (routing_latency + 1) + length - 1``."""
+        into the destination receive memory: ``(hops + 1) * (routing_latency + 1) + length - 1``; with
+        the Hermes buffer's read pointer and 2-flit buffers, where every flit after the first two
+        leaves its buffer two cycles after the previous one, ``(hops + 1) * 5 + 1 + 2 * (length - 2)``
+        (docs/noc.md, "The buffer's read pointer")."""
+        st = self.state
+        if st.cfg[k.C_READ_POINTER] and st.cfg[k.C_DEPTH] == 2:
+            return (hops + 1) * (self.routing_latency + 1) + 1 + 2 * (length - 2)
         return (hops + 1) * (self.routing_latency + 1) + length - 1
 
     # ----------------------------------------------------------------- injection
@@ -343,6 +355,39 @@ class Mesh:
                 )
             )
         st.glob[k.G_NEV] = 0
+
+    def stall_receive(self, tile: tuple[int, int], start: int, stop: int) -> None:
+        """``tile``'s receive memory accepts no flit in cycles ``[start, stop)``, whether or not a packet is
+        part-way in (a destination stalling in the middle of a packet); the router back-pressures.
+
+        Raises:
+            ValueError: bad tile, an empty or past window, or an earlier window of this tile not over yet.
+        """
+        self._window(tile, start, stop, k.T_RX_STALL_FROM, k.T_RX_STALL_UNTIL)
+
+    def pause_send(self, tile: tuple[int, int], start: int, stop: int) -> None:
+        """``tile``'s NI injects no flit in cycles ``[start, stop)``, even in the middle of a packet (a
+        source that runs dry, which makes the buffers behind it run empty mid-packet).
+
+        Raises:
+            ValueError: as :meth:`stall_receive`.
+        """
+        self._window(tile, start, stop, k.T_TX_STALL_FROM, k.T_TX_STALL_UNTIL)
+
+    def _window(self, tile: tuple[int, int], start: int, stop: int, col_from: int, col_until: int) -> None:
+        cfg = self.config
+        xy = (*tile,)
+        if len(xy) != 2 or not cfg.contains(xy):
+            raise ValueError(f"tile: {xy} is outside the {cfg.width}x{cfg.height} mesh")
+        if not start < stop:
+            raise ValueError(f"window: [{start}, {stop}) is empty")
+        if start < self.cycle:
+            raise ValueError(f"start: {start} is in the past (now {self.cycle})")
+        t = cfg.tile_index(xy)
+        row = self.state.tile[t]
+        if row[col_until] > self.cycle:
+            raise ValueError(f"tile: {xy} already has a window until {int(row[col_until])}")
+        row[col_from], row[col_until] = start, stop
 
     def free_rx(self, tile: tuple[int, int]) -> None:
         """Software has read the receive memory of ``tile``: it accepts flits from the next cycle on."""

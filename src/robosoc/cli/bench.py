@@ -89,11 +89,34 @@ def bench_noc(
         typer.Option(help="Offered loads in (0, 1] flits/cycle/tile, comma separated (default: a sweep)."),
     ] = None,
     packet_flits: Annotated[
+        str,
+        typer.Option(
+            help="Flits per packet, header and 3-flit tag included, 5..64, or a range such as 5-20 (each "
+            "packet's length drawn uniformly)."
+        ),
+    ] = "16",
+    depth: Annotated[
         int,
         typer.Option(
-            help="Flits per packet, header and 3-flit tag included, 5..64.", callback=options.int_range(5, 64)
+            help="Flits per router input buffer, 2..256 (the chip's default 16; ORCA's RTL has 4).",
+            callback=options.int_range(2, 256),
         ),
     ] = 16,
+    rx_hold: Annotated[
+        int,
+        typer.Option(
+            help="Cycles every receive memory stays held after a packet, 0..10000 (0: freed the next cycle).",
+            callback=options.int_range(0, 10_000),
+        ),
+    ] = 0,
+    compare_read_pointer: Annotated[
+        bool,
+        typer.Option(
+            "--compare-read-pointer",
+            help="Also run the Hermes model without its buffer's read-pointer timing (hermes-before: the tail "
+            "credit and the bubble off, the model before issue 38) on the same traffic.",
+        ),
+    ] = False,
 ) -> None:
     """NoC alone under uniform random traffic: flits per host second and latency against load, per router model."""
     from robosoc.benchmarks.noc import DEFAULT_RATES, run_noc_benchmark
@@ -111,12 +134,26 @@ def bench_noc(
         height=height,
         rates=loads,
         cycles=cycles,
-        packet_flits=packet_flits,
+        packet_flits=_packet_flits(packet_flits),
         seed=seed,
         plot_path=plot_path,
         console=make_console(min_width=100),  # the table needs ~90 columns
         arbiters=ARBITERS if arbiter == "both" else (arbiter,),
+        buffer_depth=depth,
+        rx_hold=rx_hold,
+        compare_read_pointer=compare_read_pointer,
     )
+
+
+def _packet_flits(text: str) -> int | tuple[int, int]:
+    """``--packet-flits``: ``"16"`` or ``"5-20"``, each 5..64."""
+    try:
+        values = [int(v) for v in text.split("-")]
+    except ValueError:
+        values = []
+    if len(values) not in (1, 2) or any(not 5 <= v <= 64 for v in values) or values[0] > values[-1]:
+        raise options.fail("--packet-flits", f"expected N or LO-HI with 5 <= LO <= HI <= 64, got {text!r}")
+    return values[0] if len(values) == 1 else (values[0], values[1])
 
 
 @bench_app.command("chip", epilog=exit_codes.EPILOG)

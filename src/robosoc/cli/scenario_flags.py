@@ -25,7 +25,7 @@ import typer
 from robosoc.cli import options
 from robosoc.cli.engine_option import Engine
 from robosoc.cli.errors import CliError
-from robosoc.config.firmware import ARITH_CHOICES
+from robosoc.config.firmware import ARITH_CHOICES, FIXED_MUL64_CHOICES
 from robosoc.config.scenario import CONTROLLERS, MAX_VEHICLES
 from robosoc.config.vehicle import VEHICLE_PRESETS
 
@@ -38,6 +38,7 @@ FLY = "fly"
 SERVE_PHYSICS = "serve physics"
 SERVE_CHIP = "serve chip"
 FIRMWARE = "firmware"  # build, size, replay: they take the firmware section's rows alone
+TABLE = "table"
 _EVERY = (FLY, SERVE_PHYSICS, SERVE_CHIP)
 
 DURATION_HELP = (
@@ -134,17 +135,27 @@ Firmware = Annotated[
         callback=_folder,
     ),
 ]
+FixedMul = Annotated[
+    str | None,
+    typer.Option(
+        "--fixed-mul",
+        help="Q16.16 multiply in the builds without the multiplier: shift-add (robosoc's routine) or muldi3 "
+        "(the 64-bit product through compiler-rt's __muldi3, as HellfireOS) (default: the scenario's, shift-add).",
+        callback=options.choice(*FIXED_MUL64_CHOICES),
+    ),
+]
 ScenarioArg = Annotated[Path | None, typer.Argument(metavar="SCENARIO", help=SCENARIO_HELP, show_default=False)]
 
 FLAGS: tuple[ScenarioFlag, ...] = (
     ScenarioFlag("--controller", "controller", "controller", Controller, (FLY,)),
     ScenarioFlag("--duration", "duration", "duration_s", Duration),
     ScenarioFlag("--seconds", "seconds", "duration_s", Seconds),
-    ScenarioFlag("--seed", "seed", "seed", Seed),
+    ScenarioFlag("--seed", "seed", "seed", Seed, (*_EVERY, TABLE)),
     ScenarioFlag("--vehicle", "vehicle", "vehicle", Vehicle),
     ScenarioFlag("--vehicles", "vehicles", "vehicles", Vehicles, (FLY,)),
     ScenarioFlag("--arith", "arith", "firmware.arith", Arith, (FLY, SERVE_CHIP, FIRMWARE)),
     ScenarioFlag("--mul/--no-mul", "mul", "firmware.multiplier", Mul, (FLY, SERVE_CHIP, FIRMWARE)),
+    ScenarioFlag("--fixed-mul", "fixed_mul", "firmware.fixed_mul64", FixedMul, (FLY, SERVE_CHIP, FIRMWARE, TABLE)),
     ScenarioFlag("--engine", "engine", "chip.engine", Engine, (FLY,)),
     ScenarioFlag("--firmware", "firmware", "firmware.project", Firmware, (FLY, SERVE_CHIP, FIRMWARE)),
 )

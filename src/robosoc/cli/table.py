@@ -13,8 +13,11 @@ from robosoc import output_files
 from robosoc.cli import exit_codes, files, options
 from robosoc.cli.app import app
 from robosoc.cli.console import make_console, plain
+from robosoc.cli.errors import CliError
 from robosoc.cli.project_check import load_checked
+from robosoc.cli.scenario_flags import TABLE, ScenarioFlags, resolve, takes_scenario
 from robosoc.config.firmware import FirmwareConfig
+from robosoc.config.scenario import ScenarioConfig
 
 RELEASES = ("event", "periodic", "both")
 MAX_ITERATIONS = 10_000
@@ -28,6 +31,7 @@ def _workers() -> int:
 
 
 @app.command("table", epilog=exit_codes.EPILOG)
+@takes_scenario(TABLE)
 def table(
     iterations: Annotated[
         int,
@@ -37,17 +41,16 @@ def table(
         ),
     ] = 100,
     release: Annotated[
-        str,
+        str | None,
         typer.Option(
-            help="event (a job per sensor message, as in the seed; the default), periodic (both tasks periodic "
-            "on the ~1 ms tick: robosoc's option) or both.",
+            help="event (a job per sensor message: the seed's release), periodic (both tasks periodic on the "
+            "~1 ms tick: robosoc's addition, not the seed's) or both (default: the scenario's, event).",
             callback=options.choice(*RELEASES),
         ),
-    ] = "event",
+    ] = None,
     closed_loop: Annotated[
         bool, typer.Option("--closed-loop", help="Fly each build closed-loop instead of replaying the built-in stream.")
     ] = False,
-    seed: Annotated[int, typer.Option(help="The flight's seed.", callback=options.seed())] = 1,
     workers: Annotated[
         int | None,
         typer.Option(
@@ -61,34 +64,58 @@ def table(
         typer.Option(
             metavar="DIR",
             help="Measure the firmware project in DIR (one row per task of its robosoc.toml, the builds it "
-            "supports) instead of the built-in application (docs/firmware-projects.md).",
+            "supports) instead of the built-in application (default: the scenario's firmware.project; "
+            "docs/firmware-projects.md).",
         ),
     ] = None,
+    *,
+    flags: ScenarioFlags,
 ) -> None:
     """Table I: response time, execution time and energy per job of the EKF and PID tasks in the four
     builds (soft-float / Q16.16, with / without multiplier) beside the seed's figures, the seed's
-    orderings checked, and the accuracy of estimates and PWM commands.
+    orderings checked, and the accuracy of estimates and PWM commands; under the built-in scenario or
+    SCENARIO (its sensors and noise, vehicle, chip, task mapping, kernel settings and Q16.16 multiply
+    routine; each build sets its own arithmetic and multiplier).
     """
     from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
     from robosoc.sweep import table_one
     from robosoc.sweep.table_one import OWN_RELEASE
 
-    folder = files.output_dir(out, "--out", names=("table.csv", "table.json")) if out is not None else None
-    project = ""
-    if firmware is not None:
-        project = str(firmware.absolute())
-        checked = load_checked(project, FirmwareConfig(project=project).default_chip(), "--firmware")
+    resolved = resolve(flags)
+    scenario = resolved.config
+    given_file = resolved.path is not None
+    folder = (
+        files.output_dir(out, "--out", names=("table.csv", "table.json"), inputs=resolved.inputs)
+        if out is not None
+        else None
+    )
+    release = release or scenario.firmware.release
+    project = str(firmware.absolute()) if firmware is not None else scenario.firmware.project
+    if project:
+        chip = scenario.chip if given_file else FirmwareConfig(project=project).default_chip()
+        source = "--firmware" if firmware is not None else resolved.source_of("firmware.project")
+        checked = load_checked(project, chip, source, scenario.firmware.mapping)
         if release != "event" and not checked.project.main:
             raise options.fail("--release", OWN_RELEASE)
     spec = table_one.TableSpec(
         iterations=iterations,
         releases=("event", "periodic") if release == "both" else (release,),
         closed_loop=closed_loop,
-        seed=seed,
+        seed=scenario.seed,
         workers=workers if workers is not None else _workers(),
         project=project,
+        base=None if scenario == ScenarioConfig(seed=scenario.seed) else scenario,  # the default: as before
+        scenario_file=str(resolved.path) if resolved.path is not None else "",
     )
+    if spec.base is not None:  # every build must fit the scenario's chip
+        for rel in spec.releases:
+            for arith, mul in table_one.BUILDS:
+                try:
+                    spec.build_scenario(spec.firmware(arith, mul, rel))
+                except ValueError as exc:
+                    where = f"{resolved.path}: " if resolved.path is not None else ""
+                    raise CliError(f"{where}{exc} (the {arith}{'+mul' if mul else '-no-mul'} build)") from exc
     console = make_console(stderr=True)
     builds = 4 * len(spec.releases)
     columns = (TextColumn("{task.description}"), BarColumn(), TextColumn("{task.completed}/{task.total}"),

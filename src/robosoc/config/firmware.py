@@ -6,6 +6,8 @@ loadable from TOML with :func:`load_firmware_config`, whose errors name the file
     arith = "fixed"          # "float" (soft-float) or "fixed" (Q16.16)
     multiplier = true        # build for cores with the iterative multiplier
     release = "event"        # "event": a job per sensor message, as in the seed; "periodic": robosoc's option
+    fixed_mul64 = "shift-add"  # Q16.16 multiply without the multiplier: "shift-add" (fix16_mul64_soft) or
+                             # "muldi3" (the 64-bit product through compiler-rt's __muldi3, as HellfireOS)
     scheduler = "edf"        # "edf" or "rm"
     tick_cycles = 262144     # the kernel's tick (the seed's 1 ms at 250 MHz)
     period_ticks = 10        # periodic release: the tasks' period (and relative deadline) in ticks
@@ -37,6 +39,7 @@ if TYPE_CHECKING:
 __all__ = [
     "ARITH_CHOICES",
     "DEFAULT_PROJECT",
+    "FIXED_MUL64_CHOICES",
     "RELEASE_CHOICES",
     "SCHEDULER_CHOICES",
     "FirmwareConfig",
@@ -47,6 +50,11 @@ __all__ = [
 ARITH_CHOICES = ("float", "fixed")
 RELEASE_CHOICES = ("event", "periodic")
 SCHEDULER_CHOICES = ("edf", "rm")
+FIXED_MUL64_CHOICES = ("shift-add", "muldi3")
+"""How a Q16.16 build without the multiplier forms the 64-bit product of a multiply: robosoc's
+shift-and-add over the smaller operand (``fix16_mul64_soft``, about 190 cycles for values near 1), or
+the C product ``(int64_t)a * b``, which compiler-rt's general 64 x 64-bit ``__muldi3`` computes (about
+470 cycles), as HellfireOS's fixed-point library does (docs/firmware-libraries.md)."""
 #: The kernel's tick must be a multiple of 16 cycles in this range (kernel/os_config.h explains why).
 TICK_CYCLES_RANGE = (4096, 1 << 30)
 DEFAULT_PROJECT = TEMPLATES_DIR / "quadrotor"
@@ -77,6 +85,8 @@ class FirmwareConfig:
     Attributes:
         arith: ``"float"`` (soft-float, compiler-rt) or ``"fixed"`` (Q16.16).
         multiplier: compile for cores with the iterative multiplier (RV32I+Zmmul) or without.
+        fixed_mul64: :data:`FIXED_MUL64_CHOICES`; only the Q16.16 builds without the multiplier differ
+            (with it the product is MUL + MULH, and soft-float has its own multiply).
         release: ``"event"`` (each sensor message releases an estimator job, whose estimate
             releases a PID job: the seed's "every sensor message triggers a complete EKF and PID
             iteration") or ``"periodic"`` (both tasks periodic on the kernel tick: robosoc's option).
@@ -95,6 +105,7 @@ class FirmwareConfig:
     arith: str = "fixed"
     multiplier: bool = True
     release: str = "event"
+    fixed_mul64: str = "shift-add"
     scheduler: str = "edf"
     tick_cycles: int = 262144
     period_ticks: int = 10
@@ -105,6 +116,7 @@ class FirmwareConfig:
     def __post_init__(self) -> None:
         _choice("arith", self.arith, ARITH_CHOICES)
         _choice("release", self.release, RELEASE_CHOICES)
+        _choice("fixed_mul64", self.fixed_mul64, FIXED_MUL64_CHOICES)
         _choice("scheduler", self.scheduler, SCHEDULER_CHOICES)
         low, high = TICK_CYCLES_RANGE
         if not low <= self.tick_cycles <= high or self.tick_cycles % 16:
@@ -120,6 +132,12 @@ class FirmwareConfig:
             if moved.task in seen:
                 raise ValueError(f"placement[{i}].task: {moved.task!r} is also placement[{seen[moved.task]}]")
             seen[moved.task] = i
+
+    @property
+    def muldi3(self) -> bool:
+        """Whether this build forms Q16.16 products through compiler-rt's ``__muldi3`` (a fixed-point
+        build without the multiplier with ``fixed_mul64 = "muldi3"``)."""
+        return self.arith == "fixed" and not self.multiplier and self.fixed_mul64 == "muldi3"
 
     @property
     def label(self) -> str:

@@ -69,7 +69,12 @@ def samples_from_rows(rows: np.ndarray, clock_ns: float, first_cycle: int = DEFA
 
 def built_in_rows(seconds: float = 10.0, seed: int = 1) -> np.ndarray:
     """The built-in sensor stream: the default scenario flown by the host controller."""
-    scenario = ScenarioConfig(duration_s=seconds, seed=seed)
+    return scenario_rows(ScenarioConfig(duration_s=seconds, seed=seed))
+
+
+def scenario_rows(scenario: ScenarioConfig) -> np.ndarray:
+    """The sensor stream of ``scenario`` (its sensors, noise or none, wind, plan and seed) flown by the
+    host controller."""
     vehicle = vehicle_preset(scenario.vehicle)
     return fly(scenario, vehicle, HostController.for_scenario(scenario, vehicle))
 

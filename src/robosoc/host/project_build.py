@@ -24,14 +24,16 @@ __all__ = ["build_project", "firmware_defines", "project_defines"]
 
 def firmware_defines(fw: FirmwareConfig) -> dict[str, str | int | None]:
     """The scenario's firmware settings as every build sees them: real_t's arithmetic, the kernel's
-    tick and scheduling policy, and the release the scenario asks of tasks that offer both
-    (``ROBOSOC_RELEASE_PERIODIC`` 0 or 1, with ``ROBOSOC_PERIOD_TICKS``)."""
+    tick and scheduling policy, the release the scenario asks of tasks that offer both
+    (``ROBOSOC_RELEASE_PERIODIC`` 0 or 1, with ``ROBOSOC_PERIOD_TICKS``), and the Q16.16 multiply
+    routine (``FIX16_MUL64_MULDI3``, fixed point without the multiplier only)."""
     return {
         **arith_defines(fw.arith),
         "OS_TICK_CYCLES": fw.tick_cycles,
         "OS_SCHED_POLICY": "OS_SCHED_EDF" if fw.scheduler == "edf" else "OS_SCHED_RM",
         "ROBOSOC_RELEASE_PERIODIC": int(fw.release == "periodic"),
         "ROBOSOC_PERIOD_TICKS": fw.period_ticks,
+        **({"FIX16_MUL64_MULDI3": 1} if fw.muldi3 else {}),  # (absent otherwise: the same build as before)
     }
 
 

@@ -74,8 +74,8 @@ HERMES_RELEASE = 2  # an output whose tail crossed in cycle c is free for a new 
 HERMES_MIN_ROUTER_CYCLES = 4  # request up in a cycle the controller is in SC_SELECT: crosses 3 later
 
 # cfg: constants
-C_WIDTH, C_HEIGHT, C_NTILES, C_DEPTH, C_RLAT, C_MAXPKT, C_FLITMASK, C_REVERSE, C_ARBITER = range(9)
-CFG_SIZE = 9
+C_WIDTH, C_HEIGHT, C_NTILES, C_DEPTH, C_RLAT, C_MAXPKT, C_FLITMASK, C_REVERSE, C_ARBITER, C_READ_POINTER = range(10)
+CFG_SIZE = 10  # C_READ_POINTER: 1 = the Hermes buffer's read-pointer timing (tail credit, bubble), see noc_alloc
 
 # glob: scalars that change
 G_CYCLE = 0  # next cycle to simulate
@@ -111,7 +111,13 @@ P_BUSY = 13  # energy: cycles this input buffer held at least one flit at the cy
 P_HREQ = 14  # hermes: first cycle this input's request is up (its header at the head), BIG if none
 P_IDLE_AT = 15  # hermes: first cycle this input buffer was idle after its last tail left
 P_FREE_AT = 16  # hermes: first cycle this output may be connected again after its last tail
-PORT_COLS = 17
+# The Hermes buffer's read pointer (cfg[C_READ_POINTER]; docs/noc.md, "The buffer's read pointer"): the slot
+# of a packet's last flit, and of a flit that left the buffer empty in the middle of a packet, comes back
+# late; and a flit arriving into a buffer that ran empty in the middle of a packet leaves a cycle late.
+P_HELD_UNTIL = 17  # hermes: the upstream may not use one of this buffer's free slots before this cycle
+P_DRY_AT = 18  # hermes: cycle this buffer ran empty in the middle of a packet (its slot held), BIG if not
+P_READY_AT = 19  # hermes: first cycle the flit at the head may leave (the bubble after running empty)
+PORT_COLS = 20
 
 # tile columns
 T_POWERED = 0  # core, memory and NI on (the router is always on)
@@ -141,7 +147,11 @@ T_SC_STATE = 23  # hermes: switch-control state SC_* of this cycle
 T_SC_SEL = 24  # hermes: input selected last (the selection starts after it)
 T_SC_OUT = 25  # hermes: output of the connection being made
 T_RTL_LOST = 26  # headers that would have been lost on the RTL at this router (see G_RTL_LOST)
-TILE_COLS = 27
+T_RX_STALL_FROM = 27  # the receive memory accepts no flit in cycles [T_RX_STALL_FROM, T_RX_STALL_UNTIL)
+T_RX_STALL_UNTIL = 28
+T_TX_STALL_FROM = 29  # the NI injects no flit in cycles [T_TX_STALL_FROM, T_TX_STALL_UNTIL)
+T_TX_STALL_UNTIL = 30
+TILE_COLS = 31
 
 SEND_IDLE, SEND_PENDING, SEND_ACTIVE = 0, 1, 2
 RX_ACCEPT, RX_HELD = 0, 1
@@ -206,6 +216,7 @@ def noc_alloc(
     rx_auto_free: int = NONE,
     reverse: bool = False,
     arbiter: str = "hermes",
+    read_pointer: bool = True,
 ) -> NocState:
     """Allocate an empty, idle NoC at cycle 0 (plain numpy; parameters are checked by ChipConfig).
 
@@ -216,6 +227,11 @@ def noc_alloc(
         rx_auto_free: NONE to let software free receive memories, else the delay in cycles.
         reverse: evaluate routers in reverse index order (test hook; results must not change).
         arbiter: router model, one of ``config.chip.ARBITERS``.
+        read_pointer: Hermes only: the RTL buffer's read-pointer timing (a tail's slot usable two cycles
+            after it left, the slot of a flit that left the buffer empty mid-packet held until the next
+            flit is presented, and that flit one cycle late). False gives the model before issue 38
+            (every freed slot usable the next cycle, no bubble), kept for `robosoc bench noc`'s
+            before/after comparison.
     """
     n = width * height
     cfg = np.zeros(CFG_SIZE, np.int64)
@@ -224,6 +240,7 @@ def noc_alloc(
     cfg[C_FLITMASK] = (1 << flit_bits) - 1
     cfg[C_REVERSE] = int(reverse)
     cfg[C_ARBITER] = ARBITERS.index(arbiter)
+    cfg[C_READ_POINTER] = int(read_pointer and arbiter == "hermes")
     glob = np.zeros(GLOB_SIZE, np.int64)
     buf = np.zeros((n, NPORTS, depth), np.int64)
     port = np.zeros((n, NPORTS, PORT_COLS), np.int64)
@@ -233,6 +250,7 @@ def noc_alloc(
     port[:, :, P_OWNER] = NONE
     port[:, :, P_CREDIT] = depth
     port[:, :, P_HREQ] = BIG
+    port[:, :, P_DRY_AT] = BIG
     tile = np.zeros((n, TILE_COLS), np.int64)
     tile[:, T_POWERED] = 1 if powered is None else np.asarray(powered, dtype=np.int64)
     tile[:, T_SEND_ROW] = NONE
@@ -428,11 +446,54 @@ def _deliver(glob, tile, mem, ev, t, cycle):
 
 
 @njit(cache=True, inline="always")
-def _room(port, tile, t, o):
-    """Output ``o`` of router ``t`` may send a flit this cycle: a credit, or a receive memory accepting."""
+def _held(port, t, p, cycle):
+    """One of the free slots of router ``t``'s input buffer ``p`` is not usable by its upstream in ``cycle``:
+    the buffer's read pointer still stands on it (a tail that left two cycles ago or less, or a flit that
+    left the buffer empty in the middle of a packet and whose successor is not presented yet)."""
+    return port[t, p, P_DRY_AT] < cycle or cycle < port[t, p, P_HELD_UNTIL]
+
+
+@njit(cache=True, inline="always")
+def _room(port, tile, width, t, o, cycle):
+    """Output ``o`` of router ``t`` may send a flit this cycle: a usable credit, or a receive memory
+    accepting (not held by software, not stalled)."""
     if o == LOCAL:
-        return tile[t, T_RX_STATE] == RX_ACCEPT and tile[t, T_RX_COUNT] < MEM_FLITS
-    return port[t, o, P_CREDIT] > 0
+        return (
+            tile[t, T_RX_STATE] == RX_ACCEPT
+            and tile[t, T_RX_COUNT] < MEM_FLITS
+            and not (tile[t, T_RX_STALL_FROM] <= cycle < tile[t, T_RX_STALL_UNTIL])
+        )
+    credit = port[t, o, P_CREDIT]
+    if credit != 1:
+        return credit > 1  # a held slot is at most one of them
+    return not _held(port, _neighbour(width, t, o), _opposite(o), cycle)
+
+
+@njit(cache=True, inline="always")
+def _ni_room(port, tile, t, cycle):
+    """Tile ``t``'s NI may inject a flit into its router's local input buffer this cycle."""
+    if tile[t, T_TX_STALL_FROM] <= cycle < tile[t, T_TX_STALL_UNTIL]:
+        return False
+    credit = tile[t, T_NI_CREDIT]
+    if credit != 1:
+        return credit > 1
+    return not _held(port, t, LOCAL, cycle)
+
+
+@njit(cache=True, inline="always")
+def _arrive(port, nb, q, cycle):
+    """A flit is written into buffer ``q`` of router ``nb`` at the edge of ``cycle`` (read-pointer timing).
+
+    If the buffer had run empty in the middle of a packet, the RTL's read pointer moves onto the new flit
+    only in the next cycle (the held slot comes back then) and presents it the cycle after: the flit
+    leaves in ``cycle + 2`` at the earliest, one cycle later than a flit arriving behind another.
+    """
+    dry = port[nb, q, P_DRY_AT]
+    if dry != BIG:
+        if dry <= cycle:
+            port[nb, q, P_READY_AT] = cycle + 2
+            port[nb, q, P_HELD_UNTIL] = cycle + 2
+        port[nb, q, P_DRY_AT] = BIG
 
 
 @njit(cache=True, inline="always")
@@ -460,6 +521,7 @@ def noc_step(cfg, glob, buf, port, tile, mem, ev, queue, cycle):
     rlat = cfg[C_RLAT]
     reverse = cfg[C_REVERSE] != 0
     hermes = cfg[C_ARBITER] == ARB_HERMES
+    read_pointer = cfg[C_READ_POINTER] != 0
     # ---------------------------------------------------------------- phase 1: decide
     for i in range(n):
         t = n - 1 - i if reverse else i
@@ -474,7 +536,7 @@ def noc_step(cfg, glob, buf, port, tile, mem, ev, queue, cycle):
         elif send_state == SEND_PENDING and tile[t, T_SEND_START] <= cycle:
             tile[t, T_SEND_STATE] = SEND_ACTIVE
             glob[G_SENDING] += 1
-        tile[t, T_NI_MOVE] = 1 if tile[t, T_SEND_STATE] == SEND_ACTIVE and tile[t, T_NI_CREDIT] > 0 else 0
+        tile[t, T_NI_MOVE] = 1 if tile[t, T_SEND_STATE] == SEND_ACTIVE and _ni_room(port, tile, t, cycle) else 0
         # router
         tile[t, T_MOVES] = 0
         if tile[t, T_RFLITS] == 0:
@@ -495,9 +557,21 @@ def noc_step(cfg, glob, buf, port, tile, mem, ev, queue, cycle):
             # flit moves of the existing connections
             for o in range(NPORTS):
                 owner = port[t, o, P_OWNER]
-                if owner != NONE and port[t, owner, P_COUNT] > 0 and _room(port, tile, t, o):
+                count = port[t, owner, P_COUNT] if owner != NONE else 0
+                if count > 0 and port[t, owner, P_READY_AT] <= cycle and _room(port, tile, width, t, o, cycle):
                     port[t, o, P_MOVE] = 1
                     tile[t, T_MOVES] = 1
+                    if read_pointer and count == 1:
+                        # the buffer runs empty: unless this is the tail, the read pointer stays on the
+                        # flit's slot until the next flit arrives (_arrive). A header leaving alone is
+                        # followed without a bubble by a flit 1 arriving in this same cycle (the RTL's
+                        # S_HEADER looks at rx), hence cycle + 1 (a later flit 1 would leave the RTL
+                        # stuck; robosoc's sources never leave that gap: docs/noc.md)
+                        sent = port[t, owner, P_SENT]
+                        if sent == 0:
+                            port[t, owner, P_DRY_AT] = cycle + 1
+                        elif sent + 1 < port[t, owner, P_TOTAL]:
+                            port[t, owner, P_DRY_AT] = cycle
             # the switch controller (its connection takes effect from the next cycle)
             sc = tile[t, T_SC_STATE]
             if sc == SC_IDLE:
@@ -566,7 +640,7 @@ def noc_step(cfg, glob, buf, port, tile, mem, ev, queue, cycle):
                         port[t, o, P_RR] = p + 1 if p + 1 < NPORTS else 0
                         break
             if owner != NONE and port[t, owner, P_COUNT] > 0:
-                if _room(port, tile, t, o):
+                if _room(port, tile, width, t, o, cycle):
                     port[t, o, P_MOVE] = 1
                     tile[t, T_MOVES] = 1
                 elif granted:  # the header would cross in its grant cycle: lost on the RTL
@@ -582,6 +656,8 @@ def noc_step(cfg, glob, buf, port, tile, mem, ev, queue, cycle):
             if tail >= depth:
                 tail -= depth
             buf[t, LOCAL, tail] = mem[t, SEND, k]
+            if read_pointer:
+                _arrive(port, t, LOCAL, cycle)
             port[t, LOCAL, P_COUNT] += 1
             port[t, LOCAL, P_FLITS_IN] += 1
             tile[t, T_RFLITS] += 1
@@ -644,6 +720,8 @@ def noc_step(cfg, glob, buf, port, tile, mem, ev, queue, cycle):
                 if tail >= depth:
                     tail -= depth
                 buf[nb, q, tail] = f
+                if read_pointer:
+                    _arrive(port, nb, q, cycle)
                 port[nb, q, P_COUNT] += 1
                 port[nb, q, P_FLITS_IN] += 1
                 tile[nb, T_RFLITS] += 1
@@ -661,6 +739,8 @@ def noc_step(cfg, glob, buf, port, tile, mem, ev, queue, cycle):
                 port[t, p, P_TOTAL] = BIG
                 port[t, p, P_WAIT] = 0
                 port[t, p, P_IDLE_AT] = cycle + 1
+                if read_pointer:  # the tail's slot: the read pointer leaves it in the next cycle
+                    port[t, p, P_HELD_UNTIL] = cycle + 2
                 sent = 0
             port[t, p, P_SENT] = sent
     glob[G_CYCLE] = cycle + 1

@@ -114,6 +114,11 @@ class TableSpec:
         workers: processes running builds at once (1: in this process).
         project: a firmware project's folder (docs/firmware-projects.md): its tasks, in the builds
             it supports, instead of the built-in application's (no seed figures then).
+        base: the scenario Table I runs under (sensors and their noise, wind, plan, vehicle, chip,
+            the firmware section's mapping, kernel settings and Q16.16 multiply routine); each build
+            replaces its arithmetic, multiplier and release, the duration is the calibration plus the
+            window. None: the built-in default, as before.
+        scenario_file: where ``base`` was read from (printed with the table), "" if built in.
     """
 
     iterations: int = 100
@@ -122,6 +127,8 @@ class TableSpec:
     seed: int = 1
     workers: int = 2
     project: str = ""
+    base: ScenarioConfig | None = None
+    scenario_file: str = ""
 
     def __post_init__(self) -> None:
         if self.project and self.releases != ("event",):
@@ -139,10 +146,53 @@ class TableSpec:
             raise ValueError(f"workers: must be between 1 and 64, got {self.workers}")
 
     def scenario(self) -> ScenarioConfig:
-        """The default scenario, long enough for the calibration and the measured window."""
-        base = ScenarioConfig()
-        period = 1.0 / base.sensors.rate_hz
-        return ScenarioConfig(duration_s=round(base.flight.takeoff_s + self.iterations * period, 9), seed=self.seed)
+        """The scenario (``base`` or the default), long enough for the calibration and the measured
+        window, with the spec's seed."""
+        if self.base is None:
+            base = ScenarioConfig()
+            period = 1.0 / base.sensors.rate_hz
+            return ScenarioConfig(duration_s=round(base.flight.takeoff_s + self.iterations * period, 9), seed=self.seed)
+        seconds = self.base.flight.takeoff_s + self.iterations / self.base.sensors.rate_hz
+        whole_ms = math.ceil(round(seconds * 1000.0, 6)) / 1000.0  # whole physics steps
+        return dataclasses.replace(self.base, duration_s=whole_ms, seed=self.seed)
+
+    def firmware(self, arith: str, multiplier: bool, release: str) -> FirmwareConfig:
+        """One build: ``base``'s firmware section (or the default) with this arithmetic, multiplier
+        and release."""
+        if self.base is None:
+            return build_config(arith, multiplier, release, self.project)
+        return dataclasses.replace(
+            self.base.firmware, arith=arith, multiplier=multiplier, release=release, project=self.project
+        )
+
+    def build_scenario(self, fw: FirmwareConfig) -> ScenarioConfig:
+        """The scenario one build flies: :meth:`scenario` with ``fw`` (on ``base``'s chip, or the
+        chip the build's mapping defaults to).
+
+        Raises:
+            ValueError: the build does not fit the chip (``firmware.multiplier: ...`` on tiles without
+                the multiplier, a task on a tile without a powered core).
+        """
+        chip = self.base.chip if self.base is not None else fw.default_chip()
+        return dataclasses.replace(self.scenario(), firmware=fw, chip=chip)
+
+    @property
+    def fixed_mul64(self) -> str:
+        """The Q16.16 multiply routine of the builds without the multiplier."""
+        return (self.base.firmware if self.base is not None else FirmwareConfig()).fixed_mul64
+
+    def conditions(self) -> dict[str, Any]:
+        """What Table I ran under, as printed and in ``table.json``."""
+        sc = self.base if self.base is not None else ScenarioConfig()
+        fw = dataclasses.replace(sc.firmware, project=self.project) if self.project else sc.firmware
+        project, mapping = fw.load_project(), fw.mapping
+        return {
+            "scenario": self.scenario_file or "built-in",
+            "sensor_noise": sc.sensors.noise,
+            "mesh": f"{sc.chip.width}x{sc.chip.height}",
+            "tiles": {t.name: list(mapping.get(t.name, (int(t.tile[0]), int(t.tile[1])))) for t in project.tasks},
+            "fixed_mul64": fw.fixed_mul64,
+        }
 
 
 @dataclass(frozen=True)
@@ -314,14 +364,18 @@ def measure_build(
             _progress.put((key, done, total))
 
     if rows is None:
-        scenario = dataclasses.replace(spec.scenario(), firmware=fw, chip=fw.default_chip())
+        scenario = spec.build_scenario(fw)
         total = scenario.samples
         flight = fly_chip(scenario, _vehicle(scenario), on_sample=lambda _w, k: report(k + 1, total))
         rows, result = flight.rows, flight.run
         golden = golden_replay(rows, scenario)
         return summarise(result, rows, golden, spec.iterations, "closed-loop")
     assert golden is not None
-    result = replay(rows, fw, on_sample=report)
+    if spec.base is None:
+        result = replay(rows, fw, on_sample=report)
+    else:
+        scenario = spec.build_scenario(fw)
+        result = replay(rows, fw, vehicle=_vehicle(scenario), scenario=scenario, chip=scenario.chip, on_sample=report)
     return summarise(result, rows, golden, spec.iterations, "replay")
 
 
@@ -379,25 +433,33 @@ def measure_table(spec: TableSpec, on_progress: Callable[[str, int, int], None] 
         on_progress: called with (build key, samples done, samples in all) as builds run.
 
     Raises:
+        ValueError: a build does not fit the scenario's chip (the field named).
         robosoc.chip.mpsoc.ChipError / CoreError: a build's firmware faulted.
         CompileError: a build failed to compile.
     """
     from robosoc.host.scenario_image import firmware_image
 
-    configs = [build_config(arith, mul, release, spec.project) for release in spec.releases for arith, mul in BUILDS]
+    configs = [spec.firmware(arith, mul, release) for release in spec.releases for arith, mul in BUILDS]
     if spec.project:  # the builds the project supports
         from robosoc.config.project import load_project
 
         info = load_project(spec.project).project
         configs = [fw for fw in configs if fw.arith in info.arith and fw.multiplier in info.multiplier]
-    for fw in configs:
-        firmware_image(fw)  # compile (or hit the cache) before the workers start
+    for fw in configs:  # compile (or hit the cache) before the workers start
+        if spec.base is None:
+            firmware_image(fw)
+        else:
+            scenario = spec.build_scenario(fw)
+            firmware_image(fw, _vehicle(scenario), scenario, scenario.chip)
     rows = golden = None
     if not spec.closed_loop:
-        from robosoc.cosim.replay import built_in_rows
+        from robosoc.cosim import replay
 
         scenario = spec.scenario()
-        rows = built_in_rows(scenario.duration_s, spec.seed)
+        if spec.base is None:
+            rows = replay.built_in_rows(scenario.duration_s, spec.seed)
+        else:
+            rows = replay.scenario_rows(scenario)
         golden = golden_replay(rows, scenario)
     if spec.workers == 1:  # (four builds per release mode at least: workers always have work)
         runs = [measure_build(fw, spec, rows, golden, on_progress) for fw in configs]
@@ -481,7 +543,12 @@ def to_json(result: TableResult) -> dict:
     return clean(
         {
             "schema": 1,
-            "spec": {k: v for k, v in asdict(result.spec).items() if k != "project" or v},  # the built-in: no key
+            "spec": {
+                k: v
+                for k, v in asdict(result.spec).items()
+                if (k != "project" or v) and k not in ("base", "scenario_file")  # the built-in: no project key
+            },
+            "conditions": result.spec.conditions(),
             "clock_ns": 4.0,
             "runs": runs,
             "orderings": [asdict(o) for o in result.orderings],
@@ -567,6 +634,23 @@ def _task_lines(result: TableResult, task: str, runs: dict[str, BuildRun], label
     return out
 
 
+MUL64_TEXT = {
+    "shift-add": "shift-and-add (fix16_mul64_soft, robosoc's)",
+    "muldi3": "64-bit product through compiler-rt __muldi3 (as HellfireOS)",
+}
+"""How Table I names the Q16.16 multiply routine of the builds without the multiplier."""
+
+
+def _conditions_line(spec: TableSpec) -> str:
+    c = spec.conditions()
+    noise = "on" if c["sensor_noise"] else "off"
+    tiles = ", ".join(f"{task} on {tuple(xy)}" for task, xy in c["tiles"].items())
+    return (
+        f"conditions: scenario {c['scenario']} (sensor noise {noise}), {c['mesh']} mesh, {tiles}; "
+        f"Q16.16 multiply without the multiplier: {MUL64_TEXT[c['fixed_mul64']]}"
+    )
+
+
 def format_table(result: TableResult) -> list[str]:
     """Table I as text lines: per release mode the four builds' figures with the seed's beside them."""
     lines: list[str] = []
@@ -583,6 +667,7 @@ def format_table(result: TableResult) -> list[str]:
             f"Table I — {whose}{release} release, {any_run.source}, {any_run.samples} samples from take-off per "
             f"build{brackets}"
         )
+        lines.append(_conditions_line(result.spec))
         lines.append(f"{'':<{_LABEL}}" + "".join(f"{b:>{width}}" for b in labels))
         for task in dict.fromkeys(t for r in runs.values() for t in r.tasks):
             lines += _task_lines(result, task, runs, labels)

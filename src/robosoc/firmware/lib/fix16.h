@@ -36,13 +36,15 @@ typedef int32_t fix16_t;
  * MULHSU, see below).
  * Without one, compiler-rt offers only the general 64 x 64-bit __muldi3 (about 470 cycles on
  * HF-RISCV); fix16_mul64_soft is a shift-and-add over the bits of the smaller magnitude (about
- * 190 cycles), so small and zero operands (frequent in matrices) cost little.
+ * 190 cycles), so small and zero operands (frequent in matrices) cost little.  Defining
+ * FIX16_MUL64_MULDI3 (FirmwareConfig.fixed_mul64 = "muldi3") keeps the plain C product, i.e.
+ * __muldi3, as HellfireOS's fixed-point library multiplies.
  */
 int64_t fix16_mul64_soft(int32_t a, int32_t b);
 
 static inline int64_t fix16_mul64(int32_t a, int32_t b)
 {
-#if defined(__riscv) && !defined(__riscv_mul)
+#if defined(__riscv) && !defined(__riscv_mul) && !defined(FIX16_MUL64_MULDI3)
     return fix16_mul64_soft(a, b);
 #else
 #if defined(__riscv)
