@@ -318,6 +318,33 @@ def _fmt(value: float | None, scale: float, digits: int, unit: str = "") -> str:
     return f"{value * scale:.{digits}f}{(' ' + unit) if unit else ''}"
 
 
+def _mission_rows(row) -> None:
+    """The mission's lines of the flight summary: waypoints reached, their worst horizontal error,
+    the landing."""
+
+    def mission(v) -> dict:
+        return v.get("mission") or {}
+
+    row(
+        "waypoints reached",
+        lambda v: (
+            f"{mission(v).get('reached')} of {len(mission(v).get('waypoints') or [])} "
+            f"(within {_fmt(mission(v).get('acceptance_m'), 100, 0, 'cm')})"
+        ),
+    )
+    row("horizontal error at waypoints max", lambda v: _fmt(mission(v).get("horizontal_error_max_m"), 100, 1, "cm"))
+
+    def landed(v) -> str:
+        m = mission(v)
+        if "landed" not in m:
+            return "n/a (no landing)"
+        if not m["landed"]:
+            return "no"
+        return f"at {m['landed_s']:.2f} s, {_fmt(m.get('landing_error_m'), 100, 1, 'cm')} from the last waypoint"
+
+    row("landed", landed)
+
+
 def print_summary(console, summary: dict[str, Any]) -> None:
     """The short table printed at the end of a flight (from its ``summary.json`` content)."""
     from rich.table import Table
@@ -351,6 +378,8 @@ def print_summary(console, summary: dict[str, Any]) -> None:
         )  # fmt: skip
     row("attitude estimate RMS", lambda v: _fmt(flight(v, "attitude_estimate_rms_deg"), 1, 2, "deg"))
     row("height estimate RMS", lambda v: _fmt(flight(v, "height_estimate_rms_m"), 100, 2, "cm"))
+    if vehicles[0].get("mission"):
+        _mission_rows(row)
     if vehicles[0].get("tasks"):
         for task in vehicles[0]["tasks"]:
 
