@@ -36,12 +36,16 @@ def load_checked(folder: str, chip: ChipConfig, source: str) -> FirmwareProject:
     return project
 
 
-def check_project(config: ScenarioConfig, source: str) -> None:
+def check_project(config: ScenarioConfig, source: str, *, sends: tuple[str, ...] | None = None, what: str = "") -> None:
     """Load ``config``'s firmware project (if it names one), check its tasks against the scenario's
-    chip and that it supports the scenario's build.
+    chip, that it supports the scenario's build, and that it is given the packets it takes from the
+    I/O tile: in a flight of ``config`` (``sends`` None) a position packet needs the scenario's
+    position sensor on; otherwise each input must be one of ``sends`` (the packets the command's
+    run can give, ``what`` naming the run).
 
     Raises:
-        CliError: as :func:`load_checked`, or a build the project does not list (the key named).
+        CliError: as :func:`load_checked`, or a build the project does not list (the key named), or
+            an input the run cannot give (the message named).
     """
     folder = config.firmware.project
     if not folder:
@@ -51,3 +55,31 @@ def check_project(config: ScenarioConfig, source: str) -> None:
         project.check_build(config.firmware.arith, config.firmware.multiplier)
     except ValueError as exc:
         raise CliError(f"{source}: {Path(folder) / 'robosoc.toml'}: {exc}") from exc
+    if sends is not None:
+        check_inputs(project, source, sends, what)
+        return
+    for message in project.inputs():
+        if message.io_packet == "position" and not config.sensors.position.enabled:
+            raise CliError(
+                f"sensors.position.enabled: the project {project.project.name!r} takes position packets from "
+                f"the I/O tile (its message {message.name!r}), but the scenario's position sensor is off: "
+                "set [sensors.position] enabled = true (the position example's mission.toml does)"
+            )
+
+
+def check_inputs(project: FirmwareProject, source: str, sends: tuple[str, ...], what: str) -> None:
+    """Refuse a project that takes a packet from the I/O tile that a run of ``what`` cannot send
+    (``sends``: the packets it can).
+
+    Raises:
+        CliError: naming the project file, the message and the packet.
+    """
+    from robosoc.config.project import IO, PROJECT_FILE
+
+    for i, message in enumerate(project.messages):
+        if message.source == IO and message.io_packet not in sends:
+            raise CliError(
+                f"{source}: {Path(project.folder) / PROJECT_FILE}: messages[{i}]: the project takes "
+                f"{message.io_packet} packets from the I/O tile, which {what} cannot send (it sends "
+                f"{', '.join(sends)} packets)"
+            )

@@ -13,7 +13,7 @@ from robosoc import output_files
 from robosoc.cli import exit_codes, files, options
 from robosoc.cli.app import app
 from robosoc.cli.console import make_console, plain
-from robosoc.cli.project_check import load_checked
+from robosoc.cli.project_check import check_inputs, load_checked
 from robosoc.config.firmware import FirmwareConfig
 
 RELEASES = ("event", "periodic", "both")
@@ -79,7 +79,10 @@ def table(
         if release != "event":
             raise options.fail("--release", "a project's tasks have their own release (its robosoc.toml)")
         project = str(firmware.absolute())
-        load_checked(project, FirmwareConfig(project=project).default_chip(), "--firmware")
+        loaded = load_checked(project, FirmwareConfig(project=project).default_chip(), "--firmware")
+        if not closed_loop:
+            what = "the replay of the built-in sensor stream (--closed-loop flies each build instead)"
+            check_inputs(loaded, "--firmware", ("sensor",), what)
     spec = table_one.TableSpec(
         iterations=iterations,
         releases=("event", "periodic") if release == "both" else (release,),
