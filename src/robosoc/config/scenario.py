@@ -185,7 +185,8 @@ class SensorConfig:
         )
         ratio = self.rate_hz / self.position.rate_hz
         _require(
-            self.position.rate_hz <= self.rate_hz and abs(ratio - round(ratio)) < 1e-9 * ratio,
+            not self.position.enabled
+            or (self.position.rate_hz <= self.rate_hz and abs(ratio - round(ratio)) < 1e-9 * ratio),
             "position.rate_hz",
             f"must divide the sensor rate ({self.rate_hz:g} Hz) into whole sensor samples, "
             f"got {self.position.rate_hz:g}",
