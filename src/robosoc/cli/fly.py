@@ -88,8 +88,10 @@ def fly_command(
     resolved = resolve(flags)
     config = resolved.config if link is None else dataclasses.replace(resolved.config, controller="chip")
     _check_controller(resolved, config, profile)
-    decoupled_only = {"sends": ("sensor",), "what": "the decoupled mode"} if link is not None else {}
-    check_project(config, resolved.source_of("firmware.project"), **decoupled_only)
+    if link is not None:  # the decoupled mode's physics side sends the sensor packets only
+        check_project(config, resolved.source_of("firmware.project"), sends=("sensor",), what="the decoupled mode")
+    else:
+        check_project(config, resolved.source_of("firmware.project"))
     options.exclusive(out=out is not None, no_out=no_out)
     if out is None and not no_out:
         out = Path("runs") / f"fly-{config.name}-s{config.seed}"

@@ -392,7 +392,7 @@ def _section(run: RunFolder, level: int) -> str:
         mission = (run.summary or {}).get("mission")
         waypoints = mission.get("waypoints") if isinstance(mission, dict) else None
         body.append(_trajectory(run.rows, waypoints))
-        if waypoints:
+        if isinstance(mission, dict) and waypoints:
             body.append(_mission_plan(run.rows, mission))
         body += [_attitude(run.rows), _pwm(run.rows)]
     else:
