@@ -121,3 +121,14 @@ def test_runs_that_cannot_give_it_position_packets_refuse_it(project: Path, tmp_
     assert result.exit_code == exit_codes.USAGE and "--closed-loop flies each build instead" in result.output
     assert invoke("firmware", "build", "--firmware", project).exit_code == 0  # building needs no sensor
     assert dataclasses.replace(_mission(project), duration_s=1.0).firmware.project == str(project)
+
+
+def test_each_vehicle_of_a_fleet_flies_the_mission_from_its_own_take_off_point(project: Path) -> None:
+    from robosoc.outputs.flight_session import fly_scenario
+
+    scenario = dataclasses.replace(_mission(project), vehicles=2, duration_s=9.0)  # to the first hold's end
+    flight = fly_scenario(scenario, None, plot=False, logs=False)
+    firsts = [v["mission"]["waypoints"][0] for v in flight.summary["vehicles"]]
+    assert firsts[1]["x"] - firsts[0]["x"] == pytest.approx(3.0)  # the fleet's grid: 3 m apart
+    assert all(w["reached"] and w["horizontal_error_max_m"] <= BOUND_M for w in firsts)
+    assert flight.summary["min_separation_m"] > 2.5

@@ -143,6 +143,7 @@ class ChipController:
         self.result = None
         self._period_end = self.first_cycle
         self._ahead: list[PwmCommand] = []  # commands received ahead of the physics
+        self._home = (0.0, 0.0)  # the take-off point, from the first row
 
     def _run(self) -> FirmwareRun:
         if self.run is None:
@@ -158,6 +159,8 @@ class ChipController:
         if k > 0:
             run.close_period()  # the chip is at the cycle of t_k: the previous sample's period ends
         packet = sensor_packet(row, k, self.sample_period_us)
+        if k == 0:  # the take-off point: where the vehicle stands at t = 0 (the mission's origin)
+            self._home = (float(row[ROW_FIELDS.index("x")]), float(row[ROW_FIELDS.index("y")]))
         extra = self._extra_packets(k, sample, setpoint) if self._extra else ()
         run.inject(SampleInput(k, sample.time, self.cycle_of(t_ns), packet, extra))
         self._period_end = self.cycle_of(t_ns + self.sample_period_us * 1000)
@@ -167,7 +170,7 @@ class ChipController:
         (over the take-off point at the setpoint's height before the mission starts, or without one)."""
         fix = sample.position_fix
         assert fix is not None  # the sensor is on (checked in __init__)
-        x0, y0 = self.vehicle.spawn_position[0], self.vehicle.spawn_position[1]
+        x0, y0 = self._home
         relative = mission.position_setpoint(self.scenario.flight, self.vehicle.rest_height, sample.time)
         if relative is None:
             target = ((x0, y0, setpoint.height), (0.0, 0.0, setpoint.height_rate), (0.0, 0.0, setpoint.height_accel))
