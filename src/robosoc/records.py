@@ -15,12 +15,15 @@ ENERGY_PARTS = ("task", "kernel", "idle", "noc")
 
 @dataclass(frozen=True)
 class SampleInput:
-    """One sensor sample as the firmware receives it, and the cycle it is injected in."""
+    """One sensor sample as the firmware receives it, and the cycle it is injected in: the sensor
+    packet (``payload``) and the further packets sent with it, by format name (``extra``: the
+    position packet, for a firmware project that takes it)."""
 
     seq: int
     time_s: float
     cycle: int
     payload: bytes
+    extra: tuple[tuple[str, bytes], ...] = ()
 
 
 @dataclass(frozen=True)

@@ -214,7 +214,7 @@ OPTIONS: dict[tuple[str, str], Spec] = {
     ("firmware size", "--firmware"): Spec("in_dir"),
     ("firmware replay", "--firmware"): Spec("in_dir"),
     ("new", "DIR"): Spec("out_dir"),
-    ("new", "--template"): Spec("choice", choices=("blank", "quadrotor")),
+    ("new", "--template"): Spec("choice", choices=("blank", "position", "quadrotor")),
 }
 
 PATH = "\0"  # "\0dir": one of the bad_paths fixture's paths

@@ -26,7 +26,7 @@ def invoke(*args: object):
 
 
 def test_the_templates_are_the_shipped_projects() -> None:
-    assert set(TEMPLATES) == {"blank", "quadrotor"}
+    assert set(TEMPLATES) == {"blank", "quadrotor", "position"}
 
 
 @pytest.mark.parametrize("template", ["blank", "quadrotor"])

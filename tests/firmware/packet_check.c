@@ -80,5 +80,22 @@ int main(void)
         p.pwm[i] = (uint16_t)(100 + 50 * i);
     }
     put_flits("pwm", &p, ROBOSOC_PWM_FLITS);
+
+    struct robosoc_position_packet f;
+    memset(&f, 0, sizeof f);
+    f.kind = ROBOSOC_POSITION_KIND;
+    f.flags = ROBOSOC_FLAG_ARMED;
+    f.seq = 99u;
+    f.time_us = 990000u;
+    f.fix_time_us = 980000u;
+    f.fix_number = 49u;
+    for (int i = 0; i < 3; i++) {
+        f.position[i] = value(0, i);
+        f.velocity[i] = value(1, i);
+        f.setpoint[i] = value(2, i);
+        f.setpoint_velocity[i] = value(3, i);
+        f.setpoint_accel[i] = value(4, i);
+    }
+    put_flits("position", &f, ROBOSOC_POSITION_FLITS);
     return 0;
 }

@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 
 from robosoc.host import packets
-from robosoc.host.packets import ESTIMATE, FORMATS, PWM, SENSOR, from_flits, to_flits
+from robosoc.host.packets import ESTIMATE, FORMATS, POSITION, PWM, SENSOR, from_flits, to_flits
 from robosoc.toolchain import build_elf, compile_native, run_native
 
 single = pytest.importorskip("robosoc.chip.single")
@@ -90,6 +90,19 @@ def _expected() -> dict[str, dict[str, object]]:
             "height_feedforward": vec(5, 2),
         },
         "pwm": {"kind": PWM.kind, "flags": 0, "seq": 65537, "pwm": (100, 150, 200, 250)},
+        "position": {
+            "kind": POSITION.kind,
+            "flags": 1,
+            "seq": 99,
+            "time_us": 990000,
+            "fix_time_us": 980000,
+            "fix_number": 49,
+            "position": vec(0, 3),
+            "velocity": vec(1, 3),
+            "setpoint": vec(2, 3),
+            "setpoint_velocity": vec(3, 3),
+            "setpoint_accel": vec(4, 3),
+        },
     }
 
 

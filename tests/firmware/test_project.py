@@ -204,7 +204,12 @@ def test_a_refused_task_ends_the_program_with_its_index(tmp_path: Path) -> None:
             "only for periodic release",
         ),
         (('destination = "pong"', 'destination = "pang"'), "messages[1].destination", "no task 'pang'"),
-        (("port = 2\nsource", "port = 4\nsource"), "messages[1].port", "'pong' takes its messages on port 2, got 4"),
+        (('destination = "pong"', 'destination = "pong"\npacket = "sensor"'), "messages[1].packet", "only for a"),
+        (
+            ('destination = "ping"', 'destination = "ping"\npacket = "gps"'),
+            "messages[0].packet",
+            "'sensor', 'position'",
+        ),
         (('sources = ["tasks.c"]', 'sources = ["tasks.c", "missing.c"]'), "project.sources[1]", "no such file"),
         (('sources = ["tasks.c"]', 'sources = ["tasks.h"]'), "project.sources[0]", "expected a .c, .S or .s file"),
         (('sources = ["tasks.c"]', 'sources = "tasks.c"'), "project.sources", "expected a list"),
@@ -223,6 +228,29 @@ def test_a_wrong_project_file_names_the_file_and_key(
         load_project(folder)
     assert caught.value.where == str(folder / PROJECT_FILE)
     assert caught.value.field == key and reason in caught.value.reason, caught.value
+
+
+def test_a_message_on_another_port_of_its_task_waits_there_unless_that_port_releases_another_task(
+    tmp_path: Path,
+) -> None:
+    """A second input of a task (the position example's fix): a message on a port of the task's tile
+    that no task there is released by is kept for the task to read; on another task's port, refused."""
+    mailbox = PINGPONG.replace('destination = "ping"', 'destination = "ping"\n\n[[messages]]\nname = "extra"\n'
+                               'port = 5\nsource = "io"\ndestination = "pong"\npacket = "position"', 1)  # fmt: skip
+    project = load_project(write_project(tmp_path / "a", mailbox))
+    assert [(m.name, m.io_packet) for m in project.inputs()] == [("request", "sensor"), ("extra", "position")]
+    assert "#define ROBOSOC_MSG_EXTRA_TILE ROBOSOC_TASK_PONG_TILE\n#define ROBOSOC_MSG_EXTRA_PORT 5u" in header_text(
+        project
+    )
+    taken = mailbox.replace("port = 5\n", "port = 4\n").replace(
+        "[[messages]]",
+        '[[tasks]]\nname = "pang"\ntile = [1, 0]\nport = 4\non_message = "pong_on_message"\n\n[[messages]]',
+        1,
+    )
+    with pytest.raises(ConfigError) as caught:
+        load_project(write_project(tmp_path / "b", taken))
+    assert caught.value.field == "messages[1].port"
+    assert "port 4 of tile [1, 0] releases task 'pang', not 'pong'" in caught.value.reason
 
 
 def test_two_tasks_on_one_port_of_one_tile_are_refused(tmp_path: Path) -> None:

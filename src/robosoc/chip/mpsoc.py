@@ -259,15 +259,20 @@ class MPSoC:
                 f"payload of {len(payload)} flits: a packet needs at least {MIN_PACKET_FLITS - 2} payload flit "
                 "(on the Hermes RTL a packet without payload swallows the next one)"
             )
-        row = self._queue_next
-        if row >= IO_ROWS:
-            raise ValueError("too many injected packets pending")
+        # The rows are a ring used in order and sent in order: the row IO_ROWS injections back is
+        # free unless it is still the oldest one waiting (the queue's head) or being sent.
+        row = self._queue_next % IO_ROWS
+        io_tile = self.noc.tile[self.io]
+        if self._queue_next >= IO_ROWS and row in (io_tile[nk.T_Q_HEAD], io_tile[nk.T_SEND_ROW]):
+            raise ValueError(f"too many injected packets pending ({IO_ROWS} not yet sent)")
         q = self.noc.queue
         flits = [(dest[0] << 4) | dest[1], len(payload), *payload]
         q[row, nk.Q_TILE] = self.io
         q[row, nk.Q_READY] = at_cycle
         q[row, nk.Q_LEN] = len(flits)
         q[row, nk.Q_NEXT] = nk.NONE
+        q[row, nk.Q_START] = nk.NONE
+        q[row, nk.Q_END] = nk.NONE
         q[row, nk.Q_FLITS : nk.Q_FLITS + len(flits)] = np.array(flits, dtype=np.int64) & 0xFFFF
         tail = self.noc.tile[self.io, nk.T_Q_TAIL]
         if tail == nk.NONE:

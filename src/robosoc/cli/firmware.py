@@ -16,6 +16,7 @@ from robosoc.cli.errors import CliError
 from robosoc.cli.project_check import check_firmware
 from robosoc.cli.scenario_flags import FIRMWARE, ScenarioFlags, resolve_section, takes_scenario
 from robosoc.config.firmware import FirmwareConfig
+from robosoc.config.project import IO_PACKETS
 
 if TYPE_CHECKING:
     from robosoc.cosim.firmware_run import ReplayResult
@@ -23,12 +24,15 @@ if TYPE_CHECKING:
 Config = Annotated[Path | None, typer.Option("--config", help="Firmware configuration (TOML, docs/firmware-app.md).")]
 
 
-def _firmware(flags: ScenarioFlags, config: Path | None) -> FirmwareConfig:
+def _firmware(flags: ScenarioFlags, config: Path | None, *, replay: bool = False) -> FirmwareConfig:
     """The configuration: defaults, the file's fields, then the options the user gave; a firmware
-    project it names (``--firmware DIR``) checked before anything is built."""
+    project it names (``--firmware DIR``) checked before anything is built (for a ``replay``, that
+    it takes nothing but the sensor packets a flight log holds)."""
     fw = files.load_toml(FirmwareConfig, config, "--config")[0] if config is not None else FirmwareConfig()
     fw = resolve_section(flags, fw, "firmware")
-    check_firmware(fw, fw.default_chip(), "--firmware")
+    sends = ("sensor",) if replay else IO_PACKETS
+    what = "a replay of a flight log (robosoc fly flies it)"
+    check_firmware(fw, fw.default_chip(), "--firmware", sends=sends, what=what)
     return fw
 
 
@@ -136,7 +140,7 @@ def firmware_replay(
     from robosoc.outputs.run_folder import JOBS_CSV, SUMMARY_JSON
 
     folder = files.output_dir(out, "--out", names=(JOBS_CSV, SUMMARY_JSON)) if out is not None else None
-    fw = _firmware(flags, config)
+    fw = _firmware(flags, config, replay=True)
     if log is not None:
         options.exclusive(
             LOG=True, **{"--seconds": options.given(ctx, "seconds"), "--seed": options.given(ctx, "seed")}

@@ -88,7 +88,10 @@ def fly_command(
     resolved = resolve(flags)
     config = resolved.config if link is None else dataclasses.replace(resolved.config, controller="chip")
     _check_controller(resolved, config, profile)
-    check_project(config, resolved.source_of("firmware.project"))
+    if link is not None:  # the decoupled mode's physics side sends the sensor packets only
+        check_project(config, resolved.source_of("firmware.project"), sends=("sensor",), what="the decoupled mode")
+    else:
+        check_project(config, resolved.source_of("firmware.project"))
     options.exclusive(out=out is not None, no_out=no_out)
     if out is None and not no_out:
         out = Path("runs") / f"fly-{config.name}-s{config.seed}"
@@ -318,6 +321,33 @@ def _fmt(value: float | None, scale: float, digits: int, unit: str = "") -> str:
     return f"{value * scale:.{digits}f}{(' ' + unit) if unit else ''}"
 
 
+def _mission_rows(row) -> None:
+    """The mission's lines of the flight summary: waypoints reached, their worst horizontal error,
+    the landing."""
+
+    def mission(v) -> dict:
+        return v.get("mission") or {}
+
+    row(
+        "waypoints reached",
+        lambda v: (
+            f"{mission(v).get('reached')} of {len(mission(v).get('waypoints') or [])} "
+            f"(within {_fmt(mission(v).get('acceptance_m'), 100, 0, 'cm')})"
+        ),
+    )
+    row("horizontal error at waypoints max", lambda v: _fmt(mission(v).get("horizontal_error_max_m"), 100, 1, "cm"))
+
+    def landed(v) -> str:
+        m = mission(v)
+        if "landed" not in m:
+            return "n/a (no landing)"
+        if not m["landed"]:
+            return "no"
+        return f"at {m['landed_s']:.2f} s, {_fmt(m.get('landing_error_m'), 100, 1, 'cm')} from the last waypoint"
+
+    row("landed", landed)
+
+
 def print_summary(console, summary: dict[str, Any]) -> None:
     """The short table printed at the end of a flight (from its ``summary.json`` content)."""
     from rich.table import Table
@@ -351,6 +381,8 @@ def print_summary(console, summary: dict[str, Any]) -> None:
         )  # fmt: skip
     row("attitude estimate RMS", lambda v: _fmt(flight(v, "attitude_estimate_rms_deg"), 1, 2, "deg"))
     row("height estimate RMS", lambda v: _fmt(flight(v, "height_estimate_rms_m"), 100, 2, "cm"))
+    if vehicles[0].get("mission"):
+        _mission_rows(row)
     if vehicles[0].get("tasks"):
         for task in vehicles[0]["tasks"]:
 

@@ -40,24 +40,61 @@ def load_checked(
     return project
 
 
-def check_project(config: ScenarioConfig, source: str) -> None:
+def check_project(config: ScenarioConfig, source: str, *, sends: tuple[str, ...] | None = None, what: str = "") -> None:
     """Load ``config``'s firmware project (if it names one), check its tasks against the scenario's
-    chip and that it supports the scenario's build.
+    chip, that it supports the scenario's build, and that it is given the packets it takes from the
+    I/O tile: in a flight of ``config`` (``sends`` None) a position packet needs the scenario's
+    position sensor on; otherwise each input must be one of ``sends`` (the packets the command's
+    run can give, ``what`` naming the run).
 
     Raises:
-        CliError: as :func:`load_checked`, or a build the project does not list (the key named).
+        CliError: as :func:`load_checked`, or a build the project does not list (the key named), or
+            an input the run cannot give (the message named).
     """
-    check_firmware(config.firmware, config.chip, source)
+    project = check_firmware(config.firmware, config.chip, source, sends=sends, what=what)
+    if project is None or sends is not None:
+        return
+    for message in project.inputs():
+        if message.io_packet == "position" and not config.sensors.position.enabled:
+            raise CliError(
+                f"sensors.position.enabled: the project {project.project.name!r} takes position packets from "
+                f"the I/O tile (its message {message.name!r}), but the scenario's position sensor is off: "
+                "set [sensors.position] enabled = true (the position example's mission.toml does)"
+            )
 
 
-def check_firmware(fw: FirmwareConfig, chip: ChipConfig, source: str) -> None:
-    """:func:`check_project` of a firmware configuration and the chip it is to run on."""
+def check_firmware(
+    fw: FirmwareConfig, chip: ChipConfig, source: str, *, sends: tuple[str, ...] | None = None, what: str = ""
+) -> FirmwareProject | None:
+    """:func:`check_project` of a firmware configuration and the chip it is to run on (without the
+    scenario's sensors); the project it names, or None for the shipped default."""
     folder = fw.project
     if not folder:
-        return
+        return None
     project = load_checked(folder, chip, source, fw.mapping)
     try:
         fw.load_project()  # the placement's task names
         project.check_build(fw.arith, fw.multiplier)
     except ValueError as exc:
         raise CliError(f"{source}: {Path(folder) / 'robosoc.toml'}: {exc}") from exc
+    if sends is not None:
+        check_inputs(project, source, sends, what)
+    return project
+
+
+def check_inputs(project: FirmwareProject, source: str, sends: tuple[str, ...], what: str) -> None:
+    """Refuse a project that takes a packet from the I/O tile that a run of ``what`` cannot send
+    (``sends``: the packets it can).
+
+    Raises:
+        CliError: naming the project file, the message and the packet.
+    """
+    from robosoc.config.project import IO, PROJECT_FILE
+
+    for i, message in enumerate(project.messages):
+        if message.source == IO and message.io_packet not in sends:
+            raise CliError(
+                f"{source}: {Path(project.folder) / PROJECT_FILE}: messages[{i}]: the project takes "
+                f"{message.io_packet} packets from the I/O tile, which {what} cannot send (it sends "
+                f"{', '.join(sends)} packets)"
+            )

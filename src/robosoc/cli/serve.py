@@ -181,7 +181,7 @@ def serve_chip_command(
     console = make_console()
     resolved, craft = resolve_side(flags)
     config, seed = resolved.config, resolved.config.seed
-    check_project(config, resolved.source_of("firmware.project"))
+    check_project(config, resolved.source_of("firmware.project"), sends=("sensor",), what="the decoupled mode")
     link = link_options.link_config(
         faults=faults, resend=resend, peer_timeout=peer_timeout, connect_timeout=connect_timeout
     )

@@ -14,7 +14,7 @@ from robosoc.cli import exit_codes, files, options
 from robosoc.cli.app import app
 from robosoc.cli.console import make_console, plain
 from robosoc.cli.errors import CliError
-from robosoc.cli.project_check import load_checked
+from robosoc.cli.project_check import check_inputs, load_checked
 from robosoc.cli.scenario_flags import TABLE, ScenarioFlags, resolve, takes_scenario
 from robosoc.config.firmware import FirmwareConfig
 from robosoc.config.scenario import ScenarioConfig
@@ -98,6 +98,9 @@ def table(
         checked = load_checked(project, chip, source, scenario.firmware.mapping)
         if release != "event" and not checked.project.main:
             raise options.fail("--release", OWN_RELEASE)
+        if not closed_loop:
+            what = "the replay of the built-in sensor stream (--closed-loop flies each build instead)"
+            check_inputs(checked, source, ("sensor",), what)
     spec = table_one.TableSpec(
         iterations=iterations,
         releases=("event", "periodic") if release == "both" else (release,),

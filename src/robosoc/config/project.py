@@ -31,6 +31,11 @@ A project is a folder with C sources and a ``robosoc.toml``::
     port = 1                         # the destination port
     source = "io"                    # "io" (the host's I/O tile) or a task's name
     destination = "ping"             # "io" or a task's name
+    packet = "sensor"                # from "io": what the I/O tile sends, "sensor" (default) or "position"
+
+A message to a task on its event ``port`` releases a job; on another port of the task's tile (one
+no task there takes as its event port) it waits in the kernel until the task reads it with
+``os_probe``/``os_recv``: how a task takes a second input (the position example's fix).
 
     [[telemetry]]                    # values the host reads from a task's memory (no simulated cycle)
     name = "est_height"              # the column in flight.csv and the MCAP topic's field
@@ -79,6 +84,9 @@ MAX_PORT = 255
 TELEMETRY_TYPES = ("real", "f32", "q16", "i32", "u32")
 """A telemetry value's C type: ``real`` is real_t (soft-float ``float`` or Q16.16 by the build)."""
 _TELEMETRY_VALUE = re.compile(r"([A-Za-z_][A-Za-z0-9_]*)((?:\.[A-Za-z_][A-Za-z0-9_]*)*)(?:\[([0-9]{1,6})\])?")
+IO_PACKETS = ("sensor", "position")
+"""What the I/O tile can send a project each sensor period (formats of robosoc.host.packets; a test
+checks they are there): the sensor sample, and the position fix with the position setpoint."""
 
 _IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 _DEFINE = re.compile(r"[A-Za-z_][A-Za-z0-9_]*(=.*)?", re.DOTALL)
@@ -162,6 +170,7 @@ class MessageSpec:
     port: int
     source: str
     destination: str
+    packet: str = ""
 
     def __post_init__(self) -> None:
         _identifier("name", self.name, "it names the message in the generated header")
@@ -169,6 +178,15 @@ class MessageSpec:
             raise ValueError(f"port: must be between 1 and {MAX_PORT}, got {self.port}")
         if self.source == self.destination:
             raise ValueError(f"destination: the same as the source ({self.source!r})")
+        if self.packet and self.source != IO:
+            raise ValueError(f"packet: only for a message from {IO!r} (what the I/O tile sends), got {self.packet!r}")
+        if self.packet and self.packet not in IO_PACKETS:
+            raise ValueError(f"packet: the I/O tile sends {', '.join(map(repr, IO_PACKETS))}, got {self.packet!r}")
+
+    @property
+    def io_packet(self) -> str:
+        """What the I/O tile sends in a message from it (``packet``, by default the sensor packet)."""
+        return self.packet or IO_PACKETS[0]
 
 
 @dataclass(frozen=True)
@@ -288,10 +306,11 @@ class FirmwareProject:
                     raise ValueError(f"messages[{i}].{which}: no task {end!r} (tasks: {', '.join(names)}, or {IO!r})")
             if message.destination != IO:
                 task = self.tasks[names[message.destination]]
-                if task.port != message.port:
+                owner = ports.get(((*task.tile,), message.port))
+                if owner is not None and self.tasks[owner].name != task.name:
                     raise ValueError(
-                        f"messages[{i}].port: {message.destination!r} takes its messages on port {task.port}, "
-                        f"got {message.port}"
+                        f"messages[{i}].port: port {message.port} of tile {list(task.tile)} releases task "
+                        f"{self.tasks[owner].name!r}, not {message.destination!r} (its event port is {task.port})"
                     )
 
         published: dict[str, int] = {}
@@ -328,7 +347,7 @@ class FirmwareProject:
         return out
 
     def inputs(self) -> list[MessageSpec]:
-        """The messages the I/O tile sends (what the host feeds the firmware)."""
+        """The messages the I/O tile sends (what the host feeds the firmware; ``packet`` says which)."""
         return [m for m in self.messages if m.source == IO]
 
     def outputs(self) -> list[MessageSpec]:

@@ -47,6 +47,19 @@ vectors) is replaced as a whole.  All fields, with their defaults::
     time_s = 5.0
     axis = "roll"
     value = 10.0             # degrees for roll/pitch/yaw, metres for height
+    [flight.mission]         # optional: a waypoint mission after the take-off (then steps = [])
+    waypoints = [[2.0, 0.0, 1.0], [2.0, 2.0, 1.0]]   # x, y from the take-off point, z height [m]
+    hold_s = 2.0
+    acceptance_m = 0.3
+    speed_mps = 1.0
+    land = true
+    land_settle_s = 1.0
+
+    [sensors.position]       # a position fix (mocap-like), sent to a project that declares it
+    enabled = false
+    rate_hz = 50.0
+    position_sigma = 0.02    # m per axis
+    velocity_sigma = 0.05    # m/s per axis
 
 The physics step is fixed at :data:`PHYSICS_DT_S` (1 ms); every period in here must be a whole
 number of physics steps.
@@ -111,6 +124,26 @@ def steps_per_period(rate_hz: float, dt_s: float = PHYSICS_DT_S) -> int | None:
 
 
 @dataclass(frozen=True)
+class PositionSensorConfig:
+    """A position fix like a motion-capture system's (or a good RTK GNSS'): the world-frame position
+    and velocity of the body origin, ``truth + N(0, sigma)`` per axis, white (no bias), at
+    ``rate_hz`` (a whole divisor of the sensor rate: a fix with every n-th sensor sample, the first
+    at t = 0).  ``sensors.noise = false`` removes the noise.  Off by default: the I/O tile sends it
+    only to a firmware project that declares a message of it (docs/firmware-projects.md); the draws
+    come from a stream of their own (:mod:`robosoc.physics.sensors`), so turning it on changes no
+    other reading.
+    """
+
+    enabled: bool = False
+    rate_hz: float = 50.0
+    position_sigma: float = 0.02
+    velocity_sigma: float = 0.05
+
+    def __post_init__(self) -> None:
+        check_fields(self)  # every float finite and in its range (config/ranges.py)
+
+
+@dataclass(frozen=True)
 class SensorConfig:
     """Sensor rate and noise model (quadrotor.md's table).
 
@@ -131,6 +164,7 @@ class SensorConfig:
     baro_sigma: float = 0.1
     baro_bias: float = 10.0
     bias_tau_s: float = 3600.0
+    position: PositionSensorConfig = field(default_factory=PositionSensorConfig)
 
     def __post_init__(self) -> None:
         _require(
@@ -150,7 +184,20 @@ class SensorConfig:
             "bias_tau_s",
             f"must be positive, got {self.bias_tau_s}",
         )
+        ratio = self.rate_hz / self.position.rate_hz
+        _require(
+            not self.position.enabled
+            or (self.position.rate_hz <= self.rate_hz and abs(ratio - round(ratio)) < 1e-9 * ratio),
+            "position.rate_hz",
+            f"must divide the sensor rate ({self.rate_hz:g} Hz) into whole sensor samples, "
+            f"got {self.position.rate_hz:g}",
+        )
         check_fields(self)  # and every float in its range (config/ranges.py)
+
+    @property
+    def position_every(self) -> int:
+        """Sensor samples per position fix."""
+        return round(self.rate_hz / self.position.rate_hz)
 
     @property
     def period_steps(self) -> int:
@@ -294,6 +341,82 @@ def move_duration(delta_m: float, shortest_s: float, climb_rate: float, descent_
     return max(shortest_s, by_speed, by_accel)
 
 
+MAX_WAYPOINTS = 100
+"""Most waypoints of a mission."""
+MISSION_RANGE_M = 100.0
+"""Largest horizontal offset of a waypoint from the take-off point [m]."""
+MISSION_ACCEL_LIMIT_MPS2 = 2.0
+"""Peak horizontal acceleration of the mission's setpoint between two waypoints [m/s²] (a tilt of
+about 11.5°, well inside the attitude loops' range)."""
+
+
+@dataclass(frozen=True)
+class MissionPlan:
+    """A waypoint mission, flown after the take-off climb (docs/scenarios.md, "Missions").
+
+    ``waypoints`` are ``[x, y, z]``: x and y [m] relative to the vehicle's take-off point (its spawn
+    position), z the height [m] of the body origin above the ground.  The position setpoint moves
+    along a straight line from each point to the next (a half cosine in time whose duration keeps
+    within ``speed_mps``, the flight plan's climb and descent rates and
+    :data:`MISSION_ACCEL_LIMIT_MPS2`), then holds the waypoint for ``hold_s``.  The schedule is
+    fixed in time (:mod:`robosoc.control.mission`), so every build flies the same setpoints; a
+    waypoint counts as reached when the vehicle stays within ``acceptance_m`` of it horizontally
+    throughout its hold.  With ``land`` the setpoint then descends at the descent rate to below the
+    ground under the last waypoint, and the motors are disarmed ``land_settle_s`` after that descent
+    ends; the summary says whether, when and where the vehicle landed.
+    """
+
+    waypoints: tuple[Vector3, ...]
+    hold_s: float = 2.0
+    acceptance_m: float = 0.3
+    speed_mps: float = 1.0
+    land: bool = True
+    land_settle_s: float = 1.0
+
+    def __post_init__(self) -> None:
+        _require(len(self.waypoints) >= 1, "waypoints", "a mission needs at least one waypoint [x, y, z]")
+        _require(
+            len(self.waypoints) <= MAX_WAYPOINTS,
+            "waypoints",
+            f"at most {MAX_WAYPOINTS} waypoints, got {len(self.waypoints)}",
+        )
+        for i, point in enumerate(self.waypoints):
+            _require(len(point) == 3, f"waypoints[{i}]", f"expected [x, y, z], got {list(point)}")
+            x, y, z = point
+            _require(
+                all(isinstance(v, float | int) and not isinstance(v, bool) for v in point),
+                f"waypoints[{i}]",
+                f"expected three numbers, got {list(point)}",
+            )
+            _require(
+                all(math.isfinite(v) and abs(v) <= MISSION_RANGE_M for v in (x, y)),
+                f"waypoints[{i}]",
+                f"x and y must be finite and within ±{MISSION_RANGE_M:g} m of the take-off point, got {list(point)}",
+            )
+            _require(
+                math.isfinite(z) and MIN_HEIGHT_M <= z <= MAX_HEIGHT_M,
+                f"waypoints[{i}]",
+                f"z must be a height in [{MIN_HEIGHT_M:g}, {MAX_HEIGHT_M:g}] m, got {list(point)}",
+            )
+        _require(math.isfinite(self.hold_s) and self.hold_s >= 0, "hold_s", f"must be >= 0, got {self.hold_s}")
+        _require(
+            math.isfinite(self.acceptance_m) and self.acceptance_m > 0,
+            "acceptance_m",
+            f"must be positive, got {self.acceptance_m}",
+        )
+        _require(
+            math.isfinite(self.speed_mps) and self.speed_mps > 0,
+            "speed_mps",
+            f"must be positive, got {self.speed_mps}",
+        )
+        _require(
+            math.isfinite(self.land_settle_s) and self.land_settle_s >= 0,
+            "land_settle_s",
+            f"must be >= 0, got {self.land_settle_s}",
+        )
+        check_fields(self)  # and every float in its range (config/ranges.py)
+
+
 @dataclass(frozen=True)
 class FlightPlan:
     """Setpoints over time: calibrate on the ground, take off, then step the setpoints.
@@ -306,7 +429,8 @@ class FlightPlan:
     and :data:`HEIGHT_ACCEL_LIMIT_MPS2`.  The controller limits its commanded vertical speed
     to the same two rates.  ``steps`` change one setpoint each, at their time: attitude steps
     from ``takeoff_s + climb_s`` on, height steps once the previous height move has ended (checked
-    by :class:`ScenarioConfig`, which knows the vehicle's rest height).
+    by :class:`ScenarioConfig`, which knows the vehicle's rest height).  A ``mission``
+    (:class:`MissionPlan`) takes over after the take-off climb; it needs ``steps = []``.
     """
 
     takeoff_s: float = 3.0
@@ -315,6 +439,7 @@ class FlightPlan:
     climb_rate_mps: float = DEFAULT_CLIMB_RATE_MPS
     descent_rate_mps: float = DEFAULT_DESCENT_RATE_MPS
     steps: tuple[SetpointStep, ...] = ()
+    mission: MissionPlan | None = None
 
     def __post_init__(self) -> None:
         _require(
@@ -337,6 +462,12 @@ class FlightPlan:
                 f"steps[{i}].time_s",
                 f"must not come before take-off + climb_s ({self.attitude_from_s:g} s), got {step.time_s}",
             )
+        _require(
+            self.mission is None or not self.steps,
+            "steps",
+            "must be empty in a flight with a mission (the mission sets the position and height; "
+            f"write steps = []), got {len(self.steps)} steps",
+        )
         check_fields(self)  # and every float in its range (config/ranges.py)
 
     @property

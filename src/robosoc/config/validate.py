@@ -54,6 +54,9 @@ def _convert(value: Any, hint: Any, path: str, where: str, base: Any = None) -> 
     if origin in (typing.Union, types.UnionType):
         if value is None and type(None) in args:
             return None
+        options = [option for option in args if option is not type(None)]
+        if len(options) == 1:  # ``X | None``: X's own error, naming the field inside it
+            return _convert(value, options[0], path, where, base)
         errors = []
         for option in args:
             if option is type(None):

@@ -19,6 +19,7 @@ import numpy as np
 
 from robosoc.config.scenario import FlightPlan, ScenarioConfig
 from robosoc.config.vehicle import VehicleConfig
+from robosoc.control import mission
 from robosoc.control import quaternion as quat
 from robosoc.control.host import Estimate
 from robosoc.control.setpoint import Setpoint, setpoint_at
@@ -223,6 +224,8 @@ def flight_metrics(rows: np.ndarray, plan: FlightPlan, rest_height: float, settl
     hover = t >= moves[0].end_s + settle_s
     for move in moves[1:]:
         hover &= ~((t >= move.start_s - 1e-9) & (t < move.end_s + settle_s))
+    if plan.mission is not None:  # the hover ends with the mission's last hold (then it lands)
+        hover &= t < mission.timeline(plan, rest_height).holds[-1]
     height_error = z - column(rows, "sp_height")
     overshoot = 0.0
     for i, move in enumerate(moves):
@@ -242,7 +245,8 @@ def flight_metrics(rows: np.ndarray, plan: FlightPlan, rest_height: float, settl
             if step.axis == axis:
                 mask &= ~((t >= step.time_s - 1e-9) & (t < step.time_s + settle_s))
         err = _wrap(column(rows, axis) - column(rows, f"sp_{axis}"))
-        tracking.append(math.degrees(_rms(err[mask])))
+        # a mission's attitude setpoints are the firmware's own (its position controller's): none to track
+        tracking.append(math.degrees(_rms(err[mask])) if plan.mission is None else math.nan)
     rises = []
     for step in sorted(plan.steps, key=lambda s: s.time_s):
         if step.axis == "height":

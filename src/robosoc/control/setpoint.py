@@ -8,7 +8,9 @@ half cosines.  A move from h₀ to h₁ = h₀ + Δ over T seconds from t₀ giv
     ḧ(t) = Δ·π²/(2T²)·cos πs
 
 and outside the move h = h₁ (after) or h₀ (before), ḣ = ḧ = 0.  The controller receives all
-three: ḣ and ḧ are the feed-forward of the profile (see :mod:`robosoc.control.pid`).
+three: ḣ and ḧ are the feed-forward of the profile (see :mod:`robosoc.control.pid`).  A flight
+plan with a mission (:mod:`robosoc.control.mission`) takes its height, rate and acceleration from
+the mission's setpoint once the take-off climb has ended, and disarms when the mission says.
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ import math
 from dataclasses import dataclass
 
 from robosoc.config.scenario import FlightPlan, HeightMove
+from robosoc.control import mission
 
 
 @dataclass(frozen=True, slots=True)
@@ -66,6 +69,13 @@ def setpoint_at(plan: FlightPlan, rest_height: float, t: float) -> Setpoint:
     """
     if t < plan.takeoff_s - 1e-9:
         return Setpoint(height=rest_height, armed=False)
+    if plan.mission is not None:
+        line = mission.timeline(plan, rest_height)
+        if line.disarm_s is not None and t >= line.disarm_s - 1e-9:
+            return Setpoint(height=rest_height, armed=False)
+        if t >= line.start_s - 1e-9:
+            (_, _, height), (_, _, rate), (_, _, accel) = line.at(t)
+            return Setpoint(height=height, armed=True, height_rate=rate, height_accel=accel)
     moves = _moves(plan, rest_height)
     current = moves[0]
     for move in moves[1:]:

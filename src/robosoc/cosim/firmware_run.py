@@ -165,8 +165,23 @@ class FirmwareRun:
         tile, port = self.image.sensor
         for payload in images.io_packets(sample.payload, port, self.chip_config.io_tile, sample.seq):
             self.chip.inject(tile, payload, sample.cycle)
+        if self.image.io_inputs:
+            self._inject_extra(sample)
         self.samples.append(sample)
         self._sample_cycles.append(sample.cycle)
+
+    def _inject_extra(self, sample: SampleInput) -> None:
+        """The further packets the project takes (``image.io_inputs``), after the sensor packet.
+
+        Raises:
+            ValueError: the sample lacks one (the flight or log has no such reading).
+        """
+        extra = dict(sample.extra)
+        for name, tile, port in self.image.io_inputs:
+            if name not in extra:
+                raise ValueError(f"sample {sample.seq}: the firmware takes {name} packets, the sample has none")
+            for payload in images.io_packets(extra[name], port, self.chip_config.io_tile, sample.seq):
+                self.chip.inject(tile, payload, sample.cycle)
 
     def run_to(self, cycle: int) -> list[PwmCommand]:
         """Run the chip to ``cycle``; the PWM commands that reached the I/O tile meanwhile.

@@ -41,11 +41,12 @@ import numpy as np
 from robosoc.chip.energy import EnergyModel
 from robosoc.config.scenario import ScenarioConfig
 from robosoc.config.vehicle import VehicleConfig
+from robosoc.control import mission
 from robosoc.control.flight import ROW_FIELDS, flight_row
 from robosoc.control.host import Estimate, HostController
 from robosoc.control.setpoint import Setpoint, setpoint_at
 from robosoc.cosim.firmware_run import DEFAULT_FIRST_CYCLE, FirmwareRun, ReplayResult
-from robosoc.cosim.replay import sensor_packet
+from robosoc.cosim.replay import position_packet, sensor_packet
 from robosoc.host.firmware_image import FirmwareImage
 from robosoc.host.scenario_image import scenario_image
 from robosoc.host.telemetry import estimate_of
@@ -123,6 +124,12 @@ class ChipController:
         self.image = image if image is not None else scenario_image(scenario, vehicle)
         self.run: FirmwareRun | None = None
         self.result: ReplayResult | None = None
+        self._extra = tuple(name for name, _, _ in self.image.io_inputs)
+        if "position" in self._extra and not scenario.sensors.position.enabled:
+            raise ValueError(
+                "sensors.position.enabled: the firmware takes position packets from the I/O tile, but the "
+                "scenario's position sensor is off ([sensors.position] enabled = true)"
+            )
 
     def reset(self) -> None:
         """A freshly booted chip with the firmware loaded."""
@@ -137,6 +144,7 @@ class ChipController:
         self.result = None
         self._period_end = self.first_cycle
         self._ahead: list[PwmCommand] = []  # commands received ahead of the physics
+        self._home = (0.0, 0.0)  # the take-off point, from the first row
 
     def _run(self) -> FirmwareRun:
         if self.run is None:
@@ -152,8 +160,25 @@ class ChipController:
         if k > 0:
             run.close_period()  # the chip is at the cycle of t_k: the previous sample's period ends
         packet = sensor_packet(row, k, self.sample_period_us)
-        run.inject(SampleInput(k, sample.time, self.cycle_of(t_ns), packet))
+        if k == 0:  # the take-off point: where the vehicle stands at t = 0 (the mission's origin)
+            self._home = (float(row[ROW_FIELDS.index("x")]), float(row[ROW_FIELDS.index("y")]))
+        extra = self._extra_packets(k, sample, setpoint) if self._extra else ()
+        run.inject(SampleInput(k, sample.time, self.cycle_of(t_ns), packet, extra))
         self._period_end = self.cycle_of(t_ns + self.sample_period_us * 1000)
+
+    def _extra_packets(self, k: int, sample: SensorSample, setpoint: Setpoint) -> tuple[tuple[str, bytes], ...]:
+        """The position packet of sample ``k``: its fix, and the mission's setpoint in the world frame
+        (over the take-off point at the setpoint's height before the mission starts, or without one)."""
+        fix = sample.position_fix
+        assert fix is not None  # the sensor is on (checked in __init__)
+        x0, y0 = self._home
+        relative = mission.position_setpoint(self.scenario.flight, self.vehicle.rest_height, sample.time)
+        if relative is None:
+            target = ((x0, y0, setpoint.height), (0.0, 0.0, setpoint.height_rate), (0.0, 0.0, setpoint.height_accel))
+        else:
+            (x, y, z), velocity, accel = relative
+            target = ((x0 + x, y0 + y, z), velocity, accel)
+        return (("position", position_packet(fix, target, k, sample.time, setpoint.armed)),)
 
     def advance(self, t_ns: int) -> Pwm | None:
         # Nothing reaches the chip between two samples, so the chip runs to the next sample in one go

@@ -23,7 +23,10 @@ from robosoc.control.host import HostController
 from robosoc.cosim.firmware_run import DEFAULT_FIRST_CYCLE, FirmwareRun, ReplayResult
 from robosoc.host import packets
 from robosoc.host.scenario_image import firmware_image
+from robosoc.physics import PositionFix
 from robosoc.records import SampleInput
+
+Vector3 = tuple[float, float, float]
 
 # --- the sensor stream --------------------------------------------------------------------------
 
@@ -45,6 +48,31 @@ def sensor_packet(row: np.ndarray, seq: int, dt_us: int) -> bytes:
         "height_feedforward": (col["sp_height_rate"], col["sp_height_accel"]),
     }
     return packets.SENSOR.pack(values)
+
+
+def position_packet(
+    fix: PositionFix,
+    setpoint: tuple[Vector3, Vector3, Vector3],
+    seq: int,
+    time_s: float,
+    armed: bool,
+) -> bytes:
+    """The position packet sent with sensor sample ``seq`` (taken at ``time_s``): the newest ``fix``
+    and the position setpoint (world-frame position, velocity and acceleration)."""
+    position, velocity, accel = setpoint
+    values: dict[str, packets.Value] = {
+        "flags": packets.FLAG_ARMED if armed else 0,
+        "seq": seq,
+        "time_us": round(time_s * 1e6),
+        "fix_time_us": round(fix.time * 1e6),
+        "fix_number": fix.number,
+        "position": fix.position,
+        "velocity": fix.velocity,
+        "setpoint": position,
+        "setpoint_velocity": velocity,
+        "setpoint_accel": accel,
+    }
+    return packets.POSITION.pack(values)
 
 
 def samples_from_rows(rows: np.ndarray, clock_ns: float, first_cycle: int = DEFAULT_FIRST_CYCLE) -> list[SampleInput]:

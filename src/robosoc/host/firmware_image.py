@@ -1,7 +1,8 @@
 """A firmware built for the chip, with what the host needs to fly it: the I/O tile's contract.
 
 Every sensor period the I/O tile sends one sensor packet (``robosoc_packets.h``: readings, the
-setpoint, the sample's sequence number and time stamp) to ``sensor`` (a tile and port); the
+setpoint, the sample's sequence number and time stamp) to ``sensor`` (a tile and port), and each
+further packet a project declares (``io_inputs``: the position packet) to its tile and port; the
 firmware answers with one PWM packet carrying the same sequence number on ``actuator_port`` of the
 I/O tile.  Until a command arrives the motors hold the last one.  :class:`FirmwareImage` holds the
 ELF, the tiles to load it on, each tile's task ids by name (how job records are named), and that
@@ -65,6 +66,8 @@ class FirmwareImage:
     project: str = ""
     #: the project's tasks in the order of its file (how a refused task's exit code names it)
     task_order: tuple[str, ...] = ()
+    #: the further packets the I/O tile sends with each sensor packet: (format name, tile, port)
+    io_inputs: tuple[tuple[str, Tile, int], ...] = ()
 
     @property
     def tiles(self) -> list[Tile]:
@@ -114,12 +117,17 @@ def project_image(
         CompileError: the compiler failed.
         TelemetryError: a ``[[telemetry]]`` value is not in the program (file and key named).
     """
-    inputs, outputs = project.inputs(), project.outputs()
+    all_inputs, outputs = project.inputs(), project.outputs()
+    inputs = [m for m in all_inputs if m.io_packet == "sensor"]
     if len(inputs) != 1 or len(outputs) != 1:
         raise ValueError(
-            f"messages: a flying project has one message from {IO!r} (the sensor packets) and one to {IO!r} "
+            f"messages: a flying project has one message from {IO!r} of the sensor packets and one to {IO!r} "
             f"(the PWM commands), got {len(inputs)} and {len(outputs)}"
         )
+    further = [m for m in all_inputs if m.io_packet != "sensor"]
+    kinds = [m.io_packet for m in further]
+    if len(set(kinds)) != len(kinds):
+        raise ValueError(f"messages: the I/O tile sends each packet once per sensor period, got {kinds}")
     mapping = fw.mapping
     tiles = project.tiles(mapping)
     elf = build_project(
@@ -143,4 +151,5 @@ def project_image(
         actuator_port=outputs[0].port,
         project=project.project.name,
         task_order=project.task_names,
+        io_inputs=tuple((m.io_packet, task_tiles[m.destination][0], m.port) for m in further),
     )

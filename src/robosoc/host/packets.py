@@ -1,11 +1,13 @@
 """Packet formats between the I/O tile and the firmware tasks, written once.
 
-This module is the single source of the three application packets' layout and units, and of the
-message ports they travel to (:data:`PORTS`):
+This module is the single source of the application packets' layout and units, and of the
+message ports the built-in application's travel to (:data:`PORTS`):
 
 - ``sensor``: one sensor sample, I/O tile → estimator (EKF) task;
 - ``estimate``: the state estimate, estimator task → PID task;
-- ``pwm``: four PWM values and the sample's sequence number, PID task → I/O tile.
+- ``pwm``: four PWM values and the sample's sequence number, PID task → I/O tile;
+- ``position``: the newest position fix and the mission's position setpoint, I/O tile → a firmware
+  project that declares a message of it (docs/firmware-projects.md), with every sensor sample.
 
 ``include/robosoc_packets.h`` (the C structs) is generated from it (``python -m
 robosoc.host.packets``); a test checks the file is up to date, and the header's own
@@ -261,7 +263,25 @@ PWM = PacketFormat(
     ),
 )
 
-FORMATS: tuple[PacketFormat, ...] = (SENSOR, ESTIMATE, PWM)
+POSITION = PacketFormat(
+    "position",
+    0x5204,
+    "The newest position fix and the position setpoint, I/O tile -> a project's task (world frame, z up).",
+    (
+        *HEAD_FIELDS,
+        Field("seq", "u32", "-", "the sensor sample's number (its sensor packet has the same)"),
+        Field("time_us", "u32", "us", "the sensor sample's time"),
+        Field("fix_time_us", "u32", "us", "when the fix was taken (at most one fix period before time_us)"),
+        Field("fix_number", "u32", "-", "the fix's number, 0 for the first: a new fix when it changes"),
+        Field("position", "q16", "m", "the fix: position x, y, z of the body origin", 3),
+        Field("velocity", "q16", "m/s", "the fix: velocity x, y, z", 3),
+        Field("setpoint", "q16", "m", "position setpoint x, y, z (z: the sensor packet's height setpoint)", 3),
+        Field("setpoint_velocity", "q16", "m/s", "the setpoint's rate (feed-forward)", 3),
+        Field("setpoint_accel", "q16", "m/s^2", "the setpoint's acceleration (feed-forward)", 3),
+    ),
+)
+
+FORMATS: tuple[PacketFormat, ...] = (SENSOR, ESTIMATE, PWM, POSITION)
 FLAG_ARMED = 1
 
 

@@ -2,7 +2,8 @@
 
 Plots are matplotlib figures inlined as SVG, styles inline, no script or font fetched from
 anywhere: the page opens without a network.  It shows what the folder holds (see
-:mod:`robosoc.outputs.run_folder`): trajectory and setpoints, estimated against true attitude,
+:mod:`robosoc.outputs.run_folder`): trajectory and setpoints (a mission's waypoints over their holds and
+from above, from ``summary.json``), estimated against true attitude,
 motor PWM (``flight.csv``); per-task response-time histograms and energy per task split into its
 parts (``jobs.csv``); energy by tile and any other breakdown of ``summary.json``'s ``energy``
 (by instruction class, ``classes_uj``, when present); where cycles and energy go per firmware
@@ -104,7 +105,7 @@ def _figure(name: str, caption: str, svg: str) -> str:
 # --- flight plots -------------------------------------------------------------------------------
 
 
-def _trajectory(rows: np.ndarray) -> str:
+def _trajectory(rows: np.ndarray, waypoints: list[dict] | None = None) -> str:
     r = _thin(rows)
     t = _column(r, "t")
 
@@ -117,8 +118,13 @@ def _trajectory(rows: np.ndarray) -> str:
         ax_z.set_ylabel("m")
         ax_z.legend(loc="best")
         ax_z.grid(alpha=0.3)
-        ax_xy.plot(t, _column(r, "x"), label="x")
-        ax_xy.plot(t, _column(r, "y"), label="y")
+        x_line = ax_xy.plot(t, _column(r, "x"), label="x")[0]
+        y_line = ax_xy.plot(t, _column(r, "y"), label="y")[0]
+        for i, w in enumerate(waypoints or []):  # each waypoint over its hold
+            for key, line in (("x", x_line), ("y", y_line)):
+                label = f"waypoint {key} (hold)" if i == 0 else None
+                ax_xy.hlines(w[key], w["arrive_s"], w["leave_s"], colors=line.get_color(), linewidth=4, alpha=0.35,
+                             label=label)  # fmt: skip
         ax_xy.set_ylabel("m")
         ax_xy.set_xlabel("time [s]")
         ax_xy.legend(loc="best")
@@ -127,6 +133,38 @@ def _trajectory(rows: np.ndarray) -> str:
     return _figure(
         "trajectory", "Trajectory: height against its setpoint, horizontal drift", _svg(draw, "traj", (10, 5), 2)
     )
+
+
+def _mission_plan(rows: np.ndarray, mission: dict) -> str:
+    """The mission from above: the path flown, each waypoint with its acceptance circle, the landing."""
+    r = _thin(rows)
+    armed = _column(r, "armed") > 0.5
+    radius = mission.get("acceptance_m") or 0.0
+
+    def draw(ax) -> None:
+        ax.plot(_column(r, "x")[armed], _column(r, "y")[armed], label="path (armed)")
+        for i, w in enumerate(mission.get("waypoints") or []):
+            colour = "tab:green" if w.get("reached") else "tab:red"
+            ax.add_patch(_circle((w["x"], w["y"]), radius, colour))
+            ax.plot(w["x"], w["y"], "o", color=colour, label="waypoint (reached: green)" if i == 0 else None)
+            ax.annotate(str(i + 1), (w["x"], w["y"]), textcoords="offset points", xytext=(6, 6))
+        if mission.get("landed"):
+            ax.plot(mission["landed_x"], mission["landed_y"], "kx", markersize=9, label="landed")
+        ax.set_xlabel("x [m]")
+        ax.set_ylabel("y [m]")
+        ax.set_aspect("equal", adjustable="datalim")
+        ax.legend(loc="best")
+        ax.grid(alpha=0.3)
+
+    caption = f"Mission from above: waypoints with their acceptance radius ({radius * 100:.0f} cm), the path flown"
+    return _figure("mission", caption, _svg(draw, "mission", (6, 6)))
+
+
+def _circle(centre: tuple[float, float], radius: float, colour: str):
+    """A circle patch (matplotlib is imported only when a report is drawn)."""
+    from matplotlib.patches import Circle
+
+    return Circle(centre, radius, fill=False, color=colour, alpha=0.6)
 
 
 def _attitude(rows: np.ndarray) -> str:
@@ -351,7 +389,12 @@ def _section(run: RunFolder, level: int) -> str:
     body: list[str] = [f"<p class='note'>{html.escape(n)}</p>" for n in run.notes]
     body.append(f"<{h}>Flight</{h}>")
     if run.rows is not None and len(run.rows):
-        body += [_trajectory(run.rows), _attitude(run.rows), _pwm(run.rows)]
+        mission = (run.summary or {}).get("mission")
+        waypoints = mission.get("waypoints") if isinstance(mission, dict) else None
+        body.append(_trajectory(run.rows, waypoints))
+        if isinstance(mission, dict) and waypoints:
+            body.append(_mission_plan(run.rows, mission))
+        body += [_attitude(run.rows), _pwm(run.rows)]
     else:
         body.append("<p>No flight log (flight.csv) in this folder.</p>")
     body.append(f"<{h}>Tasks on the chip</{h}>")

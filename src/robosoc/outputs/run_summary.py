@@ -12,7 +12,11 @@ key names, NaN written as ``null``)::
      "tasks": {"estimator": {...}, "pid": {...}} | null, "deadline_misses": 0 | null,
      "energy": {"total_uj", "tiles_uj": {"x,y": ...}, "noc_uj"} | null,
      "cycles": {"chip", "tiles": {"x,y": ...}} | null,
-     "no_actuator_command": {"seconds", "from_s", "periods"}}   # only when the firmware went quiet
+     "no_actuator_command": {"seconds", "from_s", "periods"},   # only when the firmware went quiet
+     "mission": {"waypoints": [{"x", "y", "z", "arrive_s", "leave_s", "horizontal_error_max_m",
+                 "horizontal_error_mean_m", "height_error_max_m", "reached"}], "reached",
+                 "acceptance_m", "horizontal_error_max_m", "landed", "landed_s", "landed_x",
+                 "landed_y", "landing_error_m"}}     (only with a mission: robosoc.control.mission)
 
 ``complete`` is false for a flight that was interrupted or crashed: the figures are those of the
 rows flown so far, and ``"stopped"`` says why.  The flight figures are
@@ -41,6 +45,7 @@ from robosoc.config.chip import ChipConfig
 from robosoc.config.firmware import FirmwareConfig
 from robosoc.config.scenario import ScenarioConfig
 from robosoc.control.flight import ROW_FIELDS, column, flight_metrics
+from robosoc.control.mission import mission_figures
 from robosoc.cosim.firmware_run import ReplayResult
 from robosoc.records import ENERGY_PARTS, JobRecord
 
@@ -229,6 +234,8 @@ def vehicle_summary(
     silence = command_silence(result, scenario.firmware.command_timeout_periods) if result is not None else None
     if silence is not None:
         summary["no_actuator_command"] = silence  # the run is marked: the firmware went quiet
+    if scenario.flight.mission is not None and len(rows):
+        summary["mission"] = mission_figures(rows, scenario.flight, rest_height)
     return _with_reason(summary, stopped)
 
 
@@ -411,6 +418,27 @@ _VEHICLE_FIELDS: dict[str, _Kind] = {
     "cycles": _object({"chip": INTEGER, "tiles": _map(INTEGER, TILE_KEY, "X,Y")}),
     "min_separation_m": NUMBER,
     "no_actuator_command": _object({"seconds": NUMBER, "from_s": NUMBER, "periods": INTEGER}),
+    "mission": _object(
+        {
+            "waypoints": _list(
+                _object(
+                    {
+                        **dict.fromkeys(("x", "y", "z", "arrive_s", "leave_s"), NUMBER),
+                        **dict.fromkeys(
+                            ("horizontal_error_max_m", "horizontal_error_mean_m", "height_error_max_m"), NUMBER
+                        ),
+                        "reached": BOOLEAN,
+                    },
+                    nullable=False,
+                )
+            ),
+            "reached": INTEGER,
+            "acceptance_m": NUMBER,
+            "horizontal_error_max_m": NUMBER,
+            "landed": BOOLEAN,
+            **dict.fromkeys(("landed_s", "landed_x", "landed_y", "landing_error_m"), NUMBER),
+        }
+    ),
 }
 SUMMARY = _object(_VEHICLE_FIELDS, nullable=False)
 _VEHICLE_FIELDS["vehicles"] = _list(SUMMARY)

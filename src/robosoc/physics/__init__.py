@@ -5,7 +5,7 @@ Public API: :class:`World` (``reset``, ``step``, ``advance``) holding :class:`Qu
 See ``docs/physics.md`` for the model.
 """
 
-from robosoc.physics.sensors import SensorSample, Truth
+from robosoc.physics.sensors import PositionFix, SensorSample, Truth
 from robosoc.physics.world import Quadrotor, World
 
-__all__ = ["Quadrotor", "SensorSample", "Truth", "World"]
+__all__ = ["PositionFix", "Quadrotor", "SensorSample", "Truth", "World"]

@@ -17,6 +17,14 @@ stationary Gauss–Markov bias with the same spread would instead wander by σ_b
 sample, 0.24 m/√s for the barometer, which no altitude hold could follow.  All draws come from
 one generator per vehicle, in a fixed order (10 normals per sample: accel, gyro, mag, baro), so
 a seed fixes the stream bit for bit.
+
+The position fix (``[sensors.position]``, off by default; :class:`PositionFixModel`) is a
+motion-capture-like reading of the body origin's world-frame position and velocity,
+``p + N(0, σ_p)`` and ``v + N(0, σ_v)`` per axis, white and unbiased, taken with every n-th sensor
+sample (n = sensor rate / fix rate; the first at t = 0) and carried by every sample until the next
+(with its own time and number, so a reader can tell a new fix from an old one).  Its draws (6
+normals per fix: position x, y, z, then velocity x, y, z) come from a generator of its own per
+vehicle, so turning it on leaves every other reading of a flight unchanged.
 """
 
 from __future__ import annotations
@@ -44,11 +52,23 @@ def pressure_hpa(altitude: float) -> float:
 
 
 @dataclass(frozen=True, slots=True)
+class PositionFix:
+    """One position fix: taken at ``time`` [s], the ``number``-th of the flight (from 0); world-frame
+    ``position`` [m] and ``velocity`` [m/s] of the body origin, noise included."""
+
+    time: float
+    number: int
+    position: tuple[float, float, float]
+    velocity: tuple[float, float, float]
+
+
+@dataclass(frozen=True, slots=True)
 class SensorSample:
     """One reading of every sensor of a vehicle, taken at ``time`` [s].
 
     ``accel`` [m/s²] and ``gyro`` [rad/s] and ``mag`` [unit field] are body-frame (FLU) vectors;
-    ``baro_altitude`` [m] and ``baro_pressure`` [hPa] come from the barometer.
+    ``baro_altitude`` [m] and ``baro_pressure`` [hPa] come from the barometer; ``position_fix``
+    is the newest position fix (None while the position sensor is off).
     """
 
     time: float
@@ -57,6 +77,7 @@ class SensorSample:
     mag: np.ndarray
     baro_altitude: float
     baro_pressure: float
+    position_fix: PositionFix | None = None
 
     def as_array(self) -> np.ndarray:
         """The sample as 12 floats: time, accel, gyro, mag, baro altitude, baro pressure."""
@@ -183,3 +204,38 @@ class SensorModel:
             baro_altitude=altitude,
             baro_pressure=pressure_hpa(altitude),
         )
+
+
+class PositionFixModel:
+    """The position sensor of one vehicle (``[sensors.position]``): a fix with every
+    ``every``-th sensor sample, from its own generator."""
+
+    def __init__(self, config: SensorConfig) -> None:
+        self.config = config.position
+        self.noise = config.noise
+        self.every = config.position_every
+        self._rng = np.random.default_rng(0)
+        self._samples = 0
+        self.fix: PositionFix | None = None
+
+    def reset(self, rng: np.random.Generator) -> None:
+        """Start a flight: no fix yet, draws from ``rng``."""
+        self._rng = rng
+        self._samples = 0
+        self.fix = None
+
+    def sample(self, time: float, position: Sequence[float], velocity: Sequence[float]) -> PositionFix | None:
+        """The newest fix after the sensor sample at ``time`` (a new one with every ``every``-th
+        sample) from the true ``position`` [m] and ``velocity`` [m/s]."""
+        if self._samples % self.every == 0:
+            p = [float(v) for v in position]
+            v = [float(u) for u in velocity]
+            if self.noise:
+                d = self._rng.standard_normal(6).tolist()
+                sp, sv = self.config.position_sigma, self.config.velocity_sigma
+                p = [p[i] + sp * d[i] for i in range(3)]
+                v = [v[i] + sv * d[3 + i] for i in range(3)]
+            number = 0 if self.fix is None else self.fix.number + 1
+            self.fix = PositionFix(time, number, (p[0], p[1], p[2]), (v[0], v[1], v[2]))
+        self._samples += 1
+        return self.fix

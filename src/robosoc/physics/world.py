@@ -17,11 +17,13 @@ is a world-frame wrench at the body's CoM.  Then ``mj_step`` integrates.  Sensor
 at the end of every sensor period; the wind is updated every ``wind.update_s``.
 
 One seed drives everything: ``np.random.SeedSequence(seed)`` spawns one stream for the wind and
-one per vehicle (in vehicle order) for its sensors.
+one per vehicle (in vehicle order) for its sensors, then (with the position sensor on) one per
+vehicle for its position fixes: children spawned later leave the earlier ones unchanged.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Sequence
 
@@ -33,7 +35,7 @@ from robosoc.config.vehicle import VehicleConfig
 from robosoc.physics.drag import Drag
 from robosoc.physics.mjcf import body_name, world_xml
 from robosoc.physics.propulsion import Propulsion
-from robosoc.physics.sensors import SensorModel, SensorSample, Truth
+from robosoc.physics.sensors import PositionFixModel, SensorModel, SensorSample, Truth
 from robosoc.physics.wind import Wind
 
 
@@ -52,6 +54,7 @@ class Quadrotor:
         self.propulsion = Propulsion(config.motor, config.arm_length, world.dt)
         self.drag = Drag(config.drag)
         self.sensor_model = SensorModel(sensors, world.dt)
+        self.position_model = PositionFixModel(sensors) if sensors.position.enabled else None
         self._com = tuple(float(c) for c in config.com)
         self._has_com_offset = any(c != 0.0 for c in self._com)
         self._sample: SensorSample | None = None
@@ -91,19 +94,25 @@ class Quadrotor:
         return np.array(self.propulsion.omega)
 
     # ----------------------------------------------------------------- internals
-    def _reset(self, rng: np.random.Generator) -> None:
+    def _reset(self, rng: np.random.Generator, position_rng: np.random.Generator | None = None) -> None:
         self.propulsion.reset()
         self.pwm = (0, 0, 0, 0)
         truth = self.truth()
         self.sensor_model.reset(rng, truth.velocity, truth.quaternion)
+        if self.position_model is not None:
+            self.position_model.reset(position_rng if position_rng is not None else np.random.default_rng(0))
         self._take_sample(0.0, window=0.0)
 
     def _take_sample(self, time: float, window: float) -> None:
         data = self.world.data
         a, d = self._qpos, self._dof
+        velocity = data.qvel[d : d + 3].tolist()
         self._sample = self.sensor_model.sample(
-            time, float(data.qpos[a + 2]), data.qpos[a + 3 : a + 7].tolist(), data.qvel[d : d + 3].tolist(), window
+            time, float(data.qpos[a + 2]), data.qpos[a + 3 : a + 7].tolist(), velocity, window
         )
+        if self.position_model is not None:
+            fix = self.position_model.sample(time, data.qpos[a : a + 3].tolist(), velocity)
+            self._sample = dataclasses.replace(self._sample, position_fix=fix)
 
     def _apply_wrench(
         self, qpos: list[float], qvel: list[float], xfrc: np.ndarray, wind: tuple[float, float, float]
@@ -209,10 +218,13 @@ class World:
         mujoco.mj_resetData(self.model, self.data)
         mujoco.mj_forward(self.model, self.data)
         self.steps = 0
-        streams = np.random.SeedSequence(seed).spawn(1 + len(self.quadrotors))
+        n = len(self.quadrotors)
+        position = self.sensor_config.position.enabled
+        streams = np.random.SeedSequence(seed).spawn(1 + (2 * n if position else n))
         self.wind.reset(np.random.default_rng(streams[0]))
-        for quad, stream in zip(self.quadrotors, streams[1:], strict=True):
-            quad._reset(np.random.default_rng(stream))
+        for i, quad in enumerate(self.quadrotors):
+            fixes = np.random.default_rng(streams[1 + n + i]) if position else None
+            quad._reset(np.random.default_rng(streams[1 + i]), fixes)
 
     def step(self) -> None:
         """Advance one physics step (1 ms)."""

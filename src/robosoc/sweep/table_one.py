@@ -43,7 +43,7 @@ from robosoc.analysis.accuracy import (
     quaternion_error,
 )
 from robosoc.config.firmware import RELEASE_CHOICES, FirmwareConfig
-from robosoc.config.scenario import ScenarioConfig
+from robosoc.config.scenario import PositionSensorConfig, ScenarioConfig
 from robosoc.config.vehicle import VehicleConfig
 from robosoc.control.flight import ROW_FIELDS
 from robosoc.host.telemetry import ESTIMATE_QUATERNION
@@ -365,6 +365,9 @@ def measure_build(
 
     if rows is None:
         scenario = spec.build_scenario(fw)
+        if fw.project:  # the position fix for a project that takes it (its own stream: nothing else changes)
+            sensors = dataclasses.replace(scenario.sensors, position=PositionSensorConfig(enabled=True))
+            scenario = dataclasses.replace(scenario, sensors=sensors)
         total = scenario.samples
         flight = fly_chip(scenario, _vehicle(scenario), on_sample=lambda _w, k: report(k + 1, total))
         rows, result = flight.rows, flight.run

@@ -98,4 +98,34 @@ _Static_assert(offsetof(struct robosoc_pwm_packet, flags) == 2, "pwm.flags offse
 _Static_assert(offsetof(struct robosoc_pwm_packet, seq) == 4, "pwm.seq offset");
 _Static_assert(offsetof(struct robosoc_pwm_packet, pwm) == 8, "pwm.pwm offset");
 
+/* The newest position fix and the position setpoint, I/O tile -> a project's task (world frame, z up). */
+#define ROBOSOC_POSITION_KIND 0x5204u
+#define ROBOSOC_POSITION_BYTES 80u
+#define ROBOSOC_POSITION_FLITS 40u
+struct robosoc_position_packet {
+    uint16_t kind; /* format tag (ROBOSOC_*_KIND): a packet with another tag is malformed */
+    uint16_t flags; /* bit 0 armed (ROBOSOC_FLAG_ARMED); other bits 0 */
+    uint32_t seq; /* the sensor sample's number (its sensor packet has the same) */
+    uint32_t time_us; /* the sensor sample's time [us] */
+    uint32_t fix_time_us; /* when the fix was taken (at most one fix period before time_us) [us] */
+    uint32_t fix_number; /* the fix's number, 0 for the first: a new fix when it changes */
+    int32_t position[3]; /* the fix: position x, y, z of the body origin [m] (Q16.16) */
+    int32_t velocity[3]; /* the fix: velocity x, y, z [m/s] (Q16.16) */
+    int32_t setpoint[3]; /* position setpoint x, y, z (z: the sensor packet's height setpoint) [m] (Q16.16) */
+    int32_t setpoint_velocity[3]; /* the setpoint's rate (feed-forward) [m/s] (Q16.16) */
+    int32_t setpoint_accel[3]; /* the setpoint's acceleration (feed-forward) [m/s^2] (Q16.16) */
+};
+_Static_assert(sizeof(struct robosoc_position_packet) == 80, "position packet size");
+_Static_assert(offsetof(struct robosoc_position_packet, kind) == 0, "position.kind offset");
+_Static_assert(offsetof(struct robosoc_position_packet, flags) == 2, "position.flags offset");
+_Static_assert(offsetof(struct robosoc_position_packet, seq) == 4, "position.seq offset");
+_Static_assert(offsetof(struct robosoc_position_packet, time_us) == 8, "position.time_us offset");
+_Static_assert(offsetof(struct robosoc_position_packet, fix_time_us) == 12, "position.fix_time_us offset");
+_Static_assert(offsetof(struct robosoc_position_packet, fix_number) == 16, "position.fix_number offset");
+_Static_assert(offsetof(struct robosoc_position_packet, position) == 20, "position.position offset");
+_Static_assert(offsetof(struct robosoc_position_packet, velocity) == 32, "position.velocity offset");
+_Static_assert(offsetof(struct robosoc_position_packet, setpoint) == 44, "position.setpoint offset");
+_Static_assert(offsetof(struct robosoc_position_packet, setpoint_velocity) == 56, "position.setpoint_velocity offset");
+_Static_assert(offsetof(struct robosoc_position_packet, setpoint_accel) == 68, "position.setpoint_accel offset");
+
 #endif /* ROBOSOC_PACKETS_H */
