@@ -89,6 +89,7 @@ def fly_command(
     config = resolved.config if link is None else dataclasses.replace(resolved.config, controller="chip")
     _check_controller(resolved, config, profile)
     check_project(config, resolved.source_of("firmware.project"))
+    check_power(resolved, config)
     options.exclusive(out=out is not None, no_out=no_out)
     if out is None and not no_out:
         out = Path("runs") / f"fly-{config.name}-s{config.seed}"
@@ -115,6 +116,20 @@ def fly_command(
         plain(console, f"run folder: {out} (scenario.toml, flight.csv, summary.json, flight.png, flight.mcap, "
               + ("jobs.csv, chip-trace.json, " if config.controller == "chip" else "")
               + ("profile.json, profile.csv, " if profile else "") + "report.html)")  # fmt: skip
+
+
+def check_power(resolved: ResolvedScenario, config: ScenarioConfig) -> None:
+    """A battery that cannot fly the vehicle is refused before anything is built or flown.
+
+    Raises:
+        CliError: naming the field (the option or the scenario file that set it) and why.
+    """
+    from robosoc.physics.power import lift_problem
+
+    problem = lift_problem(config.vehicle_config())
+    if problem is not None:
+        field, reason = problem
+        raise CliError(f"{resolved.source_of(field)}: {reason}")
 
 
 def _check_controller(resolved: ResolvedScenario, config: ScenarioConfig, profile: bool) -> None:

@@ -51,7 +51,7 @@ from robosoc.host.firmware_image import FirmwareImage
 from robosoc.host.scenario_image import scenario_image
 from robosoc.physics import SensorSample, World
 from robosoc.physics.clock import PHYSICS_STEP_NS, FlightClock
-from robosoc.records import PwmCommand, SampleInput
+from robosoc.records import PowerSample, PwmCommand, SampleInput
 
 """The physics step in nanoseconds (1 ms)."""
 
@@ -75,6 +75,9 @@ class LockstepController(Protocol):
 
     def finish(self) -> None:
         """The flight is over (the controller has been advanced to its end)."""
+
+    def energy_j(self) -> float:
+        """The energy its computer has spent so far [J] (the chip's; 0 for one not simulated)."""
 
     @property
     def estimate(self) -> Estimate:
@@ -178,6 +181,10 @@ class ChipController:
             run.close_period()
         self.result = run.result()
 
+    def energy_j(self) -> float:
+        """The chip's energy so far (tiles and NoC, :meth:`FirmwareRun.energy_pj`) [J]."""
+        return sum(self._run().energy_pj().values()) * 1e-12
+
     def result_so_far(self) -> ReplayResult | None:
         """The job records and totals up to where the flight stopped (an interrupted or crashed
         flight): :attr:`result` if it finished, None if it never started."""
@@ -222,6 +229,7 @@ def fly_lockstep_fleet(
     controllers: Sequence[LockstepController],
     on_row: Callable[[int, np.ndarray], None] | None = None,
     on_sample: Callable[[World, int], None] | None = None,
+    on_power: Callable[[int, PowerSample], None] | None = None,
 ) -> list[np.ndarray]:
     """Fly ``scenario`` with several vehicles in one world, vehicle i flown by ``controllers[i]``,
     all under one clock; the flight of each vehicle (columns :data:`ROW_FIELDS`).
@@ -230,9 +238,15 @@ def fly_lockstep_fleet(
     given its sample, then every controller is run to the end of each step before the world takes
     it.  Each vehicle's sensors draw from their own random stream (:meth:`World.reset`).
 
+    A vehicle on a battery (:mod:`robosoc.physics.power`) is charged its controller's energy over
+    each sample period as the chip's power in that period's steps (the chip has run the period
+    when its first step is taken).
+
     Args:
         on_row: called with (vehicle index, row) as soon as a row is complete (logging).
         on_sample: called once per sample with the world and the sample index.
+        on_power: for a vehicle on a battery, called with (vehicle index, its power system's state)
+            just before each of its rows, and once more after the last step (the flight's totals).
 
     Raises:
         ValueError: not one controller per vehicle.
@@ -248,6 +262,8 @@ def fly_lockstep_fleet(
     flights = [np.empty((clock.sample_count, len(ROW_FIELDS))) for _ in vehicles]
     rests = [v.rest_height for v in vehicles]
     pending: list[np.ndarray] = []
+    period_s = clock.sample_period_ns * 1e-9
+    chip_j = [0.0 for _ in vehicles]  # each controller's energy at the last period's end
     for k in clock.samples():
         if world.steps != clock.first_step(k):
             raise AssertionError("the world is not at the sample's step")
@@ -268,6 +284,12 @@ def fly_lockstep_fleet(
                     quad.apply_pwm(pwm)
             if s == 0:
                 for i, (quad, row) in enumerate(zip(quads, pending, strict=True)):
+                    if quad.power is not None:  # the chip has run this period: its power over it
+                        spent = controllers[i].energy_j()
+                        quad.power.chip_w = (spent - chip_j[i]) / period_s
+                        chip_j[i] = spent
+                        if on_power is not None:
+                            on_power(i, quad.power.sample())
                     row[PWM_COLUMNS] = quad.pwm
                     flights[i][k] = row
                     if on_row is not None:
@@ -277,6 +299,10 @@ def fly_lockstep_fleet(
             world.step()
     for controller in controllers:
         controller.finish()
+    if on_power is not None:
+        for i, quad in enumerate(quads):
+            if quad.power is not None:
+                on_power(i, quad.power.sample())
     return flights
 
 
@@ -303,6 +329,9 @@ class HostLockstepController:
 
     def finish(self) -> None:
         pass
+
+    def energy_j(self) -> float:
+        return 0.0  # the host controller is not a simulated computer
 
     @property
     def estimate(self) -> Estimate:

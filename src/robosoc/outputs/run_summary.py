@@ -11,7 +11,8 @@ key names, NaN written as ``null``)::
                 "height_estimate_rms_m"},
      "tasks": {"estimator": {...}, "pid": {...}} | null, "deadline_misses": 0 | null,
      "energy": {"total_uj", "tiles_uj": {"x,y": ...}, "noc_uj"} | null,
-     "cycles": {"chip", "tiles": {"x,y": ...}} | null}
+     "cycles": {"chip", "tiles": {"x,y": ...}} | null,
+     "power": {...}}      # a battery flight only (power_figures, docs/power.md)
 
 ``complete`` is false for a flight that was interrupted or crashed: the figures are those of the
 rows flown so far, and ``"stopped"`` says why.  The flight figures are
@@ -38,10 +39,12 @@ import numpy as np
 from robosoc import output_files
 from robosoc.config.chip import ChipConfig
 from robosoc.config.firmware import FirmwareConfig
+from robosoc.config.power import PowerConfig
 from robosoc.config.scenario import ScenarioConfig
 from robosoc.control.flight import ROW_FIELDS, column, flight_metrics
 from robosoc.cosim.firmware_run import ReplayResult
-from robosoc.records import ENERGY_PARTS, JobRecord
+from robosoc.physics.power import endurance_s
+from robosoc.records import ENERGY_PARTS, POWER_CONSUMERS, JobRecord, PowerSample
 
 SCHEMA = 1
 MODE_LOCKSTEP = "lockstep"
@@ -161,6 +164,91 @@ def cycle_figures(result: ReplayResult) -> dict[str, Any]:
     return {"chip": result.cycles, "tiles": {f"{x},{y}": c["cycles"] for (x, y), c in result.counters.items()}}
 
 
+ENDURANCE_ASSUMPTIONS = (
+    "hover from a full pack until the reserve state of charge (or the cut-off voltage, if first) at a constant "
+    "power: the flight's mean power from take-off (motors + chip + avionics) drawn through Tremblay's model of the "
+    "pack (docs/power.md); no temperature, ageing or recovery effects, ideal ESCs and converters, the vehicle's "
+    "mass (pack included) unchanged"
+)
+"""What the endurance estimate of ``summary.json`` assumes, written beside it."""
+LANDING_SPEED_MPS = 1.0
+"""Fastest descent [m/s] at touchdown still counted as a landing (faster: the vehicle fell)."""
+GROUND_MARGIN_M = 0.05
+"""Height [m] above its resting height within which a vehicle counts as on the ground."""
+
+
+def power_figures(
+    samples: Sequence[PowerSample], end: PowerSample, rows: np.ndarray, power: PowerConfig, rest_height: float
+) -> dict[str, Any]:
+    """The ``power`` object of a battery flight: energy by consumer, the chip's share, the pack's
+    state, the endurance estimate with its assumptions, and, if the pack ran empty, what became of
+    the vehicle.
+
+    Args:
+        samples: the power system's state at each row (:func:`robosoc.cosim.lockstep.fly_lockstep_fleet`).
+        end: its state after the last step (the flight's totals).
+        rows: the flight rows (their ``armed`` column marks the take-off).
+    """
+    energy = dict(end.energy_j)
+    total = sum(energy.values())
+    armed = np.flatnonzero(column(rows, "armed") > 0.5) if len(rows) else np.array([], dtype=int)
+    first = samples[int(armed[0])] if len(armed) and int(armed[0]) < len(samples) else None
+    if first is not None and end.t > first.t:
+        mean_w = (total - sum(first.energy_j.values())) / (end.t - first.t)
+    else:
+        mean_w = total / end.t if end.t > 0 else math.nan
+    hover_s, ended_by = endurance_s(power.battery, mean_w, power.reserve_soc) if mean_w > 0 else (math.nan, "")
+    volts = [s.pack_v for s in samples if s.pack_v > 0] + ([end.pack_v] if end.pack_v > 0 else [])
+    return {
+        "supply": power.supply,
+        "energy_j": {**energy, "total": total},
+        "chip_share": energy["chip"] / total if total > 0 else math.nan,
+        "mean_power_w": mean_w,
+        "pack": {
+            "cells": power.battery.cells,
+            "capacity_ah": power.battery.capacity_ah,
+            "initial_soc": power.battery.initial_soc,
+            "final_soc": end.soc,
+            "min_v": min(volts) if volts else math.nan,
+            "final_v": end.pack_v,
+            "max_a": max([s.pack_a for s in samples] + [end.pack_a]),
+        },
+        "endurance": {
+            "hover_s": hover_s,
+            "at_power_w": mean_w,
+            "from_soc": 1.0,
+            "to_soc": power.reserve_soc,
+            "ended_by": ended_by,
+            "assumptions": ENDURANCE_ASSUMPTIONS,
+        },
+        "empty_at_s": end.empty_at_s,
+        "after_empty": after_empty(rows, rest_height, end.empty_at_s),
+    }
+
+
+def after_empty(rows: np.ndarray, rest_height: float, empty_at_s: float | None) -> str | None:
+    """What the vehicle did once its pack ran empty at ``empty_at_s`` (None: it did not):
+    ``"on the ground"`` (it was), ``"landed"`` (it touched down at most :data:`LANDING_SPEED_MPS`
+    fast), ``"fell"`` (faster), or ``"falling"`` (still in the air when the flight ended); with the
+    touchdown time and speed."""
+    if empty_at_s is None:
+        return None
+    t, z = column(rows, "t"), column(rows, "z")
+    ground = rest_height + GROUND_MARGIN_M
+    k = int(np.searchsorted(t, empty_at_s))
+    if k >= len(t):
+        return "the flight ended as the pack emptied"
+    if z[k] <= ground:
+        return f"on the ground when the pack emptied at {empty_at_s:.3f} s"
+    down = np.flatnonzero(z[k:] <= ground)
+    if not len(down):
+        return f"falling: still {z[-1] - rest_height:.2f} m up when the flight ended"
+    j = k + int(down[0])
+    speed = (z[j - 1] - z[j]) / (t[j] - t[j - 1]) if j > 0 else 0.0
+    verdict = "landed" if speed <= LANDING_SPEED_MPS else "fell"
+    return f"{verdict}: touched down at {t[j]:.2f} s at {speed:.2f} m/s"
+
+
 def vehicle_summary(
     scenario: ScenarioConfig,
     rows: np.ndarray,
@@ -171,6 +259,7 @@ def vehicle_summary(
     *,
     complete: bool = True,
     stopped: str | None = None,
+    power: tuple[Sequence[PowerSample], PowerSample] | None = None,
 ) -> dict[str, Any]:
     """The summary of one vehicle's flight (``result``: its firmware run, None for the host controller).
 
@@ -180,6 +269,8 @@ def vehicle_summary(
         rest_height: the vehicle's (fixes the take-off climb of the flight plan).
         simulated_s, host_s: simulated time flown and the host time it took.
         complete: false for an interrupted or crashed flight; ``stopped`` then says why.
+        power: a battery flight's power samples (one per row) and its end state: the summary gets a
+            ``power`` object (:func:`power_figures`); a flight on a constant supply has none.
     """
     chip = scenario.controller == "chip"
     summary: dict[str, Any] = {
@@ -193,6 +284,8 @@ def vehicle_summary(
         "energy": energy_figures(result) if result is not None else None,
         "cycles": cycle_figures(result) if result is not None else None,
     }
+    if power is not None:
+        summary["power"] = power_figures(power[0], power[1], rows, scenario.power, rest_height)
     return _with_reason(summary, stopped)
 
 
@@ -374,6 +467,24 @@ _VEHICLE_FIELDS: dict[str, _Kind] = {
     "energy": _object({"total_uj": NUMBER, "tiles_uj": _map(NUMBER, TILE_KEY, "X,Y"), "noc_uj": NUMBER}),
     "cycles": _object({"chip": INTEGER, "tiles": _map(INTEGER, TILE_KEY, "X,Y")}),
     "min_separation_m": NUMBER,
+    "power": _object(
+        {
+            "supply": TEXT,
+            "energy_j": _map(NUMBER, (*POWER_CONSUMERS, "total"), "motors, chip, avionics or total"),
+            "chip_share": NUMBER,
+            "mean_power_w": NUMBER,
+            "pack": _object(
+                {key: NUMBER for key in ("capacity_ah", "initial_soc", "final_soc", "min_v", "final_v", "max_a")}
+                | {"cells": INTEGER}
+            ),
+            "endurance": _object(
+                {key: NUMBER for key in ("hover_s", "at_power_w", "from_soc", "to_soc")}
+                | {"ended_by": TEXT, "assumptions": TEXT}
+            ),
+            "empty_at_s": NUMBER,
+            "after_empty": _Kind("a string or null", lambda v: v is None or isinstance(v, str)),
+        }
+    ),
 }
 SUMMARY = _object(_VEHICLE_FIELDS, nullable=False)
 _VEHICLE_FIELDS["vehicles"] = _list(SUMMARY)
