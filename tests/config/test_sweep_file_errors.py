@@ -13,7 +13,7 @@ import pytest
 from robosoc.config.sweep import DEFAULT_METRICS, MAX_POINTS, load_sweep
 from robosoc.config.validate import ConfigError
 
-SCENARIO_FIELDS = "chip, controller, duration_s, firmware, flight, name, seed, sensors, vehicle, vehicles, wind"
+SCENARIO_FIELDS = "chip, controller, duration_s, firmware, flight, name, power, seed, sensors, vehicle, vehicles, wind"
 
 
 def refusal(tmp_path: Path, text: str) -> tuple[str, str]:
@@ -49,7 +49,8 @@ def refusal(tmp_path: Path, text: str) -> tuple[str, str]:
             "[grid]\nchip = [1]\n",
             "grid.chip: 'chip' is a table; vary one of its fields (width, height, io_tile, powered_off, "
             "tile.multiplier, tile.sram_bytes, tile.clock_period_ns, tiles, noc.buffer_depth, noc.flit_bits, "
-            "noc.max_packet_flits, noc.routing_latency, noc.arbiter, errata, engine)",
+            "noc.max_packet_flits, noc.routing_latency, noc.arbiter, noc.clock_gating, noc.gate_after_cycles, "
+            "noc.wake_cycles, errata, engine)",
         ),
         (
             '[grid]\n"chip.bogus" = [1]\n',

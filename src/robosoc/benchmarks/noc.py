@@ -9,7 +9,10 @@ first flit entered the source router.
 
 Both router models run on the same traffic: ``hermes`` (the RTL's single switch controller per router)
 and ``per-output`` (one arbiter per output port) with the same per-hop timing (routing latency 4, i.e.
-5 cycles per uncontended router), so the difference is the arbitration alone.
+5 cycles per uncontended router), so the difference is the arbitration alone.  Each model runs with
+the routers' clocks always on and with clock gating (``noc.clock_gating``, the default
+``gate_after_cycles`` and ``wake_cycles``; docs/noc.md): the routers' energy over the run (the packaged
+energy model) and what the wake-ups add to the mean latency are printed side by side.
 """
 
 from __future__ import annotations
@@ -24,6 +27,7 @@ from rich.console import Console
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
+from robosoc.chip.energy import EnergyModel
 from robosoc.chip.noc import Mesh
 from robosoc.config.chip import ARBITERS, HERMES_ROUTING_LATENCY, ChipConfig, NocConfig
 from robosoc.config.ranges import MAX_CYCLES, check_float, check_int, check_seed
@@ -49,6 +53,9 @@ class NocBenchmarkRow:
             in the receive memory.
         sim_cycles: cycles simulated.
         host_seconds: host time of the simulation (kernel plus event collection).
+        gating: the routers were clock-gated.
+        noc_uj: the routers' energy over the run (generation plus drain) [µJ].
+        wakeups: routers woken from a stopped clock.
     """
 
     arbiter: str
@@ -60,6 +67,14 @@ class NocBenchmarkRow:
     network_latency: float
     sim_cycles: int
     host_seconds: float
+    gating: bool = False
+    noc_uj: float = 0.0
+    wakeups: int = 0
+
+    @property
+    def model(self) -> str:
+        """The router model's label: ``hermes``, ``hermes+gating``, ..."""
+        return f"{self.arbiter}+gating" if self.gating else self.arbiter
 
     @property
     def flits_per_second(self) -> float:
@@ -91,6 +106,7 @@ def run_noc_benchmark(
     plot_path: str | Path | None = None,
     console: Console | None = None,
     arbiters: tuple[str, ...] = ARBITERS,
+    gating: tuple[bool, ...] = (False, True),
 ) -> list[NocBenchmarkRow]:
     """Run the NoC alone under uniform random traffic at each rate, for each router model, and print a table.
 
@@ -103,6 +119,7 @@ def run_noc_benchmark(
         routing_latency: of the per-output model (the Hermes model's is fixed at 4).
         seed: traffic seed (the same traffic for every model).
         arbiters: router models to run.
+        gating: each model without (False) and/or with (True) clock-gated routers.
         plot_path: if given, a PNG of latency against offered load is written there.
         console: where to print (default: a new rich console).
 
@@ -119,18 +136,21 @@ def run_noc_benchmark(
             raise ValueError(f"arbiter: must be one of {', '.join(ARBITERS)}, got {arbiter!r}")
     console = console or Console(width=max(Console().width, 100))  # the table needs ~90 columns
     configs = {
-        arbiter: ChipConfig(
+        (arbiter, gated): ChipConfig(
             width=width,
             height=height,
             noc=NocConfig(
                 buffer_depth=buffer_depth,
                 arbiter=arbiter,
                 routing_latency=HERMES_ROUTING_LATENCY if arbiter == "hermes" else routing_latency,
+                clock_gating=gated,
             ),
         )
         for arbiter in arbiters
+        for gated in dict.fromkeys(gating)
         if arbiter in ARBITERS  # all are (checked above): narrows the name to an Arbiter
     }
+    energy = EnergyModel.load()
 
     warm = Mesh(next(iter(configs.values())))  # JIT compile (or load from cache) outside the timings
     warm.inject((0, 0), (width - 1, height - 1), [1, 2, 3], at_cycle=0)
@@ -144,11 +164,12 @@ def run_noc_benchmark(
         TimeElapsedColumn(),
     )
     with Progress(*columns, console=console, transient=True) as progress:
-        for (arbiter, cfg), rate in ((item, rate) for item in configs.items() for rate in rates):
+        for ((arbiter, gated), cfg), rate in ((item, rate) for item in configs.items() for rate in rates):
             rng = np.random.default_rng(seed)
             mesh = Mesh(cfg, tag_packets=True, event_capacity=8192)
             n_packets = _traffic(mesh, rate, cycles, packet_flits, rng)
-            task = progress.add_task(f"{width}x{height} {arbiter} rate {rate:.3f}", total=n_packets)
+            label = f"{arbiter}+gating" if gated else arbiter
+            task = progress.add_task(f"{width}x{height} {label} rate {rate:.3f}", total=n_packets)
             host = 0.0
             chunk = max(1000, cycles // 20)
             while not mesh.idle:
@@ -172,6 +193,7 @@ def run_noc_benchmark(
             network = np.array(network_cycles, dtype=np.float64)
             last = max((d.cycle for d in deliveries), default=0) + 1
             flits = sum(d.length for d in deliveries)
+            counters = mesh.counters()
             rows.append(
                 NocBenchmarkRow(
                     arbiter=arbiter,
@@ -183,6 +205,9 @@ def run_noc_benchmark(
                     network_latency=float(network.mean()) if deliveries else 0.0,
                     sim_cycles=last,
                     host_seconds=host,
+                    gating=gated,
+                    noc_uj=sum(energy.noc_pj(counters.energy_counts()).values()) / 1e6,
+                    wakeups=int(counters.wakeups.sum()),
                 )
             )
 
@@ -192,19 +217,26 @@ def run_noc_benchmark(
         box=box.SIMPLE_HEAD,
         pad_edge=False,
         caption="load and accept: flits/cycle/tile; lat: mean cycles from generation (net: from the first "
-        "flit entering the source router) to the last flit in the receive memory",
+        "flit entering the source router) to the last flit in the receive memory; +gating: routers idle for "
+        "gate_after_cycles stop their clock (Δlat: mean latency change against the same router ungated, "
+        "wakes: wake-ups); µJ: the routers' energy over the run",
     )
-    headers = ("router", "load", "accept", "pkts", "lat", "net", "cycles", "host s", "Mflit/s")
+    headers = ("router", "load", "accept", "pkts", "lat", "net", "Δlat", "wakes", "µJ", "cycles", "host s", "Mflit/s")
     for name in headers:
         table.add_column(name, justify="right", no_wrap=True)
+    plain = {(r.arbiter, r.rate): r for r in rows if not r.gating}
     for r in rows:
+        base = plain.get((r.arbiter, r.rate)) if r.gating else None
         table.add_row(
-            r.arbiter,
+            r.model,
             f"{r.rate:.3f}",
             f"{r.accepted:.3f}",
             str(r.packets),
             f"{r.latency:.1f}",
             f"{r.network_latency:.1f}",
+            f"{r.latency - base.latency:+.1f}" if base is not None else "",
+            str(r.wakeups) if r.gating else "",
+            f"{r.noc_uj:.2f}" + (f" ({r.noc_uj / base.noc_uj - 1:+.0%})" if base is not None and base.noc_uj else ""),
             str(r.sim_cycles),
             f"{r.host_seconds:.3f}",
             f"{r.flits_per_second / 1e6:.2f}",
@@ -225,11 +257,11 @@ def _plot(rows: list[NocBenchmarkRow], path: Path, title: str) -> None:
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(figsize=(6, 4))
-    for arbiter in dict.fromkeys(r.arbiter for r in rows):
-        mine = [r for r in rows if r.arbiter == arbiter]
+    for model in dict.fromkeys(r.model for r in rows):
+        mine = [r for r in rows if r.model == model]
         rate = [r.rate for r in mine]
-        ax.plot(rate, [r.latency for r in mine], "o-", label=f"{arbiter}: generation to delivery")
-        ax.plot(rate, [r.network_latency for r in mine], "s--", label=f"{arbiter}: in the network")
+        ax.plot(rate, [r.latency for r in mine], "o-", label=f"{model}: generation to delivery")
+        ax.plot(rate, [r.network_latency for r in mine], "s--", label=f"{model}: in the network")
     ax.set_xlabel("offered load (flits / cycle / tile)")
     ax.set_ylabel("average packet latency (cycles)")
     ax.set_yscale("log")

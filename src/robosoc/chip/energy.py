@@ -14,6 +14,7 @@ from pathlib import Path
 from robosoc.config import ConfigError
 from robosoc.config.ranges import FLOAT_FIELDS
 from robosoc.isa.table import CLASS_NAMES, CORE_STALL_KINDS
+from robosoc.kernels.noc import NPORTS
 
 INSTRUCTION_CLASSES: tuple[str, ...] = tuple(CLASS_NAMES.values())
 #: The core's stall kinds (from the instruction table) and the chip's: DMA copies and sleep.
@@ -118,11 +119,18 @@ class EnergyModel:
         return sum(self.breakdown_pj(counts).values()) / 1000.0
 
     def noc_pj(self, noc: dict[str, int]) -> dict[str, float]:
-        """Router energy in pJ from :meth:`robosoc.chip.mpsoc.MPSoC.noc_counters`."""
+        """Router energy in pJ from :meth:`robosoc.chip.mpsoc.MPSoC.noc_counters`.
+
+        A router cycle costs leakage, its control logic (active or idle) and one term per input
+        buffer (active or idle); a cycle in which a clock-gated router's clock is stopped
+        (``router_gated_cycles``, absent: none) costs only its leakage (docs/power.md).
+        """
         c = self.noc
+        gated = noc.get("router_gated_cycles", 0)
+        idle_ports = noc["port_idle_cycles"] - gated * NPORTS
         return {
-            "buffers": noc["port_busy_cycles"] * c["buffer_active"].pj + noc["port_idle_cycles"] * c["buffer_idle"].pj,
+            "buffers": noc["port_busy_cycles"] * c["buffer_active"].pj + idle_ports * c["buffer_idle"].pj,
             "control": noc["router_busy_cycles"] * c["control_active"].pj
-            + (noc["router_cycles"] - noc["router_busy_cycles"]) * c["control_idle"].pj,
+            + (noc["router_cycles"] - noc["router_busy_cycles"] - gated) * c["control_idle"].pj,
             "leakage": noc["router_cycles"] * c["leakage"].pj,
         }

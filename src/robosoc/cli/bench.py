@@ -94,8 +94,17 @@ def bench_noc(
             help="Flits per packet, header and 3-flit tag included, 5..64.", callback=options.int_range(5, 64)
         ),
     ] = 16,
+    gating: Annotated[
+        str,
+        typer.Option(
+            help="Router clock gating (chip.noc.clock_gating): off, on, or both (same traffic; the energy and "
+            "latency change printed side by side).",
+            callback=options.choice("off", "on", "both"),
+        ),
+    ] = "both",
 ) -> None:
-    """NoC alone under uniform random traffic: flits per host second and latency against load, per router model."""
+    """NoC alone under uniform random traffic: flits per host second and latency against load, per router model
+    (with and without clock-gated routers: their energy and latency change)."""
     from robosoc.benchmarks.noc import DEFAULT_RATES, run_noc_benchmark
     from robosoc.config.chip import ARBITERS
 
@@ -116,6 +125,7 @@ def bench_noc(
         plot_path=plot_path,
         console=make_console(min_width=100),  # the table needs ~90 columns
         arbiters=ARBITERS if arbiter == "both" else (arbiter,),
+        gating={"off": (False,), "on": (True,), "both": (False, True)}[gating],
     )
 
 

@@ -26,6 +26,7 @@ from robosoc.cli import options
 from robosoc.cli.engine_option import Engine
 from robosoc.cli.errors import CliError
 from robosoc.config.firmware import ARITH_CHOICES
+from robosoc.config.power import SUPPLIES
 from robosoc.config.scenario import CONTROLLERS, MAX_VEHICLES
 from robosoc.config.vehicle import VEHICLE_PRESETS
 
@@ -134,6 +135,23 @@ Firmware = Annotated[
         callback=_folder,
     ),
 ]
+Supply = Annotated[
+    str | None,
+    typer.Option(
+        help="What feeds the motors: constant (14.8 V) or battery (the scenario's [power.battery] Li-Po pack, "
+        "and a power budget in flight.csv, summary.json and the report; docs/power.md) "
+        "(default: the scenario's, constant).",
+        callback=options.choice(*SUPPLIES),
+    ),
+]
+NocGating = Annotated[
+    bool | None,
+    typer.Option(
+        "--noc-gating/--no-noc-gating",
+        help="Routers that held no flit for chip.noc.gate_after_cycles stop their clock, and wake up "
+        "chip.noc.wake_cycles later when a flit arrives (default: the scenario's, off; docs/noc.md).",
+    ),
+]
 ScenarioArg = Annotated[Path | None, typer.Argument(metavar="SCENARIO", help=SCENARIO_HELP, show_default=False)]
 
 FLAGS: tuple[ScenarioFlag, ...] = (
@@ -147,6 +165,8 @@ FLAGS: tuple[ScenarioFlag, ...] = (
     ScenarioFlag("--mul/--no-mul", "mul", "firmware.multiplier", Mul, (FLY, SERVE_CHIP, FIRMWARE)),
     ScenarioFlag("--engine", "engine", "chip.engine", Engine, (FLY,)),
     ScenarioFlag("--firmware", "firmware", "firmware.project", Firmware, (FLY, SERVE_CHIP, FIRMWARE)),
+    ScenarioFlag("--supply", "supply", "power.supply", Supply, (FLY,)),
+    ScenarioFlag("--noc-gating/--no-noc-gating", "noc_gating", "chip.noc.clock_gating", NocGating, (FLY,)),
 )
 """Every flag that sets a scenario field."""
 

@@ -19,6 +19,7 @@ and loadable from TOML through :func:`load_chip_config`, whose errors name the f
     [noc]
     buffer_depth = 16
     arbiter = "hermes"      # or "per-output" (idealised router)
+    clock_gating = false    # true: idle routers stop their clock (gate_after_cycles, wake_cycles)
 
 Coordinates are ``(x, y)`` with ``0 <= x < width`` and ``0 <= y < height``; ``y`` grows northwards. The
 NoC address of a tile is ``(x << 4) | y`` (ORCA packet format), hence at most 16 tiles per side.
@@ -48,6 +49,7 @@ __all__ = [
     "NocConfig",
     "TileConfig",
     "TileOverride",
+    "gating_args",
     "load_chip_config",
 ]
 
@@ -158,6 +160,13 @@ class NocConfig:
             :data:`HERMES_ROUTING_LATENCY` by the Hermes switch controller; free with ``"per-output"``.
         arbiter: ``"hermes"``, the RTL's single switch controller per router (default), or
             ``"per-output"``, an idealised router with one round-robin arbiter per output port.
+        clock_gating: a router that has held no flit for ``gate_after_cycles`` cycles stops its
+            clock (it then costs only its leakage) until a flit arrives; the flit's router restarts
+            ``wake_cycles`` later, delaying every decision of that router by as much (docs/noc.md,
+            "Clock gating"; docs/power.md).  Off by default: the routers' clocks always run.
+        gate_after_cycles: idle cycles before a router's clock stops (assumed: 8; at least 1).
+        wake_cycles: cycles a stopped router needs before it acts on the flit that woke it
+            (assumed: 2, detecting the flit and re-enabling the clock-gating cell).
     """
 
     buffer_depth: int = 16
@@ -165,6 +174,9 @@ class NocConfig:
     max_packet_flits: int = NI_MEMORY_FLITS
     routing_latency: int = HERMES_ROUTING_LATENCY
     arbiter: Arbiter = "hermes"
+    clock_gating: bool = False
+    gate_after_cycles: int = 8
+    wake_cycles: int = 2
 
     def __post_init__(self) -> None:
         if not 2 <= self.buffer_depth <= 256:
@@ -180,11 +192,20 @@ class NocConfig:
             raise ValueError(f"arbiter: must be one of {', '.join(map(repr, ARBITERS))}, got {self.arbiter!r}")
         if not 0 <= self.routing_latency <= 64:
             raise ValueError(f"routing_latency: must be between 0 and 64 cycles, got {self.routing_latency}")
+        if not 1 <= self.gate_after_cycles <= 1_000_000:
+            raise ValueError(f"gate_after_cycles: must be between 1 and 1000000 cycles, got {self.gate_after_cycles}")
+        if not 0 <= self.wake_cycles <= 1000:
+            raise ValueError(f"wake_cycles: must be between 0 and 1000 cycles, got {self.wake_cycles}")
         if self.arbiter == "hermes" and self.routing_latency != HERMES_ROUTING_LATENCY:
             raise ValueError(
                 f"routing_latency: the Hermes switch controller fixes it at {HERMES_ROUTING_LATENCY} "
                 f'(5 cycles per router), got {self.routing_latency}; use arbiter = "per-output" to vary it'
             )
+
+
+def gating_args(noc: NocConfig) -> dict[str, int]:
+    """The NoC kernel's clock-gating arguments (``gate_after``, ``wake_cycles``) for ``noc``."""
+    return {"gate_after": noc.gate_after_cycles if noc.clock_gating else -1, "wake_cycles": noc.wake_cycles}
 
 
 @dataclass(frozen=True)
