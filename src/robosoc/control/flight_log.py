@@ -156,7 +156,7 @@ def check_flight_rows(rows: np.ndarray, where: str = "rows") -> np.ndarray:
     return rows
 
 
-def read_flight_log(path: Path, notes: list[str] | None = None) -> np.ndarray:
+def read_flight_log(path: Path, notes: list[str] | None = None, power: list[np.ndarray] | None = None) -> np.ndarray:
     """Read a CSV flight log back into an array with the columns of :data:`ROW_FIELDS`, checked by
     :func:`check_flight_rows` (a battery flight's power columns, :data:`WITH_POWER_FIELDS`, are
     read past).
@@ -164,6 +164,8 @@ def read_flight_log(path: Path, notes: list[str] | None = None) -> np.ndarray:
     Args:
         notes: given, a last line cut short (an interrupted flight) is skipped with a note there;
             without, it is an error.
+        power: given, a battery flight's power columns (:data:`robosoc.records.POWER_FIELDS`, one
+            row per flight row) are appended to it.
 
     Raises:
         FlightLogError: the header is not a flight log's, or a row is bad (names the file, row, column).
@@ -196,9 +198,23 @@ def read_flight_log(path: Path, notes: list[str] | None = None) -> np.ndarray:
                     if notes is not None and k == len(lines) - 1:
                         notes.append(f"{path.name}: last line incomplete (interrupted flight?), skipped")
                         rows = np.array(lines[:-1], dtype=float).reshape(-1, width)
-                        return check_flight_rows(rows[:, : len(ROW_FIELDS)], str(path))
+                        return _split_power(rows, str(path), power)
                     raise FlightLogError(
                         f"{_where(str(path), k, expected[c])}: {cell[:40]!r} is not a number"
                     ) from None
         raise
-    return check_flight_rows(rows[:, : len(ROW_FIELDS)], str(path))
+    return _split_power(rows, str(path), power)
+
+
+def _split_power(rows: np.ndarray, where: str, power: list[np.ndarray] | None) -> np.ndarray:
+    """The flight's columns of ``rows``, checked; a battery flight's power columns (finite) to ``power``."""
+    width = len(ROW_FIELDS)
+    if rows.shape[1] > width:
+        extra = rows[:, width:]
+        bad = np.argwhere(~np.isfinite(extra))
+        if len(bad):
+            k, c = (int(i) for i in bad[0])
+            raise FlightLogError(f"{_where(where, k, POWER_FIELDS[c])}: {extra[k, c]}: expected a finite number")
+        if power is not None:
+            power.append(extra)
+    return check_flight_rows(rows[:, :width], where)
