@@ -383,6 +383,23 @@ def print_summary(console, summary: dict[str, Any]) -> None:
             row(f"{task} energy per job (mean)", lambda v, f=figures: _fmt(f(v).get("energy_nj_mean"), 1, 1, "nJ"))
         row("deadline misses", lambda v: str(v.get("deadline_misses")))
         row("chip energy", lambda v: _fmt((v.get("energy") or {}).get("total_uj"), 1e-3, 2, "mJ"))
+    if vehicles[0].get("power"):  # a battery flight (docs/power.md)
+
+        def power(v) -> dict[str, Any]:
+            return v.get("power") or {}
+
+        row("energy from the pack", lambda v: _fmt((power(v).get("energy_j") or {}).get("total"), 1, 1, "J"))
+        row("chip share of it", lambda v: _fmt(power(v).get("chip_share"), 100, 4, "%"))
+        row("state of charge at the end", lambda v: _fmt((power(v).get("pack") or {}).get("final_soc"), 1, 4))
+        row(
+            "hover endurance to the reserve",
+            lambda v: (
+                f"{_fmt((power(v).get('endurance') or {}).get('hover_s'), 1 / 60, 1, 'min')} at "
+                f"{_fmt(power(v).get('mean_power_w'), 1, 1, 'W')}"
+            ),
+        )
+        if any(power(v).get("after_empty") for v in vehicles):
+            row("pack empty", lambda v: str(power(v).get("after_empty") or "no"))
     console.print(table)
     status = "" if summary.get("complete", True) else f" (incomplete: {summary.get('stopped')})"
     extra = f"; closest approach {_fmt(summary.get('min_separation_m'), 1, 2, 'm')}" if many else ""

@@ -283,8 +283,8 @@ def override(config: C, changes: dict[str, tuple[str, Any]], sources: list[str])
             nested.setdefault(head, {})[option] = (leaf, value)
         else:
             top[option] = (field, value)
-    for head, fields in nested.items():  # each sub-table's own checks name the option
-        top[next(iter(fields))] = (head, options.override(getattr(config, head), fields, sources))
+    for head, fields in nested.items():  # each sub-table's own checks name the option (tables in tables too)
+        top[next(iter(fields))] = (head, override(getattr(config, head), fields, sources))
     try:
         return options.override(config, top, sources)
     except CliError as exc:
