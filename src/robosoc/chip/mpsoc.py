@@ -31,7 +31,7 @@ from robosoc.chip.single import (
     exit_word,
 )
 from robosoc.chip.translation import ChipTranslation
-from robosoc.config.chip import MIN_PACKET_FLITS, ChipConfig, gating_args
+from robosoc.config.chip import MIN_PACKET_FLITS, ChipConfig
 from robosoc.config.ranges import check_memory, format_bytes
 from robosoc.isa.disasm import disassemble
 from robosoc.isa.table import MEMORY_CYCLES
@@ -138,7 +138,7 @@ class MPSoC:
         self.noc = nk.noc_alloc(
             config.width, config.height, noc.buffer_depth, noc.routing_latency, noc.max_packet_flits,
             noc.flit_bits, powered, event_capacity=4 * n + 64, queue_rows=IO_ROWS, arbiter=noc.arbiter,
-            **gating_args(noc),
+            gate_after=noc.gate_after, wake_cycles=noc.wake_cycles,
         )  # fmt: skip
         self.io = config.tile_index(config.io_tile)
         self.noc.tile[self.io, nk.T_RX_AUTO] = 0  # the outside world takes packets as they come

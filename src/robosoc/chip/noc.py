@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from robosoc.config.chip import MIN_PACKET_FLITS, ChipConfig, gating_args
+from robosoc.config.chip import MIN_PACKET_FLITS, ChipConfig
 from robosoc.kernels import noc as k
 
 __all__ = ["Delivery", "Mesh", "NocError", "PacketInfo", "PortCounters"]
@@ -168,7 +168,8 @@ class Mesh:
             rx_auto_free=k.NONE if rx_free_delay is None else rx_free_delay,
             reverse=reverse_evaluation,
             arbiter=noc.arbiter,
-            **gating_args(noc),
+            gate_after=noc.gate_after,
+            wake_cycles=noc.wake_cycles,
         )
         self._rows = 0
         self._deliveries: list[Delivery] = []

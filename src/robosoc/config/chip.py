@@ -49,7 +49,6 @@ __all__ = [
     "NocConfig",
     "TileConfig",
     "TileOverride",
-    "gating_args",
     "load_chip_config",
 ]
 
@@ -202,10 +201,10 @@ class NocConfig:
                 f'(5 cycles per router), got {self.routing_latency}; use arbiter = "per-output" to vary it'
             )
 
-
-def gating_args(noc: NocConfig) -> dict[str, int]:
-    """The NoC kernel's clock-gating arguments (``gate_after``, ``wake_cycles``) for ``noc``."""
-    return {"gate_after": noc.gate_after_cycles if noc.clock_gating else -1, "wake_cycles": noc.wake_cycles}
+    @property
+    def gate_after(self) -> int:
+        """The NoC kernel's clock-gating threshold: ``gate_after_cycles``, or -1 without clock gating."""
+        return self.gate_after_cycles if self.clock_gating else -1
 
 
 @dataclass(frozen=True)
