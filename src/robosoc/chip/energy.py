@@ -12,6 +12,7 @@ from importlib import resources
 from pathlib import Path
 
 from robosoc.config import ConfigError
+from robosoc.config.chip import ChipConfig
 from robosoc.config.ranges import FLOAT_FIELDS
 from robosoc.isa.table import CLASS_NAMES, CORE_STALL_KINDS
 from robosoc.kernels.noc import NPORTS
@@ -20,6 +21,9 @@ INSTRUCTION_CLASSES: tuple[str, ...] = tuple(CLASS_NAMES.values())
 #: The core's stall kinds (from the instruction table) and the chip's: DMA copies and sleep.
 STALL_KINDS: tuple[str, ...] = (*CORE_STALL_KINDS, "dma_cycle", "sleep_cycle")
 NOC_TERMS = ("buffer_active", "buffer_idle", "control_active", "control_idle", "leakage")
+LEAKAGE_TERMS = ("sleep_cycle", "leakage")
+"""The coefficients that are leakage per cycle (a sleeping core, a router): DVFS scales them with V
+and the clock period; every other coefficient is a switching energy, scaled with V²."""
 
 
 @dataclass(frozen=True)
@@ -105,6 +109,31 @@ class EnergyModel:
             float(clock),
             where,
         )
+
+    def at_operating_point(self, volts: float, reference_v: float, clock_ns: float) -> EnergyModel:
+        """The coefficients at supply ``volts`` and clock period ``clock_ns`` (DVFS, docs/power.md), from
+        theirs at ``reference_v`` and :attr:`clock_ns`: a switching energy scales with V² (C·V² per
+        transition, whatever the clock), a leakage energy per cycle (:data:`LEAKAGE_TERMS`) with V
+        (leakage power, to first order) times the period."""
+        dynamic = (volts / reference_v) ** 2
+        leakage = (volts / reference_v) * (clock_ns / self.clock_ns)
+        note = f"; scaled for {volts:g} V at {clock_ns:g} ns from {reference_v:g} V at {self.clock_ns:g} ns"
+
+        def scaled(table: dict[str, Coefficient]) -> dict[str, Coefficient]:
+            return {
+                key: Coefficient(c.pj * (leakage if key in LEAKAGE_TERMS else dynamic), c.status, c.source + note)
+                for key, c in table.items()
+            }
+
+        return EnergyModel(scaled(self.instruction), scaled(self.stall), scaled(self.noc), clock_ns, self.path)
+
+    def for_chip(self, chip: ChipConfig) -> EnergyModel:
+        """This model at ``chip``'s DVFS operating point (itself, unscaled, when the chip lists none)."""
+        period = chip.tile.clock_period_ns
+        volts = chip.dvfs.voltage_at(period)
+        if volts is None:
+            return self
+        return self.at_operating_point(volts, chip.dvfs.reference_v, period)
 
     def breakdown_pj(self, counts: dict[str, int]) -> dict[str, float]:
         """Energy per counter name in pJ, for counters named ``<class>`` or ``<kind>`` (see keys)."""

@@ -34,11 +34,13 @@ round-robin arbiter per output port and a configurable routing latency, for comp
 from __future__ import annotations
 
 import dataclasses
+import itertools
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Literal, get_args
 
-from robosoc.config.ranges import CLOCK_PERIOD_NS, MAX_CHIP_SRAM_BYTES, format_bytes
+from robosoc.config.ranges import CLOCK_PERIOD_NS, MAX_CHIP_SRAM_BYTES, check_fields, format_bytes
 from robosoc.config.validate import load_toml
 
 __all__ = [
@@ -46,6 +48,7 @@ __all__ = [
     "HERMES_ROUTING_LATENCY",
     "MIN_PACKET_FLITS",
     "ChipConfig",
+    "DvfsConfig",
     "NocConfig",
     "TileConfig",
     "TileOverride",
@@ -208,6 +211,52 @@ class NocConfig:
 
 
 @dataclass(frozen=True)
+class DvfsConfig:
+    """The chip's voltage/frequency operating points (docs/power.md, "DVFS").
+
+    The chip has one clock (``tile.clock_period_ns``); with ``points`` given it runs at the voltage of
+    the slowest point at least as fast as that clock, and the energy coefficients, characterised at
+    ``reference_v`` and the energy file's clock, are scaled: every switching energy (instructions,
+    stalls, DMA, the routers' buffers and control) by ``(V/reference_v)²``, the leakage per cycle (a
+    sleeping core's cycle, a router's leakage) by ``(V/reference_v)·(period/reference period)``.
+
+    Attributes:
+        points: ``[MHz, V]`` pairs, the voltage not falling as the frequency rises; empty (the
+            default): no scaling, the coefficients as characterised.
+        reference_v: the supply voltage of the coefficients' characterisation (assumed 1.0 V: ORCA
+            does not publish it).
+    """
+
+    points: tuple[tuple[float, float], ...] = ()
+    reference_v: float = 1.0
+
+    def __post_init__(self) -> None:
+        for i, (mhz, volts) in enumerate(self.points):
+            if not (math.isfinite(mhz) and 1.0 <= mhz <= 2000.0):
+                raise ValueError(f"points[{i}]: a frequency in 1..2000 MHz, got {mhz}")
+            if not (math.isfinite(volts) and 0.1 <= volts <= 5.0):
+                raise ValueError(f"points[{i}]: a voltage in 0.1..5 V, got {volts}")
+        ordered = sorted(self.points)
+        for (f0, v0), (f1, v1) in itertools.pairwise(ordered):
+            if f0 == f1:
+                raise ValueError(f"points: {f0:g} MHz is listed twice")
+            if v1 < v0:
+                raise ValueError(
+                    f"points: {f1:g} MHz at {v1:g} V is faster than {f0:g} MHz at {v0:g} V on less voltage"
+                )
+        check_fields(self)  # reference_v in its range (config/ranges.py)
+
+    def voltage_at(self, clock_period_ns: float) -> float | None:
+        """The voltage the chip runs at with this clock: that of the slowest point at least as fast
+        (None without points, or when the clock is faster than every point)."""
+        mhz = 1000.0 / clock_period_ns
+        for f, volts in sorted(self.points):
+            if f >= mhz * (1 - 1e-12):
+                return volts
+        return None
+
+
+@dataclass(frozen=True)
 class ChipConfig:
     """The whole MPSoC: a ``width`` × ``height`` mesh of tiles.
 
@@ -226,6 +275,7 @@ class ChipConfig:
             platform.md §3), for every core.
         engine: how the simulator executes the cores' code (:data:`ENGINE_CHOICES`): a matter of
             host speed only, never of the results.
+        dvfs: the voltage/frequency points the clock's voltage is read from (energy scaling).
     """
 
     width: int = 2
@@ -237,6 +287,7 @@ class ChipConfig:
     noc: NocConfig = field(default_factory=NocConfig)
     errata: str = "spec"
     engine: str = DEFAULT_CHIP_ENGINE
+    dvfs: DvfsConfig = field(default_factory=DvfsConfig)
 
     def __post_init__(self) -> None:
         if self.errata not in ERRATA_CHOICES:
@@ -268,6 +319,20 @@ class ChipConfig:
                 raise ValueError(f"tiles[{i}]: {xy} is overridden twice")
             overridden.add(xy)
         self._check_sram_total()
+        if self.dvfs.points:
+            for i, over in enumerate(self.tiles):
+                if over.clock_period_ns is not None:
+                    self._check_point(f"tiles[{i}].clock_period_ns", over.clock_period_ns)
+            self._check_point("tile.clock_period_ns", self.tile.clock_period_ns)
+
+    def _check_point(self, name: str, period_ns: float) -> None:
+        """A clock faster than every DVFS point has no voltage to run at."""
+        if self.dvfs.voltage_at(period_ns) is None:
+            fastest = max(f for f, _ in self.dvfs.points)
+            raise ValueError(
+                f"{name}: {period_ns:g} ns ({1000 / period_ns:g} MHz) is faster than the highest DVFS point "
+                f"(dvfs.points: {fastest:g} MHz)"
+            )
 
     def _check_sram_total(self) -> None:
         """The simulator holds every tile's SRAM at the largest tile's size: refuse a chip whose total

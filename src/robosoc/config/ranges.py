@@ -197,6 +197,7 @@ FLOAT_FIELDS: dict[str, FloatRange] = {
     "TileOverride.clock_period_ns": CLOCK_PERIOD_NS,
     "EnergyModel.clock_ns": CLOCK_PERIOD_NS,
     "Coefficient.pj": FloatRange(0.0, 1e6, "pJ"),
+    "DvfsConfig.reference_v": FloatRange(0.1, 5.0, "V"),
     # link files
     "LinkFaults.loss": _RATE,
     "LinkFaults.duplicate": _RATE,

@@ -115,7 +115,7 @@ class FirmwareRun:
         self.chip_config = chip or self.fw.default_chip()
         if not image.project:
             self.fw.check_chip(self.chip_config)  # a project's tiles are checked when it is loaded
-        self.model = energy or EnergyModel.load()
+        self.model = (energy or EnergyModel.load()).for_chip(self.chip_config)  # DVFS: at its operating point
         self.first_cycle = first_cycle
         self.chip = MPSoC(self.chip_config)
         self.chip.record_timeline()  # for the chip trace (cosim/chip_timeline.py)

@@ -147,9 +147,13 @@ def firmware_figures(fw: FirmwareConfig) -> dict[str, Any]:
 
 
 def chip_figures(chip: ChipConfig, result: ReplayResult | None) -> dict[str, Any]:
-    """The ``chip`` object: mesh and clock."""
+    """The ``chip`` object: mesh and clock (and the DVFS point's voltage, when the chip lists points)."""
     clock = result.clock_ns if result is not None else chip.tile.clock_period_ns
-    return {"width": chip.width, "height": chip.height, "clock_ns": clock}
+    figures: dict[str, Any] = {"width": chip.width, "height": chip.height, "clock_ns": clock}
+    volts = chip.dvfs.voltage_at(chip.tile.clock_period_ns)
+    if volts is not None:  # a DVFS operating point (docs/power.md)
+        figures["dvfs_v"] = volts
+    return figures
 
 
 def energy_figures(result: ReplayResult) -> dict[str, Any]:
@@ -447,7 +451,7 @@ _VEHICLE_FIELDS: dict[str, _Kind] = {
             "pid_tile": _list(INTEGER),
         },
     ),
-    "chip": _object({"width": INTEGER, "height": INTEGER, "clock_ns": NUMBER}),
+    "chip": _object({"width": INTEGER, "height": INTEGER, "clock_ns": NUMBER, "dvfs_v": NUMBER}),
     "simulated_s": NUMBER,
     "host_s": NUMBER,
     "real_time_factor": NUMBER,
