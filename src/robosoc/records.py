@@ -76,6 +76,7 @@ class PowerSample:
     avionics_w: float
     energy_j: dict[str, float]
     empty_at_s: float | None
+    low_at_s: float | None = None  # when the state of charge fell below the reserve (the failsafe's cue)
 
     @property
     def columns(self) -> tuple[float, ...]:

@@ -143,3 +143,35 @@ def test_a_state_of_charge_outside_0_1_is_refused_naming_the_field(tmp_path: Pat
 def test_supply_option_sets_the_field() -> None:
     result = runner.invoke(app, ["fly", "--supply", "solar", "--no-out"])
     assert result.exit_code == 2 and "--supply" in result.output
+
+
+def test_below_the_reserve_the_firmwares_failsafe_lands_and_disarms(tmp_path: Path) -> None:
+    """A 0.01 Ah pack (36 A·s) with a 40 % reserve: the reserve comes at about 3.5 s, hovering at
+    1 m; the firmware (built with the failsafe for a battery flight) descends at 0.5 m/s and stops
+    the motors on the ground, long before the cut-off."""
+    pack = PowerConfig(supply="battery", reserve_soc=0.4, battery=BatteryConfig(capacity_ah=0.01))
+    scenario = dataclasses.replace(SHORT, power=pack, duration_s=7.0)
+    out = tmp_path / "run"
+    fly_scenario(scenario, out, plot=False, logs=False)
+    summary = json.loads((out / "summary.json").read_text())
+    p = summary["power"]
+    failsafe = p["failsafe"]
+    assert failsafe is not None and failsafe["reserve_soc"] == 0.4
+    rows = read_flight_log(out / "flight.csv")
+    _, table = _power_columns(out / "flight.csv")
+    soc = table[:, len(ROW_FIELDS) + POWER_FIELDS.index("soc")]
+    t, z = column(rows, "t"), column(rows, "z")
+    # the cue is the first step below the reserve, seen in the rows' state of charge
+    first_low = t[np.flatnonzero(soc < 0.4)[0]]
+    assert first_low - 0.01 <= failsafe["at_s"] <= first_low
+    assert z[t < failsafe["at_s"]][-1] > 0.8  # flying at the 1 m hover when it came
+    assert failsafe["outcome"].startswith("landed: touched down")
+    speed = float(failsafe["outcome"].split(" at ")[-1].split(" m/s")[0])
+    assert speed <= 0.6  # the 0.5 m/s descent, not a fall
+    pwm = rows[:, [ROW_FIELDS.index(f"pwm{i}") for i in range(4)]]
+    down = float(failsafe["outcome"].split("touched down at ")[1].split(" s")[0])
+    after = t > down + 0.5
+    assert np.all(pwm[after] == 0)  # disarmed on the ground and staying so
+    assert np.all(z[after] < 0.2)
+    assert p["empty_at_s"] is None  # it landed on the reserve, before the cut-off
+    assert p["pack"]["final_soc"] > 0.1

@@ -398,6 +398,8 @@ def print_summary(console, summary: dict[str, Any]) -> None:
                 f"{_fmt(power(v).get('mean_power_w'), 1, 1, 'W')}"
             ),
         )
+        if any(power(v).get("failsafe") for v in vehicles):
+            row("low-battery failsafe", lambda v: str((power(v).get("failsafe") or {}).get("outcome") or "no"))
         if any(power(v).get("after_empty") for v in vehicles):
             row("pack empty", lambda v: str(power(v).get("after_empty") or "no"))
     console.print(table)

@@ -79,6 +79,9 @@ class LockstepController(Protocol):
     def energy_j(self) -> float:
         """The energy its computer has spent so far [J] (the chip's; 0 for one not simulated)."""
 
+    def warn_low_battery(self) -> None:
+        """The pack is below its reserve (a battery flight): from the next sample on, tell the firmware."""
+
     @property
     def estimate(self) -> Estimate:
         """The controller's current state estimate (NaN where it cannot be seen)."""
@@ -138,6 +141,7 @@ class ChipController:
             profile=self.profile,
         )
         self.result = None
+        self.low_battery = False
         self._period_end = self.first_cycle
         self._ahead: list[PwmCommand] = []  # commands received ahead of the physics
 
@@ -154,7 +158,7 @@ class ChipController:
         run = self._run()
         if k > 0:
             run.close_period()  # the chip is at the cycle of t_k: the previous sample's period ends
-        packet = sensor_packet(row, k, self.sample_period_us)
+        packet = sensor_packet(row, k, self.sample_period_us, self.low_battery)
         run.inject(SampleInput(k, sample.time, self.cycle_of(t_ns), packet))
         self._period_end = self.cycle_of(t_ns + self.sample_period_us * 1000)
 
@@ -184,6 +188,11 @@ class ChipController:
     def energy_j(self) -> float:
         """The chip's energy so far (tiles and NoC, :meth:`FirmwareRun.energy_pj`) [J]."""
         return sum(self._run().energy_pj().values()) * 1e-12
+
+    def warn_low_battery(self) -> None:
+        """Set :data:`packets.FLAG_LOW_BATTERY` in every sensor packet from now on (the firmware of a
+        battery flight lands on it: docs/power.md)."""
+        self.low_battery = True
 
     def result_so_far(self) -> ReplayResult | None:
         """The job records and totals up to where the flight stopped (an interrupted or crashed
@@ -271,6 +280,8 @@ def fly_lockstep_fleet(
         wind = world.wind.velocity
         pending.clear()
         for quad, controller, rest in zip(quads, controllers, rests, strict=True):
+            if quad.power is not None and quad.power.low_at_s is not None:
+                controller.warn_low_battery()  # below the reserve: the firmware's failsafe lands
             sample = quad.sensors()
             setpoint = setpoint_at(scenario.flight, rest, sample.time)
             truth = quad.truth()
@@ -332,6 +343,9 @@ class HostLockstepController:
 
     def energy_j(self) -> float:
         return 0.0  # the host controller is not a simulated computer
+
+    def warn_low_battery(self) -> None:
+        pass  # the failsafe is the firmware's: the host controller has none
 
     @property
     def estimate(self) -> Estimate:

@@ -356,6 +356,13 @@ def _power_section(power: dict) -> list[str]:
             f"({html.escape(str(endurance.get('ended_by', '')))}).</p>"
             f"<p class='note'>Assumptions: {html.escape(str(endurance.get('assumptions', '')))}.</p>"
         )
+    failsafe = power.get("failsafe")
+    if isinstance(failsafe, dict):
+        out.append(
+            f"<p class='note'>Low-battery failsafe: the pack fell below its reserve (state of charge "
+            f"{_number(failsafe.get('reserve_soc'))}) at {_number(failsafe.get('at_s'))} s; "
+            f"{html.escape(str(failsafe.get('outcome', '')))}.</p>"
+        )
     if power.get("after_empty"):
         out.append(
             f"<p class='note'>The pack ran empty at {_number(power.get('empty_at_s'))} s: "

@@ -227,26 +227,39 @@ def power_figures(
         },
         "empty_at_s": end.empty_at_s,
         "after_empty": after_empty(rows, rest_height, end.empty_at_s),
+        "failsafe": None
+        if end.low_at_s is None
+        else {
+            "reserve_soc": power.reserve_soc,
+            "at_s": end.low_at_s,
+            "outcome": touchdown(rows, rest_height, end.low_at_s, "the pack reached its reserve"),
+        },
     }
 
 
 def after_empty(rows: np.ndarray, rest_height: float, empty_at_s: float | None) -> str | None:
-    """What the vehicle did once its pack ran empty at ``empty_at_s`` (None: it did not):
-    ``"on the ground"`` (it was), ``"landed"`` (it touched down at most :data:`LANDING_SPEED_MPS`
-    fast), ``"fell"`` (faster), or ``"falling"`` (still in the air when the flight ended); with the
-    touchdown time and speed."""
+    """What the vehicle did once its pack ran empty at ``empty_at_s`` (None: it did not): see
+    :func:`touchdown`."""
     if empty_at_s is None:
         return None
+    return touchdown(rows, rest_height, empty_at_s, "the pack emptied", still="falling")
+
+
+def touchdown(rows: np.ndarray, rest_height: float, since_s: float, event: str, still: str = "in the air") -> str:
+    """How the vehicle reached the ground after ``since_s`` (when ``event`` happened): ``"on the
+    ground"`` (it was), ``"landed"`` (it touched down at most :data:`LANDING_SPEED_MPS` fast),
+    ``"fell"`` (faster), or ``still`` (in the air when the flight ended); with the touchdown time and
+    speed (from the rows' heights)."""
     t, z = column(rows, "t"), column(rows, "z")
     ground = rest_height + GROUND_MARGIN_M
-    k = int(np.searchsorted(t, empty_at_s))
+    k = int(np.searchsorted(t, since_s))
     if k >= len(t):
-        return "the flight ended as the pack emptied"
+        return f"the flight ended as {event}"
     if z[k] <= ground:
-        return f"on the ground when the pack emptied at {empty_at_s:.3f} s"
+        return f"on the ground when {event} at {since_s:.3f} s"
     down = np.flatnonzero(z[k:] <= ground)
     if not len(down):
-        return f"falling: still {z[-1] - rest_height:.2f} m up when the flight ended"
+        return f"{still}: still {z[-1] - rest_height:.2f} m up when the flight ended"
     j = k + int(down[0])
     speed = (z[j - 1] - z[j]) / (t[j] - t[j - 1]) if j > 0 else 0.0
     verdict = "landed" if speed <= LANDING_SPEED_MPS else "fell"
@@ -487,6 +500,7 @@ _VEHICLE_FIELDS: dict[str, _Kind] = {
             ),
             "empty_at_s": NUMBER,
             "after_empty": _Kind("a string or null", lambda v: v is None or isinstance(v, str)),
+            "failsafe": _object({"reserve_soc": NUMBER, "at_s": NUMBER, "outcome": TEXT}),
         }
     ),
 }

@@ -38,8 +38,8 @@ class PowerSystem:
         dt: the physics step [s].
     """
 
-    __slots__ = ("avionics_w", "battery", "chip_w", "current", "dt", "empty_at_s", "energy_j", "motors_w", "steps",
-                 "voltage")  # fmt: skip
+    __slots__ = ("avionics_w", "battery", "chip_w", "current", "dt", "empty_at_s", "energy_j", "low_at_s", "motors_w",
+                 "reserve_soc", "steps", "voltage")  # fmt: skip
 
     def __init__(self, config: PowerConfig, dt: float) -> None:
         self.battery = Battery(config.battery)
@@ -51,6 +51,8 @@ class PowerSystem:
         self.voltage = self.battery.terminal_v(0.0)
         self.energy_j = dict.fromkeys(POWER_CONSUMERS, 0.0)
         self.empty_at_s: float | None = None
+        self.reserve_soc = config.reserve_soc
+        self.low_at_s: float | None = None  # when the state of charge first fell below the reserve
         self.steps = 0
 
     def supply_v(self) -> float:
@@ -74,6 +76,8 @@ class PowerSystem:
         total = motors_w + self.chip_w + self.avionics_w
         self.current = total / volts
         self.battery.draw(self.current, self.dt)
+        if self.low_at_s is None and self.battery.soc < self.reserve_soc:
+            self.low_at_s = self.steps * self.dt
         e = self.energy_j
         e["motors"] += motors_w * self.dt
         e["chip"] += self.chip_w * self.dt
@@ -92,6 +96,7 @@ class PowerSystem:
             avionics_w=self.avionics_w if on else 0.0,
             energy_j=dict(self.energy_j),
             empty_at_s=self.empty_at_s,
+            low_at_s=self.low_at_s,
         )
 
 
