@@ -50,7 +50,7 @@ def refusal(tmp_path: Path, text: str) -> tuple[str, str]:
             "grid.chip: 'chip' is a table; vary one of its fields (width, height, io_tile, powered_off, "
             "tile.multiplier, tile.sram_bytes, tile.clock_period_ns, tiles, noc.buffer_depth, noc.flit_bits, "
             "noc.max_packet_flits, noc.routing_latency, noc.arbiter, noc.clock_gating, noc.gate_after_cycles, "
-            "noc.wake_cycles, errata, engine, dvfs.points, dvfs.reference_v)",
+            "noc.wake_cycles, noc.power_off_unused_routers, errata, engine, dvfs.points, dvfs.reference_v)",
         ),
         (
             '[grid]\n"chip.bogus" = [1]\n',

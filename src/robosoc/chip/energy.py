@@ -152,14 +152,16 @@ class EnergyModel:
 
         A router cycle costs leakage, its control logic (active or idle) and one term per input
         buffer (active or idle); a cycle in which a clock-gated router's clock is stopped
-        (``router_gated_cycles``, absent: none) costs only its leakage (docs/power.md).
+        (``router_gated_cycles``, absent: none) costs only its leakage, and a switched-off router's
+        cycle (``router_off_cycles``, absent: none) nothing at all (docs/power.md).
         """
         c = self.noc
         gated = noc.get("router_gated_cycles", 0)
-        idle_ports = noc["port_idle_cycles"] - gated * NPORTS
+        off = noc.get("router_off_cycles", 0)
+        idle_ports = noc["port_idle_cycles"] - (gated + off) * NPORTS
         return {
             "buffers": noc["port_busy_cycles"] * c["buffer_active"].pj + idle_ports * c["buffer_idle"].pj,
             "control": noc["router_busy_cycles"] * c["control_active"].pj
-            + (noc["router_cycles"] - noc["router_busy_cycles"] - gated) * c["control_idle"].pj,
-            "leakage": noc["router_cycles"] * c["leakage"].pj,
+            + (noc["router_cycles"] - noc["router_busy_cycles"] - gated - off) * c["control_idle"].pj,
+            "leakage": (noc["router_cycles"] - off) * c["leakage"].pj,
         }

@@ -528,10 +528,16 @@ class MPSoC:
         cycles = int(glob[nk.G_CYCLE]) - int(glob[nk.G_CYCLE0])
         n = self.config.n_tiles
         busy_ports = int(port[:, :, nk.P_BUSY].sum())
+        gated = nk.gated_cycles(self.noc.cfg, glob, self.noc.tile)
+        off = [self.config.tile_index(xy) for xy in self.config.routers_off()]
+        extra: dict[str, int] = {}
+        if off:  # switched off (noc.power_off_unused_routers): never busy, never counted as gated
+            gated[off] = 0
+            extra["router_off_cycles"] = cycles * len(off)
         return {
             "router_cycles": cycles * n,
             "router_busy_cycles": int(self.noc.tile[:, nk.T_BUSY].sum()),
-            "router_gated_cycles": int(nk.gated_cycles(self.noc.cfg, glob, self.noc.tile).sum()),
+            "router_gated_cycles": int(gated.sum()),
             "router_wakeups": int(self.noc.tile[:, nk.T_WAKES].sum()),
             "port_busy_cycles": busy_ports,
             "port_idle_cycles": cycles * n * nk.NPORTS - busy_ports,
@@ -539,6 +545,7 @@ class MPSoC:
             "flits_injected": int(glob[nk.G_INJECTED]),
             "packets_delivered": int(glob[nk.G_DELIVERED]),
             "rtl_lost_headers": int(glob[nk.G_RTL_LOST]),
+            **extra,
         }
 
     # --- errors ----------------------------------------------------------------------------

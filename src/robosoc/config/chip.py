@@ -169,6 +169,9 @@ class NocConfig:
         gate_after_cycles: idle cycles before a router's clock stops (assumed: 8; at least 1).
         wake_cycles: cycles a stopped router needs before it acts on the flit that woke it
             (assumed: 2, detecting the flit and re-enabling the clock-gating cell).
+        power_off_unused_routers: the router of a powered-off tile that no XY route between two
+            powered tiles crosses is switched off too (no energy at all, leakage included); by
+            default a powered-off tile keeps its router (:meth:`ChipConfig.routers_off`).
     """
 
     buffer_depth: int = 16
@@ -179,6 +182,7 @@ class NocConfig:
     clock_gating: bool = False
     gate_after_cycles: int = 8
     wake_cycles: int = 2
+    power_off_unused_routers: bool = False
 
     def __post_init__(self) -> None:
         if not 2 <= self.buffer_depth <= 256:
@@ -347,6 +351,22 @@ class ChipConfig:
                 f"{field}: {self.n_tiles} tiles x {format_bytes(largest)} of SRAM = {format_bytes(total)} to simulate, "
                 f"more than {format_bytes(MAX_CHIP_SRAM_BYTES)} (every tile gets the largest tile's SRAM)"
             )
+
+    def routers_off(self) -> tuple[tuple[int, int], ...]:
+        """The routers switched off with ``noc.power_off_unused_routers``: those of powered-off tiles
+        on no XY route between two powered tiles (the I/O tile included), so no packet can reach
+        them and the timing of every packet is as with them on.  Empty without the option."""
+        if not self.noc.power_off_unused_routers:
+            return ()
+        powered = [xy for xy in (self.tile_xy(t) for t in range(self.n_tiles)) if self.is_powered(xy)]
+        used: set[tuple[int, int]] = set()
+        for sx, sy in powered:
+            for dx, dy in powered:
+                step = 1 if dx >= sx else -1
+                used.update((x, sy) for x in range(sx, dx + step, step))
+                step = 1 if dy >= sy else -1
+                used.update((dx, y) for y in range(sy, dy + step, step))
+        return tuple(xy for xy in self.powered_off if tuple(xy) not in used)
 
     @property
     def n_tiles(self) -> int:
