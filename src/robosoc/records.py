@@ -56,3 +56,32 @@ class PwmCommand:
     seq: int
     pwm: tuple[int, int, int, int]
     cycle: int  # the PWM message's last packet reached the I/O tile
+
+
+#: The consumers of a vehicle's power budget (:attr:`PowerSample.energy_j`), docs/power.md.
+POWER_CONSUMERS = ("motors", "chip", "avionics")
+#: The power columns a battery flight's ``flight.csv`` gets after :data:`robosoc.control.flight.ROW_FIELDS`.
+POWER_FIELDS = ("pack_v", "pack_a", "soc", "motors_w", "chip_w")
+
+
+@dataclass(frozen=True)
+class PowerSample:
+    """A vehicle's power system at time ``t``: the pack's terminal voltage and current and state of
+    charge after the last physics step, the consumers' power in it, and the energy each consumer has
+    drawn from the pack since the start (``energy_j``, keys :data:`POWER_CONSUMERS`)."""
+
+    t: float
+    pack_v: float
+    pack_a: float
+    soc: float
+    motors_w: float
+    chip_w: float
+    avionics_w: float
+    energy_j: dict[str, float]
+    empty_at_s: float | None
+    low_at_s: float | None = None  # when the state of charge fell below the reserve (the failsafe's cue)
+
+    @property
+    def columns(self) -> tuple[float, ...]:
+        """The values of :data:`POWER_FIELDS`."""
+        return (self.pack_v, self.pack_a, self.soc, self.motors_w, self.chip_w)

@@ -256,6 +256,8 @@ def test_each_written_plot_is_the_figure_of_its_own_task_field_and_metric(tmp_pa
     metric = "tasks.estimator.energy_nj_mean"
     plots = write_sweep_plots(tmp_path / "out", both, varied, [metric])
     expected = [(pareto_figure(both, varied, task), 100) for task in ("estimator", "pid")]
+    # the chip was varied: the chip's whole energy against each task's response too
+    expected += [(pareto_figure(both, varied, task, chip=True), 100) for task in ("estimator", "pid")]
     expected += [(metric_figure(both, metric, field), 80) for field in varied]
     assert len(plots) == len(expected)
     for (caption, path, _), (fig, dpi) in zip(plots, expected, strict=True):
@@ -277,3 +279,17 @@ def test_the_points_table_has_one_row_per_line_in_order():
         "<h2>Points</h2><table><thead><tr><th>point</th><th>value</th></tr></thead><tbody>"
         "<tr><td>0</td><td>&lt;1&gt;</td></tr><tr><td>1</td><td>2</td></tr></tbody></table>"
     ) in page
+
+
+def test_the_chip_front_puts_the_chips_whole_energy_against_a_tasks_response() -> None:
+    points = [record("fixed", 1, 10.0, 5.0, **{"chip.noc.clock_gating": g}) for g in (False, True)]
+    for r, total in zip(points, (100.0, 20.0), strict=True):
+        r["summary"]["energy"] = {"total_uj": total}
+    fig = pareto_figure(points, ["chip.noc.clock_gating"], "estimator", chip=True)
+    try:
+        ax = fig.axes[0]
+        assert "chip's energy" in ax.get_ylabel()
+        ys = sorted(float(y) for c in ax.collections for _, y in c.get_offsets())
+        assert ys == [20.0, 100.0]
+    finally:
+        plt.close(fig)

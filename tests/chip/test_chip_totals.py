@@ -327,6 +327,8 @@ def test_one_packets_noc_energy_and_flit_hops_by_hand(noc: NocConfig, router_cyc
         "flits_injected": length,
         "packets_delivered": 1,
         "rtl_lost_headers": 0,
+        "router_gated_cycles": 0,  # no clock gating
+        "router_wakeups": 0,
     }
     c = {k: v.pj for k, v in MODEL.noc.items()}
     want = {

@@ -49,8 +49,20 @@ PER_OUTPUT = NocConfig(arbiter="per-output")
         (ChipConfig(noc=PER_OUTPUT), 6),
         (ChipConfig(width=3, height=2, noc=PER_OUTPUT), 3),
         (ChipConfig(width=3, height=2, noc=NocConfig(buffer_depth=2, routing_latency=1, arbiter="per-output")), 3),
+        # clock-gated routers (docs/noc.md): wake-ups only delay, the quanta stay exact
+        (ChipConfig(width=3, height=2, noc=NocConfig(clock_gating=True, gate_after_cycles=3, wake_cycles=2)), 3),
+        (ChipConfig(noc=NocConfig(arbiter="per-output", clock_gating=True, gate_after_cycles=1, wake_cycles=5)), 6),
     ],
-    ids=["hermes-2x2", "hermes-3x2", "hermes-3x2-shallow", "per-output-2x2", "per-output-3x2", "per-output-3x2-fast"],
+    ids=[
+        "hermes-2x2",
+        "hermes-3x2",
+        "hermes-3x2-shallow",
+        "per-output-2x2",
+        "per-output-3x2",
+        "per-output-3x2-fast",
+        "hermes-3x2-gated",
+        "per-output-2x2-gated",
+    ],
 )
 def test_quanta_give_the_lockstep_results(config: ChipConfig, rounds: int):
     fast = run(config, lockstep=False, rounds=rounds)
@@ -60,6 +72,7 @@ def test_quanta_give_the_lockstep_results(config: ChipConfig, rounds: int):
     for xy, text in output.items():
         assert f"got {rounds * (n_cores - 1)} " in text.decode(), (xy, text)
     assert noc["packets_delivered"] == rounds * n_cores * (n_cores - 1)
+    assert (noc["router_wakeups"] > 0) == config.noc.clock_gating  # gated runs do wake routers up
     assert fast == slow
 
 

@@ -113,6 +113,7 @@ TASK_EXTRA = {"sleep_cycle", "dma_cycle"}
 NOC_COUNTERS = {
     "router_cycles", "router_busy_cycles", "port_busy_cycles", "port_idle_cycles",
     "flit_hops", "flits_injected", "packets_delivered", "rtl_lost_headers",
+    "router_gated_cycles", "router_wakeups",  # clock gating (docs/noc.md): zero unless it is on
 }  # fmt: skip
 ENERGY_KEYS = CORE_COUNTERS - {"taken_branches", "interrupts", "interrupts_lost", "traps", "device_accesses",
                                "cycles", "instructions"} | {"dma_cycle", "sleep_cycle"}  # fmt: skip

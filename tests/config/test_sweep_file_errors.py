@@ -13,7 +13,7 @@ import pytest
 from robosoc.config.sweep import DEFAULT_METRICS, MAX_POINTS, load_sweep
 from robosoc.config.validate import ConfigError
 
-SCENARIO_FIELDS = "chip, controller, duration_s, firmware, flight, name, seed, sensors, vehicle, vehicles, wind"
+SCENARIO_FIELDS = "chip, controller, duration_s, firmware, flight, name, power, seed, sensors, vehicle, vehicles, wind"
 
 
 def refusal(tmp_path: Path, text: str) -> tuple[str, str]:
@@ -49,11 +49,12 @@ def refusal(tmp_path: Path, text: str) -> tuple[str, str]:
             "[grid]\nchip = [1]\n",
             "grid.chip: 'chip' is a table; vary one of its fields (width, height, io_tile, powered_off, "
             "tile.multiplier, tile.sram_bytes, tile.clock_period_ns, tiles, noc.buffer_depth, noc.flit_bits, "
-            "noc.max_packet_flits, noc.routing_latency, noc.arbiter, errata, engine)",
+            "noc.max_packet_flits, noc.routing_latency, noc.arbiter, noc.clock_gating, noc.gate_after_cycles, "
+            "noc.wake_cycles, noc.power_off_unused_routers, errata, engine, dvfs.points, dvfs.reference_v)",
         ),
         (
             '[grid]\n"chip.bogus" = [1]\n',
-            "grid.chip.bogus: 'chip.bogus' is not a scenario field (chip has: engine, errata, height, io_tile, "
+            "grid.chip.bogus: 'chip.bogus' is not a scenario field (chip has: dvfs, engine, errata, height, io_tile, "
             "noc, powered_off, tile, tiles, width)",
         ),
         (
@@ -65,8 +66,8 @@ def refusal(tmp_path: Path, text: str) -> tuple[str, str]:
         ("points = [{}]\n", "points[0]: an empty point: name at least one field"),
         (
             '[[points]]\nduration_s = 2.0\n[[points]]\n"chip.bogus" = 1\n',
-            "points[1].chip.bogus: 'chip.bogus' is not a scenario field (chip has: engine, errata, height, io_tile, "
-            "noc, powered_off, tile, tiles, width)",
+            "points[1].chip.bogus: 'chip.bogus' is not a scenario field (chip has: dvfs, engine, errata, height, "
+            "io_tile, noc, powered_off, tile, tiles, width)",
         ),
         ("seeds = 1\n", "seeds: expected a non-empty list of seeds (integers), got 1"),
         ("seeds = []\n", "seeds: expected a non-empty list of seeds (integers), got []"),

@@ -114,7 +114,7 @@ def run_chip_benchmark(
     if noc:
         from robosoc.benchmarks.noc import run_noc_benchmark
 
-        run_noc_benchmark(width=8, height=8, cycles=5_000, console=console, arbiters=("hermes",))
+        run_noc_benchmark(width=8, height=8, cycles=5_000, console=console, arbiters=("hermes",), gating=(False,))
     median = statistics.median(rows[(4, 4)])
     print(f"chip: {median:.0f} Mcycles/s")
     return median

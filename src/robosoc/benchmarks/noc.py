@@ -14,6 +14,10 @@ and ``per-output`` (one arbiter per output port) with the same per-hop timing (r
 (``hermes-before``: the model before issue 38, docs/noc.md "The buffer's read pointer"), on the same
 traffic, which shows what the tail-credit rule and the bubble change under load. ``rx_hold`` makes every
 receiver hold its memory that many cycles after each packet (as in the RTL measurement of platform.md §4).
+Each model runs
+with the routers' clocks always on and with clock gating (``noc.clock_gating``, the default
+``gate_after_cycles`` and ``wake_cycles``; docs/noc.md): the routers' energy over the run (the packaged
+energy model) and what the wake-ups add to the mean latency are printed side by side.
 """
 
 from __future__ import annotations
@@ -28,6 +32,7 @@ from rich.console import Console
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
+from robosoc.chip.energy import EnergyModel
 from robosoc.chip.noc import Mesh
 from robosoc.config.chip import ARBITERS, HERMES_ROUTING_LATENCY, ChipConfig, NocConfig
 from robosoc.config.ranges import MAX_CYCLES, check_float, check_int, check_seed
@@ -59,6 +64,9 @@ class NocBenchmarkRow:
             them: its timing is only comparable where this is 0).
         moved: ``hermes-before`` rows: packets whose start or arrival cycle differs from the ``hermes``
             run on the same traffic (None for other rows).
+        gating: the routers were clock-gated.
+        noc_uj: the routers' energy over the run (generation plus drain) [µJ].
+        wakeups: routers woken from a stopped clock.
     """
 
     arbiter: str
@@ -73,11 +81,15 @@ class NocBenchmarkRow:
     host_seconds: float
     rtl_lost_headers: int = 0
     moved: int | None = None
+    gating: bool = False
+    noc_uj: float = 0.0
+    wakeups: int = 0
 
     @property
     def model(self) -> str:
-        """The router model as printed: ``hermes``, ``hermes-before`` or ``per-output``."""
-        return "hermes-before" if self.arbiter == "hermes" and not self.read_pointer else self.arbiter
+        """The router model as printed: ``hermes``, ``hermes-before``, ``per-output``, ``+gating`` if gated."""
+        name = "hermes-before" if self.arbiter == "hermes" and not self.read_pointer else self.arbiter
+        return f"{name}+gating" if self.gating else name
 
     @property
     def flits_per_second(self) -> float:
@@ -115,6 +127,7 @@ def run_noc_benchmark(
     arbiters: tuple[str, ...] = ARBITERS,
     compare_read_pointer: bool = False,
     rx_hold: int = 0,
+    gating: tuple[bool, ...] = (False, True),
 ) -> list[NocBenchmarkRow]:
     """Run the NoC alone under uniform random traffic at each rate, for each router model, and print a table.
 
@@ -131,6 +144,7 @@ def run_noc_benchmark(
         compare_read_pointer: also run the Hermes model without its buffer's read-pointer timing
             (``hermes-before``), for the before/after curves.
         rx_hold: cycles every receive memory stays held after a delivery (0: freed the next cycle).
+        gating: each model without (False) and/or with (True) clock-gated routers.
         plot_path: if given, a PNG of latency against offered load is written there.
         console: where to print (default: a new rich console).
 
@@ -153,21 +167,24 @@ def run_noc_benchmark(
             raise ValueError(f"arbiter: must be one of {', '.join(ARBITERS)}, got {arbiter!r}")
     console = console or Console(width=max(Console().width, 100))  # the table needs ~90 columns
     chips = {
-        arbiter: ChipConfig(
+        (arbiter, gated): ChipConfig(
             width=width,
             height=height,
             noc=NocConfig(
                 buffer_depth=buffer_depth,
                 arbiter=arbiter,
                 routing_latency=HERMES_ROUTING_LATENCY if arbiter == "hermes" else routing_latency,
+                clock_gating=gated,
             ),
         )
         for arbiter in arbiters
+        for gated in dict.fromkeys(gating)
         if arbiter in ARBITERS  # all are (checked above): narrows the name to an Arbiter
     }
-    models = [(arbiter, cfg, True) for arbiter, cfg in chips.items()]
-    if compare_read_pointer and "hermes" in chips:
-        models.insert(1, ("hermes", chips["hermes"], False))
+    models = [(arbiter, gated, cfg, True) for (arbiter, gated), cfg in chips.items()]
+    if compare_read_pointer and ("hermes", False) in chips:
+        models.insert(1, ("hermes", False, chips[("hermes", False)], False))
+    energy = EnergyModel.load()
 
     warm = Mesh(next(iter(chips.values())))  # JIT compile (or load from cache) outside the timings
     warm.inject((0, 0), (width - 1, height - 1), [1, 2, 3], at_cycle=0)
@@ -182,13 +199,14 @@ def run_noc_benchmark(
         TimeElapsedColumn(),
     )
     with Progress(*columns, console=console, transient=True) as progress:
-        for (arbiter, cfg, read_pointer), rate in ((model, rate) for model in models for rate in rates):
+        for (arbiter, gated, cfg, read_pointer), rate in ((model, rate) for model in models for rate in rates):
             rng = np.random.default_rng(seed)
             mesh = Mesh(
                 cfg, tag_packets=True, event_capacity=8192, rx_free_delay=rx_hold, read_pointer_timing=read_pointer
             )
             n_packets = _traffic(mesh, rate, cycles, packet_flits, rng)
             label = arbiter if read_pointer or arbiter != "hermes" else "hermes-before"
+            label = f"{label}+gating" if gated else label
             task = progress.add_task(f"{width}x{height} {label} rate {rate:.3f}", total=n_packets)
             host = 0.0
             chunk = max(1000, cycles // 20)
@@ -212,14 +230,15 @@ def run_noc_benchmark(
                 network_cycles.append(d.cycle - packet.start)
                 times[d.packet_id] = (packet.start, d.cycle)
             moved = None
-            if arbiter == "hermes" and read_pointer:
+            if arbiter == "hermes" and read_pointer and not gated:
                 timing[rate] = times
-            elif arbiter == "hermes" and rate in timing:
+            elif arbiter == "hermes" and not gated and rate in timing:
                 moved = sum(times[p] != timing[rate].get(p) for p in times)
             latency = np.array(latency_cycles, dtype=np.float64)
             network = np.array(network_cycles, dtype=np.float64)
             last = max((d.cycle for d in deliveries), default=0) + 1
             flits = sum(d.length for d in deliveries)
+            counters = mesh.counters()
             rows.append(
                 NocBenchmarkRow(
                     arbiter=arbiter,
@@ -234,6 +253,9 @@ def run_noc_benchmark(
                     host_seconds=host,
                     rtl_lost_headers=mesh.rtl_lost_headers,
                     moved=moved,
+                    gating=gated,
+                    noc_uj=sum(energy.noc_pj(counters.energy_counts()).values()) / 1e6,
+                    wakeups=int(counters.wakeups.sum()),
                 )
             )
 
@@ -247,12 +269,19 @@ def run_noc_benchmark(
         caption="load and accept: flits/cycle/tile; lat: mean cycles from generation (net: from the first "
         "flit entering the source router) to the last flit in the receive memory; lost: headers the RTL "
         "would have lost (no room in their crossing cycle: robosoc lets them wait); moved: packets whose start "
-        "or arrival cycle differs from the hermes row's",
+        "or arrival cycle differs from the hermes row's; +gating: routers idle for gate_after_cycles stop their "
+        "clock (Δlat: mean latency change against the same router ungated, wakes: wake-ups); µJ: the routers' "
+        "energy over the run",
     )
-    headers = ("router", "load", "accept", "pkts", "lat", "net", "lost", "moved", "cycles", "host s", "Mflit/s")
+    headers = (
+        "router", "load", "accept", "pkts", "lat", "net", "lost", "moved", "Δlat", "wakes", "µJ", "cycles",
+        "host s", "Mflit/s",
+    )  # fmt: skip
     for name in headers:
         table.add_column(name, justify="right", no_wrap=True)
+    plain = {(r.arbiter, r.rate): r for r in rows if not r.gating and (r.read_pointer or r.arbiter != "hermes")}
     for r in rows:
+        base = plain.get((r.arbiter, r.rate)) if r.gating else None
         table.add_row(
             r.model,
             f"{r.rate:.3f}",
@@ -262,6 +291,9 @@ def run_noc_benchmark(
             f"{r.network_latency:.2f}",
             str(r.rtl_lost_headers),
             "" if r.moved is None else str(r.moved),
+            f"{r.latency - base.latency:+.1f}" if base is not None else "",
+            str(r.wakeups) if r.gating else "",
+            f"{r.noc_uj:.2f}" + (f" ({r.noc_uj / base.noc_uj - 1:+.0%})" if base is not None and base.noc_uj else ""),
             str(r.sim_cycles),
             f"{r.host_seconds:.3f}",
             f"{r.flits_per_second / 1e6:.2f}",

@@ -12,13 +12,18 @@ from importlib import resources
 from pathlib import Path
 
 from robosoc.config import ConfigError
+from robosoc.config.chip import ChipConfig
 from robosoc.config.ranges import FLOAT_FIELDS
 from robosoc.isa.table import CLASS_NAMES, CORE_STALL_KINDS
+from robosoc.kernels.noc import NPORTS
 
 INSTRUCTION_CLASSES: tuple[str, ...] = tuple(CLASS_NAMES.values())
 #: The core's stall kinds (from the instruction table) and the chip's: DMA copies and sleep.
 STALL_KINDS: tuple[str, ...] = (*CORE_STALL_KINDS, "dma_cycle", "sleep_cycle")
 NOC_TERMS = ("buffer_active", "buffer_idle", "control_active", "control_idle", "leakage")
+LEAKAGE_TERMS = ("sleep_cycle", "leakage")
+"""The coefficients that are leakage per cycle (a sleeping core, a router): DVFS scales them with V
+and the clock period; every other coefficient is a switching energy, scaled with V²."""
 
 
 @dataclass(frozen=True)
@@ -105,6 +110,31 @@ class EnergyModel:
             where,
         )
 
+    def at_operating_point(self, volts: float, reference_v: float, clock_ns: float) -> EnergyModel:
+        """The coefficients at supply ``volts`` and clock period ``clock_ns`` (DVFS, docs/power.md), from
+        theirs at ``reference_v`` and :attr:`clock_ns`: a switching energy scales with V² (C·V² per
+        transition, whatever the clock), a leakage energy per cycle (:data:`LEAKAGE_TERMS`) with V
+        (leakage power, to first order) times the period."""
+        dynamic = (volts / reference_v) ** 2
+        leakage = (volts / reference_v) * (clock_ns / self.clock_ns)
+        note = f"; scaled for {volts:g} V at {clock_ns:g} ns from {reference_v:g} V at {self.clock_ns:g} ns"
+
+        def scaled(table: dict[str, Coefficient]) -> dict[str, Coefficient]:
+            return {
+                key: Coefficient(c.pj * (leakage if key in LEAKAGE_TERMS else dynamic), c.status, c.source + note)
+                for key, c in table.items()
+            }
+
+        return EnergyModel(scaled(self.instruction), scaled(self.stall), scaled(self.noc), clock_ns, self.path)
+
+    def for_chip(self, chip: ChipConfig) -> EnergyModel:
+        """This model at ``chip``'s DVFS operating point (itself, unscaled, when the chip lists none)."""
+        period = chip.tile.clock_period_ns
+        volts = chip.dvfs.voltage_at(period)
+        if volts is None:
+            return self
+        return self.at_operating_point(volts, chip.dvfs.reference_v, period)
+
     def breakdown_pj(self, counts: dict[str, int]) -> dict[str, float]:
         """Energy per counter name in pJ, for counters named ``<class>`` or ``<kind>`` (see keys)."""
         out: dict[str, float] = {}
@@ -118,11 +148,20 @@ class EnergyModel:
         return sum(self.breakdown_pj(counts).values()) / 1000.0
 
     def noc_pj(self, noc: dict[str, int]) -> dict[str, float]:
-        """Router energy in pJ from :meth:`robosoc.chip.mpsoc.MPSoC.noc_counters`."""
+        """Router energy in pJ from :meth:`robosoc.chip.mpsoc.MPSoC.noc_counters`.
+
+        A router cycle costs leakage, its control logic (active or idle) and one term per input
+        buffer (active or idle); a cycle in which a clock-gated router's clock is stopped
+        (``router_gated_cycles``, absent: none) costs only its leakage, and a switched-off router's
+        cycle (``router_off_cycles``, absent: none) nothing at all (docs/power.md).
+        """
         c = self.noc
+        gated = noc.get("router_gated_cycles", 0)
+        off = noc.get("router_off_cycles", 0)
+        idle_ports = noc["port_idle_cycles"] - (gated + off) * NPORTS
         return {
-            "buffers": noc["port_busy_cycles"] * c["buffer_active"].pj + noc["port_idle_cycles"] * c["buffer_idle"].pj,
+            "buffers": noc["port_busy_cycles"] * c["buffer_active"].pj + idle_ports * c["buffer_idle"].pj,
             "control": noc["router_busy_cycles"] * c["control_active"].pj
-            + (noc["router_cycles"] - noc["router_busy_cycles"]) * c["control_idle"].pj,
-            "leakage": noc["router_cycles"] * c["leakage"].pj,
+            + (noc["router_cycles"] - noc["router_busy_cycles"] - gated - off) * c["control_idle"].pj,
+            "leakage": (noc["router_cycles"] - off) * c["leakage"].pj,
         }

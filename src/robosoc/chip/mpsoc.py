@@ -138,6 +138,7 @@ class MPSoC:
         self.noc = nk.noc_alloc(
             config.width, config.height, noc.buffer_depth, noc.routing_latency, noc.max_packet_flits,
             noc.flit_bits, powered, event_capacity=4 * n + 64, queue_rows=IO_ROWS, arbiter=noc.arbiter,
+            gate_after=noc.gate_after, wake_cycles=noc.wake_cycles,
         )  # fmt: skip
         self.io = config.tile_index(config.io_tile)
         self.noc.tile[self.io, nk.T_RX_AUTO] = 0  # the outside world takes packets as they come
@@ -532,15 +533,24 @@ class MPSoC:
         cycles = int(glob[nk.G_CYCLE]) - int(glob[nk.G_CYCLE0])
         n = self.config.n_tiles
         busy_ports = int(port[:, :, nk.P_BUSY].sum())
+        gated = nk.gated_cycles(self.noc.cfg, glob, self.noc.tile)
+        off = [self.config.tile_index(xy) for xy in self.config.routers_off()]
+        extra: dict[str, int] = {}
+        if off:  # switched off (noc.power_off_unused_routers): never busy, never counted as gated
+            gated[off] = 0
+            extra["router_off_cycles"] = cycles * len(off)
         return {
             "router_cycles": cycles * n,
             "router_busy_cycles": int(self.noc.tile[:, nk.T_BUSY].sum()),
+            "router_gated_cycles": int(gated.sum()),
+            "router_wakeups": int(self.noc.tile[:, nk.T_WAKES].sum()),
             "port_busy_cycles": busy_ports,
             "port_idle_cycles": cycles * n * nk.NPORTS - busy_ports,
             "flit_hops": int(glob[nk.G_HOPS]),
             "flits_injected": int(glob[nk.G_INJECTED]),
             "packets_delivered": int(glob[nk.G_DELIVERED]),
             "rtl_lost_headers": int(glob[nk.G_RTL_LOST]),
+            **extra,
         }
 
     # --- errors ----------------------------------------------------------------------------

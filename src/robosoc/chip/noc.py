@@ -94,6 +94,8 @@ class PortCounters:
         router_busy_cycles: cycles each router held at least one flit (control logic active), ``[x, y]``.
         rtl_lost_headers: headers each router could not send in their crossing cycle for lack of room
             downstream, ``[x, y]``: robosoc lets them wait, the Hermes RTL would have lost them.
+        gated_cycles: cycles each router's clock was stopped (clock gating), ``[x, y]``.
+        wakeups: each router's wake-ups from a stopped clock, ``[x, y]``.
     """
 
     cycles: int
@@ -103,6 +105,20 @@ class PortCounters:
     idle_cycles: np.ndarray
     router_busy_cycles: np.ndarray
     rtl_lost_headers: np.ndarray
+    gated_cycles: np.ndarray
+    wakeups: np.ndarray
+
+    def energy_counts(self) -> dict[str, int]:
+        """The mesh's totals in the form :meth:`robosoc.chip.energy.EnergyModel.noc_pj` takes."""
+        routers = int(self.router_busy_cycles.size)
+        busy_ports = int(self.busy_cycles.sum())
+        return {
+            "router_cycles": self.cycles * routers,
+            "router_busy_cycles": int(self.router_busy_cycles.sum()),
+            "router_gated_cycles": int(self.gated_cycles.sum()),
+            "port_busy_cycles": busy_ports,
+            "port_idle_cycles": self.cycles * routers * len(PORT_NAMES) - busy_ports,
+        }
 
 
 PORT_NAMES = k.PORT_NAMES
@@ -158,6 +174,8 @@ class Mesh:
             reverse=reverse_evaluation,
             arbiter=noc.arbiter,
             read_pointer=read_pointer_timing,
+            gate_after=noc.gate_after,
+            wake_cycles=noc.wake_cycles,
         )
         self._rows = 0
         self._deliveries: list[Delivery] = []
@@ -430,6 +448,8 @@ class Mesh:
             idle_cycles=cycles - busy,
             router_busy_cycles=by_xy(st.tile[:, k.T_BUSY]),
             rtl_lost_headers=by_xy(st.tile[:, k.T_RTL_LOST]),
+            gated_cycles=by_xy(k.gated_cycles(st.cfg, st.glob, st.tile)),
+            wakeups=by_xy(st.tile[:, k.T_WAKES]),
         )
 
     def snapshot(self) -> tuple[k.NocState, int, list[Delivery]]:

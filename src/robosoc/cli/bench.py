@@ -117,8 +117,17 @@ def bench_noc(
             "credit and the bubble off, the model before issue 38) on the same traffic.",
         ),
     ] = False,
+    gating: Annotated[
+        str,
+        typer.Option(
+            help="Router clock gating (chip.noc.clock_gating): off, on, or both (same traffic; the energy and "
+            "latency change printed side by side).",
+            callback=options.choice("off", "on", "both"),
+        ),
+    ] = "both",
 ) -> None:
-    """NoC alone under uniform random traffic: flits per host second and latency against load, per router model."""
+    """NoC alone under uniform random traffic: flits per host second and latency against load, per router model
+    (with and without clock-gated routers: their energy and latency change)."""
     from robosoc.benchmarks.noc import DEFAULT_RATES, run_noc_benchmark
     from robosoc.config.chip import ARBITERS
 
@@ -142,6 +151,7 @@ def bench_noc(
         buffer_depth=depth,
         rx_hold=rx_hold,
         compare_read_pointer=compare_read_pointer,
+        gating={"off": (False,), "on": (True,), "both": (False, True)}[gating],
     )
 
 

@@ -92,6 +92,7 @@ def fly_command(
         check_project(config, resolved.source_of("firmware.project"), sends=("sensor",), what="the decoupled mode")
     else:
         check_project(config, resolved.source_of("firmware.project"))
+    check_power(resolved, config)
     options.exclusive(out=out is not None, no_out=no_out)
     if out is None and not no_out:
         out = Path("runs") / f"fly-{config.name}-s{config.seed}"
@@ -118,6 +119,20 @@ def fly_command(
         plain(console, f"run folder: {out} (scenario.toml, flight.csv, summary.json, flight.png, flight.mcap, "
               + ("jobs.csv, chip-trace.json, " if config.controller == "chip" else "")
               + ("profile.json, profile.csv, " if profile else "") + "report.html)")  # fmt: skip
+
+
+def check_power(resolved: ResolvedScenario, config: ScenarioConfig) -> None:
+    """A battery that cannot fly the vehicle is refused before anything is built or flown.
+
+    Raises:
+        CliError: naming the field (the option or the scenario file that set it) and why.
+    """
+    from robosoc.physics.power import lift_problem
+
+    problem = lift_problem(config.vehicle_config())
+    if problem is not None:
+        field, reason = problem
+        raise CliError(f"{resolved.source_of(field)}: {reason}")
 
 
 def _check_controller(resolved: ResolvedScenario, config: ScenarioConfig, profile: bool) -> None:
@@ -400,6 +415,25 @@ def print_summary(console, summary: dict[str, Any]) -> None:
             row(f"{task} energy per job (mean)", lambda v, f=figures: _fmt(f(v).get("energy_nj_mean"), 1, 1, "nJ"))
         row("deadline misses", lambda v: str(v.get("deadline_misses")))
         row("chip energy", lambda v: _fmt((v.get("energy") or {}).get("total_uj"), 1e-3, 2, "mJ"))
+    if vehicles[0].get("power"):  # a battery flight (docs/power.md)
+
+        def power(v) -> dict[str, Any]:
+            return v.get("power") or {}
+
+        row("energy from the pack", lambda v: _fmt((power(v).get("energy_j") or {}).get("total"), 1, 1, "J"))
+        row("chip share of it", lambda v: _fmt(power(v).get("chip_share"), 100, 4, "%"))
+        row("state of charge at the end", lambda v: _fmt((power(v).get("pack") or {}).get("final_soc"), 1, 4))
+        row(
+            "hover endurance to the reserve",
+            lambda v: (
+                f"{_fmt((power(v).get('endurance') or {}).get('hover_s'), 1 / 60, 1, 'min')} at "
+                f"{_fmt(power(v).get('mean_power_w'), 1, 1, 'W')}"
+            ),
+        )
+        if any(power(v).get("failsafe") for v in vehicles):
+            row("low-battery failsafe", lambda v: str((power(v).get("failsafe") or {}).get("outcome") or "no"))
+        if any(power(v).get("after_empty") for v in vehicles):
+            row("pack empty", lambda v: str(power(v).get("after_empty") or "no"))
     console.print(table)
     for i, v in enumerate(vehicles):
         quiet = v.get("no_actuator_command")

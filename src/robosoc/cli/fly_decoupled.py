@@ -80,6 +80,9 @@ def fly_decoupled_run(
 
     if scenario.vehicles != 1:
         raise options.fail("--decoupled", f"flies one vehicle, the scenario has {scenario.vehicles}")
+    if scenario.power.battery_on:
+        raise options.fail("--decoupled", "flies on the constant supply only (power.supply = \"battery\" is not "
+                           "modelled across the two processes): fly the battery in lockstep")  # fmt: skip
     vehicle, fw, seed = vehicle_preset(scenario.vehicle), scenario.firmware, scenario.seed
     from rich.markup import escape
     from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn

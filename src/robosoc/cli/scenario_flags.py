@@ -26,6 +26,7 @@ from robosoc.cli import options
 from robosoc.cli.engine_option import Engine
 from robosoc.cli.errors import CliError
 from robosoc.config.firmware import ARITH_CHOICES, FIXED_MUL64_CHOICES
+from robosoc.config.power import SUPPLIES
 from robosoc.config.scenario import CONTROLLERS, MAX_VEHICLES
 from robosoc.config.vehicle import VEHICLE_PRESETS
 
@@ -144,6 +145,23 @@ FixedMul = Annotated[
         callback=options.choice(*FIXED_MUL64_CHOICES),
     ),
 ]
+Supply = Annotated[
+    str | None,
+    typer.Option(
+        help="What feeds the motors: constant (14.8 V) or battery (the scenario's [power.battery] Li-Po pack, "
+        "and a power budget in flight.csv, summary.json and the report; docs/power.md) "
+        "(default: the scenario's, constant).",
+        callback=options.choice(*SUPPLIES),
+    ),
+]
+NocGating = Annotated[
+    bool | None,
+    typer.Option(
+        "--noc-gating/--no-noc-gating",
+        help="Routers that held no flit for chip.noc.gate_after_cycles stop their clock, and wake up "
+        "chip.noc.wake_cycles later when a flit arrives (default: the scenario's, off; docs/noc.md).",
+    ),
+]
 ScenarioArg = Annotated[Path | None, typer.Argument(metavar="SCENARIO", help=SCENARIO_HELP, show_default=False)]
 
 FLAGS: tuple[ScenarioFlag, ...] = (
@@ -158,6 +176,8 @@ FLAGS: tuple[ScenarioFlag, ...] = (
     ScenarioFlag("--fixed-mul", "fixed_mul", "firmware.fixed_mul64", FixedMul, (FLY, SERVE_CHIP, FIRMWARE, TABLE)),
     ScenarioFlag("--engine", "engine", "chip.engine", Engine, (FLY,)),
     ScenarioFlag("--firmware", "firmware", "firmware.project", Firmware, (FLY, SERVE_CHIP, FIRMWARE)),
+    ScenarioFlag("--supply", "supply", "power.supply", Supply, (FLY,)),
+    ScenarioFlag("--noc-gating/--no-noc-gating", "noc_gating", "chip.noc.clock_gating", NocGating, (FLY,)),
 )
 """Every flag that sets a scenario field."""
 
@@ -274,8 +294,8 @@ def override(config: C, changes: dict[str, tuple[str, Any]], sources: list[str])
             nested.setdefault(head, {})[option] = (leaf, value)
         else:
             top[option] = (field, value)
-    for head, fields in nested.items():  # each sub-table's own checks name the option
-        top[next(iter(fields))] = (head, options.override(getattr(config, head), fields, sources))
+    for head, fields in nested.items():  # each sub-table's own checks name the option (tables in tables too)
+        top[next(iter(fields))] = (head, override(getattr(config, head), fields, sources))
     try:
         return options.override(config, top, sources)
     except CliError as exc:

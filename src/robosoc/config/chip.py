@@ -19,6 +19,7 @@ and loadable from TOML through :func:`load_chip_config`, whose errors name the f
     [noc]
     buffer_depth = 16
     arbiter = "hermes"      # or "per-output" (idealised router)
+    clock_gating = false    # true: idle routers stop their clock (gate_after_cycles, wake_cycles)
 
 Coordinates are ``(x, y)`` with ``0 <= x < width`` and ``0 <= y < height``; ``y`` grows northwards. The
 NoC address of a tile is ``(x << 4) | y`` (ORCA packet format), hence at most 16 tiles per side.
@@ -33,11 +34,13 @@ round-robin arbiter per output port and a configurable routing latency, for comp
 from __future__ import annotations
 
 import dataclasses
+import itertools
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Literal, get_args
 
-from robosoc.config.ranges import CLOCK_PERIOD_NS, MAX_CHIP_SRAM_BYTES, format_bytes
+from robosoc.config.ranges import CLOCK_PERIOD_NS, MAX_CHIP_SRAM_BYTES, check_fields, format_bytes
 from robosoc.config.validate import load_toml
 
 __all__ = [
@@ -45,6 +48,7 @@ __all__ = [
     "HERMES_ROUTING_LATENCY",
     "MIN_PACKET_FLITS",
     "ChipConfig",
+    "DvfsConfig",
     "NocConfig",
     "TileConfig",
     "TileOverride",
@@ -158,6 +162,16 @@ class NocConfig:
             :data:`HERMES_ROUTING_LATENCY` by the Hermes switch controller; free with ``"per-output"``.
         arbiter: ``"hermes"``, the RTL's single switch controller per router (default), or
             ``"per-output"``, an idealised router with one round-robin arbiter per output port.
+        clock_gating: a router that has held no flit for ``gate_after_cycles`` cycles stops its
+            clock (it then costs only its leakage) until a flit arrives; the flit's router restarts
+            ``wake_cycles`` later, delaying every decision of that router by as much (docs/noc.md,
+            "Clock gating"; docs/power.md).  Off by default: the routers' clocks always run.
+        gate_after_cycles: idle cycles before a router's clock stops (assumed: 8; at least 1).
+        wake_cycles: cycles a stopped router needs before it acts on the flit that woke it
+            (assumed: 2, detecting the flit and re-enabling the clock-gating cell).
+        power_off_unused_routers: the router of a powered-off tile that no XY route between two
+            powered tiles crosses is switched off too (no energy at all, leakage included); by
+            default a powered-off tile keeps its router (:meth:`ChipConfig.routers_off`).
     """
 
     buffer_depth: int = 16
@@ -165,6 +179,10 @@ class NocConfig:
     max_packet_flits: int = NI_MEMORY_FLITS
     routing_latency: int = HERMES_ROUTING_LATENCY
     arbiter: Arbiter = "hermes"
+    clock_gating: bool = False
+    gate_after_cycles: int = 8
+    wake_cycles: int = 2
+    power_off_unused_routers: bool = False
 
     def __post_init__(self) -> None:
         if not 2 <= self.buffer_depth <= 256:
@@ -180,11 +198,66 @@ class NocConfig:
             raise ValueError(f"arbiter: must be one of {', '.join(map(repr, ARBITERS))}, got {self.arbiter!r}")
         if not 0 <= self.routing_latency <= 64:
             raise ValueError(f"routing_latency: must be between 0 and 64 cycles, got {self.routing_latency}")
+        if not 1 <= self.gate_after_cycles <= 1_000_000:
+            raise ValueError(f"gate_after_cycles: must be between 1 and 1000000 cycles, got {self.gate_after_cycles}")
+        if not 0 <= self.wake_cycles <= 1000:
+            raise ValueError(f"wake_cycles: must be between 0 and 1000 cycles, got {self.wake_cycles}")
         if self.arbiter == "hermes" and self.routing_latency != HERMES_ROUTING_LATENCY:
             raise ValueError(
                 f"routing_latency: the Hermes switch controller fixes it at {HERMES_ROUTING_LATENCY} "
                 f'(5 cycles per router), got {self.routing_latency}; use arbiter = "per-output" to vary it'
             )
+
+    @property
+    def gate_after(self) -> int:
+        """The NoC kernel's clock-gating threshold: ``gate_after_cycles``, or -1 without clock gating."""
+        return self.gate_after_cycles if self.clock_gating else -1
+
+
+@dataclass(frozen=True)
+class DvfsConfig:
+    """The chip's voltage/frequency operating points (docs/power.md, "DVFS").
+
+    The chip has one clock (``tile.clock_period_ns``); with ``points`` given it runs at the voltage of
+    the slowest point at least as fast as that clock, and the energy coefficients, characterised at
+    ``reference_v`` and the energy file's clock, are scaled: every switching energy (instructions,
+    stalls, DMA, the routers' buffers and control) by ``(V/reference_v)²``, the leakage per cycle (a
+    sleeping core's cycle, a router's leakage) by ``(V/reference_v)·(period/reference period)``.
+
+    Attributes:
+        points: ``[MHz, V]`` pairs, the voltage not falling as the frequency rises; empty (the
+            default): no scaling, the coefficients as characterised.
+        reference_v: the supply voltage of the coefficients' characterisation (assumed 1.0 V: ORCA
+            does not publish it).
+    """
+
+    points: tuple[tuple[float, float], ...] = ()
+    reference_v: float = 1.0
+
+    def __post_init__(self) -> None:
+        for i, (mhz, volts) in enumerate(self.points):
+            if not (math.isfinite(mhz) and 1.0 <= mhz <= 2000.0):
+                raise ValueError(f"points[{i}]: a frequency in 1..2000 MHz, got {mhz}")
+            if not (math.isfinite(volts) and 0.1 <= volts <= 5.0):
+                raise ValueError(f"points[{i}]: a voltage in 0.1..5 V, got {volts}")
+        ordered = sorted(self.points)
+        for (f0, v0), (f1, v1) in itertools.pairwise(ordered):
+            if f0 == f1:
+                raise ValueError(f"points: {f0:g} MHz is listed twice")
+            if v1 < v0:
+                raise ValueError(
+                    f"points: {f1:g} MHz at {v1:g} V is faster than {f0:g} MHz at {v0:g} V on less voltage"
+                )
+        check_fields(self)  # reference_v in its range (config/ranges.py)
+
+    def voltage_at(self, clock_period_ns: float) -> float | None:
+        """The voltage the chip runs at with this clock: that of the slowest point at least as fast
+        (None without points, or when the clock is faster than every point)."""
+        mhz = 1000.0 / clock_period_ns
+        for f, volts in sorted(self.points):
+            if f >= mhz * (1 - 1e-12):
+                return volts
+        return None
 
 
 @dataclass(frozen=True)
@@ -206,6 +279,7 @@ class ChipConfig:
             platform.md §3), for every core.
         engine: how the simulator executes the cores' code (:data:`ENGINE_CHOICES`): a matter of
             host speed only, never of the results.
+        dvfs: the voltage/frequency points the clock's voltage is read from (energy scaling).
     """
 
     width: int = 2
@@ -217,6 +291,7 @@ class ChipConfig:
     noc: NocConfig = field(default_factory=NocConfig)
     errata: str = "spec"
     engine: str = DEFAULT_CHIP_ENGINE
+    dvfs: DvfsConfig = field(default_factory=DvfsConfig)
 
     def __post_init__(self) -> None:
         if self.errata not in ERRATA_CHOICES:
@@ -248,6 +323,20 @@ class ChipConfig:
                 raise ValueError(f"tiles[{i}]: {xy} is overridden twice")
             overridden.add(xy)
         self._check_sram_total()
+        if self.dvfs.points:
+            for i, over in enumerate(self.tiles):
+                if over.clock_period_ns is not None:
+                    self._check_point(f"tiles[{i}].clock_period_ns", over.clock_period_ns)
+            self._check_point("tile.clock_period_ns", self.tile.clock_period_ns)
+
+    def _check_point(self, name: str, period_ns: float) -> None:
+        """A clock faster than every DVFS point has no voltage to run at."""
+        if self.dvfs.voltage_at(period_ns) is None:
+            fastest = max(f for f, _ in self.dvfs.points)
+            raise ValueError(
+                f"{name}: {period_ns:g} ns ({1000 / period_ns:g} MHz) is faster than the highest DVFS point "
+                f"(dvfs.points: {fastest:g} MHz)"
+            )
 
     def _check_sram_total(self) -> None:
         """The simulator holds every tile's SRAM at the largest tile's size: refuse a chip whose total
@@ -262,6 +351,22 @@ class ChipConfig:
                 f"{field}: {self.n_tiles} tiles x {format_bytes(largest)} of SRAM = {format_bytes(total)} to simulate, "
                 f"more than {format_bytes(MAX_CHIP_SRAM_BYTES)} (every tile gets the largest tile's SRAM)"
             )
+
+    def routers_off(self) -> tuple[tuple[int, int], ...]:
+        """The routers switched off with ``noc.power_off_unused_routers``: those of powered-off tiles
+        on no XY route between two powered tiles (the I/O tile included), so no packet can reach
+        them and the timing of every packet is as with them on.  Empty without the option."""
+        if not self.noc.power_off_unused_routers:
+            return ()
+        powered = [xy for xy in (self.tile_xy(t) for t in range(self.n_tiles)) if self.is_powered(xy)]
+        used: set[tuple[int, int]] = set()
+        for sx, sy in powered:
+            for dx, dy in powered:
+                step = 1 if dx >= sx else -1
+                used.update((x, sy) for x in range(sx, dx + step, step))
+                step = 1 if dy >= sy else -1
+                used.update((dx, y) for y in range(sy, dy + step, step))
+        return tuple(xy for xy in self.powered_off if tuple(xy) not in used)
 
     @property
     def n_tiles(self) -> int:

@@ -197,6 +197,7 @@ FLOAT_FIELDS: dict[str, FloatRange] = {
     "TileOverride.clock_period_ns": CLOCK_PERIOD_NS,
     "EnergyModel.clock_ns": CLOCK_PERIOD_NS,
     "Coefficient.pj": FloatRange(0.0, 1e6, "pJ"),
+    "DvfsConfig.reference_v": FloatRange(0.1, 5.0, "V"),
     # link files
     "LinkFaults.loss": _RATE,
     "LinkFaults.duplicate": _RATE,
@@ -267,6 +268,19 @@ FLOAT_FIELDS: dict[str, FloatRange] = {
     "DragConfig.c_wz": FloatRange(0.0, 10.0),
     "DragConfig.c_mxy": FloatRange(0.0, 10.0),
     "DragConfig.c_mz": FloatRange(0.0, 10.0),
+    # the power system (config/power.py)
+    "BatteryConfig.capacity_ah": FloatRange(0.001, 1000.0, "Ah"),
+    "BatteryConfig.full_v": FloatRange(0.5, 10.0, "V"),
+    "BatteryConfig.exp_v": FloatRange(0.5, 10.0, "V"),
+    "BatteryConfig.exp_fraction": FloatRange(0.0, 1.0, "(a fraction of the capacity)", lo_open=True),
+    "BatteryConfig.nominal_v": FloatRange(0.5, 10.0, "V"),
+    "BatteryConfig.nominal_fraction": FloatRange(0.0, 1.0, "(a fraction of the capacity)", lo_open=True),
+    "BatteryConfig.curve_c": FloatRange(0.0, 100.0, "C", lo_open=True),
+    "BatteryConfig.resistance_ohm": FloatRange(0.0, 10.0, "Ω"),
+    "BatteryConfig.cutoff_v": FloatRange(0.5, 10.0, "V"),
+    "BatteryConfig.initial_soc": FloatRange(0.0, 1.0, "(state of charge)"),
+    "PowerConfig.avionics_w": FloatRange(0.0, 1000.0, "W"),
+    "PowerConfig.reserve_soc": FloatRange(0.0, 1.0, "(state of charge)"),
 }
 """Every float field of every configuration file, ``"<dataclass>.<field>"``, and its range (a tuple of
 floats, a vector, has the range for each element).  Checked in each dataclass's ``__post_init__``

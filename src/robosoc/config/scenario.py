@@ -37,6 +37,16 @@ vectors) is replaced as a whole.  All fields, with their defaults::
     rise_s = 0.3
     velocity = [3.0, 2.0, 0.0]
 
+    [power]                  # what feeds the motors (robosoc.config.power.PowerConfig, docs/power.md)
+    supply = "constant"      # or "battery": the Li-Po pack of [power.battery], and a power budget
+    avionics_w = 3.0
+    reserve_soc = 0.2
+    [power.battery]
+    cells = 4
+    capacity_ah = 5.0
+    initial_soc = 1.0
+    ...
+
     [flight]
     takeoff_s = 3.0
     height_m = 1.0
@@ -67,6 +77,7 @@ number of physics steps.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -74,10 +85,11 @@ from typing import Literal
 
 from robosoc.config.chip import ChipConfig
 from robosoc.config.firmware import FirmwareConfig
+from robosoc.config.power import PowerConfig
 from robosoc.config.ranges import MAX_SEED, check_fields
 from robosoc.config.toml_text import to_toml
 from robosoc.config.validate import ConfigError
-from robosoc.config.vehicle import VEHICLE_PRESETS
+from robosoc.config.vehicle import VEHICLE_PRESETS, VehicleConfig
 
 PHYSICS_DT_S = 0.001
 """The MuJoCo step: 1 ms, as in the seed's Gazebo setup."""
@@ -530,6 +542,7 @@ class ScenarioConfig:
     flight: FlightPlan = field(default_factory=lambda: FlightPlan(steps=_default_steps()))
     firmware: FirmwareConfig = field(default_factory=FirmwareConfig)
     chip: ChipConfig = field(default_factory=_default_chip)
+    power: PowerConfig = field(default_factory=PowerConfig)
 
     def __post_init__(self) -> None:
         _require(
@@ -596,6 +609,11 @@ class ScenarioConfig:
                 f"got {self.flight.steps[i].time_s}",
             )
         check_fields(self)  # and every float in its range (config/ranges.py)
+
+    def vehicle_config(self) -> VehicleConfig:
+        """The preset :attr:`vehicle` with this scenario's :attr:`power` system."""
+        preset = VEHICLE_PRESETS[self.vehicle]()
+        return preset if self.power == preset.power else dataclasses.replace(preset, power=self.power)
 
     @property
     def samples(self) -> int:

@@ -15,6 +15,7 @@ import math
 from dataclasses import dataclass, field
 from typing import Literal
 
+from robosoc.config.power import PowerConfig
 from robosoc.config.ranges import check_fields
 
 Vector3 = tuple[float, float, float]
@@ -94,6 +95,10 @@ class VehicleConfig:
     gives no usable differential thrust: attitude control loses its authority.  50 counts give
     1.67 N per rotor in steady state (46 % of the default vehicle's hover thrust; four of them
     still let it sink at up to 5.3 m/s²).
+
+    ``power`` is what feeds the motors (:mod:`robosoc.config.power`): the presets keep the
+    published constant 14.8 V; a scenario's ``[power]`` table is put on its preset
+    (:meth:`robosoc.config.scenario.ScenarioConfig.vehicle_config`).
     """
 
     name: str = "quad"
@@ -112,6 +117,7 @@ class VehicleConfig:
     motor: MotorConfig = field(default_factory=MotorConfig)
     drag: DragConfig = field(default_factory=DragConfig)
     idle_pwm: int = 50
+    power: PowerConfig = field(default_factory=PowerConfig)
 
     def __post_init__(self) -> None:
         _require(

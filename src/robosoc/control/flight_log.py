@@ -15,22 +15,37 @@ import numpy as np
 
 from robosoc.control.flight import ROW_FIELDS
 from robosoc.output_files import open_in_place
+from robosoc.records import POWER_FIELDS
 
 
 class CsvFlightLog:
-    """Append-only CSV writer of flight rows (use as a context manager)."""
+    """Append-only CSV writer of flight rows (use as a context manager).
 
-    def __init__(self, path: Path) -> None:
+    Args:
+        path: the file.
+        extra_fields: columns after :data:`ROW_FIELDS` (a battery flight's
+            :data:`robosoc.records.POWER_FIELDS`), whose values each :meth:`write` is given.
+    """
+
+    def __init__(self, path: Path, extra_fields: Sequence[str] = ()) -> None:
         self.path = path
+        self.extra_fields = tuple(extra_fields)
         path.parent.mkdir(parents=True, exist_ok=True)
         self._file = open_in_place(path, "w", encoding="utf-8", newline="\n")
-        self._file.write(",".join(ROW_FIELDS) + "\n")
+        self._file.write(",".join((*ROW_FIELDS, *self.extra_fields)) + "\n")
         self._file.flush()
         self.rows = 0
 
-    def write(self, row: np.ndarray) -> None:
-        """Append one row (full float precision) and flush it to the OS."""
-        self._file.write(",".join(repr(float(v)) for v in row) + "\n")
+    def write(self, row: np.ndarray, extra: Sequence[float] = ()) -> None:
+        """Append one row and the values of the extra columns (full float precision), and flush it to the OS.
+
+        Raises:
+            ValueError: not one value per extra column.
+        """
+        if len(extra) != len(self.extra_fields):
+            raise ValueError(f"extra: {len(self.extra_fields)} values expected ({', '.join(self.extra_fields)}), "
+                             f"got {len(extra)}")  # fmt: skip
+        self._file.write(",".join(repr(float(v)) for v in (*row, *extra)) + "\n")
         self._file.flush()
         self.rows += 1
 
@@ -82,6 +97,10 @@ PACKET_COLUMNS = (
 """Columns a replay packs into the firmware's sensor packet, whose fields are Q16.16
 (:data:`robosoc.host.packets.SENSOR`): they must fit in -32768 .. 32768 - 2**-16."""
 Q16_LOW, Q16_HIGH = -(2**15), 2**15 - 2**-16
+
+
+WITH_POWER_FIELDS = (*ROW_FIELDS, *POWER_FIELDS)
+"""The columns of a battery flight's log: the flight's, then its power system's."""
 
 
 class FlightLogError(ValueError):
@@ -137,13 +156,16 @@ def check_flight_rows(rows: np.ndarray, where: str = "rows") -> np.ndarray:
     return rows
 
 
-def read_flight_log(path: Path, notes: list[str] | None = None) -> np.ndarray:
+def read_flight_log(path: Path, notes: list[str] | None = None, power: list[np.ndarray] | None = None) -> np.ndarray:
     """Read a CSV flight log back into an array with the columns of :data:`ROW_FIELDS`, checked by
-    :func:`check_flight_rows`.
+    :func:`check_flight_rows` (a battery flight's power columns, :data:`WITH_POWER_FIELDS`, are
+    read past).
 
     Args:
         notes: given, a last line cut short (an interrupted flight) is skipped with a note there;
             without, it is an error.
+        power: given, a battery flight's power columns (:data:`robosoc.records.POWER_FIELDS`, one
+            row per flight row) are appended to it.
 
     Raises:
         FlightLogError: the header is not a flight log's, or a row is bad (names the file, row, column).
@@ -152,11 +174,12 @@ def read_flight_log(path: Path, notes: list[str] | None = None) -> np.ndarray:
     with path.open(encoding="utf-8", newline="") as handle:
         reader = csv.reader(handle)
         header = next(reader, None)
-        problem = "empty file" if header is None else header_problem(header, ROW_FIELDS)
+        expected = ROW_FIELDS if header is None or len(header) <= len(ROW_FIELDS) else WITH_POWER_FIELDS
+        problem = "empty file" if header is None else header_problem(header, expected)
         if problem is not None:
             raise FlightLogError(f"{path}: not a robosoc flight log ({problem})")
         lines = list(reader)
-    width = len(ROW_FIELDS)
+    width = len(expected)
     for k, line in enumerate(lines):
         if len(line) != width:
             if notes is not None and k == len(lines) - 1:
@@ -174,9 +197,24 @@ def read_flight_log(path: Path, notes: list[str] | None = None) -> np.ndarray:
                 except ValueError:
                     if notes is not None and k == len(lines) - 1:
                         notes.append(f"{path.name}: last line incomplete (interrupted flight?), skipped")
-                        return check_flight_rows(np.array(lines[:-1], dtype=float).reshape(-1, width), str(path))
+                        rows = np.array(lines[:-1], dtype=float).reshape(-1, width)
+                        return _split_power(rows, str(path), power)
                     raise FlightLogError(
-                        f"{_where(str(path), k, ROW_FIELDS[c])}: {cell[:40]!r} is not a number"
+                        f"{_where(str(path), k, expected[c])}: {cell[:40]!r} is not a number"
                     ) from None
         raise
-    return check_flight_rows(rows, str(path))
+    return _split_power(rows, str(path), power)
+
+
+def _split_power(rows: np.ndarray, where: str, power: list[np.ndarray] | None) -> np.ndarray:
+    """The flight's columns of ``rows``, checked; a battery flight's power columns (finite) to ``power``."""
+    width = len(ROW_FIELDS)
+    if rows.shape[1] > width:
+        extra = rows[:, width:]
+        bad = np.argwhere(~np.isfinite(extra))
+        if len(bad):
+            k, c = (int(i) for i in bad[0])
+            raise FlightLogError(f"{_where(where, k, POWER_FIELDS[c])}: {extra[k, c]}: expected a finite number")
+        if power is not None:
+            power.append(extra)
+    return check_flight_rows(rows[:, :width], where)

@@ -124,7 +124,7 @@ class FirmwareRun:
         self.image = image
         self.chip_config = chip or self.fw.default_chip()
         self.fw.check_chip(self.chip_config)
-        self.model = energy or EnergyModel.load()
+        self.model = (energy or EnergyModel.load()).for_chip(self.chip_config)  # DVFS: at its operating point
         self.first_cycle = first_cycle
         self.chip = MPSoC(self.chip_config)
         self.chip.record_timeline()  # for the chip trace (cosim/chip_timeline.py)
@@ -252,6 +252,15 @@ class FirmwareRun:
                 self._logged.append((xy, r, _period_of(self._sample_cycles, r.release)))
             self._seen[xy] = count
 
+    def energy_pj(self) -> dict[str, float]:
+        """The chip's energy so far, per application tile (``"tile (x, y)"``) and for the NoC
+        (``"noc"``): what :meth:`result` reports as the run's totals, at the present cycle."""
+        chip_, model = self.chip, self.model
+        chip_.finish_accounting()
+        total = {f"tile {xy}": _pj(model, chip_.counters(xy)) for xy in self.tiles}
+        total["noc"] = sum(model.noc_pj(chip_.noc_counters()).values())
+        return total
+
     def function_profile(self) -> FunctionProfile:
         """The exact profile so far: cycles, instructions and energy per function, tile and task.
 
@@ -298,11 +307,9 @@ class FirmwareRun:
                     spans_periods=p + 1 < len(samples) and r.completion > samples[p + 1].cycle,
                 )
             )  # fmt: skip
-        chip_.finish_accounting()
+        total = self.energy_pj()
         counters = {xy: chip_.counters(xy) for xy in self.tiles}
         task_energy = {(xy, task): _pj(model, c) for xy in self.tiles for task, c in chip_.task_counters(xy).items()}
-        total = {f"tile {xy}": _pj(model, c) for xy, c in counters.items()}
-        total["noc"] = sum(model.noc_pj(chip_.noc_counters()).values())
         return ReplayResult(
             firmware=self.fw, clock_ns=chip_.clock_ns, samples=list(samples), commands=list(self.commands),
             jobs=jobs, kernel_stats={xy: images.read_stats(chip_, xy) for xy in self.tiles}, counters=counters,

@@ -52,7 +52,7 @@ from robosoc.host.scenario_image import scenario_image
 from robosoc.host.telemetry import estimate_of
 from robosoc.physics import SensorSample, World
 from robosoc.physics.clock import PHYSICS_STEP_NS, FlightClock
-from robosoc.records import PwmCommand, SampleInput
+from robosoc.records import PowerSample, PwmCommand, SampleInput
 
 """The physics step in nanoseconds (1 ms)."""
 
@@ -76,6 +76,12 @@ class LockstepController(Protocol):
 
     def finish(self) -> None:
         """The flight is over (the controller has been advanced to its end)."""
+
+    def energy_j(self) -> float:
+        """The energy its computer has spent so far [J] (the chip's; 0 for one not simulated)."""
+
+    def warn_low_battery(self) -> None:
+        """The pack is below its reserve (a battery flight): from the next sample on, tell the firmware."""
 
     @property
     def estimate(self) -> Estimate:
@@ -142,6 +148,7 @@ class ChipController:
             profile=self.profile,
         )
         self.result = None
+        self.low_battery = False
         self._period_end = self.first_cycle
         self._ahead: list[PwmCommand] = []  # commands received ahead of the physics
         self._home = (0.0, 0.0)  # the take-off point, from the first row
@@ -159,7 +166,7 @@ class ChipController:
         run = self._run()
         if k > 0:
             run.close_period()  # the chip is at the cycle of t_k: the previous sample's period ends
-        packet = sensor_packet(row, k, self.sample_period_us)
+        packet = sensor_packet(row, k, self.sample_period_us, self.low_battery)
         if k == 0:  # the take-off point: where the vehicle stands at t = 0 (the mission's origin)
             self._home = (float(row[ROW_FIELDS.index("x")]), float(row[ROW_FIELDS.index("y")]))
         extra = self._extra_packets(k, sample, setpoint) if self._extra else ()
@@ -202,6 +209,15 @@ class ChipController:
         if run.samples:
             run.close_period()
         self.result = run.result()
+
+    def energy_j(self) -> float:
+        """The chip's energy so far (tiles and NoC, :meth:`FirmwareRun.energy_pj`) [J]."""
+        return sum(self._run().energy_pj().values()) * 1e-12
+
+    def warn_low_battery(self) -> None:
+        """Set :data:`packets.FLAG_LOW_BATTERY` in every sensor packet from now on (the firmware of a
+        battery flight lands on it: docs/power.md)."""
+        self.low_battery = True
 
     def result_so_far(self) -> ReplayResult | None:
         """The job records and totals up to where the flight stopped (an interrupted or crashed
@@ -246,6 +262,7 @@ def fly_lockstep_fleet(
     controllers: Sequence[LockstepController],
     on_row: Callable[[int, np.ndarray], None] | None = None,
     on_sample: Callable[[World, int], None] | None = None,
+    on_power: Callable[[int, PowerSample], None] | None = None,
 ) -> list[np.ndarray]:
     """Fly ``scenario`` with several vehicles in one world, vehicle i flown by ``controllers[i]``,
     all under one clock; the flight of each vehicle (columns :data:`ROW_FIELDS`).
@@ -254,9 +271,15 @@ def fly_lockstep_fleet(
     given its sample, then every controller is run to the end of each step before the world takes
     it.  Each vehicle's sensors draw from their own random stream (:meth:`World.reset`).
 
+    A vehicle on a battery (:mod:`robosoc.physics.power`) is charged its controller's energy over
+    each sample period as the chip's power in that period's steps (the chip has run the period
+    when its first step is taken).
+
     Args:
         on_row: called with (vehicle index, row) as soon as a row is complete (logging).
         on_sample: called once per sample with the world and the sample index.
+        on_power: for a vehicle on a battery, called with (vehicle index, its power system's state)
+            just before each of its rows, and once more after the last step (the flight's totals).
 
     Raises:
         ValueError: not one controller per vehicle.
@@ -272,6 +295,8 @@ def fly_lockstep_fleet(
     flights = [np.empty((clock.sample_count, len(ROW_FIELDS))) for _ in vehicles]
     rests = [v.rest_height for v in vehicles]
     pending: list[np.ndarray] = []
+    period_s = clock.sample_period_ns * 1e-9
+    chip_j = [0.0 for _ in vehicles]  # each controller's energy at the last period's end
     for k in clock.samples():
         if world.steps != clock.first_step(k):
             raise AssertionError("the world is not at the sample's step")
@@ -279,6 +304,8 @@ def fly_lockstep_fleet(
         wind = world.wind.velocity
         pending.clear()
         for quad, controller, rest in zip(quads, controllers, rests, strict=True):
+            if quad.power is not None and quad.power.low_at_s is not None:
+                controller.warn_low_battery()  # below the reserve: the firmware's failsafe lands
             sample = quad.sensors()
             setpoint = setpoint_at(scenario.flight, rest, sample.time)
             truth = quad.truth()
@@ -292,6 +319,12 @@ def fly_lockstep_fleet(
                     quad.apply_pwm(pwm)
             if s == 0:
                 for i, (quad, row) in enumerate(zip(quads, pending, strict=True)):
+                    if quad.power is not None:  # the chip has run this period: its power over it
+                        spent = controllers[i].energy_j()
+                        quad.power.chip_w = (spent - chip_j[i]) / period_s
+                        chip_j[i] = spent
+                        if on_power is not None:
+                            on_power(i, quad.power.sample())
                     row[PWM_COLUMNS] = quad.pwm
                     flights[i][k] = row
                     if on_row is not None:
@@ -301,6 +334,10 @@ def fly_lockstep_fleet(
             world.step()
     for controller in controllers:
         controller.finish()
+    if on_power is not None:
+        for i, quad in enumerate(quads):
+            if quad.power is not None:
+                on_power(i, quad.power.sample())
     return flights
 
 
@@ -327,6 +364,12 @@ class HostLockstepController:
 
     def finish(self) -> None:
         pass
+
+    def energy_j(self) -> float:
+        return 0.0  # the host controller is not a simulated computer
+
+    def warn_low_battery(self) -> None:
+        pass  # the failsafe is the firmware's: the host controller has none
 
     @property
     def estimate(self) -> Estimate:

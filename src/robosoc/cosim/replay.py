@@ -31,12 +31,13 @@ Vector3 = tuple[float, float, float]
 # --- the sensor stream --------------------------------------------------------------------------
 
 
-def sensor_packet(row: np.ndarray, seq: int, dt_us: int) -> bytes:
-    """The sensor packet of one flight row (columns :data:`ROW_FIELDS`): its sample and setpoint."""
+def sensor_packet(row: np.ndarray, seq: int, dt_us: int, low_battery: bool = False) -> bytes:
+    """The sensor packet of one flight row (columns :data:`ROW_FIELDS`): its sample and setpoint
+    (``low_battery``: the pack is below its reserve, :data:`packets.FLAG_LOW_BATTERY`)."""
     col = dict(zip(ROW_FIELDS, (float(v) for v in row), strict=True))
     values: dict[str, packets.Value] = {
         "kind": packets.SENSOR.kind,
-        "flags": packets.FLAG_ARMED if col["armed"] > 0.5 else 0,
+        "flags": (packets.FLAG_ARMED if col["armed"] > 0.5 else 0) | (packets.FLAG_LOW_BATTERY if low_battery else 0),
         "seq": seq,
         "time_us": round(col["t"] * 1e6),
         "dt_us": dt_us,

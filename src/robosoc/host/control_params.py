@@ -86,6 +86,14 @@ def _loop_lines(name: str, gains: PidGains) -> list[str]:
     return lines
 
 
+FAILSAFE_LAND_RATE_MPS = 0.5
+"""Descent speed of the low-battery landing [m/s] (assumed: half the controller's descent limit, a
+gentle touchdown)."""
+FAILSAFE_LANDED_MARGIN_M = 0.05
+"""The failsafe disarms once the estimated height is within this of the resting height [m]; its
+height setpoint stops as far below the resting height, so that the vehicle does settle."""
+
+
 def control_header(vehicle: VehicleConfig | None = None, scenario: ScenarioConfig | None = None) -> str:
     """The text of ``robosoc_control.h`` for ``vehicle`` flying ``scenario`` (defaults: the default
     scenario and its vehicle preset).
@@ -183,6 +191,19 @@ def control_header(vehicle: VehicleConfig | None = None, scenario: ScenarioConfi
         f"#define ALT_INITIAL_VELOCITY_SIGMA {_c(velocity_sigma)} /* [m/s], AltitudeFilter.reset */",
         f"#define ALT_GRAVITY {_c(GRAVITY)} /* [m/s^2] */",
         f"#define ALT_REST_HEIGHT {_c(vehicle.rest_height)} /* body origin above the ground at rest [m] */",
+    ]
+    if scenario.power.battery_on:  # only then: a flight on the constant supply builds the same firmware
+        lines += [
+            "",
+            "/* Low-battery failsafe (docs/power.md): below the reserve the I/O tile sets ROBOSOC_FLAG_LOW_BATTERY;",
+            " * the PID task then levels the vehicle, descends at CTL_LAND_RATE and disarms on the ground */",
+            "#define CTL_FAILSAFE 1",
+            f"#define CTL_LAND_RATE {_c(FAILSAFE_LAND_RATE_MPS)} /* [m/s] */",
+            f"#define CTL_LANDED_HEIGHT {_c(vehicle.rest_height + FAILSAFE_LANDED_MARGIN_M)} /* estimated height"
+            " at which it disarms [m] */",
+            f"#define CTL_LAND_FLOOR {_c(vehicle.rest_height - FAILSAFE_LANDED_MARGIN_M)} /* lowest setpoint [m] */",
+        ]
+    lines += [
         "",
         "#endif /* ROBOSOC_CONTROL_H */",
         "",

@@ -213,7 +213,9 @@ def q16(value: float) -> int:
 
 HEAD_FIELDS = (
     Field("kind", "u16", "-", "format tag (ROBOSOC_*_KIND): a packet with another tag is malformed"),
-    Field("flags", "u16", "-", "bit 0 armed (ROBOSOC_FLAG_ARMED); other bits 0"),
+    Field(
+        "flags", "u16", "-", "bit 0 armed (ROBOSOC_FLAG_ARMED), bit 1 low battery (ROBOSOC_FLAG_LOW_BATTERY); others 0"
+    ),
 )
 
 SENSOR = PacketFormat(
@@ -283,6 +285,9 @@ POSITION = PacketFormat(
 
 FORMATS: tuple[PacketFormat, ...] = (SENSOR, ESTIMATE, PWM, POSITION)
 FLAG_ARMED = 1
+FLAG_LOW_BATTERY = 2
+"""Set by the I/O tile in a battery flight once the pack is below its reserve (docs/power.md): the
+firmware built with the failsafe lands and disarms."""
 
 
 @dataclass(frozen=True)
@@ -331,6 +336,7 @@ def c_header() -> str:
         f"#define ROBOSOC_MESSAGE_HEADER_FLITS {MESSAGE_HEADER_FLITS}",
         f"#define ROBOSOC_MAX_PAYLOAD_FLITS {MAX_PAYLOAD_FLITS}",
         f"#define ROBOSOC_FLAG_ARMED {FLAG_ARMED}u",
+        f"#define ROBOSOC_FLAG_LOW_BATTERY {FLAG_LOW_BATTERY}u",
         "",
         "/* Message ports of the flight application (kernel ports, below OS_MSG_PORTS) */",
         *(f"#define ROBOSOC_{port.name.upper()}_PORT {port.number}u /* {port.tile}: {port.doc} */" for port in PORTS),

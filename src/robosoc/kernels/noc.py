@@ -75,7 +75,10 @@ HERMES_MIN_ROUTER_CYCLES = 4  # request up in a cycle the controller is in SC_SE
 
 # cfg: constants
 C_WIDTH, C_HEIGHT, C_NTILES, C_DEPTH, C_RLAT, C_MAXPKT, C_FLITMASK, C_REVERSE, C_ARBITER, C_READ_POINTER = range(10)
-CFG_SIZE = 10  # C_READ_POINTER: 1 = the Hermes buffer's read-pointer timing (tail credit, bubble), see noc_alloc
+# C_READ_POINTER: 1 = the Hermes buffer's read-pointer timing (tail credit, bubble), see noc_alloc
+C_GATE = 10  # clock gating: a router that held no flit for this many cycles stops its clock (NONE: never)
+C_WAKE = 11  # clock gating: cycles a stopped router needs to restart its clock when a flit arrives
+CFG_SIZE = 12
 
 # glob: scalars that change
 G_CYCLE = 0  # next cycle to simulate
@@ -151,7 +154,12 @@ T_RX_STALL_FROM = 27  # the receive memory accepts no flit in cycles [T_RX_STALL
 T_RX_STALL_UNTIL = 28
 T_TX_STALL_FROM = 29  # the NI injects no flit in cycles [T_TX_STALL_FROM, T_TX_STALL_UNTIL)
 T_TX_STALL_UNTIL = 30
-TILE_COLS = 31
+# clock gating (cfg[C_GATE], docs/noc.md "Clock gating"): only read and written by _clock_gate
+T_LAST_FLIT = 31  # last cycle this router held a flit at the cycle start (-1 before any)
+T_WAKE_AT = 32  # first cycle this router's clock runs again after a wake-up (NONE: not waking)
+T_GATED = 33  # energy: cycles this router's clock was stopped, up to its last wake-up
+T_WAKES = 34  # wake-ups of this router
+TILE_COLS = 35
 
 SEND_IDLE, SEND_PENDING, SEND_ACTIVE = 0, 1, 2
 RX_ACCEPT, RX_HELD = 0, 1
@@ -217,6 +225,8 @@ def noc_alloc(
     reverse: bool = False,
     arbiter: str = "hermes",
     read_pointer: bool = True,
+    gate_after: int = NONE,
+    wake_cycles: int = 0,
 ) -> NocState:
     """Allocate an empty, idle NoC at cycle 0 (plain numpy; parameters are checked by ChipConfig).
 
@@ -232,6 +242,9 @@ def noc_alloc(
             flit is presented, and that flit one cycle late). False gives the model before issue 38
             (every freed slot usable the next cycle, no bubble), kept for `robosoc bench noc`'s
             before/after comparison.
+        gate_after: clock gating: a router that held no flit for this many cycles stops its clock
+            (NONE: no gating).
+        wake_cycles: clock gating: cycles a stopped router takes to restart when a flit arrives.
     """
     n = width * height
     cfg = np.zeros(CFG_SIZE, np.int64)
@@ -241,6 +254,7 @@ def noc_alloc(
     cfg[C_REVERSE] = int(reverse)
     cfg[C_ARBITER] = ARBITERS.index(arbiter)
     cfg[C_READ_POINTER] = int(read_pointer and arbiter == "hermes")
+    cfg[C_GATE], cfg[C_WAKE] = gate_after, wake_cycles
     glob = np.zeros(GLOB_SIZE, np.int64)
     buf = np.zeros((n, NPORTS, depth), np.int64)
     port = np.zeros((n, NPORTS, PORT_COLS), np.int64)
@@ -264,6 +278,8 @@ def noc_alloc(
     tile[:, T_SEND_FIRST] = NONE
     tile[:, T_SC_STATE] = SC_IDLE
     tile[:, T_SC_SEL] = EAST  # after reset the selection starts after EAST
+    tile[:, T_LAST_FLIT] = -1
+    tile[:, T_WAKE_AT] = NONE
     mem = np.zeros((n, 2, MEM_FLITS), np.int64)
     ev = np.zeros((max(event_capacity, 1), EV_COLS), np.int64)
     queue = np.zeros((queue_rows, Q_COLS), np.int64)
@@ -496,6 +512,42 @@ def _arrive(port, nb, q, cycle):
         port[nb, q, P_DRY_AT] = BIG
 
 
+# ---------------------------------------------------------------------------------- clock gating
+@njit(cache=True, inline="always")
+def _clock_gate(cfg, port, tile, t, cycle):
+    """Clock gating of router ``t``, which holds a flit at the start of ``cycle``: whether its clock is
+    still restarting in this cycle (then the router only holds its flits: no request, move or switch
+    state changes, and its buffers count as active).
+
+    A router that held no flit in the ``cfg[C_GATE]`` cycles before ``cycle`` has stopped its clock;
+    the flit that arrived wakes it, and it runs again from ``cycle + cfg[C_WAKE]``: every decision it
+    would have taken from ``cycle`` on comes exactly ``cfg[C_WAKE]`` cycles later.  The cycles its clock
+    was stopped (the empty cycles after the first ``cfg[C_GATE]``) are counted in ``T_GATED``.
+    """
+    idle = cycle - 1 - tile[t, T_LAST_FLIT]  # cycles without a flit just before this one
+    if idle >= cfg[C_GATE]:
+        tile[t, T_GATED] += idle - cfg[C_GATE]
+        tile[t, T_WAKE_AT] = cycle + cfg[C_WAKE]
+        tile[t, T_WAKES] += 1
+    tile[t, T_LAST_FLIT] = cycle
+    if cycle < tile[t, T_WAKE_AT]:
+        for p in range(NPORTS):
+            if port[t, p, P_COUNT] > 0:
+                port[t, p, P_BUSY] += 1
+        return True
+    return False
+
+
+def gated_cycles(cfg: np.ndarray, glob: np.ndarray, tile: np.ndarray) -> np.ndarray:
+    """Per router, the cycles its clock has been stopped up to now (``glob[G_CYCLE]``): those counted
+    at its wake-ups and those of the stretch it is in (zeros without clock gating)."""
+    gate = int(cfg[C_GATE])
+    if gate == NONE:
+        return np.zeros(tile.shape[0], np.int64)
+    pending = np.maximum(0, glob[G_CYCLE] - 1 - tile[:, T_LAST_FLIT] - gate)
+    return tile[:, T_GATED] + pending
+
+
 @njit(cache=True, inline="always")
 def noc_step(cfg, glob, buf, port, tile, mem, ev, queue, cycle):
     """Simulate one NoC cycle ``cycle``: decide everything from the cycle-start state, then commit.
@@ -542,6 +594,8 @@ def noc_step(cfg, glob, buf, port, tile, mem, ev, queue, cycle):
         if tile[t, T_RFLITS] == 0:
             continue  # (an empty router's switch controller is idle: it only serves headers present)
         tile[t, T_BUSY] += 1
+        if cfg[C_GATE] != NONE and _clock_gate(cfg, port, tile, t, cycle):
+            continue  # its clock is restarting: nothing moves, nothing is decided
         if hermes:
             asking = False  # some input's request is up in this cycle
             for p in range(NPORTS):

@@ -64,6 +64,8 @@ from robosoc.outputs.run_folder import (
 from robosoc.outputs.run_summary import fleet_summary, vehicle_summary, write_summary
 from robosoc.physics import World
 from robosoc.physics.clock import FlightClock
+from robosoc.physics.power import lift_problem
+from robosoc.records import POWER_FIELDS, PowerSample
 
 EXTRA_FILES = (FLIGHT_PNG, FLIGHT_MCAP, REPORT_HTML)
 """What :func:`fly_scenario` writes after the summary (a chip flight recording its timeline also
@@ -88,9 +90,9 @@ __all__ = [
 def fleet_vehicles(scenario: ScenarioConfig) -> list[VehicleConfig]:
     """The vehicles of ``scenario``: its preset, named and spawned on a grid (see the module's docstring)."""
     if scenario.vehicles == 1:
-        return [vehicle_preset(scenario.vehicle)]
+        return [scenario.vehicle_config()]
     side = math.ceil(math.sqrt(scenario.vehicles))
-    base = vehicle_preset(scenario.vehicle)
+    base = scenario.vehicle_config()
     x0, y0, z0 = base.spawn_position
     return [
         dataclasses.replace(
@@ -169,41 +171,51 @@ def fly_scenario(
     Raises:
         KeyboardInterrupt, or whatever stopped the flight (a firmware fault: ChipError, CoreError),
         after ``summary.json`` with ``"complete": false`` has been written next to the rows flown.
+        ValueError: the scenario's battery cannot fly its vehicle (before anything is flown or written).
         robosoc.cosim.interrupts.InterruptedAfterFlight: Ctrl-C after the flight was complete and
         its ``summary.json`` (``"complete": true``) written, while the plots and logs were being
         written (it names those not written).  Either way no scratch file (``*.partial``) is left.
     """
     say = on_status or (lambda _text: None)
     vehicles = fleet_vehicles(scenario)
+    problem = lift_problem(vehicles[0])
+    if problem is not None:
+        raise ValueError(f"{problem[0]}: {problem[1]}")
     count = len(vehicles)
     folders = [vehicle_folder(out, i, count) for i in range(count)] if out is not None else []
     for folder in {*folders, *([out] if out is not None else [])}:  # an earlier run's summary must not
         (folder / SUMMARY_JSON).unlink(missing_ok=True)  # speak for this one, even if it stops at once
     controllers = _controllers(scenario, say, profile)
+    battery = scenario.power.battery_on
     csv_logs: list[CsvFlightLog] = []
     if out is not None:
         out.mkdir(parents=True, exist_ok=True)
         output_files.write_atomic(out / SCENARIO_TOML, scenario_toml(scenario))
-        csv_logs = [CsvFlightLog(folder / FLIGHT_CSV) for folder in folders]
+        csv_logs = [CsvFlightLog(folder / FLIGHT_CSV, POWER_FIELDS if battery else ()) for folder in folders]
     flown: list[list[np.ndarray]] = [[] for _ in vehicles]
+    powered: list[list[PowerSample]] = [[] for _ in vehicles]  # a battery flight: one per row, then the end
+
+    def keep_power(i: int, sample: PowerSample) -> None:
+        powered[i].append(sample)
 
     def keep_row(i: int, row: np.ndarray) -> None:
         flown[i].append(row.copy())
         if csv_logs:
-            csv_logs[i].write(row)
+            csv_logs[i].write(row, powered[i][-1].columns if battery else ())
         if on_row is not None:
             on_row(i, row)
 
     start = time.perf_counter()
     try:
-        fly_lockstep_fleet(scenario, vehicles, controllers, on_row=keep_row, on_sample=on_sample)
+        on_power = keep_power if battery else None
+        fly_lockstep_fleet(scenario, vehicles, controllers, on_row=keep_row, on_sample=on_sample, on_power=on_power)
     except BaseException as exc:
         host_s = time.perf_counter() - start
         for log in csv_logs:
             log.close()
         stopped = "interrupted" if isinstance(exc, KeyboardInterrupt) else f"{type(exc).__name__}: {exc}"
         try:
-            so_far = _summarize(scenario, vehicles, controllers, flown, host_s, stopped, folders, out)
+            so_far = _summarize(scenario, vehicles, controllers, flown, host_s, stopped, folders, out, powered)
             _extras(scenario, vehicles, controllers, so_far, folders, plot, logs)
         except KeyboardInterrupt:  # a second Ctrl-C: the summary (complete false) is written first
             pass
@@ -217,7 +229,7 @@ def fly_scenario(
         log.close()
     flight: ScenarioFlight | None = None
     try:
-        flight = _summarize(scenario, vehicles, controllers, flown, host_s, None, folders, out)
+        flight = _summarize(scenario, vehicles, controllers, flown, host_s, None, folders, out, powered)
         _extras(scenario, vehicles, controllers, flight, folders, plot, logs)
     except KeyboardInterrupt:
         if out is not None and not (out / SUMMARY_JSON).exists():
@@ -241,9 +253,11 @@ def _summarize(
     stopped: str | None,
     folders: list[Path],
     out: Path | None,
+    powered: list[list[PowerSample]],
 ) -> ScenarioFlight:
     """Summaries (complete or not) and job records of the rows flown; ``summary.json``, ``jobs.csv``
-    and the profile written when ``out`` is set."""
+    and the profile written when ``out`` is set.  ``powered``: a battery flight's power samples
+    per vehicle, one per row and then (a complete flight) the end state."""
     complete = stopped is None
     rows = [np.array(r).reshape(-1, len(ROW_FIELDS)) for r in flown]
     samples = min(len(r) for r in rows)
@@ -259,9 +273,14 @@ def _summarize(
             except Exception as exc:  # the chip's state after a crash may not give job records
                 note = f"{stopped}; no task figures: {type(exc).__name__}: {exc}"
         results.append(result)
+        power = None
+        if powered[i]:
+            series = powered[i][: len(rows[i])]
+            power = (series, powered[i][-1])
         summary = vehicle_summary(
-            scenario, rows[i], vehicle.rest_height, result, simulated_s, host_s, complete=complete, stopped=note
-        )
+            scenario, rows[i], vehicle.rest_height, result, simulated_s, host_s, complete=complete, stopped=note,
+            power=power,
+        )  # fmt: skip
         summaries.append(summary)
         if out is None:
             continue

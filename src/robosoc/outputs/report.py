@@ -7,7 +7,8 @@ from above, from ``summary.json``), estimated against true attitude,
 motor PWM (``flight.csv``); per-task response-time histograms and energy per task split into its
 parts (``jobs.csv``); energy by tile and any other breakdown of ``summary.json``'s ``energy``
 (by instruction class, ``classes_uj``, when present); where cycles and energy go per firmware
-function, task and tile (``profile.json``, when the run was profiled: docs/profile.md); the key
+function, task and tile (``profile.json``, when the run was profiled: docs/profile.md); a battery
+flight's power budget (``summary.json``'s ``power``, the pack's columns of ``flight.csv``); the key
 figures of ``summary.json`` and the scenario (``scenario.toml``).  A missing file leaves its
 section out with a line saying so.
 
@@ -30,6 +31,7 @@ import numpy as np
 from robosoc import output_files
 from robosoc.control.flight import ROW_FIELDS
 from robosoc.outputs.run_folder import REPORT_HTML, RunFolder, finite, read_run_folder
+from robosoc.records import POWER_CONSUMERS, POWER_FIELDS
 
 MAX_POINTS = 5000
 """Most points drawn per line (longer flights are thinned evenly; the CSV keeps every row)."""
@@ -337,6 +339,76 @@ def _profile_table(tasks: dict[tuple[str, int], list[dict]]) -> str:
     return f"<table>{head}{''.join(body)}</table>"
 
 
+# --- power (a battery flight, docs/power.md) -----------------------------------------------------
+
+
+def _power_plot(rows: np.ndarray, power: np.ndarray) -> str:
+    step = max(1, math.ceil(len(rows) / MAX_POINTS))
+    t = _column(rows, "t")[::step]
+    p = {name: power[::step, i] for i, name in enumerate(POWER_FIELDS)}
+
+    def draw(ax_v, ax_w, ax_soc) -> None:
+        ax_v.plot(t, p["pack_v"], label="pack voltage [V]")
+        ax_v.set_ylabel("V")
+        ax_v.grid(alpha=0.3)
+        ax_v.legend(loc="best")
+        ax_w.plot(t, p["motors_w"], label="motors")
+        ax_w.plot(t, p["chip_w"] * 1000, label="chip [mW]")
+        ax_w.set_ylabel("W")
+        ax_w.grid(alpha=0.3)
+        ax_w.legend(loc="best")
+        ax_soc.plot(t, p["soc"], label="state of charge")
+        ax_soc.set_ylabel("SoC")
+        ax_soc.set_xlabel("time [s]")
+        ax_soc.grid(alpha=0.3)
+        ax_soc.legend(loc="best")
+
+    return _figure(
+        "power",
+        "The pack under load: terminal voltage, the motors' and the chip's power, state of charge (flight.csv)",
+        _svg(draw, "power", (10, 6), 3),
+    )
+
+
+def _power_section(power: dict) -> list[str]:
+    """The budget by consumer, the chip's share, the pack and the endurance estimate of ``summary.json``."""
+    energy = power.get("energy_j") or {}
+    total = finite(energy.get("total")) or 0.0
+    rows = []
+    for name in (*POWER_CONSUMERS, "total"):
+        value = finite(energy.get(name))
+        if value is None:
+            continue
+        share = f"{100 * value / total:.3f} %" if total > 0 else "n/a"
+        rows.append(
+            f"<tr><th>{html.escape(name)}</th><td class='num'>{value:,.3f}</td><td class='num'>{share}</td></tr>"
+        )
+    out = [f"<table><tr><th>consumer</th><th>energy J</th><th>share</th></tr>{''.join(rows)}</table>"]
+    endurance = power.get("endurance") or {}
+    hover = finite(endurance.get("hover_s"))
+    at = finite(endurance.get("at_power_w"))
+    if hover is not None and at is not None:
+        out.append(
+            f"<p><b>Endurance estimate</b>: {hover / 60:.1f} min of hover at {at:.1f} W (the flight's mean power "
+            f"from take-off), from state of charge {endurance.get('from_soc')} to {endurance.get('to_soc')} "
+            f"({html.escape(str(endurance.get('ended_by', '')))}).</p>"
+            f"<p class='note'>Assumptions: {html.escape(str(endurance.get('assumptions', '')))}.</p>"
+        )
+    failsafe = power.get("failsafe")
+    if isinstance(failsafe, dict):
+        out.append(
+            f"<p class='note'>Low-battery failsafe: the pack fell below its reserve (state of charge "
+            f"{_number(failsafe.get('reserve_soc'))}) at {_number(failsafe.get('at_s'))} s; "
+            f"{html.escape(str(failsafe.get('outcome', '')))}.</p>"
+        )
+    if power.get("after_empty"):
+        out.append(
+            f"<p class='note'>The pack ran empty at {_number(power.get('empty_at_s'))} s: "
+            f"{html.escape(str(power['after_empty']))}.</p>"
+        )
+    return out
+
+
 # --- tables -------------------------------------------------------------------------------------
 
 
@@ -409,6 +481,12 @@ def _section(run: RunFolder, level: int) -> str:
         if tasks:
             body.append(f"<{h}>Where cycles and energy go, per function (profile.json)</{h}>")
             body += [_profile_plot(tasks), _profile_table(tasks)]
+    power = (run.summary or {}).get("power")
+    if isinstance(power, dict):
+        body.append(f"<{h}>Power budget</{h}>")
+        if run.rows is not None and run.power is not None and len(run.rows):
+            body.append(_power_plot(run.rows, run.power))
+        body += _power_section(power)
     if run.summary is not None:
         energy = _energy_breakdowns(run.summary)
         if energy:

@@ -115,6 +115,7 @@ class RunFolder:
     summary: dict | None = None
     scenario_text: str | None = None
     profile: dict | None = None
+    power: np.ndarray | None = None  # a battery flight's power columns of flight.csv (POWER_FIELDS)
     vehicles: list[RunFolder] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
 
@@ -126,15 +127,16 @@ class RunFolder:
         return float(value) if isinstance(value, int | float) and value > 0 else None
 
 
-def read_flight_rows(path: Path, notes: list[str]) -> np.ndarray:
-    """The rows of a flight log; a last line cut short (an interrupted flight) is skipped with a note.
+def read_flight_rows(path: Path, notes: list[str], power: list[np.ndarray] | None = None) -> np.ndarray:
+    """The rows of a flight log; a last line cut short (an interrupted flight) is skipped with a note;
+    a battery flight's power columns appended to ``power``.
 
     Raises:
         RunFolderError: the header is not the flight log's, or a row is bad
             (:func:`robosoc.control.flight_log.read_flight_log`: names the row and the column).
     """
     try:
-        return read_flight_log(path, notes)
+        return read_flight_log(path, notes, power)
     except FlightLogError as exc:
         raise RunFolderError(str(exc)) from None
 
@@ -251,7 +253,9 @@ def read_run_folder(path: Path) -> RunFolder:
     run = RunFolder(path)
     try:
         if (path / FLIGHT_CSV).is_file():
-            run.rows = read_flight_rows(path / FLIGHT_CSV, run.notes)
+            power: list[np.ndarray] = []
+            run.rows = read_flight_rows(path / FLIGHT_CSV, run.notes, power)
+            run.power = power[0] if power else None
         if (path / JOBS_CSV).is_file():
             run.jobs = read_jobs(path / JOBS_CSV, run.notes)
         if (path / SUMMARY_JSON).is_file():

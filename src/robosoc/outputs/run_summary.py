@@ -16,7 +16,8 @@ key names, NaN written as ``null``)::
      "mission": {"waypoints": [{"x", "y", "z", "arrive_s", "leave_s", "horizontal_error_max_m",
                  "horizontal_error_mean_m", "height_error_max_m", "reached"}], "reached",
                  "acceptance_m", "horizontal_error_max_m", "landed", "landed_s", "landed_x",
-                 "landed_y", "landing_error_m"}}     (only with a mission: robosoc.control.mission)
+                 "landed_y", "landing_error_m"},   # only with a mission: robosoc.control.mission
+     "power": {...}}      # a battery flight only (power_figures, docs/power.md)
 
 ``complete`` is false for a flight that was interrupted or crashed: the figures are those of the
 rows flown so far, and ``"stopped"`` says why.  The flight figures are
@@ -43,11 +44,13 @@ import numpy as np
 from robosoc import output_files
 from robosoc.config.chip import ChipConfig
 from robosoc.config.firmware import FirmwareConfig
+from robosoc.config.power import PowerConfig
 from robosoc.config.scenario import ScenarioConfig
 from robosoc.control.flight import ROW_FIELDS, column, flight_metrics
 from robosoc.control.mission import mission_figures
 from robosoc.cosim.firmware_run import ReplayResult
-from robosoc.records import ENERGY_PARTS, JobRecord
+from robosoc.physics.power import endurance_s
+from robosoc.records import ENERGY_PARTS, POWER_CONSUMERS, JobRecord, PowerSample
 
 SCHEMA = 1
 MODE_LOCKSTEP = "lockstep"
@@ -150,9 +153,13 @@ def firmware_figures(fw: FirmwareConfig) -> dict[str, Any]:
 
 
 def chip_figures(chip: ChipConfig, result: ReplayResult | None) -> dict[str, Any]:
-    """The ``chip`` object: mesh and clock."""
+    """The ``chip`` object: mesh and clock (and the DVFS point's voltage, when the chip lists points)."""
     clock = result.clock_ns if result is not None else chip.tile.clock_period_ns
-    return {"width": chip.width, "height": chip.height, "clock_ns": clock}
+    figures: dict[str, Any] = {"width": chip.width, "height": chip.height, "clock_ns": clock}
+    volts = chip.dvfs.voltage_at(chip.tile.clock_period_ns)
+    if volts is not None:  # a DVFS operating point (docs/power.md)
+        figures["dvfs_v"] = volts
+    return figures
 
 
 def energy_figures(result: ReplayResult) -> dict[str, Any]:
@@ -199,6 +206,104 @@ def command_silence(result: ReplayResult, timeout_periods: int) -> dict[str, Any
     return {"seconds": seconds, "from_s": samples[k0].time_s, "periods": periods}
 
 
+ENDURANCE_ASSUMPTIONS = (
+    "hover from a full pack until the reserve state of charge (or the cut-off voltage, if first) at a constant "
+    "power: the flight's mean power from take-off (motors + chip + avionics) drawn through Tremblay's model of the "
+    "pack (docs/power.md); no temperature, ageing or recovery effects, ideal ESCs and converters, the vehicle's "
+    "mass (pack included) unchanged"
+)
+"""What the endurance estimate of ``summary.json`` assumes, written beside it."""
+LANDING_SPEED_MPS = 1.0
+"""Fastest descent [m/s] at touchdown still counted as a landing (faster: the vehicle fell)."""
+GROUND_MARGIN_M = 0.05
+"""Height [m] above its resting height within which a vehicle counts as on the ground."""
+
+
+def power_figures(
+    samples: Sequence[PowerSample], end: PowerSample, rows: np.ndarray, power: PowerConfig, rest_height: float
+) -> dict[str, Any]:
+    """The ``power`` object of a battery flight: energy by consumer, the chip's share, the pack's
+    state, the endurance estimate with its assumptions, and, if the pack ran empty, what became of
+    the vehicle.
+
+    Args:
+        samples: the power system's state at each row (:func:`robosoc.cosim.lockstep.fly_lockstep_fleet`).
+        end: its state after the last step (the flight's totals).
+        rows: the flight rows (their ``armed`` column marks the take-off).
+    """
+    energy = dict(end.energy_j)
+    total = sum(energy.values())
+    armed = np.flatnonzero(column(rows, "armed") > 0.5) if len(rows) else np.array([], dtype=int)
+    first = samples[int(armed[0])] if len(armed) and int(armed[0]) < len(samples) else None
+    if first is not None and end.t > first.t:
+        mean_w = (total - sum(first.energy_j.values())) / (end.t - first.t)
+    else:
+        mean_w = total / end.t if end.t > 0 else math.nan
+    hover_s, ended_by = endurance_s(power.battery, mean_w, power.reserve_soc) if mean_w > 0 else (math.nan, "")
+    volts = [s.pack_v for s in samples if s.pack_v > 0] + ([end.pack_v] if end.pack_v > 0 else [])
+    return {
+        "supply": power.supply,
+        "energy_j": {**energy, "total": total},
+        "chip_share": energy["chip"] / total if total > 0 else math.nan,
+        "mean_power_w": mean_w,
+        "pack": {
+            "cells": power.battery.cells,
+            "capacity_ah": power.battery.capacity_ah,
+            "initial_soc": power.battery.initial_soc,
+            "final_soc": end.soc,
+            "min_v": min(volts) if volts else math.nan,
+            "final_v": end.pack_v,
+            "max_a": max([s.pack_a for s in samples] + [end.pack_a]),
+        },
+        "endurance": {
+            "hover_s": hover_s,
+            "at_power_w": mean_w,
+            "from_soc": 1.0,
+            "to_soc": power.reserve_soc,
+            "ended_by": ended_by,
+            "assumptions": ENDURANCE_ASSUMPTIONS,
+        },
+        "empty_at_s": end.empty_at_s,
+        "after_empty": after_empty(rows, rest_height, end.empty_at_s),
+        "failsafe": None
+        if end.low_at_s is None
+        else {
+            "reserve_soc": power.reserve_soc,
+            "at_s": end.low_at_s,
+            "outcome": touchdown(rows, rest_height, end.low_at_s, "the pack reached its reserve"),
+        },
+    }
+
+
+def after_empty(rows: np.ndarray, rest_height: float, empty_at_s: float | None) -> str | None:
+    """What the vehicle did once its pack ran empty at ``empty_at_s`` (None: it did not): see
+    :func:`touchdown`."""
+    if empty_at_s is None:
+        return None
+    return touchdown(rows, rest_height, empty_at_s, "the pack emptied", still="falling")
+
+
+def touchdown(rows: np.ndarray, rest_height: float, since_s: float, event: str, still: str = "in the air") -> str:
+    """How the vehicle reached the ground after ``since_s`` (when ``event`` happened): ``"on the
+    ground"`` (it was), ``"landed"`` (it touched down at most :data:`LANDING_SPEED_MPS` fast),
+    ``"fell"`` (faster), or ``still`` (in the air when the flight ended); with the touchdown time and
+    speed (from the rows' heights)."""
+    t, z = column(rows, "t"), column(rows, "z")
+    ground = rest_height + GROUND_MARGIN_M
+    k = int(np.searchsorted(t, since_s))
+    if k >= len(t):
+        return f"the flight ended as {event}"
+    if z[k] <= ground:
+        return f"on the ground when {event} at {since_s:.3f} s"
+    down = np.flatnonzero(z[k:] <= ground)
+    if not len(down):
+        return f"{still}: still {z[-1] - rest_height:.2f} m up when the flight ended"
+    j = k + int(down[0])
+    speed = (z[j - 1] - z[j]) / (t[j] - t[j - 1]) if j > 0 else 0.0
+    verdict = "landed" if speed <= LANDING_SPEED_MPS else "fell"
+    return f"{verdict}: touched down at {t[j]:.2f} s at {speed:.2f} m/s"
+
+
 def vehicle_summary(
     scenario: ScenarioConfig,
     rows: np.ndarray,
@@ -209,6 +314,7 @@ def vehicle_summary(
     *,
     complete: bool = True,
     stopped: str | None = None,
+    power: tuple[Sequence[PowerSample], PowerSample] | None = None,
 ) -> dict[str, Any]:
     """The summary of one vehicle's flight (``result``: its firmware run, None for the host controller).
 
@@ -218,6 +324,8 @@ def vehicle_summary(
         rest_height: the vehicle's (fixes the take-off climb of the flight plan).
         simulated_s, host_s: simulated time flown and the host time it took.
         complete: false for an interrupted or crashed flight; ``stopped`` then says why.
+        power: a battery flight's power samples (one per row) and its end state: the summary gets a
+            ``power`` object (:func:`power_figures`); a flight on a constant supply has none.
     """
     chip = scenario.controller == "chip"
     summary: dict[str, Any] = {
@@ -236,6 +344,8 @@ def vehicle_summary(
         summary["no_actuator_command"] = silence  # the run is marked: the firmware went quiet
     if scenario.flight.mission is not None and len(rows):
         summary["mission"] = mission_figures(rows, scenario.flight, rest_height)
+    if power is not None:
+        summary["power"] = power_figures(power[0], power[1], rows, scenario.power, rest_height)
     return _with_reason(summary, stopped)
 
 
@@ -397,7 +507,7 @@ _VEHICLE_FIELDS: dict[str, _Kind] = {
             "tiles": _map(_list(INTEGER), TASK_KEY, "TASK: a task of the project"),
         },
     ),
-    "chip": _object({"width": INTEGER, "height": INTEGER, "clock_ns": NUMBER}),
+    "chip": _object({"width": INTEGER, "height": INTEGER, "clock_ns": NUMBER, "dvfs_v": NUMBER}),
     "simulated_s": NUMBER,
     "host_s": NUMBER,
     "real_time_factor": NUMBER,
@@ -437,6 +547,25 @@ _VEHICLE_FIELDS: dict[str, _Kind] = {
             "horizontal_error_max_m": NUMBER,
             "landed": BOOLEAN,
             **dict.fromkeys(("landed_s", "landed_x", "landed_y", "landing_error_m"), NUMBER),
+        }
+    ),
+    "power": _object(
+        {
+            "supply": TEXT,
+            "energy_j": _map(NUMBER, (*POWER_CONSUMERS, "total"), "motors, chip, avionics or total"),
+            "chip_share": NUMBER,
+            "mean_power_w": NUMBER,
+            "pack": _object(
+                {key: NUMBER for key in ("capacity_ah", "initial_soc", "final_soc", "min_v", "final_v", "max_a")}
+                | {"cells": INTEGER}
+            ),
+            "endurance": _object(
+                {key: NUMBER for key in ("hover_s", "at_power_w", "from_soc", "to_soc")}
+                | {"ended_by": TEXT, "assumptions": TEXT}
+            ),
+            "empty_at_s": NUMBER,
+            "after_empty": _Kind("a string or null", lambda v: v is None or isinstance(v, str)),
+            "failsafe": _object({"reserve_soc": NUMBER, "at_s": NUMBER, "outcome": TEXT}),
         }
     ),
 }

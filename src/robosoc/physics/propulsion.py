@@ -47,6 +47,7 @@ class Propulsion:
         "forces",
         "motor",
         "omega",
+        "pwm",
         "torques",
         "voltages",
     )
@@ -66,6 +67,7 @@ class Propulsion:
         self._k_m = motor.k_m
         self._dt_over_j = dt / motor.j_m
         self.omega = [0.0, 0.0, 0.0, 0.0]
+        self.pwm = (0, 0, 0, 0)
         self.voltages = [0.0, 0.0, 0.0, 0.0]
         self.forces = [0.0, 0.0, 0.0, 0.0]
         self.torques = [0.0, 0.0, 0.0, 0.0]
@@ -73,6 +75,7 @@ class Propulsion:
     def reset(self, omega: Sequence[float] = (0.0, 0.0, 0.0, 0.0)) -> None:
         """Set the rotor speeds [rad/s] and zero the input voltages."""
         self.omega = [float(w) for w in omega]
+        self.pwm = (0, 0, 0, 0)
         self.voltages = [0.0, 0.0, 0.0, 0.0]
         self.forces = [0.0, 0.0, 0.0, 0.0]
         self.torques = [0.0, 0.0, 0.0, 0.0]
@@ -92,6 +95,19 @@ class Propulsion:
                 raise ValueError(f"pwm[{i}]: must be an integer in 0..255, got {value!r}")
             volts.append(byte * self.motor.supply_voltage / PWM_MAX)
         self.voltages = volts
+        b0, b1, b2, b3 = (int(v) for v in pwm)
+        self.pwm = (b0, b1, b2, b3)
+
+    def set_supply(self, volts: float) -> None:
+        """Run the latched PWM on a supply of ``volts`` (a battery's terminal voltage) instead of
+        ``motor.supply_voltage``: each motor gets ``pwm/255`` of it (an ideal ESC)."""
+        self.voltages = [byte * volts / PWM_MAX for byte in self.pwm]
+
+    def electrical_power(self) -> float:
+        """The motors' electrical power in the last step [W]: ``Σ U_i·I_i``, with ``I_i = M_e,i/Psi``."""
+        u0, u1, u2, u3 = self.voltages
+        m0, m1, m2, m3 = self.torques
+        return (u0 * m0 + u1 * m1 + u2 * m2 + u3 * m3) / self._psi
 
     def step(self, w: float, p: float, q: float) -> tuple[float, float, float, float]:
         """Advance the motors one step; return the body wrench (Fz, τx, τy, τz) at the origin.
@@ -148,13 +164,16 @@ class Propulsion:
         return (f0 + f1 + f2 + f3, (f3 - f1) * arm, (f2 - f0) * arm, m0 + m2 - m1 - m3)
 
 
-def steady_state(motor: MotorConfig, pwm: float, inflow: float = 0.0) -> tuple[float, float, float]:
+def steady_state(
+    motor: MotorConfig, pwm: float, inflow: float = 0.0, supply_v: float | None = None
+) -> tuple[float, float, float]:
     """Equilibrium of one motor at a constant (possibly fractional) PWM: (ω, thrust, M_e).
 
     Solves dω/dt = 0 by bisection on ω (the net torque falls monotonically with ω above the
-    idle equilibrium).  Used by tests and documentation; not on the hot path.
+    idle equilibrium).  ``supply_v``: the supply voltage (default ``motor.supply_voltage``).
+    Used by tests, documentation and the checks before a flight; not on the hot path.
     """
-    u = pwm * motor.supply_voltage / PWM_MAX
+    u = pwm * (motor.supply_voltage if supply_v is None else supply_v) / PWM_MAX
 
     def net(om: float) -> float:
         force = motor.ct0s * om * om + motor.ct1s * inflow * om + motor.ct2s * inflow * inflow

@@ -34,6 +34,7 @@ from robosoc.config.scenario import PHYSICS_DT_S, SensorConfig, WindConfig
 from robosoc.config.vehicle import VehicleConfig
 from robosoc.physics.drag import Drag
 from robosoc.physics.mjcf import body_name, world_xml
+from robosoc.physics.power import PowerSystem
 from robosoc.physics.propulsion import Propulsion
 from robosoc.physics.sensors import PositionFixModel, SensorModel, SensorSample, Truth
 from robosoc.physics.wind import Wind
@@ -52,6 +53,8 @@ class Quadrotor:
         self._qpos = int(joint.qposadr[0])
         self._dof = int(joint.dofadr[0])
         self.propulsion = Propulsion(config.motor, config.arm_length, world.dt)
+        self.power: PowerSystem | None = PowerSystem(config.power, world.dt) if config.power.battery_on else None
+        """The pack and the power budget of a battery flight (None: constant supply, no budget kept)."""
         self.drag = Drag(config.drag)
         self.sensor_model = SensorModel(sensors, world.dt)
         self.position_model = PositionFixModel(sensors) if sensors.position.enabled else None
@@ -96,6 +99,8 @@ class Quadrotor:
     # ----------------------------------------------------------------- internals
     def _reset(self, rng: np.random.Generator, position_rng: np.random.Generator | None = None) -> None:
         self.propulsion.reset()
+        if self.power is not None:
+            self.power = PowerSystem(self.config.power, self.world.dt)
         self.pwm = (0, 0, 0, 0)
         truth = self.truth()
         self.sensor_model.reset(rng, truth.velocity, truth.quaternion)
@@ -133,7 +138,14 @@ class Quadrotor:
         vx, vy, vz, p, q, r = qvel[d : d + 6]
         # Rotor inflow uses the body-frame velocity (w = third row of Rᵀ·v).
         w_body = r02 * vx + r12 * vy + r22 * vz
-        fz, tx, ty, tz = self.propulsion.step(w_body, p, q)
+        power = self.power
+        if power is None:
+            fz, tx, ty, tz = self.propulsion.step(w_body, p, q)
+        else:  # a battery flight: the motors run on the pack's terminal voltage (physics/power.py)
+            volts = power.supply_v()
+            self.propulsion.set_supply(volts)
+            fz, tx, ty, tz = self.propulsion.step(w_body, p, q)
+            power.consume(self.propulsion.electrical_power(), volts)
         # Drag uses the air-relative velocity in the body frame: Rᵀ·(v − wind).
         ax, ay, az = vx - wind[0], vy - wind[1], vz - wind[2]
         dfx, dfy, dfz, dtx, dty, dtz = self.drag.wrench(

@@ -18,6 +18,7 @@ from robosoc.sweep.point import OK, metric
 
 RESPONSE = "tasks.{task}.response_us_mean"
 ENERGY = "tasks.{task}.energy_nj_mean"
+CHIP_ENERGY = "energy.total_uj"
 
 
 def pareto_front(costs: Sequence[tuple[float, float]]) -> list[int]:
@@ -68,17 +69,14 @@ def _pyplot():
     return plt
 
 
-def pareto_figure(records: Sequence[dict[str, Any]], varied: Sequence[str], task: str):
-    """Energy per job against mean response time of ``task``, one marker per point, front joined."""
+def pareto_figure(records: Sequence[dict[str, Any]], varied: Sequence[str], task: str, *, chip: bool = False):
+    """Energy per job (``chip``: the chip's whole energy, :data:`CHIP_ENERGY`) against mean response
+    time of ``task``, one marker per point, front joined."""
     plt = _pyplot()
     ok = [r for r in records if r["status"] == OK]
-    costs = [
-        (
-            _number(metric(r["summary"], RESPONSE.format(task=task))),
-            _number(metric(r["summary"], ENERGY.format(task=task))),
-        )
-        for r in ok
-    ]
+    energy = CHIP_ENERGY if chip else ENERGY.format(task=task)
+    costs = [(_number(metric(r["summary"], RESPONSE.format(task=task))), _number(metric(r["summary"], energy)))
+             for r in ok]  # fmt: skip
     fig, ax = plt.subplots(figsize=(7, 4.5))
     labels = sorted({_label(r, varied) for r in ok})
     for label in labels:
@@ -89,8 +87,10 @@ def pareto_figure(records: Sequence[dict[str, Any]], varied: Sequence[str], task
     if front:
         ax.plot([costs[i][0] for i in front], [costs[i][1] for i in front], "k--", linewidth=1, label="Pareto front")
     ax.set_xlabel(f"{task}: mean response time [µs]")
-    ax.set_ylabel(f"{task}: energy per job [nJ]")
-    ax.set_title(f"{task}: energy against response time")
+    ax.set_ylabel("the chip's energy over the flight [µJ]" if chip else f"{task}: energy per job [nJ]")
+    ax.set_title(
+        f"the chip's energy against {task}'s response time" if chip else f"{task}: energy against response time"
+    )
     ax.grid(alpha=0.3)
     if labels:
         ax.legend(fontsize=7, loc="best")
@@ -139,6 +139,13 @@ def write_sweep_plots(
     for task in tasks:
         path = out / f"pareto-{task}.png"
         plots.append((f"{task}: Pareto front", path, _png(pareto_figure(records, varied, task), path, 100)))
+    # the chip's whole energy (idle routers and sleeping cores included: what clock gating and DVFS
+    # change) against each task's response time, when the points varied the chip
+    if any(field.startswith("chip.") for field in varied):
+        for task in tasks:
+            path = out / f"pareto-chip-{task}.png"
+            figure = pareto_figure(records, varied, task, chip=True)
+            plots.append((f"chip energy against {task} response: Pareto front", path, _png(figure, path, 100)))
     for field in varied:
         for name in metrics:
             path = out / f"{name}--{field}.png"

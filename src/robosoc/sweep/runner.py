@@ -135,7 +135,7 @@ def prepare(config: SweepConfig, points: list[Point], on_status: Callable[[str],
         if scenario.controller != "chip":
             continue
         vehicle = vehicle_preset(scenario.vehicle)
-        token = repr((scenario.firmware, scenario.chip, vehicle, scenario.flight, scenario.sensors))
+        token = repr((scenario.firmware, scenario.chip, vehicle, scenario.flight, scenario.sensors, scenario.power))
         if token in seen:
             continue
         seen.add(token)

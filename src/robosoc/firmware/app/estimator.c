@@ -111,6 +111,9 @@ int est_packet_step(est_t *est, const struct robosoc_sensor_packet *in, struct r
     }
     out->kind = ROBOSOC_ESTIMATE_KIND;
     out->flags = armed ? ROBOSOC_FLAG_ARMED : 0;
+#ifdef CTL_FAILSAFE
+    out->flags |= in->flags & ROBOSOC_FLAG_LOW_BATTERY; /* on to the PID task, which lands */
+#endif
     out->seq = in->seq;
     out->time_us = in->time_us;
     out->dt_us = in->dt_us;

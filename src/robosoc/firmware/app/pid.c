@@ -171,6 +171,46 @@ void pid_step(pid_controller_t *ctl, const real_t q[4], const real_t rate[3], re
     mix_pwm(&ctl->mixer, u_z, u_roll, u_pitch, u_yaw, pwm);
 }
 
+#ifdef CTL_FAILSAFE
+/* The low-battery failsafe (docs/power.md), built only for a battery flight: from the first packet
+ * flagged ROBOSOC_FLAG_LOW_BATTERY the setpoint is level attitude and a height that falls from the
+ * commanded one at CTL_LAND_RATE (feed-forward included) down to CTL_LAND_FLOOR; once the estimated
+ * height is at most CTL_LANDED_HEIGHT the motors stop and the vehicle stays disarmed. */
+static int failsafe_landing;
+static int failsafe_landed;
+static real_t failsafe_height;
+
+static int pid_failsafe(pid_setpoint_t *sp, real_t height, real_t dt)
+{
+    if (failsafe_landed) {
+        return 0;
+    }
+    if (!failsafe_landing) {
+        failsafe_landing = 1;
+        failsafe_height = sp->height;
+    }
+    real_t floor = REAL_C(CTL_LAND_FLOOR);
+    real_t rate = REAL_ZERO;
+    if (failsafe_height > floor) {
+        failsafe_height = real_sub(failsafe_height, real_mul(REAL_C(CTL_LAND_RATE), dt));
+        rate = real_neg(REAL_C(CTL_LAND_RATE));
+        if (failsafe_height < floor) {
+            failsafe_height = floor;
+        }
+    }
+    sp->roll = REAL_ZERO;
+    sp->pitch = REAL_ZERO;
+    sp->height = failsafe_height;
+    sp->height_rate = rate;
+    sp->height_accel = REAL_ZERO;
+    if (height <= REAL_C(CTL_LANDED_HEIGHT)) {
+        failsafe_landed = 1;
+        return 0;
+    }
+    return 1;
+}
+#endif
+
 int pid_packet_step(pid_controller_t *ctl, const struct robosoc_estimate_packet *in, struct robosoc_pwm_packet *out)
 {
     if (in->kind != ROBOSOC_ESTIMATE_KIND) {
@@ -190,6 +230,11 @@ int pid_packet_step(pid_controller_t *ctl, const struct robosoc_estimate_packet 
         real_from_fix16(in->height_feedforward[0]), real_from_fix16(in->height_feedforward[1]),
     };
     int armed = (in->flags & ROBOSOC_FLAG_ARMED) != 0;
+#ifdef CTL_FAILSAFE
+    if (armed && (in->flags & ROBOSOC_FLAG_LOW_BATTERY)) {
+        armed = pid_failsafe(&sp, real_from_fix16(in->height), real_from_us(in->dt_us));
+    }
+#endif
     out->kind = ROBOSOC_PWM_KIND;
     out->flags = armed ? ROBOSOC_FLAG_ARMED : 0;
     out->seq = in->seq;

@@ -16,6 +16,7 @@
 #define ROBOSOC_MESSAGE_HEADER_FLITS 4
 #define ROBOSOC_MAX_PAYLOAD_FLITS 58
 #define ROBOSOC_FLAG_ARMED 1u
+#define ROBOSOC_FLAG_LOW_BATTERY 2u
 
 /* Message ports of the flight application (kernel ports, below OS_MSG_PORTS) */
 #define ROBOSOC_SENSOR_PORT 1u /* estimator tile: sensor packets, I/O tile -> estimator task */
@@ -28,7 +29,7 @@
 #define ROBOSOC_SENSOR_FLITS 40u
 struct robosoc_sensor_packet {
     uint16_t kind; /* format tag (ROBOSOC_*_KIND): a packet with another tag is malformed */
-    uint16_t flags; /* bit 0 armed (ROBOSOC_FLAG_ARMED); other bits 0 */
+    uint16_t flags; /* bit 0 armed (ROBOSOC_FLAG_ARMED), bit 1 low battery (ROBOSOC_FLAG_LOW_BATTERY); others 0 */
     uint32_t seq; /* sample number, 0 for the first sample of a flight */
     uint32_t time_us; /* sample time since the start of the flight [us] */
     uint32_t dt_us; /* time since the previous sample (the sample period for the first) [us] */
@@ -58,7 +59,7 @@ _Static_assert(offsetof(struct robosoc_sensor_packet, height_feedforward) == 72,
 #define ROBOSOC_ESTIMATE_FLITS 38u
 struct robosoc_estimate_packet {
     uint16_t kind; /* format tag (ROBOSOC_*_KIND): a packet with another tag is malformed */
-    uint16_t flags; /* bit 0 armed (ROBOSOC_FLAG_ARMED); other bits 0 */
+    uint16_t flags; /* bit 0 armed (ROBOSOC_FLAG_ARMED), bit 1 low battery (ROBOSOC_FLAG_LOW_BATTERY); others 0 */
     uint32_t seq; /* the sensor sample's number */
     uint32_t time_us; /* the sensor sample's time [us] */
     uint32_t dt_us; /* the sensor sample's dt_us [us] */
@@ -88,7 +89,7 @@ _Static_assert(offsetof(struct robosoc_estimate_packet, height_feedforward) == 6
 #define ROBOSOC_PWM_FLITS 8u
 struct robosoc_pwm_packet {
     uint16_t kind; /* format tag (ROBOSOC_*_KIND): a packet with another tag is malformed */
-    uint16_t flags; /* bit 0 armed (ROBOSOC_FLAG_ARMED); other bits 0 */
+    uint16_t flags; /* bit 0 armed (ROBOSOC_FLAG_ARMED), bit 1 low battery (ROBOSOC_FLAG_LOW_BATTERY); others 0 */
     uint32_t seq; /* the sensor sample's number */
     uint16_t pwm[4]; /* motors 0-3 [PWM count (0-255)] */
 };
@@ -104,7 +105,7 @@ _Static_assert(offsetof(struct robosoc_pwm_packet, pwm) == 8, "pwm.pwm offset");
 #define ROBOSOC_POSITION_FLITS 40u
 struct robosoc_position_packet {
     uint16_t kind; /* format tag (ROBOSOC_*_KIND): a packet with another tag is malformed */
-    uint16_t flags; /* bit 0 armed (ROBOSOC_FLAG_ARMED); other bits 0 */
+    uint16_t flags; /* bit 0 armed (ROBOSOC_FLAG_ARMED), bit 1 low battery (ROBOSOC_FLAG_LOW_BATTERY); others 0 */
     uint32_t seq; /* the sensor sample's number (its sensor packet has the same) */
     uint32_t time_us; /* the sensor sample's time [us] */
     uint32_t fix_time_us; /* when the fix was taken (at most one fix period before time_us) [us] */
