@@ -45,7 +45,7 @@ from robosoc.config.vehicle import VehicleConfig
 from robosoc.cosim.datagram import MAX_COMMANDS, Bye, ByeReason, Command, CommandBatch, Hello, Reading, SensorBatch
 from robosoc.cosim.decoupled_physics import Ended, scenario_digest
 from robosoc.cosim.firmware_run import DEFAULT_FIRST_CYCLE, FirmwareRun, ReplayResult
-from robosoc.cosim.link import Address, LinkLog, UdpLink
+from robosoc.cosim.link import Address, ChipTransport, LinkLog, UdpLink
 from robosoc.host.scenario_image import scenario_image
 from robosoc.physics.clock import NS_PER_S, FlightClock
 from robosoc.records import SampleInput
@@ -82,9 +82,17 @@ class _Chip:
     """State of the chip side during a flight (the helpers of :func:`serve_chip`)."""
 
     def __init__(
-        self, run: FirmwareRun, link: UdpLink, config: LinkConfig, period_ns: int, log: LinkLog, samples: int
+        self,
+        run: FirmwareRun,
+        link: ChipTransport,
+        config: LinkConfig,
+        period_ns: int,
+        log: LinkLog,
+        samples: int,
+        on_period: Callable[[FirmwareRun], None] | None = None,
     ) -> None:
         self.run, self.link, self.config, self.period_ns, self.log = run, link, config, period_ns, log
+        self.on_period = on_period
         self.samples = samples  # the physics sends readings 0 .. samples-1, at k * period_ns
         self.flight_ns = samples * period_ns  # the flight's end: no reading, and no bye's end, lies past it
         self.first = run.first_cycle
@@ -173,6 +181,8 @@ class _Chip:
             cycle = self.run.cycle
         if self.run.samples:
             self.run.close_period()
+            if self.on_period is not None:
+                self.on_period(self.run)
         self.run.inject(SampleInput(k, r.t_ns / NS_PER_S, cycle, r.packet))
         self.counts["injected"] += 1
         self.newest_k, self.newest_t = k, r.t_ns
@@ -214,11 +224,13 @@ def serve_chip(
     scenario: ScenarioConfig,
     vehicle: VehicleConfig,
     config: LinkConfig,
-    peer: Address,
+    peer: Address | str,
     bind: Address | None = None,
     *,
     log_path: Path | None = None,
     on_status: Callable[[str], None] | None = None,
+    transport: Callable[[LinkLog], ChipTransport] | None = None,
+    on_period: Callable[[FirmwareRun], None] | None = None,
 ) -> ChipOutcome:
     """Run the scenario's firmware on its chip for the physics side at ``peer``; see the module docstring.
 
@@ -227,10 +239,14 @@ def serve_chip(
             from them; the physics side refuses a chip built for another); the scenario's seed
             drives the faults injected on the command datagrams.
         config: timeouts, redundancy and faults (pace and hold are the physics side's).
-        peer: the physics side's address.
+        peer: the physics side's address (or, with ``transport``, how to name it).
         bind: where to listen (default: any free port on the loopback interface of ``peer``'s family).
         log_path: the side's link log (``link-chip.log``), or None.
         on_status: told what the side is doing (building, booting, waiting, flying).
+        transport: makes the link to the physics from the side's log instead of a UDP socket
+            (the ROS 1 node's, :mod:`robosoc.cosim.ros_chip`).
+        on_period: called with the firmware run at each sample period's close (its estimate and
+            jobs so far are there).
 
     Returns:
         The outcome, also when interrupted (Ctrl-C), the physics went silent or said bye early, or
@@ -244,12 +260,17 @@ def serve_chip(
     say = on_status or (lambda _text: None)
     period_ns = FlightClock.of(scenario).sample_period_ns
     log = LinkLog(log_path)
+    link: ChipTransport
     try:
-        if bind is None:
-            bind = Address("::1" if ":" in peer.host else "127.0.0.1", 0)
-            if peer.host not in ("127.0.0.1", "::1", "localhost"):
-                bind = Address("::" if ":" in peer.host else "0.0.0.0", 0)
-        link = UdpLink(bind, "chip", config.faults, scenario.seed, log, peer=peer)
+        if transport is not None:
+            link = transport(log)
+        else:
+            assert isinstance(peer, Address)
+            if bind is None:
+                bind = Address("::1" if ":" in peer.host else "127.0.0.1", 0)
+                if peer.host not in ("127.0.0.1", "::1", "localhost"):
+                    bind = Address("::" if ":" in peer.host else "0.0.0.0", 0)
+            link = UdpLink(bind, "chip", config.faults, scenario.seed, log, peer=peer)
     except BaseException:
         log.close()
         raise
@@ -266,7 +287,7 @@ def serve_chip(
         say("booting the chip (compiling the chip kernels on a fresh install) ...")
         run.run_to(DEFAULT_FIRST_CYCLE)
         samples = round(scenario.duration_s * scenario.sensors.rate_hz)  # as the physics side counts them
-        state = _Chip(run, link, config, period_ns, log, samples)
+        state = _Chip(run, link, config, period_ns, log, samples, on_period)
         say(f"waiting for the physics at {peer} ...")
         hello = Hello(scenario_digest(scenario, vehicle), period_ns)
         deadline = time.monotonic() + config.connect_timeout_s
@@ -328,7 +349,6 @@ def serve_chip(
         readings = dict(state.counts) if state is not None else {}
         if state is not None:
             readings["commands_sent"] = state.commands_sent
-        counts = link.counts.as_dict()
         outcome = ChipOutcome(
             result=result,
             ended=ended,
@@ -336,16 +356,7 @@ def serve_chip(
             host_s=host_s,
             cpu_s=cpu_s,
             simulated_s=end_ns / NS_PER_S,
-            link={
-                "to_physics": {
-                    "sent": link.sent,
-                    "injected": dict(link.injector.injected),
-                    "send_errors": link.send_errors,
-                },
-                "from_physics": counts,
-                "foreign": link.foreign,
-                "receive_errors": link.receive_errors,
-            },
+            link=link.report(),
             readings=readings,
         )
         log.write(f"counts: {outcome.link}; readings {readings}")

@@ -319,7 +319,6 @@ def serve_physics(
             "late": flight.late if flight else 0,
             "missed": max(0, done - (flight.received if flight else 0)),
         }
-        counts = link.counts.as_dict()
         outcome = PhysicsOutcome(
             rows=rows[:done],
             samples=samples,
@@ -327,16 +326,7 @@ def serve_physics(
             message=message,
             host_s=host_s,
             cpu_s=cpu_s,
-            link={
-                "to_chip": {
-                    "sent": link.sent,
-                    "injected": dict(link.injector.injected),
-                    "send_errors": link.send_errors,
-                },
-                "from_chip": counts,
-                "foreign": link.foreign,
-                "receive_errors": link.receive_errors,
-            },
+            link=link.report(),
             commands=commands,
             max_lag_s=max_lag,
             period_s=period_ns / NS_PER_S,

@@ -103,16 +103,18 @@ def run_chip_side(
     scenario: ScenarioConfig,
     vehicle: VehicleConfig,
     config: LinkConfig,
-    peer: Address,
+    peer: Address | str,
     bind: Address | None,
     out: Path | None,
     *,
     on_status: Callable[[str], None] | None = None,
+    **link: Any,
 ) -> tuple[ChipOutcome, dict[str, Any]]:
-    """:func:`serve_chip` writing ``jobs.csv``, ``link-chip.log`` and ``chip.json`` in ``out``."""
+    """:func:`serve_chip` writing ``jobs.csv``, ``link-chip.log`` and ``chip.json`` in ``out``
+    (``link``: its ``transport`` and ``on_period``, for the ROS node)."""
     outcome = serve_chip(
         scenario, vehicle, config, peer, bind,
-        log_path=out / LINK_CHIP_LOG if out is not None else None, on_status=on_status,
+        log_path=out / LINK_CHIP_LOG if out is not None else None, on_status=on_status, **link,
     )  # fmt: skip
     with _interrupts_held():
         record = chip_record(outcome, scenario.firmware, scenario.chip)
