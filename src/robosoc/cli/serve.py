@@ -140,6 +140,15 @@ def serve_physics_command(
     peer_timeout: PeerTimeout = 5.0,
     connect_timeout: ConnectTimeout = 300.0,
     ros: Ros = False,
+    start_delay: Annotated[
+        float,
+        typer.Option(
+            min=0.0,
+            max=600.0,
+            help="With --ros: seconds between the chips' arrival and the first sample, for recorders "
+            "(rosbag record -a) to subscribe first.",
+        ),
+    ] = 0.0,
 ) -> None:
     """The physics side: fly the scenario, sending sensor readings to a chip side and applying its commands."""
     from rich.markup import escape
@@ -157,8 +166,10 @@ def serve_physics_command(
         raise options.fail(resolved.source_of("vehicles"), reason)
     link = link_options.link_config(pace, hold, faults, resend, peer_timeout, connect_timeout)
     folder = _out(out, no_out, "physics", config.name, seed, resolved.path)
+    if not ros and start_delay:
+        raise options.fail("--start-delay", "is an option of --ros")
     if ros:
-        _serve_physics_ros(console, resolved, link, folder)
+        _serve_physics_ros(console, resolved, link, folder, start_delay)
         return
     address = bind or parse_address(DEFAULT_BIND, any_port=True)
     samples = config.samples
@@ -282,7 +293,7 @@ def serve_chip_command(
     end_of_side(outcome.ended, outcome.message, str(folder) if folder else "")
 
 
-def _serve_physics_ros(console, resolved: ResolvedScenario, link, folder: Path | None) -> None:
+def _serve_physics_ros(console, resolved: ResolvedScenario, link, folder: Path | None, start_delay: float) -> None:
     """``serve physics --ros``: the physics node, its figures per vehicle, its end."""
     from robosoc.cosim.ros1 import RosUnavailable
     from robosoc.outputs.ros_sides import run_ros_physics_side
@@ -293,7 +304,7 @@ def _serve_physics_ros(console, resolved: ResolvedScenario, link, folder: Path |
         f"{config.vehicles} vehicle(s), pace {link.pace}; waiting for the chip node(s) ..."
     )
     try:
-        outcomes, records = run_ros_physics_side(config, link, folder)
+        outcomes, records = run_ros_physics_side(config, link, folder, start_delay_s=start_delay)
     except RosUnavailable as exc:
         raise _ros_failed(exc) from None
     for outcome, record in zip(outcomes, records, strict=True):

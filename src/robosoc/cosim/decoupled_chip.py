@@ -286,6 +286,8 @@ def serve_chip(
         run = FirmwareRun(fw, scenario_image(scenario, vehicle), chip=scenario.chip, first_cycle=DEFAULT_FIRST_CYCLE)
         say("booting the chip (compiling the chip kernels on a fresh install) ...")
         run.run_to(DEFAULT_FIRST_CYCLE)
+        if on_period is not None:
+            on_period(run)  # booted: nothing estimated yet
         samples = round(scenario.duration_s * scenario.sensors.rate_hz)  # as the physics side counts them
         state = _Chip(run, link, config, period_ns, log, samples, on_period)
         say(f"waiting for the physics at {peer} ...")

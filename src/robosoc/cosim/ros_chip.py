@@ -102,7 +102,12 @@ class _Aux:
     """The readings of one auxiliary sensor topic (magnetic, pressure height) by stamp."""
 
     def __init__(self) -> None:
-        self.readings: deque[tuple[int, tuple[float, ...]]] = deque(maxlen=64)
+        self.readings: deque[tuple[int, tuple[float, ...]]] = deque()
+
+    def used(self, stamp: int) -> None:
+        """A sample at ``stamp`` has been built: forget the readings no later sample can use."""
+        while len(self.readings) >= 2 and self.readings[1][0] <= stamp:
+            self.readings.popleft()
 
     def ready(self, stamp: int) -> bool:
         """Whether the reading for a sample at ``stamp`` is known: one at or after it came, or the
@@ -225,6 +230,8 @@ class RosChipLink:
                 self.counts["imu"]["held"] += 1
                 self.log.write(f"sample at {stamp} ns built with the newest magnetic/pressure readings", "held")
             self.waiting.popleft()
+            for aux in self.aux.values():
+                aux.used(stamp)
             assert self.t0 is not None
             t_ns = stamp - self.t0
             if t_ns >= self.flight_ns:
@@ -306,7 +313,10 @@ class RosChipLink:
             self._status(body.end_ns)
 
     def period_closed(self, run: FirmwareRun) -> None:
-        """Publish the estimates and job response times the chip has produced since the last call."""
+        """Publish the estimates and job response times the chip has produced since the last call
+        (the first call, at boot, advertises a response time topic per task)."""
+        for task in sorted(set(run.names.values())):
+            self._response_pub(task)
         for e in run.estimates[self.estimates_seen :]:
             if not 0 <= e.sample < len(run.samples):
                 continue
@@ -324,11 +334,15 @@ class RosChipLink:
         jobs = run.jobs_logged(self.jobs_seen)
         self.jobs_seen += len(jobs)
         for task, release, completion in jobs:
-            pub = self.response_pubs.get(task)
-            if pub is None:
-                name = full_name(self.namespace, topic("response_time").name.format(task=task))
-                pub = self.response_pubs[task] = self.node.publisher(name, topic("response_time").type)
+            pub = self._response_pub(task)
             pub.publish(pub.data_class(data=(completion - release) * run.clock_ns / 1000.0))
+
+    def _response_pub(self, task: str) -> Any:
+        pub = self.response_pubs.get(task)
+        if pub is None:
+            name = full_name(self.namespace, topic("response_time").name.format(task=task))
+            pub = self.response_pubs[task] = self.node.publisher(name, topic("response_time").type)
+        return pub
 
     def report(self) -> dict[str, object]:
         return {

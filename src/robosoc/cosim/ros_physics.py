@@ -86,6 +86,7 @@ def serve_physics_ros(
     config: LinkConfig,
     *,
     log_paths: Sequence[Any] | None = None,
+    start_delay_s: float = 0.0,
     on_start: Callable[[], None] | None = None,
     on_row: Callable[[int, np.ndarray], None] | None = None,
     on_sample: Callable[[int, int], None] | None = None,
@@ -98,6 +99,9 @@ def serve_physics_ros(
             (:func:`robosoc.cosim.decoupled_physics.scenario_digest` of the scenario and vehicle).
         config: pacing (``realtime`` or ``fast``), hold, timeouts.
         log_paths: each vehicle's log (``link-physics.log``), or None.
+        start_delay_s: wall time between the chips' arrival and the first sample (time for a
+            recorder such as ``rosbag record -a``, which looks for new topics once a second, to
+            subscribe to every topic first).
         on_start: called when every chip is there and the flight starts.
         on_row: called with (vehicle index, row) as soon as a row is complete (the flight logs).
         on_sample: called with (samples done, samples in all).
@@ -209,6 +213,9 @@ def serve_physics_ros(
                     f"no chip node answered within --connect-timeout {config.connect_timeout_s:g} s"
                     + (f" (none in {', '.join(missing)})" if missing else " (subscriptions not connected)")
                 )
+        pause = time.monotonic() + start_delay_s
+        while time.monotonic() < pause:
+            take(min(0.05, max(0.0, pause - time.monotonic())), 0, 0, start)
         for v in fleet:
             v.heard = time.monotonic()
         if on_start is not None:

@@ -48,6 +48,8 @@ def run_ros_physics_side(
     scenario: ScenarioConfig,
     config: LinkConfig,
     out: Path | None,
+    *,
+    start_delay_s: float = 0.0,
     **callbacks: Any,
 ) -> tuple[list[PhysicsOutcome], list[dict[str, Any]]]:
     """The physics node with its files in ``out`` (nothing if None); each vehicle's outcome and record."""
@@ -67,7 +69,8 @@ def run_ros_physics_side(
     try:
         outcomes = serve_physics_ros(
             scenario, vehicles, firmware_digest(scenario), config,
-            log_paths=[f / LINK_PHYSICS_LOG if f is not None else None for f in folders], on_row=on_row, **callbacks,
+            log_paths=[f / LINK_PHYSICS_LOG if f is not None else None for f in folders], on_row=on_row,
+            start_delay_s=start_delay_s, **callbacks,
         )  # fmt: skip
     finally:
         for log in logs:
