@@ -42,7 +42,19 @@ from robosoc.chip.single import CoreError
 from robosoc.config.link import LinkConfig
 from robosoc.config.scenario import ScenarioConfig
 from robosoc.config.vehicle import VehicleConfig
-from robosoc.cosim.datagram import MAX_COMMANDS, Bye, ByeReason, Command, CommandBatch, Hello, Reading, SensorBatch
+from robosoc.cosim.datagram import (
+    MAX_COMMANDS,
+    MAX_ESTIMATES,
+    Bye,
+    ByeReason,
+    Command,
+    CommandBatch,
+    EstimateBatch,
+    Hello,
+    Reading,
+    SensorBatch,
+    StateEstimate,
+)
 from robosoc.cosim.decoupled_physics import Ended, scenario_digest
 from robosoc.cosim.firmware_run import DEFAULT_FIRST_CYCLE, FirmwareRun, ReplayResult
 from robosoc.cosim.link import Address, ChipTransport, LinkLog, UdpLink
@@ -106,6 +118,8 @@ class _Chip:
         self.counts = {"received": 0, "injected": 0, "late": 0, "stale": 0, "repeated": 0, "outside": 0}
         self.recent: deque[Command] = deque(maxlen=min(MAX_COMMANDS, config.resend + 16))
         self.commands_sent = 0
+        self.estimates_read = 0  # of run.estimates, sent
+        self.recent_estimates: deque[StateEstimate] = deque(maxlen=min(MAX_ESTIMATES, config.resend + 1))
         self.last_send = time.monotonic()
         self.reported_ns = -1
 
@@ -163,6 +177,20 @@ class _Chip:
         self.last_send = time.monotonic()
         self.reported_ns = self.now_ns()
 
+    def send_estimates(self) -> None:
+        """Send the estimates read since the last call (with the ``resend`` before them): the
+        physics' flight log has the chip's estimate, as lockstep's."""
+        fresh = []
+        for e in self.run.estimates[self.estimates_read :]:
+            if 0 <= e.sample < len(self.run.samples):
+                s = self.run.samples[e.sample]
+                t_ns = round(s.time_s * NS_PER_S)
+                fresh.append(StateEstimate(s.seq, t_ns, e.quaternion, e.height, e.vertical_velocity))
+        self.estimates_read = len(self.run.estimates)
+        if fresh:
+            self.recent_estimates.extend(fresh)
+            self.link.send_data(EstimateBatch(self.now_ns(), tuple(self.recent_estimates)))
+
     def inject_due(self) -> bool:
         """Inject the oldest waiting reading if the chip has reached its cycle; whether it did."""
         if not self.pending:
@@ -181,6 +209,7 @@ class _Chip:
             cycle = self.run.cycle
         if self.run.samples:
             self.run.close_period()
+            self.send_estimates()
             if self.on_period is not None:
                 self.on_period(self.run)
         self.run.inject(SampleInput(k, r.t_ns / NS_PER_S, cycle, r.packet))

@@ -36,17 +36,41 @@ import numpy as np
 from robosoc.config.link import LinkConfig
 from robosoc.config.scenario import ScenarioConfig
 from robosoc.config.vehicle import VehicleConfig
+from robosoc.control import quaternion
 from robosoc.control.flight import ROW_FIELDS, flight_row
+from robosoc.control.host import Estimate
 from robosoc.control.setpoint import setpoint_at
 from robosoc.cosim.actuator_hold import ActuatorHold
-from robosoc.cosim.datagram import MAX_READINGS, Bye, ByeReason, CommandBatch, Hello, Reading, SensorBatch
+from robosoc.cosim.datagram import (
+    MAX_READINGS,
+    Bye,
+    ByeReason,
+    CommandBatch,
+    EstimateBatch,
+    Hello,
+    Reading,
+    SensorBatch,
+    StateEstimate,
+)
 from robosoc.cosim.link import Address, LinkLog, UdpLink
 from robosoc.cosim.lockstep import PWM_COLUMNS, UNKNOWN_ESTIMATE
 from robosoc.cosim.replay import sensor_packet
 from robosoc.physics import World
 from robosoc.physics.clock import NS_PER_S, PHYSICS_STEP_NS, FlightClock
 
-__all__ = ["Ended", "PhysicsOutcome", "scenario_digest", "serve_physics"]
+__all__ = ["Ended", "PhysicsOutcome", "estimate_columns", "scenario_digest", "serve_physics"]
+
+ESTIMATE_COLUMNS = [ROW_FIELDS.index(n) for n in ROW_FIELDS if n.startswith("est_")]
+
+
+def estimate_columns(e: StateEstimate) -> np.ndarray:
+    """The estimate columns of a flight row (``est_roll`` ... ``est_height``) from a chip's estimate."""
+    q = np.array(e.quaternion)
+    est = Estimate(q, quaternion.to_euler(q), e.height, e.vertical_velocity)
+    values = {f"est_{a}": v for a, v in zip(("roll", "pitch", "yaw"), est.euler, strict=True)}
+    values.update({f"est_q{a}": v for a, v in zip("wxyz", est.quaternion, strict=True)})
+    values["est_height"] = est.height
+    return np.array([values[ROW_FIELDS[i]] for i in ESTIMATE_COLUMNS])
 
 
 class Ended:
@@ -117,6 +141,19 @@ class _Flight:
         self.last_send = time.monotonic()
         self.peer_bye: Bye | None = None
         self.finished = False  # the flight is over: commands are still counted, no longer applied
+        self.estimates: dict[int, StateEstimate] = {}  # by sensor sample, not yet superseded
+        self.estimate: StateEstimate | None = None  # the newest one a row has shown
+
+    def estimate_before(self, k: int) -> StateEstimate | None:
+        """The chip's newest estimate at sample ``k``'s time: of the newest sample before ``k``
+        whose estimate has come (lockstep's row k shows the estimate read at t_k)."""
+        ready = [j for j in self.estimates if j < k]
+        if ready:
+            newest = max(ready)
+            self.estimate = self.estimates[newest]
+            for j in ready:
+                del self.estimates[j]
+        return self.estimate
 
     def send(self, now_ns: int, fresh: list[Reading]) -> None:
         self.recent.extend(fresh)
@@ -146,6 +183,10 @@ class _Flight:
                         )
                         step = now
                     self.hold.schedule(step, c.pwm)
+            elif isinstance(body, EstimateBatch):
+                for e in body.estimates:
+                    if self.estimate is None or e.k > self.estimate.k:
+                        self.estimates[e.k] = e
             elif isinstance(body, Bye):
                 self.peer_bye = body
                 raise PeerEnded(f"the chip said bye ({body.reason.name.lower()})")
@@ -282,6 +323,9 @@ def serve_physics(
                 quad.apply_pwm(flight.hold.at(clock.first_step(k) + s))
                 if s == 0:
                     row[PWM_COLUMNS] = quad.pwm
+                    estimate = flight.estimate_before(k)
+                    if estimate is not None:
+                        row[ESTIMATE_COLUMNS] = estimate_columns(estimate)
                     rows[k] = row
                     done = k + 1
                     if on_row is not None:

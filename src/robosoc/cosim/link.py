@@ -28,6 +28,7 @@ from robosoc.cosim.datagram import (
     Bye,
     CommandBatch,
     Datagram,
+    EstimateBatch,
     Hello,
     Kind,
     Rejected,
@@ -154,6 +155,8 @@ def _describe(body: Body) -> str:
         return f"sensors k={[r.k for r in body.readings]}"
     if isinstance(body, CommandBatch):
         return f"commands seq={[c.seq for c in body.commands]} chip_now={body.chip_now_ns} ns"
+    if isinstance(body, EstimateBatch):
+        return f"estimates k={[e.k for e in body.estimates]}"
     if isinstance(body, Hello):
         return f"hello period={body.sample_period_ns} ns"
     assert isinstance(body, Bye)
@@ -167,7 +170,7 @@ class ChipTransport(Protocol):
     sent: int
 
     def receive(self, timeout: float) -> list[Datagram]: ...
-    def send_data(self, body: CommandBatch) -> None: ...
+    def send_data(self, body: CommandBatch | EstimateBatch) -> None: ...
     def send_control(self, body: Hello | Bye) -> None: ...
     def silent_for(self, now: float) -> float: ...
     def report(self) -> dict[str, object]: ...
@@ -245,7 +248,7 @@ class UdpLink:
             self.send_errors += 1
             self.log.write(f"send error: {exc}", "send error")
 
-    def send_data(self, body: SensorBatch | CommandBatch) -> None:
+    def send_data(self, body: SensorBatch | CommandBatch | EstimateBatch) -> None:
         """Send ``body`` as the next data datagram, through the fault injector."""
         datagram = encode(body, self.sent)
         self.sent += 1

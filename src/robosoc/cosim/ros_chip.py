@@ -44,12 +44,22 @@ from robosoc.config.scenario import ScenarioConfig
 from robosoc.config.vehicle import VehicleConfig
 from robosoc.control.flight import ROW_FIELDS
 from robosoc.control.setpoint import setpoint_at
-from robosoc.cosim.datagram import Bye, ByeReason, CommandBatch, Datagram, Hello, Kind, Reading, SensorBatch
+from robosoc.cosim.datagram import (
+    Bye,
+    ByeReason,
+    CommandBatch,
+    Datagram,
+    EstimateBatch,
+    Hello,
+    Kind,
+    Reading,
+    SensorBatch,
+)
 from robosoc.cosim.firmware_run import FirmwareRun
 from robosoc.cosim.link import LinkLog
 from robosoc.cosim.replay import sensor_packet
 from robosoc.cosim.ros1 import Node, RosUnavailable, full_name, stamp_ns, to_time
-from robosoc.cosim.ros_topics import FRAME_BODY, SENSOR_TOPICS, topic
+from robosoc.cosim.ros_topics import FRAME_BODY, FRAME_WORLD, SENSOR_TOPICS, topic
 from robosoc.physics.clock import NS_PER_S, FlightClock
 
 __all__ = ["AUX_WAIT_S", "NAMESPACE_GRACE_S", "RosChipLink", "check_topics"]
@@ -173,7 +183,7 @@ class RosChipLink:
         self.status_sent = 0
         self.published_seq = -1
         self.said_bye = False
-        self.estimates_seen = 0
+        self.estimated_k = -1
         self.jobs_seen = 0
 
     # --- in ---------------------------------------------------------------------------------------
@@ -284,7 +294,10 @@ class RosChipLink:
     def _ros_time(self, t_ns: int) -> Any:
         return to_time((self.t0 or 0) + t_ns)
 
-    def send_data(self, body: CommandBatch) -> None:
+    def send_data(self, body: CommandBatch | EstimateBatch) -> None:
+        if isinstance(body, EstimateBatch):
+            self._estimates(body)
+            return
         for c in body.commands:
             if self.published_seq >= 0 and c.seq <= self.published_seq:
                 continue  # a command repeated for the UDP link's redundancy: TCP needs none
@@ -312,25 +325,26 @@ class RosChipLink:
             self.said_bye = True
             self._status(body.end_ns)
 
-    def period_closed(self, run: FirmwareRun) -> None:
-        """Publish the estimates and job response times the chip has produced since the last call
-        (the first call, at boot, advertises a response time topic per task)."""
-        for task in sorted(set(run.names.values())):
-            self._response_pub(task)
-        for e in run.estimates[self.estimates_seen :]:
-            if not 0 <= e.sample < len(run.samples):
-                continue
-            sample = run.samples[e.sample]  # read at the close of the period of the sample it includes
+    def _estimates(self, body: EstimateBatch) -> None:
+        for e in body.estimates:
+            if e.k <= self.estimated_k:
+                continue  # repeated for the UDP link's redundancy
+            self.estimated_k = e.k
             msg = self.estimate_class()
-            msg.header.stamp = self._ros_time(round(sample.time_s * NS_PER_S))
-            msg.header.frame_id = "world"
+            msg.header.stamp = self._ros_time(e.t_ns)  # the sample it includes
+            msg.header.frame_id = FRAME_WORLD
             msg.pose.position.x = msg.pose.position.y = math.nan
             msg.pose.position.z = e.height
             w, x, y, z = e.quaternion
             msg.pose.orientation.w, msg.pose.orientation.x = w, x
             msg.pose.orientation.y, msg.pose.orientation.z = y, z
             self.estimate_pub.publish(msg)
-        self.estimates_seen = len(run.estimates)
+
+    def period_closed(self, run: FirmwareRun) -> None:
+        """Publish the job response times the chip has produced since the last call (the first
+        call, at boot, advertises a topic per task)."""
+        for task in sorted(set(run.names.values())):
+            self._response_pub(task)
         jobs = run.jobs_logged(self.jobs_seen)
         self.jobs_seen += len(jobs)
         for task, release, completion in jobs:
