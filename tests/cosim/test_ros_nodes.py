@@ -123,8 +123,8 @@ def test_ros_option_without_ros_installed(monkeypatch: pytest.MonkeyPatch, tmp_p
     assert result.exit_code == exit_codes.USAGE and "--ns" in result.output
     result = runner.invoke(app, ["serve", "chip", "--ros", "--ns", "/1bad", "--no-out"])
     assert result.exit_code == exit_codes.USAGE and "--ns" in result.output
-    result = runner.invoke(app, ["serve", "physics", "--vehicles", "2", "--no-out"])
-    assert result.exit_code == exit_codes.USAGE and "--ros" in result.output
+    result = runner.invoke(app, ["serve", "physics", "--start-delay", "2", "--no-out"])
+    assert result.exit_code == exit_codes.USAGE and "--start-delay" in result.output
 
 
 # --- with a master --------------------------------------------------------------------------------

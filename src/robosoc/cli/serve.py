@@ -161,15 +161,15 @@ def serve_physics_command(
     resolved, craft = resolve_side(flags)
     config, seed = resolved.config, resolved.config.seed
     _no_udp_options(ros, bind=bind is not None, faults=faults is not None)
-    if config.vehicles > 1 and not ros:
-        reason = f"{config.vehicles} vehicles need --ros (the UDP physics side flies one)"
-        raise options.fail(resolved.source_of("vehicles"), reason)
     link = link_options.link_config(pace, hold, faults, resend, peer_timeout, connect_timeout)
     folder = _out(out, no_out, "physics", config.name, seed, resolved.path)
     if not ros and start_delay:
         raise options.fail("--start-delay", "is an option of --ros")
     if ros:
         _serve_physics_ros(console, resolved, link, folder, start_delay)
+        return
+    if config.vehicles > 1:
+        _serve_physics_fleet(console, resolved, link, bind or parse_address(DEFAULT_BIND, any_port=True), folder)
         return
     address = bind or parse_address(DEFAULT_BIND, any_port=True)
     samples = config.samples
@@ -318,6 +318,40 @@ def _serve_physics_ros(console, resolved: ResolvedScenario, link, folder: Path |
         console.print(
             f"  {record['namespace']}: flown {outcome.simulated_s:g} of {config.duration_s:g} s in "
             f"{outcome.host_s:.1f} s; {hover}; commands {c['received']}, late {c['late']}, missed {c['missed']}"
+        )
+    if folder is not None:
+        plain(console, f"files: {folder}")
+    end_of_side(outcomes[0].ended, outcomes[0].message, str(folder) if folder else "")
+
+
+def _serve_physics_fleet(console, resolved: ResolvedScenario, link, bind, folder: Path | None) -> None:
+    """``serve physics --vehicles N`` over UDP: one link per vehicle on consecutive ports."""
+    from robosoc.cosim.link import LinkError
+    from robosoc.outputs.decoupled_flight import run_physics_fleet_side
+
+    config = resolved.config
+
+    def on_listen(addresses) -> None:
+        console.print(
+            f"physics: scenario {config.name}, {config.duration_s:g} s, seed {config.seed}, {config.vehicles} "
+            f"vehicles, pace {link.pace}; listening on " + ", ".join(str(a) for a in addresses) + " (one chip each)"
+        )
+
+    try:
+        outcomes, part = run_physics_fleet_side(config, link, bind, folder, on_listen=on_listen)
+    except LinkError as exc:
+        raise options.fail("--bind", str(exc)) from None
+    for i, (outcome, record) in enumerate(zip(outcomes, part["vehicles"], strict=True)):
+        f = record["flight"]
+        hover = (
+            f"hover RMS {f['hover_rms_m'] * 100:.2f} cm (max {f['hover_max_m'] * 100:.2f} cm)"
+            if f and math.isfinite(f["hover_rms_m"])
+            else "no hover figures"
+        )
+        c = outcome.commands
+        console.print(
+            f"  vehicle {i + 1}: flown {outcome.simulated_s:g} of {config.duration_s:g} s; {hover}; "
+            f"commands {c['received']}, late {c['late']}, missed {c['missed']}"
         )
     if folder is not None:
         plain(console, f"files: {folder}")

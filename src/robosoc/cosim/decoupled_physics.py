@@ -24,6 +24,7 @@ and every command delivered in time the flight is the lockstep flight, row for r
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import select
 import time
@@ -94,8 +95,9 @@ class Ended:
 
 
 def scenario_digest(scenario: ScenarioConfig, vehicle: VehicleConfig) -> bytes:
-    """8 bytes naming what is flown: both sides must have it equal."""
-    return hashlib.blake2b(repr((scenario, vehicle)).encode(), digest_size=8).digest()
+    """8 bytes naming what a chip's firmware is built for: both sides must have it equal.  The
+    number of vehicles is left out: every chip of a fleet runs the same firmware."""
+    return hashlib.blake2b(repr((dataclasses.replace(scenario, vehicles=1), vehicle)).encode(), digest_size=8).digest()
 
 
 @dataclass

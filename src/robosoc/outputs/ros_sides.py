@@ -41,7 +41,7 @@ __all__ = ["firmware_digest", "run_ros_chip_side", "run_ros_physics_side"]
 
 def firmware_digest(scenario: ScenarioConfig) -> bytes:
     """What a chip node's firmware is built for: the scenario with one vehicle, its preset."""
-    return scenario_digest(dataclasses.replace(scenario, vehicles=1), vehicle_preset(scenario.vehicle))
+    return scenario_digest(scenario, vehicle_preset(scenario.vehicle))
 
 
 def run_ros_physics_side(
