@@ -40,6 +40,7 @@ HPA_TO_PA = 100.0
 # files and the ``MSG:`` sections of a schema name them), and robosoc's own two
 _DEFINITIONS: dict[str, str] = {
     "builtin_interfaces/Time": "int32 sec\nuint32 nanosec\n",
+    "rosgraph_msgs/Clock": "builtin_interfaces/Time clock\n",
     "std_msgs/Header": "builtin_interfaces/Time stamp\nstring frame_id\n",
     "std_msgs/Float64": "float64 data\n",
     "geometry_msgs/Vector3": "float64 x\nfloat64 y\nfloat64 z\n",
