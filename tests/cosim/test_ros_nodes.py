@@ -356,14 +356,22 @@ def chip_args(toml: Path, ns: str, out: Path) -> list[str]:
 
 
 def test_realtime_pacing_and_sim_time(master: Master, tmp_path: Path) -> None:
-    """--pace realtime keeps to the wall clock (a 1 s flight takes at least 1 s) and stays close to
-    the simulated-time flight; use_sim_time is set for the nodes that follow /clock."""
-    toml = scenario_file(tmp_path)
-    physics = master.robosoc(["serve", "physics", str(toml), "--ros", "--pace", "realtime", "--out",
-                              str(tmp_path / "p")], tmp_path / "physics.log")  # fmt: skip
+    """--pace realtime keeps to the wall clock (a 2 s flight takes at least 2 s); use_sim_time is set,
+    and ``rostopic hz`` started after it (so on /clock's time) shows the sensors' 100 Hz."""
+    toml = scenario_file(tmp_path, 2.0)
+    physics = master.robosoc(["serve", "physics", str(toml), "--ros", "--pace", "realtime", "--start-delay", "2",
+                              "--out", str(tmp_path / "p")], tmp_path / "physics.log")  # fmt: skip
+    deadline = time.monotonic() + 60
+    while master.run(["rosparam", "get", "/use_sim_time"]).stdout.strip() != "true":
+        assert time.monotonic() < deadline, "use_sim_time was not set"
+        time.sleep(0.2)
+    hz = master.start(["rostopic", "hz", "/raw_imu"], tmp_path / "hz.log")
     chip = master.robosoc(["serve", "chip", str(toml), "--ros", "--out", str(tmp_path / "c")], tmp_path / "chip.log")
     codes = wait_all([physics, chip], timeout=300)
+    stop(hz)
     assert codes == [0, 0], (tmp_path / "physics.log").read_text() + (tmp_path / "chip.log").read_text()
     record = json.loads((tmp_path / "p" / "physics.json").read_text())
-    assert record["host_s"] >= 1.0 and record["commands"]["received"] == 100
-    assert master.run(["rosparam", "get", "/use_sim_time"]).stdout.strip() == "true"
+    assert record["host_s"] >= 2.0 and record["commands"]["received"] == 200
+    rates = [float(line.split(":")[1]) for line in (tmp_path / "hz.log").read_text().splitlines()
+             if line.strip().startswith("average rate:")]  # fmt: skip
+    assert rates and all(r == pytest.approx(100.0, abs=1.0) for r in rates), (tmp_path / "hz.log").read_text()
