@@ -285,9 +285,13 @@ def serve_chip_command(
             f"readings {r['received']}, injected {r['injected']}, late {r['late']}, stale {r['stale']}; "
             f"commands sent {r['commands_sent']}; chip time {outcome.simulated_s:g} s in {outcome.host_s:.1f} s"
         )
-    print_link_counts(
-        console, {"to physics": record["link"]["to_physics"], "from physics": record["link"]["from_physics"]}
-    )
+    if ros:
+        for topic, counts in record["link"]["from_physics"].items():
+            console.print(f"  {topic}: " + ", ".join(f"{name} {value}" for name, value in counts.items()))
+    else:
+        print_link_counts(
+            console, {"to physics": record["link"]["to_physics"], "from physics": record["link"]["from_physics"]}
+        )
     if folder is not None:
         plain(console, f"files: {folder}")
     end_of_side(outcome.ended, outcome.message, str(folder) if folder else "")

@@ -25,7 +25,6 @@ import socket
 import sys
 import time
 import xmlrpc.client
-from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from types import ModuleType
@@ -106,7 +105,7 @@ def check_master(timeout_s: float = MASTER_TIMEOUT_S) -> str:
     try:
         with socket.create_connection((parsed.hostname, port), timeout=timeout_s):
             pass
-        code, _, _ = _TimedProxy(uri, timeout_s).getPid("/robosoc")
+        code, _, _ = _timed_proxy(uri, timeout_s).getPid("/robosoc")
     except (OSError, xmlrpc.client.Error, ValueError) as exc:
         raise RosUnavailable(
             f"no ROS master answers at {named} ({exc}); start one with `roscore`, or set ROS_MASTER_URI to its address"
@@ -127,7 +126,7 @@ class _TimeoutTransport(xmlrpc.client.Transport):
         return connection
 
 
-def _TimedProxy(uri: str, timeout_s: float) -> Any:
+def _timed_proxy(uri: str, timeout_s: float) -> Any:
     return xmlrpc.client.ServerProxy(uri, transport=_TimeoutTransport(timeout_s))
 
 
@@ -245,13 +244,3 @@ class Node:
             item.unregister()
         self.subscribers.clear()
         self.publishers.clear()
-
-
-def wait_until(done: Callable[[], bool], timeout_s: float, step_s: float = 0.05) -> bool:
-    """Poll ``done`` until it holds or ``timeout_s`` passed; whether it held."""
-    deadline = time.monotonic() + timeout_s
-    while not done():
-        if time.monotonic() > deadline:
-            return False
-        time.sleep(step_s)
-    return True
