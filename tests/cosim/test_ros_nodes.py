@@ -158,7 +158,7 @@ def test_two_nodes_fly_the_lockstep_flight(master: Master, tmp_path: Path) -> No
     bag = tmp_path / "flight.bag"
     recorder = master.start(["rosbag", "record", "-a", "-O", str(bag)], tmp_path / "rosbag.log")
     time.sleep(1.5)
-    physics = master.robosoc(["serve", "physics", str(toml), "--ros", "--pace", "fast", "--start-delay", "3",
+    physics = master.robosoc(["serve", "physics", str(toml), "--ros", "--pace", "fast", "--start-delay", "5",
                               "--out", str(tmp_path / "p")], tmp_path / "physics.log")  # fmt: skip
     chip = master.robosoc(["serve", "chip", str(toml), "--ros", "--out", str(tmp_path / "c")], tmp_path / "chip.log")
     codes = wait_all([physics, chip], timeout=300)
