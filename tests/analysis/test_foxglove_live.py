@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
+import signal
 import socket
 import struct
 import subprocess
@@ -19,7 +21,7 @@ from mcap_ros2.decoder import DecoderFactory
 from websockets.sync.client import connect
 
 from robosoc.control.flight import ROW_FIELDS
-from robosoc.outputs.foxglove_live import LiveFlight, LiveFlightError
+from robosoc.outputs.foxglove_live import CLOCK_TOPIC, LiveFlight, LiveFlightError
 from robosoc.outputs.ros2_flight import START_NS, TOPICS
 
 SUBPROTOCOL = "foxglove.sdk.v1"
@@ -30,7 +32,7 @@ WAIT_S = 30
 def _advertised(ws) -> list[dict]:
     """Read JSON frames up to the advertisement of every topic."""
     channels: dict[str, dict] = {}
-    while len(channels) < len(TOPICS):
+    while len(channels) < len(TOPICS) + 1:  # and /clock
         frame = json.loads(ws.recv(timeout=WAIT_S))
         if frame["op"] == "advertise":
             channels.update({c["topic"]: c for c in frame["channels"]})
@@ -72,9 +74,10 @@ def test_a_client_gets_the_channels_and_messages_equal_to_the_rows(host_flight: 
         with connect(live.url, subprotocols=[SUBPROTOCOL], open_timeout=WAIT_S) as ws:
             assert ws.subprotocol == SUBPROTOCOL
             channels = _advertised(ws)
-            assert {c["topic"]: c["schemaName"] for c in channels} == {t.name: t.datatype for t in TOPICS}
+            expected = {t.name: t.datatype for t in TOPICS} | {CLOCK_TOPIC: "rosgraph_msgs/msg/Clock"}
+            assert {c["topic"]: c["schemaName"] for c in channels} == expected
             assert {(c["encoding"], c["schemaEncoding"]) for c in channels} == {("cdr", "ros2msg")}
-            subscriptions = _subscribe(ws, channels)
+            subscriptions = _subscribe(ws, [c for c in channels if c["topic"] != CLOCK_TOPIC])
 
             failed: list[BaseException] = []
 
@@ -180,3 +183,69 @@ def test_publishing_is_held_back_to_the_pace(monkeypatch, host_flight: np.ndarra
         assert clock.slept == []
         live.publish(later)
         assert sum(clock.slept) == pytest.approx(slept, abs=1e-9)
+
+
+TIME = 0x02  # binary opcode of the server's time (Foxglove WebSocket protocol)
+
+
+def test_subprotocols_clock_and_server_time(host_flight: np.ndarray) -> None:
+    """Only foxglove.sdk.v1 connects (the older foxglove.websocket.v1 and no subprotocol get HTTP
+    400); the server has the time capability, sends each row's time, and /clock decodes to it."""
+    from websockets.exceptions import InvalidStatus
+
+    rows = host_flight[:20]
+    with LiveFlight(0, pace=0) as live:
+        for refused in (["foxglove.websocket.v1"], None):
+            with pytest.raises(InvalidStatus, match="400"):
+                connect(live.url, subprotocols=refused, open_timeout=WAIT_S)
+        with connect(live.url, subprotocols=[SUBPROTOCOL], open_timeout=WAIT_S) as ws:
+            info = json.loads(ws.recv(timeout=WAIT_S))
+            assert info["op"] == "serverInfo" and "time" in info["capabilities"]
+            clock = next(c for c in _advertised(ws) if c["topic"] == CLOCK_TOPIC)
+            ws.send(json.dumps({"op": "subscribe", "subscriptions": [{"id": 7, "channelId": clock["id"]}]}))
+            times = [START_NS + round(float(t) * 1e9) for t in rows[:, ROW_FIELDS.index("t")]]
+            clocks: list[int] = []
+            server_times: list[int] = []
+            deadline = time.monotonic() + WAIT_S
+            while not (clocks and server_times) and time.monotonic() < deadline:
+                for row in rows:
+                    live.publish(row)
+                with contextlib.suppress(TimeoutError):
+                    while True:
+                        frame = ws.recv(timeout=0.1)
+                        if isinstance(frame, bytes) and frame[0] == TIME:
+                            server_times.append(struct.unpack_from("<Q", frame, 1)[0])
+                        elif isinstance(frame, bytes) and frame[0] == MESSAGE_DATA:
+                            _, ns = struct.unpack_from("<IQ", frame, 1)
+                            schema = Schema(id=1, name=clock["schemaName"], encoding=clock["schemaEncoding"],
+                                            data=clock["schema"].encode())  # fmt: skip
+                            decoded = DecoderFactory().decoder_for("cdr", schema)(frame[13:])
+                            assert decoded.clock.sec * 10**9 + decoded.clock.nanosec == ns
+                            clocks.append(ns)
+    assert clocks and set(clocks) <= set(times)
+    assert server_times and set(server_times) <= set(times)
+
+
+def test_fly_foxglove_keep_serves_until_ctrl_c(tmp_path: Path) -> None:
+    """--foxglove-keep: the flight's files are written, the server still takes clients, Ctrl-C ends
+    the command with 0; without --foxglove it is refused."""
+    env = {**os.environ, "PYTHONUNBUFFERED": "1", "COLUMNS": "200"}
+    out = tmp_path / "run"
+    args = [sys.executable, "-m", "robosoc", "fly", "--seconds", "0.3", "--foxglove", "0", "--foxglove-keep",
+            "--out", str(out)]  # fmt: skip
+    with subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env) as fly:
+        assert fly.stdout is not None
+        url = None
+        for line in fly.stdout:
+            if "still serving on" in line:
+                url = line.split("still serving on ")[1].split()[0]
+                break
+        assert url is not None, "fly did not say it keeps serving"
+        assert (out / "summary.json").is_file() and json.loads((out / "summary.json").read_text())["complete"]
+        with connect(url, subprotocols=[SUBPROTOCOL], open_timeout=WAIT_S) as ws:
+            assert {c["topic"] for c in _advertised(ws)} >= {t.name for t in TOPICS}
+        fly.send_signal(signal.SIGINT)
+        assert fly.wait(timeout=60) == 0, fly.stdout.read()
+    bad = subprocess.run([sys.executable, "-m", "robosoc", "fly", "--foxglove-keep", "--no-out"], env=env,
+                         capture_output=True, text=True, timeout=60, check=False)  # fmt: skip
+    assert bad.returncode == 2 and "--foxglove-keep: only with --foxglove PORT" in bad.stderr

@@ -323,7 +323,6 @@ def test_firmware_replay_names_the_log_argument(host_run: Path) -> None:
          "--decoupled: the decoupled mode flies the firmware on the chip (drop --controller host)"),
         (["--decoupled", "--video", "v.mp4"], "--video: not with --decoupled (the physics runs in another process)"),
         (["--decoupled", "--foxglove", "0"], "--foxglove: not with --decoupled (the physics runs in another process)"),
-        (["--decoupled", "--vehicles", "2"], "--decoupled: flies one vehicle, the scenario has 2"),
         (["--duration", "0.01", "--seconds", "0.01"], "--duration: cannot be combined with --seconds"),
         (["--scenario", "SCENARIO", "SCENARIO"], "--scenario: cannot be combined with SCENARIO"),
     ],

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import struct
 import zlib
 
@@ -12,18 +13,21 @@ from hypothesis import strategies as st
 from robosoc.cosim.datagram import (
     MAX_COMMANDS,
     MAX_DATAGRAM_BYTES,
+    MAX_ESTIMATES,
     MAX_READINGS,
     Bye,
     ByeReason,
     Command,
     CommandBatch,
     Datagram,
+    EstimateBatch,
     Hello,
     Kind,
     Reading,
     Rejected,
     Rejection,
     SensorBatch,
+    StateEstimate,
     decode,
     encode,
 )
@@ -42,6 +46,13 @@ BODIES = [
     SensorBatch(0, ()),
     CommandBatch(12_345_678, (Command(7, 70_135_000, (0, 17, 200, 255)), Command(8, 80_134_996, (1, 2, 3, 4)))),
     Bye(ByeReason.INTERRUPTED, 1234, 9_990_000_000),
+    EstimateBatch(
+        40_000_000,
+        (
+            StateEstimate(2, 20_000_000, (1.0, 0.0, -0.5, 2.0**-16), 0.25, -1e-3),
+            StateEstimate(3, 30_000_000, (0.75, 1e-300, 3.0, -4.0), math.inf, math.nan),
+        ),
+    ),
 ]
 
 
@@ -49,8 +60,12 @@ BODIES = [
 def test_round_trip(body) -> None:
     d = decode(encode(body, seq=41))
     assert isinstance(d, Datagram)
-    kinds = {Hello: Kind.HELLO, SensorBatch: Kind.SENSORS, CommandBatch: Kind.COMMANDS, Bye: Kind.BYE}
-    assert d.body == body and d.seq == 41 and d.kind is kinds[type(body)]
+    kinds = {
+        Hello: Kind.HELLO, SensorBatch: Kind.SENSORS, CommandBatch: Kind.COMMANDS, Bye: Kind.BYE,
+        EstimateBatch: Kind.ESTIMATES,
+    }  # fmt: skip
+    assert d.seq == 41 and d.kind is kinds[type(body)]
+    assert repr(d.body) == repr(body)  # NaN is not equal to itself, its repr is
 
 
 def test_the_documented_layout() -> None:
@@ -67,6 +82,10 @@ def test_the_largest_batches_fit_one_datagram() -> None:
     assert len(encode(SensorBatch(0, readings))) <= MAX_DATAGRAM_BYTES
     commands = tuple(Command(k, k, (1, 2, 3, 4)) for k in range(MAX_COMMANDS))
     assert len(encode(CommandBatch(0, commands))) <= MAX_DATAGRAM_BYTES
+    estimates = tuple(StateEstimate(k, k, (1.0, 0.0, 0.0, 0.0), 1.0, 0.0) for k in range(MAX_ESTIMATES))
+    assert len(encode(EstimateBatch(0, estimates))) <= MAX_DATAGRAM_BYTES
+    with pytest.raises(ValueError, match="at most"):
+        encode(EstimateBatch(0, (*estimates, estimates[0])))
     with pytest.raises(ValueError, match="at most"):
         encode(SensorBatch(0, (*readings, readings[0])))
 
@@ -78,6 +97,17 @@ def rejected(data: bytes) -> Rejection:
 
 
 GOOD = encode(BODIES[3], seq=5)
+
+
+def test_the_documented_estimate_layout() -> None:
+    """An estimate datagram built by hand from the docstring's layout (kind 5, f64 fields) decodes."""
+    payload = struct.pack("<QH", 7, 1) + struct.pack("<IQ6d", 4, 40_000_000, 0.5, 0.5, -0.5, 0.5, 1.25, -0.125)
+    header = struct.pack("<4sBBHIII", b"RSoC", 1, 5, 0, 3, len(payload), 0)
+    crc = zlib.crc32(header + payload)
+    d = decode(struct.pack("<4sBBHIII", b"RSoC", 1, 5, 0, 3, len(payload), crc) + payload)
+    assert d == Datagram(
+        Kind.ESTIMATES, 3, EstimateBatch(7, (StateEstimate(4, 40_000_000, (0.5, 0.5, -0.5, 0.5), 1.25, -0.125),))
+    )
 
 
 def test_every_bad_input_class() -> None:

@@ -205,8 +205,8 @@ def run_noc_benchmark(
                 cfg, tag_packets=True, event_capacity=8192, rx_free_delay=rx_hold, read_pointer_timing=read_pointer
             )
             n_packets = _traffic(mesh, rate, cycles, packet_flits, rng)
-            label = arbiter if read_pointer or arbiter != "hermes" else "hermes-before"
-            label = f"{label}+gating" if gated else label
+            model = arbiter if read_pointer or arbiter != "hermes" else "hermes-before"
+            label = f"{model}+gating" if gated else model
             task = progress.add_task(f"{width}x{height} {label} rate {rate:.3f}", total=n_packets)
             host = 0.0
             chunk = max(1000, cycles // 20)

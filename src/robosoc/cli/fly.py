@@ -43,6 +43,10 @@ Foxglove = Annotated[
         callback=options.int_range(0, 65535),
     ),
 ]
+FoxgloveKeep = Annotated[
+    bool,
+    typer.Option("--foxglove-keep", help="With --foxglove: keep serving after the flight ends, until Ctrl-C."),
+]
 Profile = Annotated[
     bool,
     typer.Option(
@@ -69,6 +73,7 @@ def fly_command(
     no_out: NoOut = False,
     video: Video = None,
     foxglove: Foxglove = None,
+    foxglove_keep: FoxgloveKeep = False,
     profile: Profile = False,
     # --- decoupled mode (robosoc.cli.fly_decoupled, docs/decoupled.md) ---
     decoupled: Decoupled = False,
@@ -85,6 +90,8 @@ def fly_command(
 
     console = make_console()
     link = fly_decoupled.link_of(ctx, decoupled, flags, video=video, foxglove=foxglove, profile=profile)
+    if foxglove_keep and foxglove is None:
+        raise options.fail("--foxglove-keep", "only with --foxglove PORT")
     resolved = resolve(flags)
     config = resolved.config if link is None else dataclasses.replace(resolved.config, controller="chip")
     _check_controller(resolved, config, profile)
@@ -107,7 +114,7 @@ def fly_command(
         video = files.output_file(video, "--video", inputs=resolved.inputs) if video.suffix.lower() == ".mp4" else (
             files.output_dir(video, "--video"))  # fmt: skip
     _announce(console, resolved, config)
-    flight = _fly(console, config, out, video, foxglove, profile)
+    flight = _fly(console, config, out, video, foxglove, profile, foxglove_keep)
     print_summary(console, flight.summary)
     if profile:
         from robosoc.cli.profile import print_profile
@@ -163,9 +170,18 @@ def _announce(console, resolved: ResolvedScenario, config: ScenarioConfig) -> No
     console.print("every other field: built-in default" if resolved.sources else "all fields: built-in defaults")
 
 
-def _fly(console, config: ScenarioConfig, out: Path | None, video: Path | None, foxglove: int | None, profile: bool):
-    """The flight with its progress bar, video and live server; an interrupt or a firmware fault ends
-    the command with the flight so far in ``out``."""
+def _fly(
+    console,
+    config: ScenarioConfig,
+    out: Path | None,
+    video: Path | None,
+    foxglove: int | None,
+    profile: bool,
+    keep: bool = False,
+):
+    """The flight with its progress bar, video and live server (kept serving after the flight until
+    Ctrl-C with ``keep``); an interrupt or a firmware fault ends the command with the flight so far
+    in ``out``."""
     from robosoc.chip.mpsoc import ChipError
     from robosoc.chip.single import CoreError
     from robosoc.outputs.flight_session import fly_scenario
@@ -185,6 +201,10 @@ def _fly(console, config: ScenarioConfig, out: Path | None, video: Path | None, 
             config, out, on_sample=on_sample, on_status=progress.status, on_row=_live_rows(live), plot=True,
             profile=profile,
         )  # fmt: skip
+        if keep and live is not None:
+            progress.stop()
+            plain(console, f"foxglove: the flight is over; still serving on {live.url} until Ctrl-C")
+            live.hold()
     except KeyboardInterrupt as exc:
         progress.stop()
         note(console, interrupted_message(out, exc))

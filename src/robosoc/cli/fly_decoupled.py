@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 import tempfile
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import typer
 from rich.console import Console
@@ -21,6 +22,9 @@ from robosoc.cli.scenario_flags import ScenarioFlags
 from robosoc.config.link import LinkConfig
 from robosoc.config.scenario import ScenarioConfig
 from robosoc.cosim.link import Address
+
+if TYPE_CHECKING:
+    from robosoc.outputs.decoupled_flight import DecoupledFlight
 
 __all__ = ["LINK_OPTIONS", "fly_decoupled_run", "link_of"]
 
@@ -68,6 +72,23 @@ def _number(value: float | None, scale: float, unit: str) -> str:
     return "n/a" if value is None or not math.isfinite(value) else f"{value * scale:.2f} {unit}"
 
 
+def _print_fleet(console: Console, flight: DecoupledFlight) -> None:
+    """Each vehicle's hover figures, commands and datagram counts."""
+    for i, summary in enumerate(flight.summary["vehicles"]):
+        f = summary.get("flight") or {}
+        c = (summary.get("link") or {}).get("commands") or {}
+        console.print(
+            f"vehicle {i + 1}: hover height error (RMS, after the climb) {_number(f.get('hover_rms_m'), 100, 'cm')} "
+            f"(max {_number(f.get('hover_max_m'), 100, 'cm')}); commands applied {c.get('received', 0)} "
+            f"(late {c.get('late', 0)}, missed {c.get('missed', 0)})"
+        )
+        lk = summary.get("link") or {}
+        if lk.get("to_chip") and lk.get("to_physics"):
+            print_link_counts(console, {"to chip": lk["to_chip"], "to physics": lk["to_physics"]})
+    sep = flight.summary.get("min_separation_m")
+    console.print(f"closest approach of two vehicles: {_number(sep, 1, 'm')}")
+
+
 def fly_decoupled_run(
     console: Console, scenario: ScenarioConfig, out: Path | None, link: LinkConfig, bind: Address | None
 ) -> None:
@@ -78,8 +99,6 @@ def fly_decoupled_run(
     """
     from robosoc.config.vehicle import vehicle_preset
 
-    if scenario.vehicles != 1:
-        raise options.fail("--decoupled", f"flies one vehicle, the scenario has {scenario.vehicles}")
     if scenario.power.battery_on:
         raise options.fail("--decoupled", "flies on the constant supply only (power.supply = \"battery\" is not "
                            "modelled across the two processes): fly the battery in lockstep")  # fmt: skip
@@ -90,6 +109,7 @@ def fly_decoupled_run(
     from robosoc.control.flight_log import read_flight_log
     from robosoc.control.flight_plot import plot_flight
     from robosoc.outputs.decoupled_flight import SideFailed, fly_decoupled
+    from robosoc.outputs.flight_session import vehicle_folder
     from robosoc.outputs.run_folder import FLIGHT_CSV, FLIGHT_PNG
 
     samples = scenario.samples
@@ -135,6 +155,22 @@ def fly_decoupled_run(
             raise CliError(f"{exc.side} side: {exc.message}") from None
         raise CliError(f"the {exc.side} side failed:\n{exc.message}", code=exit_codes.INTERNAL_ERROR) from None
     summary = flight.summary
+    if flight.vehicles:
+        _print_fleet(console, flight)
+        if out is not None:
+            for i in range(len(flight.vehicles)):
+                folder = vehicle_folder(out, i, len(flight.vehicles))
+                rows = read_flight_log(folder / FLIGHT_CSV) if (folder / FLIGHT_CSV).exists() else None
+                if rows is not None and len(rows):
+                    title = f"{scenario.name}, seed {seed}, decoupled, vehicle {i + 1}"
+                    plot_flight(rows, folder / FLIGHT_PNG, title=title)
+            plain(console, f"run folder: {out} (summary.json, vehicle-N/ with each vehicle's files)")
+        elif temporary is not None:
+            temporary.cleanup()
+        if flight.ended != "done":
+            note(console, f"{flight.message}")
+        end_of_side(flight.ended, flight.message, str(out) if out else "")
+        return
     f = summary["flight"]
     if f:
         t = f["tracking_rms_deg"]

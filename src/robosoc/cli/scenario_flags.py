@@ -170,7 +170,7 @@ FLAGS: tuple[ScenarioFlag, ...] = (
     ScenarioFlag("--seconds", "seconds", "duration_s", Seconds),
     ScenarioFlag("--seed", "seed", "seed", Seed, (*_EVERY, TABLE)),
     ScenarioFlag("--vehicle", "vehicle", "vehicle", Vehicle),
-    ScenarioFlag("--vehicles", "vehicles", "vehicles", Vehicles, (FLY,)),
+    ScenarioFlag("--vehicles", "vehicles", "vehicles", Vehicles, (FLY, SERVE_PHYSICS)),
     ScenarioFlag("--arith", "arith", "firmware.arith", Arith, (FLY, SERVE_CHIP, FIRMWARE)),
     ScenarioFlag("--mul/--no-mul", "mul", "firmware.multiplier", Mul, (FLY, SERVE_CHIP, FIRMWARE)),
     ScenarioFlag("--fixed-mul", "fixed_mul", "firmware.fixed_mul64", FixedMul, (FLY, SERVE_CHIP, FIRMWARE, TABLE)),

@@ -41,6 +41,52 @@ serve_app = typer.Typer(
 app.add_typer(serve_app, name="serve")
 
 NoOut = Annotated[bool, typer.Option("--no-out", help="Write no files.")]
+Ros = Annotated[
+    bool,
+    typer.Option(
+        "--ros",
+        help="Be a ROS 1 node (hector_quadrotor's topics through the master at ROS_MASTER_URI) instead of "
+        "a UDP peer (docs/ros.md).",
+    ),
+]
+
+
+def _namespace(ctx: typer.Context, param: typer.CallbackParam, value: str) -> str:
+    if getattr(ctx, "resilient_parsing", False):
+        return value
+    import re
+
+    text = value.strip()
+    if not text.startswith("/"):
+        text = "/" + text
+    if not re.fullmatch(r"/|(/[A-Za-z][A-Za-z0-9_]*)+/?", text):
+        raise CliError(f"--ns: not a ROS namespace such as /uav1, got {value!r}")
+    return text.rstrip("/") or "/"
+
+
+Namespace = Annotated[
+    str,
+    typer.Option(
+        "--ns",
+        metavar="NS",
+        help="With --ros: the vehicle's namespace (/ for one vehicle, /uav1, /uav2 ... for a fleet).",
+        callback=_namespace,
+    ),
+]
+
+
+def _no_udp_options(ros: bool, **given: bool) -> None:
+    """Refuse the UDP link's options with --ros (they would be silently ignored)."""
+    if ros:
+        for name, on in given.items():
+            if on:
+                raise options.fail(f"--{name.replace('_', '-')}", "is an option of the UDP link, not of --ros")
+
+
+def _ros_failed(exc: Exception) -> CliError:
+    return CliError(str(exc))
+
+
 Peer = Annotated[
     link_options.Address | None,
     typer.Option(
@@ -93,6 +139,16 @@ def serve_physics_command(
     resend: Resend = 2,
     peer_timeout: PeerTimeout = 5.0,
     connect_timeout: ConnectTimeout = 300.0,
+    ros: Ros = False,
+    start_delay: Annotated[
+        float,
+        typer.Option(
+            min=0.0,
+            max=600.0,
+            help="With --ros: seconds between the chips' arrival and the first sample, for recorders "
+            "(rosbag record -a) to subscribe first.",
+        ),
+    ] = 0.0,
 ) -> None:
     """The physics side: fly the scenario, sending sensor readings to a chip side and applying its commands."""
     from rich.markup import escape
@@ -104,8 +160,17 @@ def serve_physics_command(
     console = make_console()
     resolved, craft = resolve_side(flags)
     config, seed = resolved.config, resolved.config.seed
+    _no_udp_options(ros, bind=bind is not None, faults=faults is not None)
     link = link_options.link_config(pace, hold, faults, resend, peer_timeout, connect_timeout)
     folder = _out(out, no_out, "physics", config.name, seed, resolved.path)
+    if not ros and start_delay:
+        raise options.fail("--start-delay", "is an option of --ros")
+    if ros:
+        _serve_physics_ros(console, resolved, link, folder, start_delay)
+        return
+    if config.vehicles > 1:
+        _serve_physics_fleet(console, resolved, link, bind or parse_address(DEFAULT_BIND, any_port=True), folder)
+        return
     address = bind or parse_address(DEFAULT_BIND, any_port=True)
     samples = config.samples
     progress = Progress(
@@ -173,24 +238,38 @@ def serve_chip_command(
     resend: Resend = 2,
     peer_timeout: PeerTimeout = 5.0,
     connect_timeout: ConnectTimeout = 300.0,
+    ros: Ros = False,
+    ns: Namespace = "/",
 ) -> None:
-    """The chip side: run the firmware on the chip for a physics side, over UDP."""
+    """The chip side: run the firmware on the chip for a physics side, over UDP (or as a ROS 1 node)."""
     from robosoc.cosim.link import LinkError, parse_address
     from robosoc.outputs.decoupled_flight import run_chip_side
 
     console = make_console()
     resolved, craft = resolve_side(flags)
     config, seed = resolved.config, resolved.config.seed
-    check_project(config, resolved.source_of("firmware.project"), sends=("sensor",), what="the decoupled mode")
+    _no_udp_options(ros, peer=peer is not None, bind=bind is not None, faults=faults is not None)
+    if not ros and ns != "/":
+        raise options.fail("--ns", "is an option of --ros")
+    what = "a ROS chip node" if ros else "the decoupled mode"  # both are sent the sensor packets only
+    check_project(config, resolved.source_of("firmware.project"), sends=("sensor",), what=what)
     link = link_options.link_config(
         faults=faults, resend=resend, peer_timeout=peer_timeout, connect_timeout=connect_timeout
     )
     folder = _out(out, no_out, "chip", config.name, seed, resolved.path)
     target = peer or parse_address(DEFAULT_BIND, any_port=False)
+    say = lambda text: note(console, f"chip: {text}")  # noqa: E731
     try:
-        outcome, record = run_chip_side(
-            config, craft, link, target, bind, folder, on_status=lambda text: note(console, f"chip: {text}")
-        )  # fmt: skip
+        if ros:
+            from robosoc.cosim.ros1 import RosUnavailable
+            from robosoc.outputs.ros_sides import run_ros_chip_side
+
+            try:
+                outcome, record = run_ros_chip_side(config, craft, link, ns, folder, on_status=say)
+            except RosUnavailable as exc:
+                raise _ros_failed(exc) from None
+        else:
+            outcome, record = run_chip_side(config, craft, link, target, bind, folder, on_status=say)
     except LinkError as exc:
         raise options.fail("--bind" if bind is not None and str(bind) in str(exc) else "--peer", str(exc)) from None
     except ValueError as exc:
@@ -207,9 +286,78 @@ def serve_chip_command(
             f"readings {r['received']}, injected {r['injected']}, late {r['late']}, stale {r['stale']}; "
             f"commands sent {r['commands_sent']}; chip time {outcome.simulated_s:g} s in {outcome.host_s:.1f} s"
         )
-    print_link_counts(
-        console, {"to physics": record["link"]["to_physics"], "from physics": record["link"]["from_physics"]}
-    )
+    if ros:
+        for topic, counts in record["link"]["from_physics"].items():
+            console.print(f"  {topic}: " + ", ".join(f"{name} {value}" for name, value in counts.items()))
+    else:
+        print_link_counts(
+            console, {"to physics": record["link"]["to_physics"], "from physics": record["link"]["from_physics"]}
+        )
     if folder is not None:
         plain(console, f"files: {folder}")
     end_of_side(outcome.ended, outcome.message, str(folder) if folder else "")
+
+
+def _serve_physics_ros(console, resolved: ResolvedScenario, link, folder: Path | None, start_delay: float) -> None:
+    """``serve physics --ros``: the physics node, its figures per vehicle, its end."""
+    from robosoc.cosim.ros1 import RosUnavailable
+    from robosoc.outputs.ros_sides import run_ros_physics_side
+
+    config = resolved.config
+    console.print(
+        f"physics (ROS 1): scenario {config.name}, {config.duration_s:g} s, seed {config.seed}, "
+        f"{config.vehicles} vehicle(s), pace {link.pace}; waiting for the chip node(s) ..."
+    )
+    try:
+        outcomes, records = run_ros_physics_side(config, link, folder, start_delay_s=start_delay)
+    except RosUnavailable as exc:
+        raise _ros_failed(exc) from None
+    for outcome, record in zip(outcomes, records, strict=True):
+        f = record["flight"]
+        hover = (
+            f"hover RMS {f['hover_rms_m'] * 100:.2f} cm (max {f['hover_max_m'] * 100:.2f} cm)"
+            if f and math.isfinite(f["hover_rms_m"])
+            else "no hover figures"
+        )
+        c = outcome.commands
+        console.print(
+            f"  {record['namespace']}: flown {outcome.simulated_s:g} of {config.duration_s:g} s in "
+            f"{outcome.host_s:.1f} s; {hover}; commands {c['received']}, late {c['late']}, missed {c['missed']}"
+        )
+    if folder is not None:
+        plain(console, f"files: {folder}")
+    end_of_side(outcomes[0].ended, outcomes[0].message, str(folder) if folder else "")
+
+
+def _serve_physics_fleet(console, resolved: ResolvedScenario, link, bind, folder: Path | None) -> None:
+    """``serve physics --vehicles N`` over UDP: one link per vehicle on consecutive ports."""
+    from robosoc.cosim.link import LinkError
+    from robosoc.outputs.decoupled_flight import run_physics_fleet_side
+
+    config = resolved.config
+
+    def on_listen(addresses) -> None:
+        console.print(
+            f"physics: scenario {config.name}, {config.duration_s:g} s, seed {config.seed}, {config.vehicles} "
+            f"vehicles, pace {link.pace}; listening on " + ", ".join(str(a) for a in addresses) + " (one chip each)"
+        )
+
+    try:
+        outcomes, part = run_physics_fleet_side(config, link, bind, folder, on_listen=on_listen)
+    except LinkError as exc:
+        raise options.fail("--bind", str(exc)) from None
+    for i, (outcome, record) in enumerate(zip(outcomes, part["vehicles"], strict=True)):
+        f = record["flight"]
+        hover = (
+            f"hover RMS {f['hover_rms_m'] * 100:.2f} cm (max {f['hover_max_m'] * 100:.2f} cm)"
+            if f and math.isfinite(f["hover_rms_m"])
+            else "no hover figures"
+        )
+        c = outcome.commands
+        console.print(
+            f"  vehicle {i + 1}: flown {outcome.simulated_s:g} of {config.duration_s:g} s; {hover}; "
+            f"commands {c['received']}, late {c['late']}, missed {c['missed']}"
+        )
+    if folder is not None:
+        plain(console, f"files: {folder}")
+    end_of_side(outcomes[0].ended, outcomes[0].message, str(folder) if folder else "")

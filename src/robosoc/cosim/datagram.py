@@ -5,7 +5,7 @@ Every datagram is a 20-byte header and a payload, little-endian::
     offset size  field
     0      4     magic b"RSoC"
     4      1     version (:data:`VERSION`)
-    5      1     kind: 1 hello, 2 sensor batch, 3 actuator commands, 4 bye
+    5      1     kind: 1 hello, 2 sensor batch, 3 actuator commands, 4 bye, 5 estimates
     6      2     flags (0)
     8      4     sequence number (data datagrams: 0, 1, 2 ... per sender; hello and bye: 0)
     12     4     payload length in bytes
@@ -24,6 +24,11 @@ Payloads:
   there: every command that left before is in this or an earlier datagram), a count, and that
   many commands ``(seq, left_ns, pwm[4])``: the PWM command of sensor sample ``seq`` with the chip
   time it reached the I/O tile, newest last.
+* **estimates** (chip → physics): the chip's time, a count, and that many state estimates
+  ``(k, t_ns, quaternion w x y z, height, vertical velocity)`` as f64: the estimator's state read
+  at the close of the period of sensor sample ``k`` (taken at ``t_ns``), newest last, plus the
+  ``resend`` before them; the flight log's estimate columns (the chip's newest estimate at each
+  sample time, as in lockstep).
 * **bye**: why the sender stops, how many data datagrams it sent (so the peer can count losses at
   the end), and its final time in ns.
 
@@ -50,12 +55,14 @@ __all__ = [
     "Command",
     "CommandBatch",
     "Datagram",
+    "EstimateBatch",
     "Hello",
     "Kind",
     "Reading",
     "Rejected",
     "Rejection",
     "SensorBatch",
+    "StateEstimate",
     "decode",
     "encode",
 ]
@@ -73,6 +80,7 @@ class Kind(enum.IntEnum):
     SENSORS = 2
     COMMANDS = 3
     BYE = 4
+    ESTIMATES = 5
 
 
 class ByeReason(enum.IntEnum):
@@ -135,14 +143,38 @@ class CommandBatch:
 
 
 @dataclass(frozen=True)
+class StateEstimate:
+    """The estimator's state after sensor sample ``k`` (taken at ``t_ns``): attitude w, x, y, z
+    (body -> world), height [m] and vertical velocity [m/s]."""
+
+    k: int
+    t_ns: int
+    quaternion: tuple[float, float, float, float]
+    height: float
+    vertical_velocity: float
+
+
+@dataclass(frozen=True)
+class EstimateBatch:
+    chip_now_ns: int
+    estimates: tuple[StateEstimate, ...]
+
+
+@dataclass(frozen=True)
 class Bye:
     reason: ByeReason
     data_sent: int
     end_ns: int
 
 
-Body = Hello | SensorBatch | CommandBatch | Bye
-KIND_OF: dict[type, Kind] = {Hello: Kind.HELLO, SensorBatch: Kind.SENSORS, CommandBatch: Kind.COMMANDS, Bye: Kind.BYE}
+Body = Hello | SensorBatch | CommandBatch | EstimateBatch | Bye
+KIND_OF: dict[type, Kind] = {
+    Hello: Kind.HELLO,
+    SensorBatch: Kind.SENSORS,
+    CommandBatch: Kind.COMMANDS,
+    Bye: Kind.BYE,
+    EstimateBatch: Kind.ESTIMATES,
+}
 
 
 @dataclass(frozen=True)
@@ -164,11 +196,13 @@ _BATCH = struct.Struct("<QH")
 _READING = struct.Struct("<IQ")
 _COMMAND = struct.Struct("<IQ4H")
 _BYE = struct.Struct("<BIQ")
+_ESTIMATE = struct.Struct("<IQ6d")
 SENSOR_BYTES = packets.SENSOR.size
 READING_BYTES = _READING.size + SENSOR_BYTES
 #: Most readings or commands one datagram holds.
 MAX_READINGS = (MAX_DATAGRAM_BYTES - HEADER_BYTES - _BATCH.size) // READING_BYTES
 MAX_COMMANDS = (MAX_DATAGRAM_BYTES - HEADER_BYTES - _BATCH.size) // _COMMAND.size
+MAX_ESTIMATES = (MAX_DATAGRAM_BYTES - HEADER_BYTES - _BATCH.size) // _ESTIMATE.size
 
 
 def _payload(body: Body) -> bytes:
@@ -190,6 +224,12 @@ def _payload(body: Body) -> bytes:
             raise ValueError(f"command batch: at most {MAX_COMMANDS} commands, got {len(body.commands)}")
         parts = [_BATCH.pack(body.chip_now_ns, len(body.commands))]
         parts += [_COMMAND.pack(c.seq, c.left_ns, *c.pwm) for c in body.commands]
+        return b"".join(parts)
+    if isinstance(body, EstimateBatch):
+        if len(body.estimates) > MAX_ESTIMATES:
+            raise ValueError(f"estimate batch: at most {MAX_ESTIMATES} estimates, got {len(body.estimates)}")
+        parts = [_BATCH.pack(body.chip_now_ns, len(body.estimates))]
+        parts += [_ESTIMATE.pack(e.k, e.t_ns, *e.quaternion, e.height, e.vertical_velocity) for e in body.estimates]
         return b"".join(parts)
     return _BYE.pack(int(body.reason), body.data_sent, body.end_ns)
 
@@ -223,7 +263,7 @@ def _parse(kind: Kind, payload: bytes) -> Body | str:
     if len(payload) < _BATCH.size:
         return f"batch payload of {len(payload)} bytes, shorter than its {_BATCH.size}-byte head"
     now, count = _BATCH.unpack_from(payload)
-    item = READING_BYTES if kind is Kind.SENSORS else _COMMAND.size
+    item = {Kind.SENSORS: READING_BYTES, Kind.ESTIMATES: _ESTIMATE.size}.get(kind, _COMMAND.size)
     if len(payload) != _BATCH.size + count * item:
         return f"{count} items need {_BATCH.size + count * item} payload bytes, got {len(payload)}"
     offset = _BATCH.size
@@ -237,6 +277,13 @@ def _parse(kind: Kind, payload: bytes) -> Body | str:
             readings.append(Reading(k, t, packet))
             offset += READING_BYTES
         return SensorBatch(now, tuple(readings))
+    if kind is Kind.ESTIMATES:
+        estimates = []
+        for _ in range(count):
+            k, t, w, x, y, z, height, vz = _ESTIMATE.unpack_from(payload, offset)
+            estimates.append(StateEstimate(k, t, (w, x, y, z), height, vz))
+            offset += _ESTIMATE.size
+        return EstimateBatch(now, tuple(estimates))
     commands = []
     for _ in range(count):
         seq, left, *pwm = _COMMAND.unpack_from(payload, offset)

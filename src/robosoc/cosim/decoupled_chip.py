@@ -42,11 +42,24 @@ from robosoc.chip.single import CoreError
 from robosoc.config.link import LinkConfig
 from robosoc.config.scenario import ScenarioConfig
 from robosoc.config.vehicle import VehicleConfig
-from robosoc.cosim.datagram import MAX_COMMANDS, Bye, ByeReason, Command, CommandBatch, Hello, Reading, SensorBatch
+from robosoc.cosim.datagram import (
+    MAX_COMMANDS,
+    MAX_ESTIMATES,
+    Bye,
+    ByeReason,
+    Command,
+    CommandBatch,
+    EstimateBatch,
+    Hello,
+    Reading,
+    SensorBatch,
+    StateEstimate,
+)
 from robosoc.cosim.decoupled_physics import Ended, scenario_digest
 from robosoc.cosim.firmware_run import DEFAULT_FIRST_CYCLE, FirmwareRun, ReplayResult
-from robosoc.cosim.link import Address, LinkLog, UdpLink
+from robosoc.cosim.link import Address, ChipTransport, LinkLog, UdpLink
 from robosoc.host.scenario_image import scenario_image
+from robosoc.host.telemetry import ESTIMATE_NAMES, estimate_of
 from robosoc.physics.clock import NS_PER_S, FlightClock
 from robosoc.records import SampleInput
 
@@ -82,9 +95,17 @@ class _Chip:
     """State of the chip side during a flight (the helpers of :func:`serve_chip`)."""
 
     def __init__(
-        self, run: FirmwareRun, link: UdpLink, config: LinkConfig, period_ns: int, log: LinkLog, samples: int
+        self,
+        run: FirmwareRun,
+        link: ChipTransport,
+        config: LinkConfig,
+        period_ns: int,
+        log: LinkLog,
+        samples: int,
+        on_period: Callable[[FirmwareRun], None] | None = None,
     ) -> None:
         self.run, self.link, self.config, self.period_ns, self.log = run, link, config, period_ns, log
+        self.on_period = on_period
         self.samples = samples  # the physics sends readings 0 .. samples-1, at k * period_ns
         self.flight_ns = samples * period_ns  # the flight's end: no reading, and no bye's end, lies past it
         self.first = run.first_cycle
@@ -98,6 +119,9 @@ class _Chip:
         self.counts = {"received": 0, "injected": 0, "late": 0, "stale": 0, "repeated": 0, "outside": 0}
         self.recent: deque[Command] = deque(maxlen=min(MAX_COMMANDS, config.resend + 16))
         self.commands_sent = 0
+        self.estimates_read = 0  # of run.telemetry, sent
+        self.published: dict[str, float] = {}  # the newest value of each telemetry name read so far
+        self.recent_estimates: deque[StateEstimate] = deque(maxlen=min(MAX_ESTIMATES, config.resend + 1))
         self.last_send = time.monotonic()
         self.reported_ns = -1
 
@@ -155,6 +179,23 @@ class _Chip:
         self.last_send = time.monotonic()
         self.reported_ns = self.now_ns()
 
+    def send_estimates(self) -> None:
+        """Send the estimates read since the last call (with the ``resend`` before them): the
+        physics' flight log has the chip's estimate, as lockstep's."""
+        fresh = []
+        for read in self.run.telemetry[self.estimates_read :]:
+            self.published.update(read.values)
+            if 0 <= read.sample < len(self.run.samples) and any(n in read.values for n in ESTIMATE_NAMES):
+                s = self.run.samples[read.sample]
+                t_ns = round(s.time_s * NS_PER_S)
+                e = estimate_of(self.published)
+                q = (float(e.quaternion[0]), float(e.quaternion[1]), float(e.quaternion[2]), float(e.quaternion[3]))
+                fresh.append(StateEstimate(s.seq, t_ns, q, e.height, e.vertical_velocity))
+        self.estimates_read = len(self.run.telemetry)
+        if fresh:
+            self.recent_estimates.extend(fresh)
+            self.link.send_data(EstimateBatch(self.now_ns(), tuple(self.recent_estimates)))
+
     def inject_due(self) -> bool:
         """Inject the oldest waiting reading if the chip has reached its cycle; whether it did."""
         if not self.pending:
@@ -173,6 +214,9 @@ class _Chip:
             cycle = self.run.cycle
         if self.run.samples:
             self.run.close_period()
+            self.send_estimates()
+            if self.on_period is not None:
+                self.on_period(self.run)
         self.run.inject(SampleInput(k, r.t_ns / NS_PER_S, cycle, r.packet))
         self.counts["injected"] += 1
         self.newest_k, self.newest_t = k, r.t_ns
@@ -214,11 +258,13 @@ def serve_chip(
     scenario: ScenarioConfig,
     vehicle: VehicleConfig,
     config: LinkConfig,
-    peer: Address,
+    peer: Address | str,
     bind: Address | None = None,
     *,
     log_path: Path | None = None,
     on_status: Callable[[str], None] | None = None,
+    transport: Callable[[LinkLog], ChipTransport] | None = None,
+    on_period: Callable[[FirmwareRun], None] | None = None,
 ) -> ChipOutcome:
     """Run the scenario's firmware on its chip for the physics side at ``peer``; see the module docstring.
 
@@ -227,10 +273,14 @@ def serve_chip(
             from them; the physics side refuses a chip built for another); the scenario's seed
             drives the faults injected on the command datagrams.
         config: timeouts, redundancy and faults (pace and hold are the physics side's).
-        peer: the physics side's address.
+        peer: the physics side's address (or, with ``transport``, how to name it).
         bind: where to listen (default: any free port on the loopback interface of ``peer``'s family).
         log_path: the side's link log (``link-chip.log``), or None.
         on_status: told what the side is doing (building, booting, waiting, flying).
+        transport: makes the link to the physics from the side's log instead of a UDP socket
+            (the ROS 1 node's, :mod:`robosoc.cosim.ros_chip`).
+        on_period: called with the firmware run at each sample period's close (its estimate and
+            jobs so far are there).
 
     Returns:
         The outcome, also when interrupted (Ctrl-C), the physics went silent or said bye early, or
@@ -244,12 +294,17 @@ def serve_chip(
     say = on_status or (lambda _text: None)
     period_ns = FlightClock.of(scenario).sample_period_ns
     log = LinkLog(log_path)
+    link: ChipTransport
     try:
-        if bind is None:
-            bind = Address("::1" if ":" in peer.host else "127.0.0.1", 0)
-            if peer.host not in ("127.0.0.1", "::1", "localhost"):
-                bind = Address("::" if ":" in peer.host else "0.0.0.0", 0)
-        link = UdpLink(bind, "chip", config.faults, scenario.seed, log, peer=peer)
+        if transport is not None:
+            link = transport(log)
+        else:
+            assert isinstance(peer, Address)
+            if bind is None:
+                bind = Address("::1" if ":" in peer.host else "127.0.0.1", 0)
+                if peer.host not in ("127.0.0.1", "::1", "localhost"):
+                    bind = Address("::" if ":" in peer.host else "0.0.0.0", 0)
+            link = UdpLink(bind, "chip", config.faults, scenario.seed, log, peer=peer)
     except BaseException:
         log.close()
         raise
@@ -265,8 +320,10 @@ def serve_chip(
         run = FirmwareRun(fw, scenario_image(scenario, vehicle), chip=scenario.chip, first_cycle=DEFAULT_FIRST_CYCLE)
         say("booting the chip (compiling the chip kernels on a fresh install) ...")
         run.run_to(DEFAULT_FIRST_CYCLE)
+        if on_period is not None:
+            on_period(run)  # booted: nothing estimated yet
         samples = round(scenario.duration_s * scenario.sensors.rate_hz)  # as the physics side counts them
-        state = _Chip(run, link, config, period_ns, log, samples)
+        state = _Chip(run, link, config, period_ns, log, samples, on_period)
         say(f"waiting for the physics at {peer} ...")
         hello = Hello(scenario_digest(scenario, vehicle), period_ns)
         deadline = time.monotonic() + config.connect_timeout_s
@@ -328,7 +385,6 @@ def serve_chip(
         readings = dict(state.counts) if state is not None else {}
         if state is not None:
             readings["commands_sent"] = state.commands_sent
-        counts = link.counts.as_dict()
         outcome = ChipOutcome(
             result=result,
             ended=ended,
@@ -336,16 +392,7 @@ def serve_chip(
             host_s=host_s,
             cpu_s=cpu_s,
             simulated_s=end_ns / NS_PER_S,
-            link={
-                "to_physics": {
-                    "sent": link.sent,
-                    "injected": dict(link.injector.injected),
-                    "send_errors": link.send_errors,
-                },
-                "from_physics": counts,
-                "foreign": link.foreign,
-                "receive_errors": link.receive_errors,
-            },
+            link=link.report(),
             readings=readings,
         )
         log.write(f"counts: {outcome.link}; readings {readings}")

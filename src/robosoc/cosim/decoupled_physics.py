@@ -24,10 +24,12 @@ and every command delivered in time the flight is the lockstep flight, row for r
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
+import select
 import time
 from collections import deque
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -36,17 +38,49 @@ import numpy as np
 from robosoc.config.link import LinkConfig
 from robosoc.config.scenario import ScenarioConfig
 from robosoc.config.vehicle import VehicleConfig
+from robosoc.control import quaternion
 from robosoc.control.flight import ROW_FIELDS, flight_row
+from robosoc.control.host import Estimate
 from robosoc.control.setpoint import setpoint_at
 from robosoc.cosim.actuator_hold import ActuatorHold
-from robosoc.cosim.datagram import MAX_READINGS, Bye, ByeReason, CommandBatch, Hello, Reading, SensorBatch
+from robosoc.cosim.datagram import (
+    MAX_READINGS,
+    Bye,
+    ByeReason,
+    CommandBatch,
+    EstimateBatch,
+    Hello,
+    Reading,
+    SensorBatch,
+    StateEstimate,
+)
 from robosoc.cosim.link import Address, LinkLog, UdpLink
 from robosoc.cosim.lockstep import PWM_COLUMNS, UNKNOWN_ESTIMATE
 from robosoc.cosim.replay import sensor_packet
 from robosoc.physics import World
 from robosoc.physics.clock import NS_PER_S, PHYSICS_STEP_NS, FlightClock
 
-__all__ = ["Ended", "PhysicsOutcome", "scenario_digest", "serve_physics"]
+__all__ = [
+    "Ended",
+    "PhysicsOutcome",
+    "estimate_columns",
+    "fleet_binds",
+    "scenario_digest",
+    "serve_physics",
+    "serve_physics_fleet",
+]
+
+ESTIMATE_COLUMNS = [ROW_FIELDS.index(n) for n in ROW_FIELDS if n.startswith("est_")]
+
+
+def estimate_columns(e: StateEstimate) -> np.ndarray:
+    """The estimate columns of a flight row (``est_roll`` ... ``est_height``) from a chip's estimate."""
+    q = np.array(e.quaternion)
+    est = Estimate(q, quaternion.to_euler(q), e.height, e.vertical_velocity)
+    values = {f"est_{a}": v for a, v in zip(("roll", "pitch", "yaw"), est.euler, strict=True)}
+    values.update({f"est_q{a}": v for a, v in zip("wxyz", est.quaternion, strict=True)})
+    values["est_height"] = est.height
+    return np.array([values[ROW_FIELDS[i]] for i in ESTIMATE_COLUMNS])
 
 
 class Ended:
@@ -61,8 +95,9 @@ class Ended:
 
 
 def scenario_digest(scenario: ScenarioConfig, vehicle: VehicleConfig) -> bytes:
-    """8 bytes naming what is flown: both sides must have it equal."""
-    return hashlib.blake2b(repr((scenario, vehicle)).encode(), digest_size=8).digest()
+    """8 bytes naming what a chip's firmware is built for: both sides must have it equal.  The
+    number of vehicles is left out: every chip of a fleet runs the same firmware."""
+    return hashlib.blake2b(repr((dataclasses.replace(scenario, vehicles=1), vehicle)).encode(), digest_size=8).digest()
 
 
 @dataclass
@@ -117,6 +152,19 @@ class _Flight:
         self.last_send = time.monotonic()
         self.peer_bye: Bye | None = None
         self.finished = False  # the flight is over: commands are still counted, no longer applied
+        self.estimates: dict[int, StateEstimate] = {}  # by sensor sample, not yet superseded
+        self.estimate: StateEstimate | None = None  # the newest one a row has shown
+
+    def estimate_before(self, k: int) -> StateEstimate | None:
+        """The chip's newest estimate at sample ``k``'s time: of the newest sample before ``k``
+        whose estimate has come (lockstep's row k shows the estimate read at t_k)."""
+        ready = [j for j in self.estimates if j < k]
+        if ready:
+            newest = max(ready)
+            self.estimate = self.estimates[newest]
+            for j in ready:
+                del self.estimates[j]
+        return self.estimate
 
     def send(self, now_ns: int, fresh: list[Reading]) -> None:
         self.recent.extend(fresh)
@@ -146,6 +194,10 @@ class _Flight:
                         )
                         step = now
                     self.hold.schedule(step, c.pwm)
+            elif isinstance(body, EstimateBatch):
+                for e in body.estimates:
+                    if self.estimate is None or e.k > self.estimate.k:
+                        self.estimates[e.k] = e
             elif isinstance(body, Bye):
                 self.peer_bye = body
                 raise PeerEnded(f"the chip said bye ({body.reason.name.lower()})")
@@ -170,28 +222,6 @@ class _Flight:
         if time.monotonic() - self.last_send >= self.config.heartbeat_s and self.recent:
             self.link.send_data(SensorBatch(now_ns, tuple(self.recent)))
             self.last_send = time.monotonic()
-
-    def wait_for_period(self, first_step: int, steps: int) -> float:
-        """Wait until the physics steps ``first_step ...`` of a sample period may be taken (their
-        commands are known); the real-time lag then [s]."""
-        self.first_step, self.last_step = first_step, first_step + steps - 1
-        end_ns = (first_step + steps) * PHYSICS_STEP_NS
-        while True:
-            now = time.monotonic()
-            if self.config.pace == "realtime":
-                remaining = self.start + end_ns / NS_PER_S - now
-                if remaining <= 0:
-                    self.take(0.0)
-                    self.check_peer()
-                    return -remaining
-                timeout = min(remaining, self.config.heartbeat_s)
-            else:
-                if self.progress_ns >= end_ns:
-                    return 0.0
-                timeout = self.config.heartbeat_s
-            self.take(timeout)
-            self.heartbeat(first_step * PHYSICS_STEP_NS)
-            self.check_peer()
 
 
 def _wait_for_hello(link: UdpLink, config: LinkConfig, digest: bytes, period_ns: int, log: LinkLog) -> Hello:
@@ -241,51 +271,152 @@ def serve_physics(
     Raises:
         LinkError: ``bind`` cannot be bound.
     """
+    (outcome,) = serve_physics_fleet(
+        scenario, [vehicle], vehicle, config, bind, log_paths=[log_path],
+        on_listen=None if on_listen is None else lambda addresses: on_listen(addresses[0]),
+        on_start=on_start, on_row=None if on_row is None else lambda _i, row: on_row(row), on_sample=on_sample,
+    )  # fmt: skip
+    return outcome
+
+
+def fleet_binds(bind: Address, count: int) -> list[Address]:
+    """Where the physics listens for each of ``count`` chips: ``bind``, then the ports after it
+    (port 0: a free port each)."""
+    return [Address(bind.host, bind.port + i if bind.port else 0) for i in range(count)]
+
+
+def _wait_any(links: Sequence[UdpLink], timeout: float) -> None:
+    """Wait up to ``timeout`` s until a datagram is there for one of ``links``."""
+    try:
+        select.select([link.sock for link in links], [], [], max(0.0, timeout))
+    except (OSError, ValueError):
+        time.sleep(min(timeout, 0.001))
+
+
+def _wait_for_period(flights: Sequence[_Flight], config: LinkConfig, first_step: int, steps: int) -> float:
+    """Wait until every vehicle's physics steps ``first_step ...`` of a sample period may be taken
+    (their commands are known); the real-time lag then [s]."""
+    for f in flights:
+        f.first_step, f.last_step = first_step, first_step + steps - 1
+    end_ns = (first_step + steps) * PHYSICS_STEP_NS
+    start = flights[0].start
+    while True:
+        now = time.monotonic()
+        if config.pace == "realtime":
+            remaining = start + end_ns / NS_PER_S - now
+            if remaining <= 0:
+                for f in flights:
+                    f.take(0.0)
+                    f.check_peer()
+                return -remaining
+            timeout = min(remaining, config.heartbeat_s)
+        else:
+            if all(f.progress_ns >= end_ns for f in flights):
+                return 0.0
+            timeout = config.heartbeat_s
+        _wait_any([f.link for f in flights], timeout)
+        for f in flights:
+            f.take(0.0)
+            f.heartbeat(first_step * PHYSICS_STEP_NS)
+            f.check_peer()
+
+
+def serve_physics_fleet(
+    scenario: ScenarioConfig,
+    vehicles: Sequence[VehicleConfig],
+    firmware_vehicle: VehicleConfig,
+    config: LinkConfig,
+    bind: Address,
+    *,
+    log_paths: Sequence[Path | None] | None = None,
+    on_listen: Callable[[list[Address]], None] | None = None,
+    on_start: Callable[[], None] | None = None,
+    on_row: Callable[[int, np.ndarray], None] | None = None,
+    on_sample: Callable[[int, int], None] | None = None,
+) -> list[PhysicsOutcome]:
+    """Fly ``scenario`` with ``vehicles`` in one world, vehicle i flown by the chip at the other end
+    of UDP link i (listening on :func:`fleet_binds`); each vehicle as :func:`serve_physics`, all
+    under one clock (a period's steps wait for every chip).  The chips' firmware must have been built
+    for ``scenario`` and ``firmware_vehicle`` (every chip of a fleet runs the same firmware).
+
+    Returns:
+        Each vehicle's outcome (one ``ended`` for all: the first reason to stop).
+
+    Raises:
+        LinkError: an address cannot be bound.
+    """
     clock = FlightClock.of(scenario)
     samples, period_ns = clock.sample_count, clock.sample_period_ns
-    log = LinkLog(log_path)
+    count = len(vehicles)
+    paths = list(log_paths) if log_paths is not None else [None] * count
+    logs = [LinkLog(path) for path in paths]
+    links: list[UdpLink] = []
     try:
-        link = UdpLink(bind, "physics", config.faults, scenario.seed, log)
+        for address, log in zip(fleet_binds(bind, count), logs, strict=True):
+            links.append(UdpLink(address, "physics", config.faults, scenario.seed, log))
     except BaseException:
-        log.close()
+        for link in links:
+            link.close()
+        for log in logs:
+            log.close()
         raise
-    rows = np.empty((samples, len(ROW_FIELDS)))
+    rows = [np.empty((samples, len(ROW_FIELDS))) for _ in vehicles]
     done = 0
-    flight: _Flight | None = None
+    flights: list[_Flight] = []
     start = time.monotonic()
     cpu_start = time.process_time()
     ended, message = Ended.DONE, "flown"
     max_lag = 0.0
     try:
         if on_listen is not None:
-            on_listen(link.address)
-        _wait_for_hello(link, config, scenario_digest(scenario, vehicle), period_ns, log)
-        log.write(f"flying {samples} samples, pace {config.pace}, hold {config.hold}, resend {config.resend}")
+            on_listen([link.address for link in links])
+        digest = scenario_digest(scenario, firmware_vehicle)
+        for i, (link, log) in enumerate(zip(links, logs, strict=True)):
+            try:
+                _wait_for_hello(link, config, digest, period_ns, log)
+            except (Mismatch, PeerSilent) as exc:
+                raise type(exc)(f"vehicle {i + 1}: {exc}" if count > 1 else str(exc)) from None
+            log.write(f"flying {samples} samples, pace {config.pace}, hold {config.hold}, resend {config.resend}")
         if on_start is not None:
             on_start()
-        world = World([vehicle], scenario.sensors, scenario.wind)
+        world = World(list(vehicles), scenario.sensors, scenario.wind)
         world.reset(scenario.seed)
-        quad = world.quadrotors[0]
-        flight = _Flight(link, config, ActuatorHold(config.hold, quad.pwm), log)
+        quads = world.quadrotors
+        flights = [
+            _Flight(link, config, ActuatorHold(config.hold, quad.pwm), log)
+            for link, log, quad in zip(links, logs, quads, strict=True)
+        ]
         steps = clock.steps_per_sample
-        rest = vehicle.rest_height
-        start = flight.start = time.monotonic()
+        start = time.monotonic()
+        for f in flights:
+            f.start = start
         cpu_start = time.process_time()
+        pending: list[np.ndarray] = []
         for k in clock.samples():
             t_ns = clock.sample_ns(k)
-            sample = quad.sensors()
-            setpoint = setpoint_at(scenario.flight, rest, sample.time)
-            row = flight_row(sample, quad.truth(), UNKNOWN_ESTIMATE, setpoint, quad.pwm, world.wind.velocity)
-            flight.send(t_ns, [Reading(k, t_ns, sensor_packet(row, k, period_ns // 1000))])
-            max_lag = max(max_lag, flight.wait_for_period(clock.first_step(k), steps))
+            pending.clear()
+            wind = world.wind.velocity
+            for f, quad, craft in zip(flights, quads, vehicles, strict=True):
+                sample = quad.sensors()
+                setpoint = setpoint_at(scenario.flight, craft.rest_height, sample.time)
+                row = flight_row(sample, quad.truth(), UNKNOWN_ESTIMATE, setpoint, quad.pwm, wind)
+                f.send(t_ns, [Reading(k, t_ns, sensor_packet(row, k, period_ns // 1000))])
+                pending.append(row)
+            max_lag = max(max_lag, _wait_for_period(flights, config, clock.first_step(k), steps))
             for s, _ in clock.steps(k):
-                quad.apply_pwm(flight.hold.at(clock.first_step(k) + s))
+                for i, (f, quad) in enumerate(zip(flights, quads, strict=True)):
+                    quad.apply_pwm(f.hold.at(clock.first_step(k) + s))
+                    if s == 0:
+                        row = pending[i]
+                        row[PWM_COLUMNS] = quad.pwm
+                        estimate = f.estimate_before(k)
+                        if estimate is not None:
+                            row[ESTIMATE_COLUMNS] = estimate_columns(estimate)
+                        rows[i][k] = row
+                        if on_row is not None:
+                            on_row(i, row)
                 if s == 0:
-                    row[PWM_COLUMNS] = quad.pwm
-                    rows[k] = row
                     done = k + 1
-                    if on_row is not None:
-                        on_row(row)
                     if on_sample is not None:
                         on_sample(done, samples)
                 world.step()
@@ -303,47 +434,44 @@ def serve_physics(
         reason = {Ended.DONE: ByeReason.DONE, Ended.INTERRUPTED: ByeReason.INTERRUPTED}.get(ended, ByeReason.ERROR)
         if ended == Ended.PEER_LOST:
             reason = ByeReason.PEER_LOST
-        log.write(f"ended: {ended}: {message}")
-        try:
-            if ended == Ended.DONE and flight is not None and flight.recent:
-                # the last readings once more: a reading lost at the very end has no later datagram to ride on
-                link.send_data(SensorBatch(samples * period_ns, tuple(flight.recent)))
-            link.send_control(Bye(reason, link.sent, samples * period_ns if ended == Ended.DONE else done * period_ns))
-            if ended == Ended.DONE and flight is not None:
-                _await_bye(flight, config)
-        except KeyboardInterrupt:
-            pass
-        link.close()
-        commands = {
-            "received": flight.received if flight else 0,
-            "late": flight.late if flight else 0,
-            "missed": max(0, done - (flight.received if flight else 0)),
-        }
-        counts = link.counts.as_dict()
-        outcome = PhysicsOutcome(
-            rows=rows[:done],
-            samples=samples,
-            ended=ended,
-            message=message,
-            host_s=host_s,
-            cpu_s=cpu_s,
-            link={
-                "to_chip": {
-                    "sent": link.sent,
-                    "injected": dict(link.injector.injected),
-                    "send_errors": link.send_errors,
-                },
-                "from_chip": counts,
-                "foreign": link.foreign,
-                "receive_errors": link.receive_errors,
-            },
-            commands=commands,
-            max_lag_s=max_lag,
-            period_s=period_ns / NS_PER_S,
-        )
-        log.write(f"counts: {outcome.link}; commands {commands}")
-        log.close()
-    return outcome
+        end_ns = samples * period_ns if ended == Ended.DONE else done * period_ns
+        for i, (link, log) in enumerate(zip(links, logs, strict=True)):
+            log.write(f"ended: {ended}: {message}")
+            flight = flights[i] if flights else None
+            try:
+                if ended == Ended.DONE and flight is not None and flight.recent:
+                    # the last readings once more: a reading lost at the very end has no later datagram to ride on
+                    link.send_data(SensorBatch(samples * period_ns, tuple(flight.recent)))
+                link.send_control(Bye(reason, link.sent, end_ns))
+            except KeyboardInterrupt:
+                pass
+        outcomes = []
+        for i, (link, log) in enumerate(zip(links, logs, strict=True)):
+            flight = flights[i] if flights else None
+            try:
+                if ended == Ended.DONE and flight is not None:
+                    _await_bye(flight, config)
+            except KeyboardInterrupt:
+                pass
+            link.close()
+            received = flight.received if flight else 0
+            commands = {"received": received, "late": flight.late if flight else 0, "missed": max(0, done - received)}
+            outcome = PhysicsOutcome(
+                rows=rows[i][:done],
+                samples=samples,
+                ended=ended,
+                message=message,
+                host_s=host_s,
+                cpu_s=cpu_s,
+                link=link.report(),
+                commands=commands,
+                max_lag_s=max_lag,
+                period_s=period_ns / NS_PER_S,
+            )
+            log.write(f"counts: {outcome.link}; commands {commands}")
+            log.close()
+            outcomes.append(outcome)
+    return outcomes
 
 
 def _await_bye(flight: _Flight, config: LinkConfig) -> None:

@@ -261,6 +261,15 @@ class FirmwareRun:
         total["noc"] = sum(model.noc_pj(chip_.noc_counters()).values())
         return total
 
+    def jobs_logged(self, since: int = 0) -> list[tuple[str, int, int]]:
+        """(task, release cycle, completion cycle) of the jobs collected so far by
+        :meth:`close_period`, from the ``since``-th on, in the order the kernels logged them (a
+        live view; :meth:`result` gives the full records with their energy)."""
+        out = []
+        for xy, r, _ in self._logged[since:]:
+            out.append((self.names.get((xy, r.task), f"task {r.task}"), r.release, r.completion))
+        return out
+
     def function_profile(self) -> FunctionProfile:
         """The exact profile so far: cycles, instructions and energy per function, tile and task.
 

@@ -18,7 +18,7 @@ import socket
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import IO
+from typing import IO, Protocol
 
 import numpy as np
 
@@ -28,6 +28,7 @@ from robosoc.cosim.datagram import (
     Bye,
     CommandBatch,
     Datagram,
+    EstimateBatch,
     Hello,
     Kind,
     Rejected,
@@ -39,7 +40,7 @@ from robosoc.cosim.link_counters import Arrival, ReceiveCounts
 from robosoc.cosim.link_faults import FaultInjector
 from robosoc.output_files import open_in_place
 
-__all__ = ["MAX_LINES_PER_KIND", "Address", "LinkError", "LinkLog", "UdpLink", "parse_address"]
+__all__ = ["MAX_LINES_PER_KIND", "Address", "ChipTransport", "LinkError", "LinkLog", "UdpLink", "parse_address"]
 
 #: Stream of the run's seed that drives each direction's faults ("one seed drives every random number").
 FAULT_STREAM = {"physics": 0x5EED_0001, "chip": 0x5EED_0002}
@@ -154,10 +155,26 @@ def _describe(body: Body) -> str:
         return f"sensors k={[r.k for r in body.readings]}"
     if isinstance(body, CommandBatch):
         return f"commands seq={[c.seq for c in body.commands]} chip_now={body.chip_now_ns} ns"
+    if isinstance(body, EstimateBatch):
+        return f"estimates k={[e.k for e in body.estimates]}"
     if isinstance(body, Hello):
         return f"hello period={body.sample_period_ns} ns"
     assert isinstance(body, Bye)
     return f"bye {body.reason.name.lower()} data_sent={body.data_sent} end={body.end_ns} ns"
+
+
+class ChipTransport(Protocol):
+    """What the chip side (:func:`robosoc.cosim.decoupled_chip.serve_chip`) needs of its link to the
+    physics: :class:`UdpLink`, or the ROS 1 node's (:class:`robosoc.cosim.ros_chip.RosChipLink`)."""
+
+    sent: int
+
+    def receive(self, timeout: float) -> list[Datagram]: ...
+    def send_data(self, body: CommandBatch | EstimateBatch) -> None: ...
+    def send_control(self, body: Hello | Bye) -> None: ...
+    def silent_for(self, now: float) -> float: ...
+    def report(self) -> dict[str, object]: ...
+    def close(self) -> None: ...
 
 
 class UdpLink:
@@ -231,7 +248,7 @@ class UdpLink:
             self.send_errors += 1
             self.log.write(f"send error: {exc}", "send error")
 
-    def send_data(self, body: SensorBatch | CommandBatch) -> None:
+    def send_data(self, body: SensorBatch | CommandBatch | EstimateBatch) -> None:
         """Send ``body`` as the next data datagram, through the fault injector."""
         datagram = encode(body, self.sent)
         self.sent += 1
@@ -310,6 +327,20 @@ class UdpLink:
         if arrival == Arrival.LATE:
             self.log.write(f"#{result.seq} arrived late (after #{self.counts.highest})", "late")
         return result
+
+    def report(self) -> dict[str, object]:
+        """The side's part of ``"link"``: what it sent (``to_PEER``), what it received (``from_PEER``)."""
+        peer = "chip" if self.side == "physics" else "physics"
+        return {
+            f"to_{peer}": {
+                "sent": self.sent,
+                "injected": dict(self.injector.injected),
+                "send_errors": self.send_errors,
+            },
+            f"from_{peer}": self.counts.as_dict(),
+            "foreign": self.foreign,
+            "receive_errors": self.receive_errors,
+        }
 
     def silent_for(self, now: float) -> float:
         """Seconds since the peer's last valid datagram (since ``now`` if never heard)."""

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import contextlib
 import json
+import math
 import multiprocessing
 import os
 import signal
@@ -29,12 +30,13 @@ from typing import Any
 
 from robosoc.config.link import LinkConfig
 from robosoc.config.scenario import ScenarioConfig
-from robosoc.config.vehicle import VehicleConfig
+from robosoc.config.vehicle import VehicleConfig, vehicle_preset
 from robosoc.control.flight_log import CsvFlightLog
 from robosoc.cosim.decoupled_chip import ChipOutcome, serve_chip
-from robosoc.cosim.decoupled_physics import Ended, PhysicsOutcome, serve_physics
+from robosoc.cosim.decoupled_physics import Ended, PhysicsOutcome, serve_physics, serve_physics_fleet
 from robosoc.cosim.link import Address, LinkError
 from robosoc.outputs.decoupled_summary import chip_record, decoupled_summary, physics_record
+from robosoc.outputs.flight_session import fleet_vehicles, min_separation, vehicle_folder
 from robosoc.outputs.run_folder import (
     CHIP_JSON,
     FLIGHT_CSV,
@@ -45,10 +47,17 @@ from robosoc.outputs.run_folder import (
     SUMMARY_JSON,
     write_jobs_csv,
 )
-from robosoc.outputs.run_summary import write_summary
+from robosoc.outputs.run_summary import fleet_summary, write_summary
 from robosoc.toolchain.errors import ToolchainError
 
-__all__ = ["DecoupledFlight", "SideFailed", "fly_decoupled", "run_chip_side", "run_physics_side"]
+__all__ = [
+    "DecoupledFlight",
+    "SideFailed",
+    "fly_decoupled",
+    "run_chip_side",
+    "run_physics_fleet_side",
+    "run_physics_side",
+]
 
 #: How long the sides get to end and write their files after Ctrl-C before they are terminated.
 SHUTDOWN_S = 20.0
@@ -100,20 +109,63 @@ def run_physics_side(
     return outcome, record
 
 
+def run_physics_fleet_side(
+    scenario: ScenarioConfig,
+    config: LinkConfig,
+    bind: Address,
+    out: Path | None,
+    **callbacks: Any,
+) -> tuple[list[PhysicsOutcome], dict[str, Any]]:
+    """:func:`serve_physics_fleet` for the scenario's vehicles, each vehicle's ``flight.csv``,
+    ``link-physics.log`` and ``physics.json`` in its ``vehicle-N/`` folder of ``out``; the outcomes
+    and ``{"vehicles": [physics.json records], "min_separation_m": ...}``."""
+    vehicles = fleet_vehicles(scenario)
+    folders = [vehicle_folder(out, i, len(vehicles)) if out is not None else None for i in range(len(vehicles))]
+    for folder in folders:
+        if folder is not None:
+            folder.mkdir(parents=True, exist_ok=True)
+    logs = [CsvFlightLog(f / FLIGHT_CSV) if f is not None else None for f in folders]
+
+    def on_row(i: int, row: Any) -> None:
+        log = logs[i]
+        if log is not None:
+            log.write(row)
+
+    try:
+        outcomes = serve_physics_fleet(
+            scenario, vehicles, vehicle_preset(scenario.vehicle), config, bind,
+            log_paths=[f / LINK_PHYSICS_LOG if f is not None else None for f in folders], on_row=on_row, **callbacks,
+        )  # fmt: skip
+    finally:
+        for log in logs:
+            if log is not None:
+                log.close()
+    with _interrupts_held():
+        records = []
+        for outcome, vehicle, folder in zip(outcomes, vehicles, folders, strict=True):
+            record = physics_record(outcome, scenario, vehicle)
+            if folder is not None:
+                write_summary(record, folder / PHYSICS_JSON)
+            records.append(record)
+    return outcomes, {"vehicles": records, "min_separation_m": min_separation([o.rows for o in outcomes])}
+
+
 def run_chip_side(
     scenario: ScenarioConfig,
     vehicle: VehicleConfig,
     config: LinkConfig,
-    peer: Address,
+    peer: Address | str,
     bind: Address | None,
     out: Path | None,
     *,
     on_status: Callable[[str], None] | None = None,
+    **link: Any,
 ) -> tuple[ChipOutcome, dict[str, Any]]:
-    """:func:`serve_chip` writing ``jobs.csv``, ``link-chip.log`` and ``chip.json`` in ``out``."""
+    """:func:`serve_chip` writing ``jobs.csv``, ``link-chip.log`` and ``chip.json`` in ``out``
+    (``link``: its ``transport`` and ``on_period``, for the ROS node)."""
     outcome = serve_chip(
         scenario, vehicle, config, peer, bind,
-        log_path=out / LINK_CHIP_LOG if out is not None else None, on_status=on_status,
+        log_path=out / LINK_CHIP_LOG if out is not None else None, on_status=on_status, **link,
     )  # fmt: skip
     with _interrupts_held():
         record = chip_record(outcome, scenario.firmware, scenario.chip)
@@ -165,6 +217,19 @@ def _physics_process(conn: Connection, args: tuple) -> None:
     )
 
 
+def _physics_fleet_process(conn: Connection, args: tuple) -> None:
+    _interrupt_once()
+    _report(
+        conn,
+        lambda: run_physics_fleet_side(
+            *args,
+            on_listen=lambda addresses: _send(conn, "listening", addresses),
+            on_start=lambda: _send(conn, "status", "physics: every chip said hello; flying"),
+            on_sample=lambda done, total: _send(conn, "progress", done, total),
+        ),
+    )
+
+
 def _chip_process(conn: Connection, args: tuple) -> None:
     _interrupt_once()
 
@@ -197,20 +262,26 @@ class DecoupledFlight:
     physics: dict[str, Any] = field(default_factory=dict)
     chip: dict[str, Any] = field(default_factory=dict)
     interrupted: bool = False
+    #: with several vehicles: each vehicle's (physics.json, chip.json) records, the first also above
+    vehicles: list[tuple[dict[str, Any], dict[str, Any]]] = field(default_factory=list)
+
+    def _records(self) -> list[dict[str, Any]]:
+        pairs = self.vehicles or [(self.physics, self.chip)]
+        return [p for p, _ in pairs] + [c for _, c in pairs]
 
     @property
     def ended(self) -> str:
-        """The first reason that is not ``done``: the physics side's, else the chip side's."""
+        """The first reason that is not ``done``: the physics side's, else a chip side's."""
         if self.interrupted:
             return Ended.INTERRUPTED
-        for record in (self.physics, self.chip):
+        for record in self._records():
             if record.get("ended", Ended.FAILED) != Ended.DONE:
                 return str(record.get("ended", Ended.FAILED))
         return Ended.DONE
 
     @property
     def message(self) -> str:
-        for record in (self.physics, self.chip):
+        for record in self._records():
             if record.get("ended") not in (None, Ended.DONE):
                 return f"{record.get('side')} side: {record.get('message')}"
         return "interrupted" if self.interrupted else "flown"
@@ -225,7 +296,7 @@ class _Side:
         child.close()
         self.record: dict[str, Any] | None = None
         self.error: tuple[str, str] | None = None
-        self.address: Address | None = None  # where the physics side listens, once it says
+        self.address: Any = None  # where the physics side listens (a list: one per vehicle), once it says
         self.open = True
 
     def receive(self) -> list[tuple]:
@@ -276,6 +347,8 @@ def fly_decoupled(
     bind = bind or Address("127.0.0.1", 0)
     ctx = multiprocessing.get_context("spawn")
     say = on_status or (lambda _text: None)
+    if scenario.vehicles > 1:
+        return _fly_fleet(scenario, vehicle, config, out, bind, ctx, say, on_progress)
     sides: list[_Side] = []
     interrupted = False
     try:
@@ -316,6 +389,80 @@ def fly_decoupled(
     return result
 
 
+def _fly_fleet(
+    scenario: ScenarioConfig,
+    vehicle: VehicleConfig,
+    config: LinkConfig,
+    out: Path,
+    bind: Address,
+    ctx: Any,
+    say: Callable[[str], None],
+    on_progress: Callable[[int, int], None] | None,
+) -> DecoupledFlight:
+    """:func:`fly_decoupled` with several vehicles: one physics process flying them all in one world
+    (:func:`run_physics_fleet_side`), one chip process per vehicle, each on its own UDP link;
+    ``vehicle-N/`` folders with each vehicle's files and ``summary.json``, and the fleet's summary."""
+    count = scenario.vehicles
+    folders = [vehicle_folder(out, i, count) for i in range(count)]
+    for folder in folders:
+        folder.mkdir(parents=True, exist_ok=True)
+    sides: list[_Side] = []
+    interrupted = False
+    try:
+        physics = _Side("physics", ctx, _physics_fleet_process, ((scenario, config, bind, out),))
+        sides.append(physics)
+        addresses = _await_listening(physics, config.connect_timeout_s, say)
+        assert isinstance(addresses, list)
+        for i, (address, folder) in enumerate(zip(addresses, folders, strict=True)):
+            args = ((scenario, vehicle, config, address, None, folder),)
+            sides.append(_Side(f"chip {i + 1}", ctx, _chip_process, args))
+        _collect(sides, say, on_progress, deadline=None)
+    except KeyboardInterrupt:
+        interrupted = True
+        for side in sides:
+            side.interrupt()
+        _collect(sides, say, None, deadline=time.monotonic() + SHUTDOWN_S)
+    finally:
+        for side in sides:
+            side.process.join(timeout=SHUTDOWN_S if not interrupted else 1.0)
+            if side.process.is_alive():
+                side.process.terminate()
+                side.process.join(timeout=5.0)
+    physics_part = sides[0].record or {} if sides else {}
+    physics_records = list(physics_part.get("vehicles") or [])
+    physics_records += [_read_record(f / PHYSICS_JSON) for f in folders[len(physics_records) :]]
+    chip_records = [
+        (sides[i + 1].record if i + 1 < len(sides) else None) or _read_record(folders[i] / CHIP_JSON)
+        for i in range(count)
+    ]
+    summaries = []
+    for p, c, folder in zip(physics_records, chip_records, folders, strict=True):
+        summary = decoupled_summary(p, c, scenario=scenario, config=config)
+        write_summary(summary, folder / SUMMARY_JSON)
+        summaries.append(summary)
+    simulated = max((float(p.get("simulated_s", 0.0)) for p in physics_records), default=0.0)
+    host = max((float(p.get("host_s", 0.0)) for p in physics_records), default=0.0)
+    stopped_early = interrupted or any(s.error is not None and s.error[0] == "interrupted" for s in sides)
+    top = fleet_summary(
+        scenario, summaries, simulated, host, min_separation_m=float(physics_part.get("min_separation_m", math.nan)),
+        complete=all(s["complete"] for s in summaries),
+    )  # fmt: skip
+    top["mode"] = "decoupled"
+    write_summary(top, out / SUMMARY_JSON)
+    failed = [s for s in sides if s.error is not None and s.error[0] in ("link", "internal")]
+    if failed and not interrupted:
+        side = failed[0]
+        assert side.error is not None
+        raise SideFailed(side.name, side.error[0], side.error[1])
+    for side in sides:
+        if side.record is None and side.error is None and not interrupted:
+            raise SideFailed(side.name, "internal", f"the process ended with exit code {side.process.exitcode}")
+    return DecoupledFlight(
+        summary=top, physics=physics_records[0], chip=chip_records[0], interrupted=stopped_early,
+        vehicles=list(zip(physics_records, chip_records, strict=True)),
+    )  # fmt: skip
+
+
 def _read_record(path: Path) -> dict[str, Any]:
     try:
         return json.loads(path.read_text(encoding="utf-8"))
@@ -337,7 +484,7 @@ def _handle(side: _Side, message: tuple, say: Callable[[str], None], on_progress
         side.address = message[1]
 
 
-def _await_listening(side: _Side, timeout_s: float, say: Callable[[str], None]) -> Address:
+def _await_listening(side: _Side, timeout_s: float, say: Callable[[str], None]) -> Any:
     deadline = time.monotonic() + timeout_s
     while time.monotonic() < deadline:
         wait([side.conn, side.process.sentinel], timeout=0.2)

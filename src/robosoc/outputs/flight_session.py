@@ -83,6 +83,7 @@ __all__ = [
     "ScenarioFlight",
     "fleet_vehicles",
     "fly_scenario",
+    "min_separation",
     "vehicle_folder",
 ]
 
@@ -131,7 +132,8 @@ def _controllers(scenario: ScenarioConfig, on_status: Callable[[str], None], pro
     return [ChipController(scenario, canonical, image=image, profile=profile) for _ in range(scenario.vehicles)]
 
 
-def _min_separation(rows: list[np.ndarray]) -> float:
+def min_separation(rows: list[np.ndarray]) -> float:
+    """The closest approach of any two vehicles' body origins [m] (NaN for fewer than two)."""
     if len(rows) < 2 or len(rows[0]) == 0:
         return math.nan
     xyz = [ROW_FIELDS.index(n) for n in ("x", "y", "z")]
@@ -298,7 +300,7 @@ def _summarize(
             summaries,
             simulated_s,
             host_s,
-            min_separation_m=_min_separation(rows),
+            min_separation_m=min_separation(rows),
             complete=complete,
             stopped=stopped,
         )

@@ -6,6 +6,13 @@ CDR-encoded, through the ``foxglove-sdk`` server on loopback: in Foxglove, *Open
 in the file (:data:`robosoc.outputs.ros2_flight.START_NS`).  A flight faster than real time is
 held back to real time (``pace``) so that it can be watched; a slower one (the chip) goes at its
 own pace.
+
+Besides the file's topics the server publishes ``/clock`` (``rosgraph_msgs/msg/Clock``, the row's
+time) and tells clients the time (the protocol's *time* capability), so Foxglove's clock follows
+the flight.  Clients must speak the protocol ``foxglove.sdk.v1`` (Foxglove's app does): the
+library refuses the older ``foxglove.websocket.v1`` and a handshake without a subprotocol with HTTP
+400.  :meth:`LiveFlight.hold` keeps serving after the flight until Ctrl-C
+(``robosoc fly --foxglove PORT --foxglove-keep``).
 """
 
 from __future__ import annotations
@@ -15,12 +22,17 @@ from collections.abc import Callable, Mapping
 
 import foxglove
 import numpy as np
+from foxglove.websocket import Capability
 
 from robosoc.control.flight import ROW_FIELDS
-from robosoc.outputs.ros2_flight import START_NS, TOPICS, cdr_encoder, message_definition, row_messages
+from robosoc.outputs.ros2_flight import START_NS, TOPICS, cdr_encoder, message_definition, row_messages, stamp_ns
 
 HOST = "127.0.0.1"
 SERVER_NAME = "robosoc"
+SUBPROTOCOL = "foxglove.sdk.v1"
+"""The WebSocket subprotocol the server speaks (the only one the foxglove-sdk server accepts)."""
+CLOCK_TOPIC = "/clock"
+CLOCK_TYPE = "rosgraph_msgs/msg/Clock"
 ROS2_SCHEMA_ENCODING = "ros2msg"
 CDR = "cdr"
 _T = ROW_FIELDS.index("t")
@@ -45,21 +57,21 @@ class LiveFlight:
     def __init__(self, port: int, pace: float = 1.0, start_ns: int = START_NS) -> None:
         self._context = foxglove.Context()
         try:
-            self._server = foxglove.start_server(name=SERVER_NAME, host=HOST, port=port, context=self._context)
+            self._server = foxglove.start_server(
+                name=SERVER_NAME, host=HOST, port=port, context=self._context, capabilities=[Capability.Time]
+            )
         except Exception as exc:  # the SDK raises its own error types for a taken or bad port
             raise LiveFlightError(f"cannot serve on {HOST}:{port}: {exc}") from exc
         self.pace = pace
         self.start_ns = start_ns
         self._channels: dict[str, foxglove.Channel] = {}
         self._encoders: dict[str, Callable[[Mapping[str, object]], bytes]] = {}
-        for topic in TOPICS:
-            text = message_definition(topic.datatype)
-            schema = foxglove.Schema(name=topic.datatype, encoding=ROS2_SCHEMA_ENCODING, data=text.encode())
-            self._channels[topic.name] = foxglove.Channel(
-                topic.name, schema=schema, message_encoding=CDR, context=self._context
-            )
-            if topic.datatype not in self._encoders:
-                self._encoders[topic.datatype] = cdr_encoder(topic.datatype)
+        for name, datatype in [(t.name, t.datatype) for t in TOPICS] + [(CLOCK_TOPIC, CLOCK_TYPE)]:
+            text = message_definition(datatype)
+            schema = foxglove.Schema(name=datatype, encoding=ROS2_SCHEMA_ENCODING, data=text.encode())
+            self._channels[name] = foxglove.Channel(name, schema=schema, message_encoding=CDR, context=self._context)
+            if datatype not in self._encoders:
+                self._encoders[datatype] = cdr_encoder(datatype)
         self._start: float | None = None
         self.published = 0
 
@@ -75,9 +87,21 @@ class LiveFlight:
         """Send one flight row (columns ``ROW_FIELDS``) to every subscribed client."""
         if self.pace > 0:
             self._wait(float(row[_T]))
-        for topic, message, ns in row_messages(row, self.start_ns):
-            self._channels[topic.name].log(self._encoders[topic.datatype](message), log_time=ns)
+        ns = stamp_ns(float(row[_T]), self.start_ns)
+        clock = {"clock": {"sec": ns // 1_000_000_000, "nanosec": ns % 1_000_000_000}}
+        self._channels[CLOCK_TOPIC].log(self._encoders[CLOCK_TYPE](clock), log_time=ns)
+        self._server.broadcast_time(ns)
+        for topic, message, log_ns in row_messages(row, self.start_ns):
+            self._channels[topic.name].log(self._encoders[topic.datatype](message), log_time=log_ns)
             self.published += 1
+
+    def hold(self, poll_s: float = 0.2) -> None:
+        """Keep serving (clients stay connected, new ones may come) until Ctrl-C, which it takes."""
+        try:
+            while True:
+                time.sleep(poll_s)
+        except KeyboardInterrupt:
+            return
 
     def _wait(self, simulated_s: float) -> None:
         now = time.monotonic()
@@ -100,4 +124,4 @@ class LiveFlight:
         self.close()
 
 
-__all__ = ["HOST", "LiveFlight", "LiveFlightError"]
+__all__ = ["CLOCK_TOPIC", "CLOCK_TYPE", "HOST", "SUBPROTOCOL", "LiveFlight", "LiveFlightError"]

@@ -28,19 +28,19 @@ import numpy as np
 
 from robosoc.control.flight import ROW_FIELDS
 from robosoc.outputs.ros2_cdr import CdrEncoder
+from robosoc.physics.clock import START_NS as START_NS
+from robosoc.physics.clock import START_TIME as START_TIME
 
 FRAME_WORLD = "world"
 FRAME_BODY = "base_link"
 FRAME_ESTIMATE = "base_link_estimate"
 HPA_TO_PA = 100.0
-START_TIME = "2026-01-01T00:00:00Z"
-START_NS = 1_767_225_600 * 1_000_000_000
-"""The default start of a flight's stamps: :data:`START_TIME` in ns since the Unix epoch."""
 
 # message definitions as ROS 2 ships them (rosidl .msg text, types named ``pkg/Type`` as the .msg
 # files and the ``MSG:`` sections of a schema name them), and robosoc's own two
 _DEFINITIONS: dict[str, str] = {
     "builtin_interfaces/Time": "int32 sec\nuint32 nanosec\n",
+    "rosgraph_msgs/Clock": "builtin_interfaces/Time clock\n",
     "std_msgs/Header": "builtin_interfaces/Time stamp\nstring frame_id\n",
     "std_msgs/Float64": "float64 data\n",
     "geometry_msgs/Vector3": "float64 x\nfloat64 y\nfloat64 z\n",

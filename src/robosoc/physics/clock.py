@@ -22,6 +22,11 @@ if TYPE_CHECKING:
 NS_PER_S = 1_000_000_000
 PHYSICS_STEP_NS = round(PHYSICS_DT_S * NS_PER_S)
 """One physics step (1 ms) in nanoseconds."""
+START_TIME = "2026-01-01T00:00:00Z"
+START_NS = 1_767_225_600 * 1_000_000_000
+"""When a flight's time 0 is stamped in its logs (MCAP) and on ROS (``/clock``): :data:`START_TIME`
+in ns since the Unix epoch.  A fixed date, so that the same flight gives the same bytes, and one
+that viewers show as a date rather than as 1970 (ROS 1 also reads time 0 as "no time yet")."""
 
 
 @dataclass(frozen=True)
@@ -78,4 +83,4 @@ class FlightClock:
         return samples_done * self.sample_period_ns / NS_PER_S
 
 
-__all__ = ["NS_PER_S", "PHYSICS_STEP_NS", "FlightClock"]
+__all__ = ["NS_PER_S", "PHYSICS_STEP_NS", "START_NS", "START_TIME", "FlightClock"]
