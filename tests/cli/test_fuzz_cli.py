@@ -114,7 +114,8 @@ OPTIONS: dict[tuple[str, str], Spec] = {
     ("bench fly", "--mul"): Spec("flag"),
     ("bench fly", "--duration"): Spec("float", 0.01, 3600.0),
     ("scenario show", "FILE"): Spec("in_file"),
-    ("fly", "--foxglove"): Spec("int", 0, 65535),  # 0: any free port (never tried: it would serve a flight)
+    ("fly", "--foxglove"): Spec("int", 0, 65535),
+    ("fly", "--foxglove-keep"): Spec("flag"),  # 0: any free port (never tried: it would serve a flight)
     ("fly", "--decoupled"): Spec("flag"),
     ("fly", "--pace"): Spec("choice", choices=("realtime", "fast")),
     ("fly", "--hold"): Spec("choice", choices=("zoh", "linear")),
@@ -131,6 +132,11 @@ OPTIONS: dict[tuple[str, str], Spec] = {
     ("serve physics", "--out"): Spec("out_dir"),
     ("serve physics", "--no-out"): Spec("flag"),
     ("serve physics", "--bind"): Spec("address"),
+    ("serve physics", "--ros"): Spec("flag"),
+    ("serve physics", "--vehicles"): Spec("int", 1, 16),
+    ("serve physics", "--start-delay"): Spec("float", 0.0, 600.0),
+    ("serve chip", "--ros"): Spec("flag"),
+    ("serve chip", "--ns"): Spec("namespace"),
     ("serve physics", "--pace"): Spec("choice", choices=("realtime", "fast")),
     ("serve physics", "--hold"): Spec("choice", choices=("zoh", "linear")),
     ("serve physics", "--faults"): Spec("faults"),
@@ -227,6 +233,7 @@ NO_DIGITS = string.ascii_letters + string.punctuation + " "
 BAD_VALUES: dict[str, list[str]] = {
     "int": ["-5", "0", HUGE, "nan", "inf", "abc", "1.5", ""],
     "float": ["-1", "0", "1e308", "nan", "inf", "-inf", "abc", ""],
+    "namespace": ["", "/1uav", "/uav 1", "//", "/a-b", "uav1/../x"],
     "sram": ["-4", "0", "4098", str(2**40), "nan", "abc"],
     "choice": ["", "nope", "-1", "nan", HUGE],
     "mesh": ["", "0x0", "1x1", "-2x2", "99999x99999", "nan", "2x", "2x2x2"],
@@ -361,7 +368,7 @@ CASES = [
     (command, option, value)
     for (command, option), spec in OPTIONS.items()
     for value in BAD_VALUES[spec.kind]
-    if not (spec.kind == "int" and spec.lo == 0 and value == "0")
+    if not (spec.kind in ("int", "float") and spec.lo == 0 and value == "0")
 ]
 
 
@@ -422,6 +429,8 @@ def bad_text(spec: Spec) -> st.SearchStrategy[str]:
     if spec.kind == "dask":  # anything but 'local' or scheme://host:port with a port in 1..65535
         far = st.integers(min_value=65536, max_value=10**12)
         return st.one_of(words.filter(lambda v: v != "local"), special, far.map(lambda p: f"tcp://host:{p}"))
+    if spec.kind == "namespace":
+        return st.sampled_from(BAD_VALUES["namespace"])
     if spec.kind == "address":
         far = st.integers(min_value=65536, max_value=10**12).map(lambda p: f"127.0.0.1:{p}")
         return st.one_of(words, special, far)

@@ -57,6 +57,8 @@ def _namespace(ctx: typer.Context, param: typer.CallbackParam, value: str) -> st
     import re
 
     text = value.strip()
+    if not text:
+        raise CliError("--ns: empty: give a ROS namespace such as /uav1 (/ for none)")
     if not text.startswith("/"):
         text = "/" + text
     if not re.fullmatch(r"/|(/[A-Za-z][A-Za-z0-9_]*)+/?", text):
@@ -143,10 +145,9 @@ def serve_physics_command(
     start_delay: Annotated[
         float,
         typer.Option(
-            min=0.0,
-            max=600.0,
             help="With --ros: seconds between the chips' arrival and the first sample, for recorders "
-            "(rosbag record -a) to subscribe first.",
+            "(rosbag record -a) to subscribe first, 0..600.",
+            callback=options.float_range(0.0, 600.0, unit="s"),
         ),
     ] = 0.0,
 ) -> None:
