@@ -101,6 +101,26 @@ class ChipResult:
     warnings: list[str] = field(default_factory=list)
 
 
+def account_counters(row: np.ndarray) -> dict[str, int]:
+    """The counters by name of one accounting row (``acc[tile, task]``, the kernels' A_* layout)."""
+    c = counters_dict(row[kc.A_CTR : kc.A_CTR + CTR_SIZE], row[:OPC_SIZE], int(row[kc.A_CYCLES]))
+    c["sleep_cycle"] = int(row[kc.A_SLEEP])
+    c["dma_cycle"] = int(row[kc.A_DMA])
+    return c
+
+
+@functools.cache
+def account_counter_map() -> tuple[tuple[str, ...], np.ndarray]:
+    """The names of :func:`account_counters` and the integer matrix M with ``M @ row`` their values:
+    every counter is a sum of the row's entries times whole numbers (classes, stall cycles per
+    operation), so the counters of a difference of rows are the difference of their counters and a
+    flight's per-period counters are one matrix product (``tests/chip/test_chip_totals.py``)."""
+    basis = np.eye(kc.ACC_SIZE, dtype=np.int64)
+    columns = [account_counters(basis[j]) for j in range(kc.ACC_SIZE)]
+    names = tuple(columns[0])
+    return names, np.array([[c[name] for c in columns] for name in names], dtype=np.int64)
+
+
 class MPSoC:
     """A mesh of tiles built from a :class:`ChipConfig`."""
 
@@ -498,16 +518,7 @@ class MPSoC:
     def task_counters(self, xy: tuple[int, int]) -> dict[int, dict[str, int]]:
         """Counters per task id of one tile (task 0 is the kernel/idle), for tasks that ran."""
         t = self.config.tile_index(xy)
-        out = {}
-        for task in range(kc.NTASKS):
-            row = self.acc[t, task]
-            if not row.any():
-                continue
-            c = counters_dict(row[kc.A_CTR : kc.A_CTR + CTR_SIZE], row[:OPC_SIZE], int(row[kc.A_CYCLES]))
-            c["sleep_cycle"] = int(row[kc.A_SLEEP])
-            c["dma_cycle"] = int(row[kc.A_DMA])
-            out[task] = c
-        return out
+        return {task: account_counters(self.acc[t, task]) for task in range(kc.NTASKS) if self.acc[t, task].any()}
 
     def enable_profile(self) -> None:
         """Count every instruction per tile, task and word of code from here on (the exact profile,

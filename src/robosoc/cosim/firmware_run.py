@@ -35,15 +35,17 @@ from collections import Counter
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
+import numpy as np
+
 from robosoc.chip.energy import EnergyModel
 from robosoc.chip.function_profile import FunctionProfile, chip_profile
-from robosoc.chip.mpsoc import ChipError, MPSoC
+from robosoc.chip.mpsoc import ChipError, MPSoC, account_counter_map
 from robosoc.chip.single import CoreError
 from robosoc.config.chip import ChipConfig
 from robosoc.config.firmware import FirmwareConfig
 from robosoc.host import flight_app, images, packets
 from robosoc.host.firmware_image import FirmwareImage
-from robosoc.kernels.chip import K_TASK
+from robosoc.kernels.chip import K_TASK, NTASKS
 from robosoc.program.elf import load_elf
 from robosoc.records import JobRecord, PwmCommand, SampleInput
 
@@ -129,8 +131,10 @@ class FirmwareRun:
         self.samples: list[SampleInput] = []
         self._sample_cycles: list[int] = []  # of the samples, for finding a job's period
         self.commands: list[PwmCommand] = []
-        self._periods: list[dict] = []  # per sample period: counter deltas per (tile, task) and NoC energy
-        self._previous = _snapshot(self.chip, self.tiles, self.model)
+        self._rows = [self.chip.config.tile_index(xy) for xy in self.tiles]
+        self._periods: list[_Period] = []  # per sample period: counter deltas per (tile, task) and NoC energy
+        self._previous = self._accounts()
+        self._estimate: flight_app.EstimateReader | None = None  # made at the first close
         self._seen = dict.fromkeys(self.tiles, 0)
         self._logged: list[tuple[tuple[int, int], images.JobRecord, int]] = []  # (tile, record, period)
         self.estimates: list[flight_app.ChipEstimate] = []
@@ -201,13 +205,14 @@ class FirmwareRun:
         Raises:
             RuntimeError: a tile's job log overflowed since the last call.
         """
-        current = _snapshot(self.chip, self.tiles, self.model)
+        current = self._accounts()
         if self.image.estimator is not None:
-            estimate = flight_app.read_estimate(self.chip, self.fw, len(self.samples) - 1)
+            self._estimate = self._estimate or flight_app.EstimateReader(self.chip, self.fw)
+            estimate = self._estimate.read(len(self.samples) - 1)
             # consistent unless a job is mid-way: every sample estimated, or the tile asleep
             if estimate.jobs >= len(self.samples) or self.chip.state(self.image.estimator) == "sleeping":
                 self.estimates.append(estimate)
-        self._periods.append(_delta(self._previous, current))
+        self._periods.append(_Period.between(self._previous, current))
         self._previous = current
         for xy in self.tiles:
             try:
@@ -218,6 +223,11 @@ class FirmwareRun:
                 r = _unwrapped(r, self.chip.cycle)
                 self._logged.append((xy, r, _period_of(self._sample_cycles, r.release)))
             self._seen[xy] = count
+
+    def _accounts(self) -> tuple[np.ndarray, float]:
+        """The accounting rows of the firmware's tiles (tile, task, A_*) now, and the NoC's traffic energy."""
+        self.chip.finish_accounting()
+        return self.chip.acc[self._rows], noc_traffic_pj(self.model, self.chip.noc_counters())
 
     def function_profile(self) -> FunctionProfile:
         """The exact profile so far: cycles, instructions and energy per function, tile and task.
@@ -240,12 +250,14 @@ class FirmwareRun:
         per_task_period = Counter((xy, r.task, p) for xy, r, p in self._logged)
         seen: Counter[tuple] = Counter()  # jobs of each (tile, task, period) charged so far
         jobs = []
+        position = {xy: i for i, xy in enumerate(self.tiles)}
         for xy, r, p in self._logged:
             name = self.names.get((xy, r.task))
             if name is None:
                 continue
             delta = self._periods[p]
-            counters = delta["tasks"].get((xy, r.task), {})
+            i = position[xy]
+            counters = delta.counters(i, r.task)
             shared = per_tile_period[(xy, p)]
             # jobs of one task released in one period (periodic release) share its counters
             alike, k = per_task_period[(xy, r.task, p)], seen[(xy, r.task, p)]
@@ -253,9 +265,9 @@ class FirmwareRun:
             quotient, remainder = divmod(int(counters.get("instructions", 0)), alike)
             energy_pj = {
                 "task": _pj(model, counters) / alike,
-                "kernel": _pj(model, delta["tasks"].get((xy, images.KERNEL_TASK_ID), {})) / shared,
-                "idle": _pj(model, delta["tasks"].get((xy, images.IDLE_TASK_ID), {})) / shared,
-                "noc": delta["noc_pj"] / per_period[p],
+                "kernel": _pj(model, delta.counters(i, images.KERNEL_TASK_ID)) / shared,
+                "idle": _pj(model, delta.counters(i, images.IDLE_TASK_ID)) / shared,
+                "noc": delta.noc_pj / per_period[p],
             }
             jobs.append(
                 JobRecord(
@@ -310,15 +322,28 @@ def noc_traffic_pj(model: EnergyModel, noc: dict[str, int]) -> float:
     return sum(model.noc_pj(noc).values()) - sum(model.noc_pj(idle).values())
 
 
-def _snapshot(chip: MPSoC, tiles: Sequence[tuple[int, int]], model: EnergyModel) -> dict:
-    chip.finish_accounting()
-    tasks = {(xy, task): c for xy in tiles for task, c in chip.task_counters(xy).items()}
-    return {"tasks": tasks, "noc_pj": noc_traffic_pj(model, chip.noc_counters())}
+@dataclass(frozen=True)
+class _Period:
+    """What one sample period spent: per (tile, task) that had run by its close, the difference of
+    its named counters (:func:`robosoc.chip.mpsoc.account_counters`) over the period; the NoC's
+    traffic energy.  Kept as the counters' values (one matrix product of the accounting rows per
+    period: building dicts per tile and task at every sample was a third of a flight's host time)."""
 
+    keys: np.ndarray  # tile position * NTASKS + task, of the tasks that had run by the close
+    values: np.ndarray  # their counters' differences, one row each (names of account_counter_map)
+    noc_pj: float
 
-def _delta(before: dict, after: dict) -> dict:
-    tasks = {}
-    for key, c in after["tasks"].items():
-        old = before["tasks"].get(key, {})
-        tasks[key] = {name: value - old.get(name, 0) for name, value in c.items()}
-    return {"tasks": tasks, "noc_pj": after["noc_pj"] - before["noc_pj"]}
+    @classmethod
+    def between(cls, before: tuple[np.ndarray, float], after: tuple[np.ndarray, float]) -> _Period:
+        rows, noc_pj = after
+        ran = rows.reshape(-1, rows.shape[-1]).any(axis=1)  # task_counters' tasks: those that ran
+        keys = np.flatnonzero(ran)
+        delta = (rows - before[0]).reshape(-1, rows.shape[-1])[keys]
+        return cls(keys, delta @ account_counter_map()[1].T, noc_pj - before[1])
+
+    def counters(self, tile: int, task: int) -> dict[str, int]:
+        """Named counter differences of ``task`` on the tile at position ``tile`` ({}: it had not run)."""
+        k = int(np.searchsorted(self.keys, tile * NTASKS + task))
+        if k == len(self.keys) or self.keys[k] != tile * NTASKS + task:
+            return {}
+        return dict(zip(account_counter_map()[0], (int(v) for v in self.values[k]), strict=True))

@@ -182,25 +182,50 @@ def read_estimate(chip: MPSoC, fw: FirmwareConfig, sample: int = -1) -> ChipEsti
     Raises:
         ValueError: no flight application on the estimator tile, or main has not run.
     """
-    from robosoc.program.dwarf import member_offset
+    return EstimateReader(chip, fw).read(sample)
 
-    xy = fw.ekf_tile
-    t = chip.config.tile_index(xy)
-    program = chip.programs.get(t)
-    if program is None:
-        raise ValueError(f"tile {xy} has no program loaded")
-    stats = read_app_stats(chip, xy)
-    base = program.address_of(EST_STATE_SYMBOL)
-    fmt = "<i" if fw.arith == "fixed" else "<f"
-    scale = 1.0 / 65536.0 if fw.arith == "fixed" else 1.0
 
-    def real(member: str, index: int = 0) -> float:
-        offset, _ = member_offset(program.path, "est_t", member)
-        (value,) = struct.unpack(fmt, chip.cores.read(base + offset + 4 * index, 4, tile=t))
-        return float(value) * scale
+class EstimateReader:
+    """:func:`read_estimate` for one chip, with the fields' addresses looked up once (a flight reads
+    the estimate at every sample: looking up the symbol and the DWARF members each time cost more
+    than the read).
 
-    quaternion = (real("ekf.x", 0), real("ekf.x", 1), real("ekf.x", 2), real("ekf.x", 3))
-    return ChipEstimate(sample, stats.est_jobs, quaternion, real("alt.h"), real("alt.v"))
+    Raises:
+        ValueError: no program on the estimator tile.
+        ElfError: the program lacks the estimator's state or its debug information.
+    """
+
+    def __init__(self, chip: MPSoC, fw: FirmwareConfig) -> None:
+        from robosoc.program.dwarf import member_offset
+
+        xy = fw.ekf_tile
+        t = chip.config.tile_index(xy)
+        program = chip.programs.get(t)
+        if program is None:
+            raise ValueError(f"tile {xy} has no program loaded")
+        base = program.address_of(EST_STATE_SYMBOL)
+
+        def address(member: str, index: int = 0) -> int:
+            return base + member_offset(program.path, "est_t", member)[0] + 4 * index
+
+        self.chip, self.xy, self.tile = chip, xy, t
+        #: w, x, y, z of the quaternion, the height, the vertical speed
+        self.addresses = (*(address("ekf.x", i) for i in range(4)), address("alt.h"), address("alt.v"))
+        self.format = "<i" if fw.arith == "fixed" else "<f"
+        self.scale = 1.0 / 65536.0 if fw.arith == "fixed" else 1.0
+
+    def read(self, sample: int = -1) -> ChipEstimate:
+        """The estimate now, as read at the close of sample period ``sample``.
+
+        Raises:
+            ValueError: main has not run.
+        """
+        stats = read_app_stats(self.chip, self.xy)
+        read = self.chip.cores.read
+        w, x, y, z, h, v = (
+            float(struct.unpack(self.format, read(a, 4, tile=self.tile))[0]) * self.scale for a in self.addresses
+        )
+        return ChipEstimate(sample, stats.est_jobs, (w, x, y, z), h, v)
 
 
 def read_app_stats(chip: MPSoC, xy: tuple[int, int]) -> AppStats:
@@ -236,6 +261,7 @@ __all__ = [
     "SENSOR_PORT",
     "AppStats",
     "ChipEstimate",
+    "EstimateReader",
     "app_tiles",
     "build",
     "defines",
