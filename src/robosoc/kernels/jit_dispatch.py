@@ -32,6 +32,7 @@ import numpy as np
 from llvmlite import ir
 from numba import njit, types
 from numba.extending import intrinsic
+from numba.typed import List
 
 from robosoc.isa.table import OP_ENTRY
 from robosoc.kernels.borrowed import row
@@ -203,6 +204,16 @@ def flush_counts(jt: JitArrays, opc_t: np.ndarray, ctr_t: np.ndarray) -> None:
             if nxt >= 0:
                 cnt[nxt] += c
             cnt[s] = 0
+
+
+@njit(cache=True)
+def tables_list(jt: JitArrays, n: int):
+    """A numba typed list holding ``jt`` ``n`` times (made here, compiled and cached: the typed
+    list's own constructor compiles its methods in every process, about a second of every start)."""
+    tables = List()
+    for _ in range(n):
+        tables.append(jt)
+    return tables
 
 
 @njit(cache=True)
