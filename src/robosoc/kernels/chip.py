@@ -584,7 +584,7 @@ def _run_awake(core, tiles, until, jit_tables, jit_on, jit_params, one, rest, gs
         if jit_on[t] != 0 and (st[t, S_RUN] == RUN_ENTRY or until - st[t, S_CYCLE] >= JIT_MIN_SLICE):
             one[0] = t
             k0 = ticks() if prof else 0
-            run_translated(core, one, until, jit_tables[t], jit_params[J_THRESHOLD], jit_params[J_STRETCH])
+            run_translated(core, one, until, jit_tables[t], jit_params[J_THRESHOLD], jit_params[J_STRETCH], False)
             if prof:
                 gst[G_TK_JIT] += ticks() - k0
                 gst[G_N_JIT] += 1
