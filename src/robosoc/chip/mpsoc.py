@@ -42,10 +42,8 @@ from robosoc.kernels.core_layout import (
     ERRATA_MODES,
     OPC_SIZE,
     RUN_CHUNK,
-    S_CODE_SIZE,
     S_CYCLE,
     S_EXIT_CODE,
-    S_MEM_BASE,
     S_MEM_SIZE,
     S_NI,
     S_PC,
@@ -331,11 +329,7 @@ class MPSoC:
         """
         # the awake and sleeping cores' pcs, all at once (a Python call per tile per step cost a
         # sleeping 16x16 chip a tenth of its run time); check_pc words the error of the first bad one
-        st = self.cores.st
-        state = self.cst[:, kc.K_STATE]
-        off = st[:, S_PC] - st[:, S_MEM_BASE]
-        bad = ((state == kc.K_RUN) | (state == kc.K_SLEEP)) & ((off % 4 != 0) | (off < 0) | (off >= st[:, S_CODE_SIZE]))
-        for t in np.flatnonzero(bad):
+        for t in kc.bad_pcs(self.cores.st, self.cst):
             xy = self.config.tile_xy(int(t))
             check_pc(self.cores, int(t), functools.partial(self.symbolize, xy), f"tile {xy}: ")
         jit = self._jit

@@ -249,6 +249,20 @@ def account(t, core, book, now):
 
 
 @njit(cache=True)
+def bad_pcs(st: np.ndarray, cst: np.ndarray) -> np.ndarray:
+    """The tiles that run or sleep with a pc outside their loaded code's words (the host's check
+    before each step: numpy's seven passes over the tiles cost more than a flight's step)."""
+    bad = np.zeros(0, dtype=np.int64)
+    for t in range(cst.shape[0]):
+        state = cst[t, K_STATE]
+        if state == K_RUN or state == K_SLEEP:
+            off = st[t, S_PC] - st[t, S_MEM_BASE]
+            if off % 4 != 0 or off < 0 or off >= st[t, S_CODE_SIZE]:
+                bad = np.append(bad, t)
+    return bad
+
+
+@njit(cache=True)
 def account_all(core, book):
     """:func:`account` for every tile with a core (not off, not the I/O tile), up to its present cycle.
 
@@ -945,4 +959,4 @@ def run_chip(core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int, jit
     return status
 
 
-__all__ = ["ChipBook", "account", "account_all", "ni_access", "record", "run_chip", "wake_time"]
+__all__ = ["ChipBook", "account", "account_all", "bad_pcs", "ni_access", "record", "run_chip", "wake_time"]
