@@ -262,14 +262,14 @@ class FirmwareRun:
                 continue
             delta = self._periods[p]
             i = position[xy]
-            counters = delta.counters(i, r.task)
+            own = delta.counters(i, r.task)
             shared = per_tile_period[(xy, p)]
             # jobs of one task released in one period (periodic release) share its counters
             alike, k = per_task_period[(xy, r.task, p)], seen[(xy, r.task, p)]
             seen[(xy, r.task, p)] += 1
-            quotient, remainder = divmod(int(counters.get("instructions", 0)), alike)
+            quotient, remainder = divmod(int(own.get("instructions", 0)), alike)
             energy_pj = {
-                "task": _pj(model, counters) / alike,
+                "task": _pj(model, own) / alike,
                 "kernel": shared_pj(p, i, images.KERNEL_TASK_ID) / shared,
                 "idle": shared_pj(p, i, images.IDLE_TASK_ID) / shared,
                 "noc": delta.noc_pj / per_period[p],
