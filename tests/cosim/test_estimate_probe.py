@@ -60,7 +60,8 @@ def test_the_probe_costs_no_cycle(rows: np.ndarray, monkeypatch: pytest.MonkeyPa
     probed = replay(short, FirmwareConfig())
     calls = []
     fake = flight_app.ChipEstimate(0, 10**9, (1.0, 0.0, 0.0, 0.0), 0.0, 0.0)
-    monkeypatch.setattr(flight_app, "read_estimate", lambda *a, **k: calls.append(a) or fake)  # reads nothing
+    # the flight's reader, made once per run, reads nothing
+    monkeypatch.setattr(flight_app.EstimateReader, "read", lambda self, *a, **k: calls.append(a) or fake)
     unprobed = replay(short, FirmwareConfig())
     assert len(calls) == len(probed.estimates) == len(short) and unprobed.estimates == [fake] * len(calls)
     assert [(j.release_cycle, j.completion_cycle, j.exec_cycles) for j in probed.jobs] == [

@@ -131,12 +131,20 @@ class FirmwareRun:
         self.samples: list[SampleInput] = []
         self._sample_cycles: list[int] = []  # of the samples, for finding a job's period
         self.commands: list[PwmCommand] = []
-        self._rows = [self.chip.config.tile_index(xy) for xy in self.tiles]
+        # the accounting rows jobs are charged to: every named task's, the kernel's and idle's per tile
+        charged = sorted(
+            {(i, task) for i, xy in enumerate(self.tiles) for (where, task) in self.names if where == xy}
+            | {(i, task) for i in range(len(self.tiles)) for task in (images.KERNEL_TASK_ID, images.IDLE_TASK_ID)}
+        )
+        self._keys = np.array([i * NTASKS + task for i, task in charged], dtype=np.int64)
+        self._acc_tiles = np.array([self.chip.config.tile_index(self.tiles[i]) for i, _ in charged], dtype=np.int64)
+        self._acc_tasks = np.array([task for _, task in charged], dtype=np.int64)
         self._periods: list[_Period] = []  # per sample period: counter deltas per (tile, task) and NoC energy
         self._previous = self._accounts()
         self._estimate: flight_app.EstimateReader | None = None  # made at the first close
         self._seen = dict.fromkeys(self.tiles, 0)
-        self._logged: list[tuple[tuple[int, int], images.JobRecord, int]] = []  # (tile, record, period)
+        # (tile, record as logged: 32-bit stamps, period, chip cycle when read: see _full_cycle)
+        self._logged: list[tuple[tuple[int, int], images.JobRecord, int, int]] = []
         self.estimates: list[flight_app.ChipEstimate] = []
         self._start = time.perf_counter()
 
@@ -212,22 +220,22 @@ class FirmwareRun:
             # consistent unless a job is mid-way: every sample estimated, or the tile asleep
             if estimate.jobs >= len(self.samples) or self.chip.state(self.image.estimator) == "sleeping":
                 self.estimates.append(estimate)
-        self._periods.append(_Period.between(self._previous, current))
+        self._periods.append(_Period.between(self._keys, self._previous, current))
         self._previous = current
+        now = self.chip.cycle
         for xy in self.tiles:
             try:
                 fresh, count = images.read_new_jobs(self.chip, xy, self._seen[xy])
             except ValueError as exc:
                 raise RuntimeError(f"{exc} (between two samples)") from exc
             for r in fresh:
-                r = _unwrapped(r, self.chip.cycle)
-                self._logged.append((xy, r, _period_of(self._sample_cycles, r.release)))
+                self._logged.append((xy, r, _period_of(self._sample_cycles, _full_cycle(r.release, now)), now))
             self._seen[xy] = count
 
     def _accounts(self) -> tuple[np.ndarray, float]:
-        """The accounting rows of the firmware's tiles (tile, task, A_*) now, and the NoC's traffic energy."""
+        """The accounting rows jobs are charged to (one per key, A_* columns) now, and the NoC's traffic energy."""
         self.chip.finish_accounting()
-        return self.chip.acc[self._rows], noc_traffic_pj(self.model, self.chip.noc_counters())
+        return self.chip.acc[self._acc_tiles, self._acc_tasks], noc_traffic_pj(self.model, self.chip.noc_counters())
 
     def function_profile(self) -> FunctionProfile:
         """The exact profile so far: cycles, instructions and energy per function, tile and task.
@@ -245,9 +253,9 @@ class FirmwareRun:
         """Job records with their energy, the PWM commands, and the run's totals."""
         seconds = time.perf_counter() - self._start
         model, chip_, samples = self.model, self.chip, self.samples
-        per_period = Counter(p for _, _, p in self._logged)
-        per_tile_period = Counter((xy, p) for xy, _, p in self._logged)
-        per_task_period = Counter((xy, r.task, p) for xy, r, p in self._logged)
+        per_period = Counter(p for _, _, p, _ in self._logged)
+        per_tile_period = Counter((xy, p) for xy, _, p, _ in self._logged)
+        per_task_period = Counter((xy, r.task, p) for xy, r, p, _ in self._logged)
         seen: Counter[tuple] = Counter()  # jobs of each (tile, task, period) charged so far
         jobs = []
         position = {xy: i for i, xy in enumerate(self.tiles)}
@@ -256,7 +264,7 @@ class FirmwareRun:
         def shared_pj(p: int, i: int, task: int) -> float:  # the kernel's and idle's, per tile and period
             return _pj(model, self._periods[p].counters(i, task))
 
-        for xy, r, p in self._logged:
+        for xy, r, p, now in self._logged:
             name = self.names.get((xy, r.task))
             if name is None:
                 continue
@@ -274,12 +282,14 @@ class FirmwareRun:
                 "idle": shared_pj(p, i, images.IDLE_TASK_ID) / shared,
                 "noc": delta.noc_pj / per_period[p],
             }
+            completion = _full_cycle(r.completion, now)
             jobs.append(
                 JobRecord(
-                    task=name, tile=xy, job=r.job, release_cycle=r.release, start_cycle=r.start,
-                    completion_cycle=r.completion, exec_cycles=r.exec_cycles, deadline_met=r.met,
+                    task=name, tile=xy, job=r.job, release_cycle=_full_cycle(r.release, now),
+                    start_cycle=_full_cycle(r.start, now), completion_cycle=completion, exec_cycles=r.exec_cycles,
+                    deadline_met=r.met,
                     instructions=quotient + int(k < remainder), energy_pj=energy_pj,
-                    spans_periods=p + 1 < len(samples) and r.completion > samples[p + 1].cycle,
+                    spans_periods=p + 1 < len(samples) and completion > samples[p + 1].cycle,
                 )
             )  # fmt: skip
         chip_.finish_accounting()
@@ -295,18 +305,10 @@ class FirmwareRun:
         )  # fmt: skip
 
 
-def _unwrapped(record: images.JobRecord, now: int) -> images.JobRecord:
-    """The record with its 32-bit TIMER0 stamps placed on the chip's 64-bit timeline (they are at
-    most 2**32 cycles, 17 s at 4 ns, before ``now``)."""
-
-    def full(value: int) -> int:
-        return now - ((now - value) & 0xFFFFFFFF)
-
-    r = record  # (the constructor: dataclasses.replace costs a flight about 10 us per job)
-    return images.JobRecord(
-        task=r.task, job=r.job, release=full(r.release), deadline=full(r.deadline), start=full(r.start),
-        completion=full(r.completion), exec_cycles=r.exec_cycles, met=r.met, event=r.event, depleted=r.depleted,
-    )  # fmt: skip
+def _full_cycle(stamp: int, now: int) -> int:
+    """A 32-bit TIMER0 stamp of a job record placed on the chip's 64-bit timeline (it is at most
+    2**32 cycles, 17 s at 4 ns, before ``now``, the chip's cycle when the record was read)."""
+    return now - ((now - stamp) & 0xFFFFFFFF)
 
 
 def _period_of(sample_cycles: Sequence[int], cycle: int) -> int:
@@ -348,26 +350,24 @@ def _float_weights() -> tuple[np.ndarray, int]:
 
 @dataclass(frozen=True)
 class _Period:
-    """What one sample period spent: per (tile, task) that had run by its close, the difference of
-    its named counters (:func:`robosoc.chip.mpsoc.account_counters`) over the period; the NoC's
-    traffic energy.  Kept as the counters' values (one matrix product of the accounting rows per
-    period: building dicts per tile and task at every sample was a third of a flight's host time)."""
+    """What one sample period spent: per (tile, task) that jobs are charged to (the named tasks, the
+    kernel, idle), the difference of its named counters (:func:`robosoc.chip.mpsoc.account_counters`)
+    over the period; the NoC's traffic energy.  Kept as the counters' values (one matrix product of
+    the accounting rows per period: building dicts for every tile and task at every sample was a
+    fifth of the default flight's host time)."""
 
-    keys: np.ndarray  # tile position * NTASKS + task, of the tasks that had run by the close
+    keys: np.ndarray  # tile position * NTASKS + task, sorted
     values: np.ndarray  # their counters' differences, one row each (names of account_counter_map)
     noc_pj: float
 
     @classmethod
-    def between(cls, before: tuple[np.ndarray, float], after: tuple[np.ndarray, float]) -> _Period:
-        rows, noc_pj = after
-        width = rows.shape[-1]
-        rows = rows.reshape(-1, width)
-        keys = np.flatnonzero(rows.any(axis=1))  # task_counters' tasks: those that ran
-        delta = rows[keys] - before[0].reshape(-1, width)[keys]
-        return cls(keys, _counter_values(delta), noc_pj - before[1])
+    def between(cls, keys: np.ndarray, before: tuple[np.ndarray, float], after: tuple[np.ndarray, float]) -> _Period:
+        """The period from the accounting rows ``before`` to ``after`` (one row per key)."""
+        return cls(keys, _counter_values(after[0] - before[0]), after[1] - before[1])
 
     def counters(self, tile: int, task: int) -> dict[str, int]:
-        """Named counter differences of ``task`` on the tile at position ``tile`` ({}: it had not run)."""
+        """Named counter differences of ``task`` on the tile at position ``tile`` ({}: not a task jobs
+        are charged to).  A task that has not run has zeros, which charge what nothing would."""
         k = int(np.searchsorted(self.keys, tile * NTASKS + task))
         if k == len(self.keys) or self.keys[k] != tile * NTASKS + task:
             return {}

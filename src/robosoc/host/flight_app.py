@@ -209,10 +209,17 @@ class EstimateReader:
             return base + member_offset(program.path, "est_t", member)[0] + 4 * index
 
         self.chip, self.xy, self.tile = chip, xy, t
-        #: w, x, y, z of the quaternion, the height, the vertical speed
-        self.addresses = (*(address("ekf.x", i) for i in range(4)), address("alt.h"), address("alt.v"))
+        #: w, x, y, z of the quaternion, the height, the vertical speed: read as one span
+        addresses = (*(address("ekf.x", i) for i in range(4)), address("alt.h"), address("alt.v"))
+        self.first = min(addresses)
+        self.span = max(addresses) + 4 - self.first
+        self.offsets = [a - self.first for a in addresses]
         self.format = "<i" if fw.arith == "fixed" else "<f"
         self.scale = 1.0 / 65536.0 if fw.arith == "fixed" else 1.0
+        try:  # app_stats (read_app_stats without its dict: only the magic and est_jobs are read)
+            self.stats = program.address_of(APP_STATS_SYMBOL)
+        except ValueError as exc:
+            raise ValueError(f"tile {xy}: {program.path} is not the flight application") from exc
 
     def read(self, sample: int = -1) -> ChipEstimate:
         """The estimate now, as read at the close of sample period ``sample``.
@@ -220,12 +227,14 @@ class EstimateReader:
         Raises:
             ValueError: main has not run.
         """
-        stats = read_app_stats(self.chip, self.xy)
         read = self.chip.cores.read
-        w, x, y, z, h, v = (
-            float(struct.unpack(self.format, read(a, 4, tile=self.tile))[0]) * self.scale for a in self.addresses
-        )
-        return ChipEstimate(sample, stats.est_jobs, (w, x, y, z), h, v)
+        stats = _APP_STATS.unpack(read(self.stats, _APP_STATS.size, tile=self.tile))
+        magic, est_jobs = stats[_APP_STATS_FIELDS.index("magic")], stats[_APP_STATS_FIELDS.index("est_jobs")]
+        if magic != APP_STATS_MAGIC:
+            raise ValueError(f"tile {self.xy}: the application has not started")
+        raw = read(self.first, self.span, tile=self.tile)
+        w, x, y, z, h, v = (float(struct.unpack_from(self.format, raw, o)[0]) * self.scale for o in self.offsets)
+        return ChipEstimate(sample, est_jobs, (w, x, y, z), h, v)
 
 
 def read_app_stats(chip: MPSoC, xy: tuple[int, int]) -> AppStats:
