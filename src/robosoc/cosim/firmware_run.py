@@ -318,7 +318,7 @@ def _period_of(sample_cycles: Sequence[int], cycle: int) -> int:
 
 
 def _pj(model: EnergyModel, counters: dict[str, int]) -> float:
-    return sum(model.breakdown_pj(counters).values()) if counters else 0.0
+    return model.total_pj(counters) if counters else 0.0
 
 
 def noc_traffic_pj(model: EnergyModel, noc: dict[str, int]) -> float:
@@ -368,7 +368,7 @@ class _Period:
     def counters(self, tile: int, task: int) -> dict[str, int]:
         """Named counter differences of ``task`` on the tile at position ``tile`` ({}: not a task jobs
         are charged to).  A task that has not run has zeros, which charge what nothing would."""
-        k = int(np.searchsorted(self.keys, tile * NTASKS + task))
+        k = int(self.keys.searchsorted(tile * NTASKS + task))
         if k == len(self.keys) or self.keys[k] != tile * NTASKS + task:
             return {}
-        return dict(zip(account_counter_map()[0], (int(v) for v in self.values[k]), strict=True))
+        return dict(zip(account_counter_map()[0], self.values[k].tolist(), strict=True))
