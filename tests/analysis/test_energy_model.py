@@ -241,3 +241,16 @@ def test_breakdown_names_every_class_and_stall_kind_and_ignores_other_counters()
     assert breakdown["add"] == 2 * 23.58 and breakdown["sleep_cycle"] == 10 * 0.9 and breakdown["dma_cycle"] == 3 * 14.4
     assert sum(v for k, v in breakdown.items() if k not in ("add", "sleep_cycle", "dma_cycle")) == 0
     assert m.total_nj(counts) == pytest.approx((2 * 23.58 + 9.0 + 3 * 14.4) / 1000)
+
+
+def test_total_is_the_breakdowns_sum_bit_for_bit():
+    # the flight's job records add the breakdown in this order; total_pj must give the same float
+    import random
+
+    model = EnergyModel.load()
+    keys = [*model.instruction, *model.stall, "cycles", "instructions"]
+    rng = random.Random(3)
+    for _ in range(5000):
+        counts = {k: rng.randrange(0, 10 ** rng.randrange(1, 12)) for k in keys if rng.random() < 0.8}
+        assert model.total_pj(counts) == sum(model.breakdown_pj(counts).values())
+    assert model.total_pj({}) == 0.0

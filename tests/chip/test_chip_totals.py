@@ -28,7 +28,7 @@ from typer.testing import CliRunner
 import rv32_asm as A
 from core_harness import exit_with
 from robosoc.chip.energy import INSTRUCTION_CLASSES, STALL_KINDS, EnergyModel
-from robosoc.chip.mpsoc import ChipResult, MPSoC
+from robosoc.chip.mpsoc import ChipResult, MPSoC, account_counter_map, account_counters
 from robosoc.cli import app
 from robosoc.config.chip import ChipConfig, NocConfig
 from robosoc.kernels import chip as kc
@@ -389,6 +389,22 @@ def test_task_counters_add_up_to_their_tile_and_the_accounting_arrays(case) -> N
         assert tasks[0]["sleep_cycle"] == total["sleep_cycle"]
         assert tasks[LAST_TASK]["dma_cycle"] >= sum(p.flits for p in packets if p.src == xy)
         assert tasks[own]["instructions"] > 0 and tasks[LAST_TASK]["instructions"] > 0
+
+
+def test_the_counter_matrix_gives_every_tasks_counters_and_their_differences(case) -> None:
+    chip, _ = case
+    names, matrix = account_counter_map()
+    rng = np.random.default_rng(5)
+    for xy in core_tiles():
+        for task, counters in chip.task_counters(xy).items():
+            row = chip.acc[index(xy), task]
+            assert dict(zip(names, (int(v) for v in matrix @ row), strict=True)) == counters
+            # a flight's period: counters of the difference of two rows are the difference of counters
+            earlier = row - rng.integers(0, np.maximum(row, 1), dtype=np.int64) * (row > 0)
+            before = account_counters(earlier)
+            assert dict(zip(names, (int(v) for v in matrix @ (row - earlier)), strict=True)) == {
+                name: counters[name] - before[name] for name in names
+            }
 
 
 def test_task_energies_add_up_to_their_tiles(case) -> None:

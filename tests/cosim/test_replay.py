@@ -109,12 +109,9 @@ def test_firmware_build_and_size_commands(tmp_path: Path):
 def test_job_stamps_are_placed_past_the_32_bit_wrap_of_timer0():
     # TIMER0 wraps every 2**32 cycles (17 s at 4 ns): a record read at chip cycle `now` lies less
     # than that before it
-    from robosoc.cosim.firmware_run import _unwrapped
-    from robosoc.host.images import JobRecord
+    from robosoc.cosim.firmware_run import _full_cycle
 
     now = 5 * 2**32 + 1000
-    record = JobRecord(task=2, job=7, release=100, deadline=2**32 - 5, start=150, completion=900, exec_cycles=600,
-                       met=True, event=True, depleted=False)  # fmt: skip
-    placed = _unwrapped(record, now)
-    assert (placed.release, placed.start, placed.completion) == (5 * 2**32 + 100, 5 * 2**32 + 150, 5 * 2**32 + 900)
-    assert placed.deadline == 4 * 2**32 + 2**32 - 5  # before the wrap
+    placed = [_full_cycle(stamp, now) for stamp in (100, 150, 900, 1000)]
+    assert placed == [5 * 2**32 + 100, 5 * 2**32 + 150, 5 * 2**32 + 900, now]
+    assert _full_cycle(2**32 - 5, now) == 4 * 2**32 + 2**32 - 5  # before the wrap

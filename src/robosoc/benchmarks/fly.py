@@ -4,10 +4,12 @@ Flies the default scenario (shortened to ``duration_s``) with :func:`robosoc.out
 writing nothing, once per firmware build, after the host controller as the reference.  The firmware
 is built and the chip kernels compiled before the timed flights (a first run says so).  Prints per
 build the real-time factor (simulated seconds per host second; and per CPU second of this
-process, which a busy shared machine does not lower), the simulated chip cycles per host second,
-the hover error, the slowest roll/pitch step (to 90 %), the RMS difference of the true height from
-the host controller's flight with the same seed (from take-off on), the deadline misses, and last
-the line ``fly: <x>× real time`` of the last build flown (fixed point with the multiplier by default).
+process, which a busy shared machine does not lower), its ratio to the host controller's flight
+in the same run (``of host``, when the host controller flies: a loaded machine slows both alike),
+the simulated chip cycles per host second, the hover error, the slowest roll/pitch step (to 90 %),
+the RMS difference of the true height from the host controller's flight with the same seed (from
+take-off on), the deadline misses, and last the line ``fly: <x>× real time`` of the last build
+flown (fixed point with the multiplier by default).
 """
 
 from __future__ import annotations
@@ -53,14 +55,15 @@ def run_fly_benchmark(
     console.print(f"lockstep flight of the default scenario, {duration_s:g} s simulated per build, seed {base.seed}")
     table = Table(show_edge=False, pad_edge=False)
     headers = (
-        "controller", "real time", "per CPU second", "chip Mcycles/s", "hover RMS", "slowest roll/pitch 90 %",
-        "height vs host RMS", "deadline misses",
+        "controller", "real time", "of host", "per CPU second", "chip Mcycles/s", "hover RMS",
+        "slowest roll/pitch 90 %", "height vs host RMS", "deadline misses",
     )  # fmt: skip
     for header in headers:
         table.add_column(header, justify="left" if header == "controller" else "right")
     flights = [("host", dataclasses.replace(base, controller="host"))] if host else []
     flights += [(f"chip {fw.label}", dataclasses.replace(base, firmware=fw)) for fw in builds]
     factor = math.nan
+    host_factor = math.nan
     host_z = None
     for name, scenario in flights:
         # first call: build and compile outside the timing (a one-sample flight)
@@ -77,6 +80,8 @@ def run_fly_benchmark(
         rises = [s["rise_s"] for s in (summary["flight"] or {}).get("step_rise_s", []) if s["axis"] != "yaw"]
         slowest = max((math.inf if r is None or math.isnan(r) else r for r in rises), default=math.nan)
         factor = summary["real_time_factor"]
+        if scenario.controller == "host":
+            host_factor = factor
         mcycles = "-"
         if scenario.controller == "chip":
             cycles = summary["simulated_s"] * 1e9 / summary["chip"]["clock_ns"]
@@ -85,6 +90,7 @@ def run_fly_benchmark(
         table.add_row(
             name,
             f"{factor:.2f}×",
+            "-" if math.isnan(host_factor) else f"{factor / host_factor:.2f}",
             f"{summary['simulated_s'] / cpu:.2f}×",
             mcycles,
             "n/a" if math.isnan(hover) else f"{hover * 100:.2f} cm",

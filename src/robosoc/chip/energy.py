@@ -144,6 +144,15 @@ class EnergyModel:
             out[key] = counts.get(key, 0) * coeff.pj
         return out
 
+    def total_pj(self, counts: dict[str, int]) -> float:
+        """``sum(breakdown_pj(counts).values())``, the same additions in the same order, without the dict."""
+        total = 0.0
+        for key, coeff in self.instruction.items():
+            total += counts.get(key, 0) * coeff.pj
+        for key, coeff in self.stall.items():
+            total += counts.get(key, 0) * coeff.pj
+        return total
+
     def total_nj(self, counts: dict[str, int]) -> float:
         return sum(self.breakdown_pj(counts).values()) / 1000.0
 

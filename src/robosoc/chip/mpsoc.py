@@ -42,10 +42,8 @@ from robosoc.kernels.core_layout import (
     ERRATA_MODES,
     OPC_SIZE,
     RUN_CHUNK,
-    S_CODE_SIZE,
     S_CYCLE,
     S_EXIT_CODE,
-    S_MEM_BASE,
     S_MEM_SIZE,
     S_NI,
     S_PC,
@@ -99,6 +97,26 @@ class ChipResult:
     #: per tile, how many times each RTL erratum was hit ("spec" mode: would have been)
     errata: dict[tuple[int, int], dict[str, int]] = field(default_factory=dict)
     warnings: list[str] = field(default_factory=list)
+
+
+def account_counters(row: np.ndarray) -> dict[str, int]:
+    """The counters by name of one accounting row (``acc[tile, task]``, the kernels' A_* layout)."""
+    c = counters_dict(row[kc.A_CTR : kc.A_CTR + CTR_SIZE], row[:OPC_SIZE], int(row[kc.A_CYCLES]))
+    c["sleep_cycle"] = int(row[kc.A_SLEEP])
+    c["dma_cycle"] = int(row[kc.A_DMA])
+    return c
+
+
+@functools.cache
+def account_counter_map() -> tuple[tuple[str, ...], np.ndarray]:
+    """The names of :func:`account_counters` and the integer matrix M with ``M @ row`` their values:
+    every counter is a sum of the row's entries times whole numbers (classes, stall cycles per
+    operation), so the counters of a difference of rows are the difference of their counters and a
+    flight's per-period counters are one matrix product (``tests/chip/test_chip_totals.py``)."""
+    basis = np.eye(kc.ACC_SIZE, dtype=np.int64)
+    columns = [account_counters(basis[j]) for j in range(kc.ACC_SIZE)]
+    names = tuple(columns[0])
+    return names, np.array([[c[name] for c in columns] for name in names], dtype=np.int64)
 
 
 class MPSoC:
@@ -317,11 +335,7 @@ class MPSoC:
         """
         # the awake and sleeping cores' pcs, all at once (a Python call per tile per step cost a
         # sleeping 16x16 chip a tenth of its run time); check_pc words the error of the first bad one
-        st = self.cores.st
-        state = self.cst[:, kc.K_STATE]
-        off = st[:, S_PC] - st[:, S_MEM_BASE]
-        bad = ((state == kc.K_RUN) | (state == kc.K_SLEEP)) & ((off % 4 != 0) | (off < 0) | (off >= st[:, S_CODE_SIZE]))
-        for t in np.flatnonzero(bad):
+        for t in kc.bad_pcs(self.cores.st, self.cst):
             xy = self.config.tile_xy(int(t))
             check_pc(self.cores, int(t), functools.partial(self.symbolize, xy), f"tile {xy}: ")
         jit = self._jit
@@ -504,16 +518,7 @@ class MPSoC:
     def task_counters(self, xy: tuple[int, int]) -> dict[int, dict[str, int]]:
         """Counters per task id of one tile (task 0 is the kernel/idle), for tasks that ran."""
         t = self.config.tile_index(xy)
-        out = {}
-        for task in range(kc.NTASKS):
-            row = self.acc[t, task]
-            if not row.any():
-                continue
-            c = counters_dict(row[kc.A_CTR : kc.A_CTR + CTR_SIZE], row[:OPC_SIZE], int(row[kc.A_CYCLES]))
-            c["sleep_cycle"] = int(row[kc.A_SLEEP])
-            c["dma_cycle"] = int(row[kc.A_DMA])
-            out[task] = c
-        return out
+        return {task: account_counters(self.acc[t, task]) for task in range(kc.NTASKS) if self.acc[t, task].any()}
 
     def enable_profile(self) -> None:
         """Count every instruction per tile, task and word of code from here on (the exact profile,

@@ -19,7 +19,7 @@ from numba.typed import List
 
 from robosoc.kernels import chip as kc
 from robosoc.kernels.core_layout import RUN_CHUNK, S_CODE_SIZE, S_PC, S_RUN
-from robosoc.kernels.jit_dispatch import JitArrays, empty_tables, set_tables
+from robosoc.kernels.jit_dispatch import JitArrays, empty_tables, set_tables, tables_list
 
 if TYPE_CHECKING:
     from robosoc.chip.engines import Engine
@@ -53,7 +53,7 @@ class ChipTranslation:
         self.on = np.zeros(tiles, dtype=np.int64)
         self.params = np.zeros(kc.J_SIZE, dtype=np.int64)
         self._empty = empty_tables()
-        self._tables = List([self._empty] * tiles)
+        self._tables = tables_list(self._empty, tiles)
         self._given: list[JitArrays | None] = [None] * tiles  # what _tables holds per tile, if translated
         self.translators: list[TranslatingCore | None] = [None] * tiles
         self._stopped = np.zeros(tiles, dtype=bool)  # tiles that interpret from now on

@@ -215,9 +215,17 @@ def bench_fly(
             callback=options.float_range(0.01, 3600.0, unit="s"),
         ),
     ] = 10.0,
+    breakdown: Annotated[
+        bool,
+        typer.Option(
+            "--breakdown",
+            help="Instead: where each build's flight spends its host time, per cause (docs/translation.md).",
+        ),
+    ] = False,
 ) -> None:
     """Real-time factor of the lockstep flight (physics + firmware on the chip), per firmware build,
-    the host controller as reference; last line: fly: <x>× real time (fixed + multiplier by default)."""
+    the host controller as reference, and each build's speed as a share of the host controller's
+    flight in the same run; last line: fly: <x>× real time (fixed + multiplier by default)."""
     from robosoc.benchmarks.fly import ALL_BUILDS, run_fly_benchmark
 
     if round(duration * 1000) != round(duration * 1000, 6):
@@ -227,6 +235,11 @@ def bench_fly(
         fw for fw in ALL_BUILDS if (arith is None or fw.arith == arith) and (not mul_given or fw.multiplier == mul)
     )
     chosen = arith is not None or mul_given
+    if breakdown:
+        from robosoc.benchmarks.fly_breakdown import run_fly_breakdown
+
+        run_fly_breakdown(builds, duration_s=duration, console=make_console())
+        return
     run_fly_benchmark(builds, duration_s=duration, host=not chosen, console=make_console())
 
 

@@ -194,6 +194,8 @@ class ChipController:
         run = self._run()
         if run.cycle < self._period_end:
             self._ahead.extend(run.run_to(self._period_end))
+        if not self._ahead:  # most physics steps: no command waits
+            return None
         until = self.cycle_of(t_ns)
         due = 0
         while due < len(self._ahead) and self._ahead[due].cycle < until:

@@ -31,22 +31,29 @@ Vector3 = tuple[float, float, float]
 # --- the sensor stream --------------------------------------------------------------------------
 
 
+#: the sensor packet's array fields and their flight-row columns
+_SENSOR_COLUMNS = {
+    "gyro": [ROW_FIELDS.index(f"gyro_{a}") for a in "xyz"],
+    "accel": [ROW_FIELDS.index(f"accel_{a}") for a in "xyz"],
+    "mag": [ROW_FIELDS.index(f"mag_{a}") for a in "xyz"],
+    "setpoint": [ROW_FIELDS.index(f"sp_{n}") for n in ("roll", "pitch", "yaw", "height")],
+    "height_feedforward": [ROW_FIELDS.index("sp_height_rate"), ROW_FIELDS.index("sp_height_accel")],
+}
+_ARMED, _T, _BARO = (ROW_FIELDS.index(name) for name in ("armed", "t", "baro_altitude"))
+
+
 def sensor_packet(row: np.ndarray, seq: int, dt_us: int, low_battery: bool = False) -> bytes:
     """The sensor packet of one flight row (columns :data:`ROW_FIELDS`): its sample and setpoint
     (``low_battery``: the pack is below its reserve, :data:`packets.FLAG_LOW_BATTERY`)."""
-    col = dict(zip(ROW_FIELDS, (float(v) for v in row), strict=True))
+    col = row.tolist()  # Python floats
     values: dict[str, packets.Value] = {
         "kind": packets.SENSOR.kind,
-        "flags": (packets.FLAG_ARMED if col["armed"] > 0.5 else 0) | (packets.FLAG_LOW_BATTERY if low_battery else 0),
+        "flags": (packets.FLAG_ARMED if col[_ARMED] > 0.5 else 0) | (packets.FLAG_LOW_BATTERY if low_battery else 0),
         "seq": seq,
-        "time_us": round(col["t"] * 1e6),
+        "time_us": round(col[_T] * 1e6),
         "dt_us": dt_us,
-        "gyro": tuple(col[f"gyro_{a}"] for a in "xyz"),
-        "accel": tuple(col[f"accel_{a}"] for a in "xyz"),
-        "mag": tuple(col[f"mag_{a}"] for a in "xyz"),
-        "baro_altitude": col["baro_altitude"],
-        "setpoint": tuple(col[f"sp_{n}"] for n in ("roll", "pitch", "yaw", "height")),
-        "height_feedforward": (col["sp_height_rate"], col["sp_height_accel"]),
+        **{name: tuple(col[c] for c in columns) for name, columns in _SENSOR_COLUMNS.items()},
+        "baro_altitude": col[_BARO],
     }
     return packets.SENSOR.pack(values)
 

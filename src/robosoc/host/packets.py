@@ -25,6 +25,7 @@ recognised) and ``flags``.
 
 from __future__ import annotations
 
+import functools
 import struct
 import sys
 from collections.abc import Mapping, Sequence
@@ -117,9 +118,13 @@ class PacketFormat:
         """The C struct's name."""
         return f"robosoc_{self.name}_packet"
 
-    @property
+    @functools.cached_property
     def _struct(self) -> struct.Struct:
         return struct.Struct("<" + "".join(f"{f.count}{_STRUCT_CODE[f.type]}" for f in self.fields))
+
+    @functools.cached_property
+    def _names(self) -> frozenset[str]:
+        return frozenset(f.name for f in self.fields)
 
     def pack(self, values: Mapping[str, Value]) -> bytes:
         """The packet's bytes.  ``kind`` is filled in; missing fields are 0; q16 fields take floats.
@@ -127,13 +132,14 @@ class PacketFormat:
         Raises:
             ValueError: an unknown field, a wrong number of values, or a value out of range.
         """
-        unknown = set(values) - {f.name for f in self.fields}
+        unknown = values.keys() - self._names
         if unknown:
             raise ValueError(f"{self.name}: unknown fields {sorted(unknown)}")
         raw: list[int] = []
         for f in self.fields:
             value = self.kind if f.name == "kind" else values.get(f.name, 0 if f.count == 1 else (0,) * f.count)
-            items = list(value) if isinstance(value, Sequence) else [value]
+            # (tuples first: a flight packs one sensor packet per sample, and the ABC check is slow)
+            items = list(value) if type(value) is tuple or isinstance(value, Sequence) else [value]
             if len(items) != f.count:
                 raise ValueError(f"{self.name}.{f.name}: {len(items)} values, expected {f.count}")
             raw.extend(_encode(f, v) for v in items)

@@ -267,7 +267,7 @@ class TranslatingCore(CoreTables):
             stop = until
             if self._compiling:  # come back soon to enter them; ask nothing the queue has no room for
                 stop, threshold = self.policy.while_compiling(until, int(st[S_CYCLE]), threshold)
-            run_translated(arrays, self._tiles, stop, jt, threshold, self.stretch)
+            run_translated(arrays, self._tiles, stop, jt, threshold, self.stretch, True)
             status = int(st[S_RUN])
             if status == RUN_CHUNK:  # the loop leaves the block counts in jt only then
                 flush_counts(jt, arrays.opc[self.tile], arrays.ctr[self.tile])

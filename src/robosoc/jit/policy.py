@@ -246,6 +246,8 @@ class AutoPolicy(JitPolicy):
         jt = self.core._tables()
         budget = self.budget()
         room = BACKGROUND_QUEUE - len(self.core._compiling)
+        if self.background and (room <= 0 or budget <= 0):
+            return  # none may go (the look over every parked word cost a flight 0.25 ms per step)
         for i, pc in list(self._parked.items()):
             if self.background:
                 ok = room > 0 and budget > 0 and self.may_hand_over(pc)

@@ -69,6 +69,7 @@ from robosoc.kernels.dev_irq import (
     irq_scan,
     requests_possible,
 )
+from robosoc.kernels.host_ticks import ticks
 from robosoc.kernels.jit_dispatch import RUN_TRANSLATE, flush_counts, forget_if_changed, run_translated
 
 # tile states
@@ -112,7 +113,22 @@ G_REC_COUNT = 12  # rows used in rec (the timeline recorder; the host drains it)
 G_REC_LOST = 13  # events that found rec full
 G_NO_LONG = 14  # 1: the next quantum may not be long (a core waits to set IRQ_MASK bit 1)
 G_LONG_OFF = 15  # 1: no long quanta at all (a debugger holds a tile: nobody may run far ahead of it)
-GST_SIZE = 16
+# the loop's breakdown of its own host time (``robosoc bench fly --breakdown``), kept only while G_PROF
+# is 1: host cycle-counter ticks (:mod:`robosoc.kernels.host_ticks`) per part, and counts
+G_PROF = 16
+G_TK_CALL = 17  # ticks from the loop's entry to its return
+G_TK_INTERP = 18  # in the interpreter (interpret_cores, the tiles without translated code)
+G_TK_JIT = 19  # in the dispatch loop (translated code and its interpreter steps)
+G_TK_NI = 20  # network-interface accesses (ni_access)
+G_TK_WAKE = 21  # waking sleeping cores (_wake_if_due)
+G_TK_NOC = 22  # the NoC: running it, taking its deliveries
+G_TK_FLUSH = 23  # adding the translated blocks' counts to the counters
+G_N_INTERP = 24  # interpret_cores calls
+G_N_JIT = 25  # dispatch-loop calls
+G_N_NI = 26  # network-interface accesses
+G_N_WAKE = 27  # cores woken
+G_N_SLEEP = 28  # SLEEP stores
+GST_SIZE = 29
 
 # timeline events (rec rows: kind, tile, cycle, then five values; cosim/chip_timeline.py reads them)
 R_TASK = 1  # a TASK_ID store took effect in `cycle`: new id, old id, pc, sleep cycles so far
@@ -230,6 +246,20 @@ def account(t, core, book, now):
     snap[t, A_SLEEP] = cst[t, K_SLEEP_CYCLES]
     acc[t, task, A_DMA] += cst[t, K_DMA_CYCLES] - snap[t, A_DMA]
     snap[t, A_DMA] = cst[t, K_DMA_CYCLES]
+
+
+@njit(cache=True)
+def bad_pcs(st: np.ndarray, cst: np.ndarray) -> np.ndarray:
+    """The tiles that run or sleep with a pc outside their loaded code's words (the host's check
+    before each step: numpy's seven passes over the tiles cost more than a flight's step)."""
+    bad = np.zeros(0, dtype=np.int64)
+    for t in range(cst.shape[0]):
+        state = cst[t, K_STATE]
+        if state == K_RUN or state == K_SLEEP:
+            off = st[t, S_PC] - st[t, S_MEM_BASE]
+            if off % 4 != 0 or off < 0 or off >= st[t, S_CODE_SIZE]:
+                bad = np.append(bad, t)
+    return bad
 
 
 @njit(cache=True)
@@ -556,22 +586,31 @@ def _take_deliveries(st, book, noc):
 
 
 @njit(cache=True, inline="always")
-def _run_awake(core, tiles, until, jit_tables, jit_on, jit_params, one, rest):
+def _run_awake(core, tiles, until, jit_tables, jit_on, jit_params, one, rest, gst, prof):
     """Run ``tiles`` to ``until``: each translating tile alone in the dispatch loop, the interpreted
     ones together (through ``interpret_cores``, the dispatch loop's own copy of the interpreter:
-    numba compiles one, and one variant of the chip loop whatever the engine)."""
+    numba compiles one, and one variant of the chip loop whatever the engine).  With ``prof`` the
+    host ticks of each go to gst (G_TK_JIT, G_TK_INTERP)."""
     k = 0
     st = core.st
     for i in range(tiles.shape[0]):
         t = tiles[i]
         if jit_on[t] != 0 and (st[t, S_RUN] == RUN_ENTRY or until - st[t, S_CYCLE] >= JIT_MIN_SLICE):
             one[0] = t
-            run_translated(core, one, until, jit_tables[t], jit_params[J_THRESHOLD], jit_params[J_STRETCH])
+            k0 = ticks() if prof else 0
+            run_translated(core, one, until, jit_tables[t], jit_params[J_THRESHOLD], jit_params[J_STRETCH], False)
+            if prof:
+                gst[G_TK_JIT] += ticks() - k0
+                gst[G_N_JIT] += 1
         else:
             rest[k] = t
             k += 1
     if k > 0:
+        k0 = ticks() if prof else 0
         interpret_cores(core, rest[:k], until)
+        if prof:
+            gst[G_TK_INTERP] += ticks() - k0
+            gst[G_N_INTERP] += 1
 
 
 @njit(cache=True, inline="always")
@@ -603,6 +642,8 @@ def run_chip(core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int, jit
     st, out = core.st, core.out
     glob = noc.glob
     cst, gst, xout, io_out = book.cst, book.gst, book.xout, book.io_out
+    prof = gst[G_PROF] != 0
+    entered = ticks() if prof else 0
     n = cst.shape[0]
     look_idle = gst[G_LOOK_IDLE]
     look_active = gst[G_LOOK_ACTIVE]
@@ -708,16 +749,24 @@ def run_chip(core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int, jit
             gst[G_QUANTA] += 1
             gst[G_NO_LONG] = 0
             if active:
+                k0 = ticks() if prof else 0
                 _noc_advance(noc, cst, H)
                 if glob[nk.G_STATUS] != nk.STATUS_OK:
                     status = CHIP_ERROR
                     gst[G_ERR_TILE] = -1
                     break
                 _take_deliveries(st, book, noc)
+                if prof:
+                    gst[G_TK_NOC] += ticks() - k0
             # wake sleeping cores due in this quantum
+            k0 = ticks() if prof else 0
             for t in range(n):
                 if cst[t, K_STATE] == K_SLEEP and cst[t, K_WAKE] < H:
                     _wake_if_due(t, st, cst, H)
+                    if prof and cst[t, K_STATE] == K_RUN:
+                        gst[G_N_WAKE] += 1
+            if prof:
+                gst[G_TK_WAKE] += ticks() - k0
             # the awake cores run to H (below); NI accesses are performed here, then the core goes on.
             # How far each may read the packet line: in a long quantum no packet can arrive before
             # T + look_idle (the network is idle at T and every send cuts H to s + look_idle), in a
@@ -747,7 +796,8 @@ def run_chip(core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int, jit
         while True:
             if hi > lo:
                 # the awake cores to H, then each stopped one on
-                _run_awake(core, runx[lo:hi] if bulk else run[lo:hi], H, jit_tables, jit_on, jit_params, one, rest)
+                _run_awake(core, runx[lo:hi] if bulk else run[lo:hi], H, jit_tables, jit_on, jit_params, one, rest,
+                           gst, prof)  # fmt: skip
                 if not fill:  # the one core handled last, at its next stop
                     nq = stop_queue.push(queue, qcyc, nq, lo, st[run[lo], S_CYCLE])
                 hi = lo
@@ -778,11 +828,14 @@ def run_chip(core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int, jit
                 sent = cst[t, K_SENT]
                 received = cst[t, K_RECEIVED]
                 if not active and not quiet:
+                    k0 = ticks() if prof else 0
                     _noc_advance(noc, cst, s0)
                     if glob[nk.G_STATUS] != nk.STATUS_OK:
                         break
                     if glob[nk.G_NEV] != 0:
                         _take_deliveries(st, book, noc)
+                    if prof:
+                        gst[G_TK_NOC] += ticks() - k0
                 a = _stop_address(t, core)
                 if a < ni.NI_BASE or a >= ni.NI_END:
                     # not an NI register: the packet line (long quanta, see S_EXT_FINAL and S_MASK_LOCK)
@@ -797,6 +850,7 @@ def run_chip(core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int, jit
                     st[t, S_EXT_FINAL] = s0 + look_idle
                     lo, hi = rt, rt + 1
                     continue
+                k0 = ticks() if prof else 0
                 if a - ni.NI_BASE == ni.TASK_ID and jit_on[t] != 0:
                     # the task accounting reads the counters: the translated blocks' counts first (a
                     # tile that ran on the interpreter in a short quantum has not flushed them)
@@ -804,6 +858,11 @@ def run_chip(core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int, jit
                 if not ni_access(t, core, book, noc):
                     failed = t
                     break
+                if prof:
+                    gst[G_TK_NI] += ticks() - k0
+                    gst[G_N_NI] += 1
+                    if cst[t, K_STATE] == K_SLEEP:
+                        gst[G_N_SLEEP] += 1
                 if cst[t, K_RECEIVED] != received and cst[t, K_RECV_ADDR] - st[t, S_MEM_BASE] < st[t, S_CODE_SIZE]:
                     _check_translated(core, t, jit_tables, jit_on)  # the packet was copied into code
                 if cst[t, K_SENT] != sent or cst[t, K_RECEIVED] != received:
@@ -816,7 +875,11 @@ def run_chip(core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int, jit
                     H = s0 + look_idle
                 if cst[t, K_STATE] == K_SLEEP and cst[t, K_WAKE] < H:
                     # asleep and due again within this quantum: wake it right away
+                    k0 = ticks() if prof else 0
                     _wake_if_due(t, st, cst, H)
+                    if prof:
+                        gst[G_TK_WAKE] += ticks() - k0
+                        gst[G_N_WAKE] += 1 if cst[t, K_STATE] == K_RUN else 0
                 if cst[t, K_STATE] != K_RUN:
                     continue
             elif why == RUN_OUTPUT:
@@ -865,6 +928,7 @@ def run_chip(core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int, jit
         if quiet:
             glob[nk.G_CYCLE] = H  # nothing in or entering the network: time just passes
         elif not active:
+            k0 = ticks() if prof else 0
             _noc_advance(noc, cst, H)
             if glob[nk.G_STATUS] != nk.STATUS_OK:
                 status = CHIP_ERROR
@@ -872,6 +936,8 @@ def run_chip(core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int, jit
                 break
             if glob[nk.G_NEV] != 0:
                 _take_deliveries(st, book, noc)
+            if prof:
+                gst[G_TK_NOC] += ticks() - k0
         T = H
         full = False
         for t in range(n):
@@ -880,12 +946,17 @@ def run_chip(core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int, jit
         if full:
             status = CHIP_OUTPUT
             break
+    k0 = ticks() if prof else 0
     for t in range(n):
         if jit_on[t] != 0:  # the translated blocks' counts of the quanta that ran to their end
             flush_counts(jit_tables[t], row(core.opc, t), row(core.ctr, t))
     gst[G_TIME] = T
     gst[G_STATUS] = status
+    if prof:
+        done = ticks()
+        gst[G_TK_FLUSH] += done - k0
+        gst[G_TK_CALL] += done - entered
     return status
 
 
-__all__ = ["ChipBook", "account", "account_all", "ni_access", "record", "run_chip", "wake_time"]
+__all__ = ["ChipBook", "account", "account_all", "bad_pcs", "ni_access", "record", "run_chip", "wake_time"]

@@ -16,9 +16,10 @@ the core has left the word (CTX_UNMARKED).
 A region returns one of the X_* codes with the pc and cycle in ``ctx``.  Instruction counts are
 kept per block (``cnt``: one slot per block and per side exit, each with a signed histogram over the
 interpreter's per-operation counters) and added to ``opc`` by :func:`flush_counts`, so the counters
-equal the interpreter's: the loop flushes when it returns for anything but the end of the slice,
-and the caller when it reads the counters (on the chip, once per call of the chip loop: a slice is
-a quantum there, often a few cycles, and a flush costs a pass over every slot).  Stores into the
+equal the interpreter's: on one core the loop flushes when it returns for anything but the end of
+the slice, and the caller when it reads the counters; on the chip the chip loop, once per call and
+before a TASK_ID store (a slice is a quantum there, often a few cycles, a stop comes at every SLEEP
+store, and a flush costs a pass over every slot).  Stores into the
 loaded code are always the interpreter's, which counts them (``S_CODE_STORES``); when the count
 moved, the loop compares the translated words with memory and forgets every translation if one
 changed (a pass over those words, so not after every interpreted stretch).
@@ -32,6 +33,7 @@ import numpy as np
 from llvmlite import ir
 from numba import njit, types
 from numba.extending import intrinsic
+from numba.typed import List
 
 from robosoc.isa.table import OP_ENTRY
 from robosoc.kernels.borrowed import row
@@ -206,6 +208,16 @@ def flush_counts(jt: JitArrays, opc_t: np.ndarray, ctr_t: np.ndarray) -> None:
 
 
 @njit(cache=True)
+def tables_list(jt: JitArrays, n: int):
+    """A numba typed list holding ``jt`` ``n`` times (made here, compiled and cached: the typed
+    list's own constructor compiles its methods in every process, about a second of every start)."""
+    tables = List()
+    for _ in range(n):
+        tables.append(jt)
+    return tables
+
+
+@njit(cache=True)
 def set_tables(tables, t: int, jt: JitArrays) -> None:
     """``tables[t] = jt`` for a numba typed list of tables (compiled and cached here: the typed
     list's own ``__setitem__`` compiles in every process and costs a dispatch per call)."""
@@ -240,15 +252,18 @@ def forget_if_changed(jt: JitArrays, m32_t: np.ndarray, dec_t: np.ndarray) -> No
 
 @njit(cache=True, nogil=True)
 def run_translated(
-    core: CoreArrays, tiles: np.ndarray, until: int, jt: JitArrays, threshold: int, stretch: int
+    core: CoreArrays, tiles: np.ndarray, until: int, jt: JitArrays, threshold: int, stretch: int, flush: bool
 ) -> None:
     """Run core ``tiles[0]`` until cycle ``until`` like ``run_cores``, with translated regions.
 
     Leaves the RUN_* status in st[t, S_RUN], or RUN_TRANSLATE with the pc of a word that turned
     hot (``threshold`` arrivals without an entry) for the caller to translate.  At a word without a
     translation the interpreter runs one instruction (``stretch`` 0), or ``stretch`` cycles at its
-    own speed.  Returning at the end of the slice (RUN_CHUNK) it leaves the block counts in
-    ``jt.cnt``: the caller flushes them (:func:`flush_counts`) before it reads the counters.
+    own speed.  Returning at the end of the slice (RUN_CHUNK), or for any reason unless ``flush``,
+    it leaves the block counts in ``jt.cnt``: the caller flushes them (:func:`flush_counts`) before
+    it reads the counters.  The chip loop passes False: it flushes before a TASK_ID store and when
+    it returns, and a flush at every stop (each SLEEP store, a pass over every slot of the core)
+    cost a translated tile more than its blocks saved.
     """
     st, ctr, opc, regs, m8, _m16, m32, dec, _out = core
     t = tiles[0]
@@ -368,7 +383,8 @@ def run_translated(
         if status == RUN_ENTRY:
             status = RUN_CHUNK  # at a translated block: the loop calls it
         if status != RUN_CHUNK:
-            flush_counts(jt, opc_t, ctr_t)
+            if flush:
+                flush_counts(jt, opc_t, ctr_t)
             return
     if err != 0:
         status = RUN_ERROR
@@ -380,7 +396,7 @@ def run_translated(
     st_t[S_PC] = pc & M32
     st_t[S_CYCLE] = cyc
     st_t[S_RUN] = status
-    if status != RUN_CHUNK:
+    if status != RUN_CHUNK and flush:
         flush_counts(jt, opc_t, ctr_t)
 
 
