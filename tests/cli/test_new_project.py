@@ -137,10 +137,16 @@ def test_table_measures_a_projects_tasks_in_the_builds_it_supports(tmp_path: Pat
     assert [(r["build"], r["task"]) for r in rows] == [
         (b, t) for b in ("float+mul", "fixed+mul") for t in ("estimator", "pid")
     ]  # the builds it lists, a row per task of its robosoc.toml
-    assert all(r["jobs"] == "5" and r["seed_response_ms"] in ("", "nan") for r in rows)
+    # the quadrotor project carries the seed's Table I ([[reference]]): its figures beside each row
+    assert all(r["jobs"] == "5" for r in rows)
+    assert [float(r["seed_response_ms"]) for r in rows] == [107.01, 25.5, 87.5, 20.0]
     data = json.loads((tmp_path / "t" / "table.json").read_text())
-    assert data["orderings"] == [] and data["spec"]["project"] == str(tmp_path / "p")
-    assert all(t["seed_response_ms"] is None for run in data["runs"] for t in run["tasks"].values())
+    assert data["spec"]["project"] == str(tmp_path / "p")
+    # its orderings are checked where both builds ran (with the multiplier only: none compares two)
+    assert data["orderings"] and all(
+        o["holds"] is None for o in data["orderings"] if "no-mul" in o["lower"] + o["higher"]
+    )
+    assert "EKF response mean (us)" in result.output  # the project's labels
     assert "fixed-no-mul" in result.output  # its column, empty
     # the release is the scenario's for a project with its own main (this one), its robosoc.toml's otherwise
     assert invoke("new", tmp_path / "b").exit_code == 0

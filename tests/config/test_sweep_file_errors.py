@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from robosoc.config.sweep import DEFAULT_METRICS, MAX_POINTS, load_sweep
+from robosoc.config.sweep import DEFAULT_METRICS, MAX_POINTS, TASK_METRICS, load_sweep
 from robosoc.config.validate import ConfigError
 
 SCENARIO_FIELDS = "chip, controller, duration_s, firmware, flight, name, power, seed, sensors, vehicle, vehicles, wind"
@@ -130,7 +130,8 @@ def test_a_minimal_sweep_file_gets_its_name_from_the_file_one_seed_and_the_defau
     config = load_sweep(path)
     assert config.name == "hover-test"
     assert config.seeds == (1,)
-    assert config.metrics == DEFAULT_METRICS
+    per_task = tuple(f"tasks.{t}.{m}" for t in ("estimator", "pid") for m in TASK_METRICS)  # the quadrotor's
+    assert config.metrics == (*per_task, *DEFAULT_METRICS)
     assert config.source == str(path)
     path.write_text('name = "v1.2_a-b"\nseeds = [7, 0]\nmetrics = ["flight.hover_rms_m"]\n')
     config = load_sweep(path)

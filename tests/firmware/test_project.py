@@ -87,6 +87,14 @@ void pong_on_message(const os_msg_t *msg, void *arg)
 
 
 POND = 'on_message = "pong_on_message"'
+LAST = 'destination = "ping"'  # the end of the first message: a table added after it
+REF = '\n\n[[reference]]\ntask = "pong"\nbuild = "fixed+mul"\nresponse_ms = 1.0\nenergy_nj = 2.0'
+TEL = '\n\n[[telemetry]]\nname = "count"\ntask = "pong"\nvalue = "pongs"\ntype = "u32"'
+
+
+def _after_last(table: str, old: str = "", new: str = "") -> tuple[str, str]:
+    """A change adding ``table`` (with ``old`` replaced by ``new`` in it) after the first message."""
+    return (LAST, LAST + (table.replace(old, new) if old else table))
 
 
 def write_project(folder: Path, text: str = PINGPONG, c_text: str = TASKS_C) -> Path:
@@ -216,6 +224,16 @@ def test_a_refused_task_ends_the_program_with_its_index(tmp_path: Path) -> None:
         (('defines = ["SCALE=3"]', 'defines = ["3SCALE"]'), "project.defines[0]", "expected NAME or NAME=VALUE"),
         (('name = "pingpong"', 'name = "pingpong"\nbuilds = 4'), "project.builds", "unknown field"),
         (('[[tasks]]\nname = "pong"', '[[task]]\nname = "pong"'), "task", "unknown field"),
+        ((POND, POND + '\nlabel = "' + "x" * 25 + '"'), "tasks[1].label", "at most 24"),
+        (_after_last(REF, "fixed+mul", "fixed"), "reference[0].build", "one of"),
+        (_after_last(REF, "1.0", "nan"), "reference[0].response_ms", "nan"),
+        (_after_last(REF, "2.0", "-2.0"), "reference[0].energy_nj", "nJ"),
+        (_after_last(REF, '"pong"', '"pang"'), "reference[0].task", "no task 'pang'"),
+        (_after_last(REF + REF), "reference[1]", "is also reference[0]"),
+        (_after_last(TEL, '"u32"', '"u64"'), "telemetry[0].type", "'u32'"),
+        (_after_last(TEL, '"pongs"', '"pongs[x]"'), "telemetry[0].value", "[index]"),
+        (_after_last(TEL, '"pong"', '"pang"'), "telemetry[0].task", "no task 'pang'"),
+        (_after_last(TEL + TEL), "telemetry[1].name", "is also telemetry[0]"),
     ],
 )
 def test_a_wrong_project_file_names_the_file_and_key(

@@ -15,6 +15,7 @@ A project is a folder with C sources and a ``robosoc.toml``::
 
     [[tasks]]                        # one table per task; created in this order on their tiles
     name = "ping"                    # a C identifier: how tables and reports name the task
+    label = "PING"                   # optional: how Table I prints it (default: its name)
     tile = [0, 1]
     release = "event"                # "event": a job per message on ``port``; "periodic"
     port = 1                         # event: the port whose messages release a job
@@ -43,6 +44,12 @@ no task there takes as its event port) it waits in the kernel until the task rea
     value = "state.alt.h"            # a variable, its members and an element: x, x.a.b, x.v[2]
     type = "real"                    # "real" (float or Q16.16 as built), "f32", "q16", "i32", "u32"
 
+    [[reference]]                    # optional: published figures Table I prints beside the project's
+    task = "ping"                    # and checks the orderings of (robosoc table)
+    build = "fixed+mul"              # float+mul, float-no-mul, fixed+mul or fixed-no-mul
+    response_ms = 1.5                # mean response time per job
+    energy_nj = 1200.0               # mean energy per job
+
 The firmware's ``main`` is generated from the task table (:mod:`robosoc.host.project_main`): on
 each tile it calls the ``init`` of the tasks mapped there and creates them with the kernel, in
 the order of the file.  Errors name the file and the dotted key (``tasks[1].port``).
@@ -58,16 +65,19 @@ from typing import Literal
 
 from robosoc.config.chip import ChipConfig
 from robosoc.config.firmware import ARITH_CHOICES
+from robosoc.config.ranges import check_fields
 from robosoc.config.validate import ConfigError, from_mapping, read_toml_mapping
 from robosoc.firmware import LIBRARIES
 
 __all__ = [
+    "BUILD_LABELS",
     "IO",
     "PROJECT_FILE",
     "TELEMETRY_TYPES",
     "FirmwareProject",
     "MessageSpec",
     "ProjectInfo",
+    "ReferenceFigure",
     "TaskSpec",
     "TelemetrySpec",
     "load_project",
@@ -119,9 +129,12 @@ class TaskSpec:
     init: str = ""
     on_message: str = ""
     on_period: str = ""
+    label: str = ""
 
     def __post_init__(self) -> None:
         _identifier("name", self.name, "it names the task in C and in reports")
+        if len(self.label) > 24 or not self.label.isprintable():
+            raise ValueError(f"label: at most 24 printable characters, got {self.label!r}")
         if self.name == IO:
             raise ValueError(f"name: {IO!r} is the I/O tile's name")
         if len(self.tile) != 2 or min(self.tile) < 0:
@@ -227,6 +240,26 @@ class TelemetrySpec:
         return int(match.group(3) or 0)
 
 
+BUILD_LABELS = tuple(f"{a}{'+mul' if m else '-no-mul'}" for a in ARITH_CHOICES for m in (True, False))
+"""The four builds as tables name them (:attr:`robosoc.config.firmware.FirmwareConfig.label`)."""
+
+
+@dataclass(frozen=True)
+class ReferenceFigure:
+    """A published figure of one task in one build (e.g. the seed paper's Table I) that
+    ``robosoc table`` prints beside the measured one and checks the build orderings against."""
+
+    task: str
+    build: str
+    response_ms: float
+    energy_nj: float
+
+    def __post_init__(self) -> None:
+        if self.build not in BUILD_LABELS:
+            raise ValueError(f"build: one of {', '.join(BUILD_LABELS)}, got {self.build!r}")
+        check_fields(self)  # both figures in their ranges (config/ranges.py)
+
+
 @dataclass(frozen=True)
 class ProjectInfo:
     """The ``[project]`` table: name, sources and the builds the project supports."""
@@ -271,6 +304,7 @@ class FirmwareProject:
     tasks: tuple[TaskSpec, ...] = ()
     messages: tuple[MessageSpec, ...] = ()
     telemetry: tuple[TelemetrySpec, ...] = ()
+    reference: tuple[ReferenceFigure, ...] = ()
     folder: str = "."
 
     def __post_init__(self) -> None:
@@ -320,10 +354,22 @@ class FirmwareProject:
             published[value.name] = i
             if value.task not in names:
                 raise ValueError(f"telemetry[{i}].task: no task {value.task!r} (tasks: {', '.join(names)})")
+        figures: dict[tuple[str, str], int] = {}
+        for i, figure in enumerate(self.reference):
+            if figure.task not in names:
+                raise ValueError(f"reference[{i}].task: no task {figure.task!r} (tasks: {', '.join(names)})")
+            key = (figure.task, figure.build)
+            if key in figures:
+                raise ValueError(f"reference[{i}]: {figure.task} {figure.build} is also reference[{figures[key]}]")
+            figures[key] = i
 
     @property
     def task_names(self) -> tuple[str, ...]:
         return tuple(task.name for task in self.tasks)
+
+    def label(self, name: str) -> str:
+        """How Table I prints task ``name``: its ``label``, or its name."""
+        return next((t.label for t in self.tasks if t.name == name and t.label), name)
 
     def task(self, name: str) -> TaskSpec:
         """The task called ``name``.

@@ -268,6 +268,9 @@ FLOAT_FIELDS: dict[str, FloatRange] = {
     "DragConfig.c_wz": FloatRange(0.0, 10.0),
     "DragConfig.c_mxy": FloatRange(0.0, 10.0),
     "DragConfig.c_mz": FloatRange(0.0, 10.0),
+    # firmware project files: published reference figures (config/project.py)
+    "ReferenceFigure.response_ms": FloatRange(0.0, 1e9, "ms", lo_open=True),
+    "ReferenceFigure.energy_nj": FloatRange(0.0, 1e12, "nJ", lo_open=True),
     # the power system (config/power.py)
     "BatteryConfig.capacity_ah": FloatRange(0.001, 1000.0, "Ah"),
     "BatteryConfig.full_v": FloatRange(0.5, 10.0, "V"),

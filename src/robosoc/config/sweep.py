@@ -37,10 +37,12 @@ from __future__ import annotations
 import dataclasses
 import math
 import typing
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from robosoc.config.firmware import FirmwareConfig
 from robosoc.config.ranges import check_seed
 from robosoc.config.scenario import ScenarioConfig
 from robosoc.config.validate import ConfigError, from_mapping, read_toml_mapping
@@ -260,7 +262,8 @@ def sweep_from_mapping(data: dict[str, Any], where: str, folder: Path, default_n
             raise ConfigError(where, field, reason) from exc
     if len(set(seeds)) != len(seeds):
         raise ConfigError(where, "seeds", f"a seed is listed twice: {list(seeds)}")
-    metrics = tuple(_list_of(data.get("metrics", list(DEFAULT_METRICS)), where, "metrics", str, "dotted names"))
+    defaults = list(default_metrics(base, grid, points))
+    metrics = tuple(_list_of(data.get("metrics", defaults), where, "metrics", str, "dotted names"))
     if len(set(metrics)) != len(metrics):
         raise ConfigError(where, "metrics", f"a metric is listed twice: {list(metrics)}")
 
@@ -272,19 +275,28 @@ def sweep_from_mapping(data: dict[str, Any], where: str, folder: Path, default_n
     return config
 
 
-DEFAULT_METRICS = (
-    "tasks.estimator.response_us_mean",
-    "tasks.estimator.response_us_max",
-    "tasks.estimator.energy_nj_mean",
-    "tasks.pid.response_us_mean",
-    "tasks.pid.response_us_max",
-    "tasks.pid.energy_nj_mean",
-    "deadline_misses",
-    "flight.hover_rms_m",
-    "energy.total_uj",
-    "real_time_factor",
-)
-"""Metrics kept when a sweep file names none: response time and energy per task, flight quality."""
+TASK_METRICS = ("response_us_mean", "response_us_max", "energy_nj_mean")
+"""Per-task metrics kept when a sweep file names none: ``tasks.<task>.<metric>`` for each task."""
+DEFAULT_METRICS = ("deadline_misses", "flight.hover_rms_m", "energy.total_uj", "real_time_factor")
+"""Metrics kept when a sweep file names none, after the per-task ones: flight quality and cost."""
+
+
+def default_metrics(
+    base: ScenarioConfig, grid: Sequence[tuple[str, Sequence[Any]]], points: Sequence[Sequence[tuple[str, Any]]]
+) -> tuple[str, ...]:
+    """The metrics of a sweep file that names none: :data:`TASK_METRICS` of every task of the
+    firmware projects its points fly (the base's, and each project a grid value or point names,
+    their tasks in file order), then :data:`DEFAULT_METRICS`."""
+    folders = [base.firmware.project]
+    folders += [str(v) for key, values in grid if key == "firmware.project" for v in values]
+    folders += [str(v) for point in points for key, v in point if key == "firmware.project"]
+    tasks: dict[str, None] = {}
+    for folder in dict.fromkeys(folders):
+        try:
+            tasks.update(dict.fromkeys(FirmwareConfig(project=folder).load_project().task_names))
+        except ValueError:  # a project that is not there: its points fail when they run, and say why
+            continue
+    return (*(f"tasks.{t}.{m}" for t in tasks for m in TASK_METRICS), *DEFAULT_METRICS)
 
 
 def load_sweep(path: str | Path) -> SweepConfig:
@@ -301,8 +313,10 @@ def load_sweep(path: str | Path) -> SweepConfig:
 __all__ = [
     "DEFAULT_METRICS",
     "MAX_POINTS",
+    "TASK_METRICS",
     "SweepConfig",
     "check_field",
+    "default_metrics",
     "field_names",
     "flatten",
     "load_sweep",

@@ -22,6 +22,7 @@ The builds run in parallel worker processes (``workers``), each reporting its sa
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import multiprocessing
 import os
@@ -43,6 +44,7 @@ from robosoc.analysis.accuracy import (
     quaternion_error,
 )
 from robosoc.config.firmware import RELEASE_CHOICES, FirmwareConfig
+from robosoc.config.project import BUILD_LABELS, FirmwareProject
 from robosoc.config.scenario import PositionSensorConfig, ScenarioConfig
 from robosoc.config.vehicle import VehicleConfig
 from robosoc.control.flight import ROW_FIELDS
@@ -52,9 +54,6 @@ OWN_RELEASE = (
     "the tasks of a project whose main() robosoc generates have the release of its robosoc.toml; "
     "a project with its own main reads the scenario's as ROBOSOC_RELEASE_PERIODIC"
 )
-TASKS = ("estimator", "pid")
-"""The firmware's tasks (the seed's EKF and PID)."""
-SEED_TASK_NAMES = {"estimator": "EKF", "pid": "PID"}
 BUILDS = (("float", True), ("float", False), ("fixed", True), ("fixed", False))
 """(arith, multiplier) of the four builds, in the seed's column order."""
 
@@ -65,18 +64,23 @@ class SeedFigure:
     energy_nj: float
 
 
-SEED_TABLE_I: dict[tuple[str, str], SeedFigure] = {
-    ("pid", "float+mul"): SeedFigure(25.5, 1781.1),
-    ("pid", "float-no-mul"): SeedFigure(34.0, 2517.4),
-    ("pid", "fixed+mul"): SeedFigure(20.0, 1480.0),
-    ("pid", "fixed-no-mul"): SeedFigure(27.0, 1776.7),
-    ("estimator", "float+mul"): SeedFigure(107.01, 7252.7),
-    ("estimator", "float-no-mul"): SeedFigure(196.5, 13761.6),
-    ("estimator", "fixed+mul"): SeedFigure(87.5, 6460.3),
-    ("estimator", "fixed-no-mul"): SeedFigure(173.0, 11776.9),
-}
-"""The seed paper's Table I (average response time and energy per job; 100 iterations, 4 ns clock;
-/work/shared/reference/platform.md §7)."""
+@functools.cache
+def _project(folder: str) -> FirmwareProject:
+    return FirmwareConfig(project=folder).load_project()
+
+
+def reference_figures(folder: str = "") -> dict[tuple[str, str], SeedFigure]:
+    """The published figures of the project in ``folder`` ("": the shipped quadrotor project, whose
+    are the seed paper's Table I; /work/shared/reference/platform.md §7), by (task, build), in the
+    order of its robosoc.toml (``[[reference]]``)."""
+    return {(f.task, f.build): SeedFigure(f.response_ms, f.energy_nj) for f in _project(folder).reference}
+
+
+def task_label(folder: str, task: str) -> str:
+    """How Table I prints ``task`` of the project in ``folder`` (its ``label``: EKF, PID...)."""
+    return _project(folder).label(task)
+
+
 SEED_MEAN_ERROR_FIXED_FLOAT = 0.0019
 """The seed's mean error per quaternion component, fixed against floating point."""
 SEED_MEAN_ERROR_TRUTH = 0.0044
@@ -391,16 +395,19 @@ def _vehicle(scenario: ScenarioConfig) -> VehicleConfig:
 # --- the table ----------------------------------------------------------------------------------
 
 
-def check_orderings(runs: Sequence[BuildRun]) -> list[OrderingCheck]:
-    """Each of :data:`ORDERINGS` for each task, metric and release mode measured."""
+def check_orderings(runs: Sequence[BuildRun], folder: str = "") -> list[OrderingCheck]:
+    """Each of :data:`ORDERINGS` for each task, metric and release mode measured, for the tasks the
+    project in ``folder`` has reference figures of in every build (:func:`reference_figures`)."""
+    figures = reference_figures(folder)
+    tasks = [t for t in _project(folder).task_names if all((t, b) in figures for b in BUILD_LABELS)]
     out = []
     for release in dict.fromkeys(r.release for r in runs):
         by_build = {r.build: r for r in runs if r.release == release}
         measured = {task for r in by_build.values() for task in r.tasks}
-        for task in [t for t in TASKS if t in measured]:
+        for task in [t for t in tasks if t in measured]:
             for metric, ours, theirs in METRICS:
                 for name, lower, higher in ORDERINGS:
-                    seed = getattr(SEED_TABLE_I[(task, lower)], theirs) < getattr(SEED_TABLE_I[(task, higher)], theirs)
+                    seed = getattr(figures[(task, lower)], theirs) < getattr(figures[(task, higher)], theirs)
                     holds = None
                     if lower in by_build and higher in by_build:
                         a = getattr(by_build[lower].tasks[task], ours)
@@ -469,7 +476,7 @@ def measure_table(spec: TableSpec, on_progress: Callable[[str, int, int], None] 
     else:
         runs = _in_workers(configs, spec, rows, golden, on_progress)
     if spec.project:  # a project's tasks have no seed figures, nor an estimate the host reads
-        return TableResult(spec, runs, [], {})
+        return TableResult(spec, runs, check_orderings(runs, spec.project), {})
     return TableResult(spec, runs, check_orderings(runs), fixed_against_float(runs))
 
 
@@ -560,7 +567,9 @@ def to_json(result: TableResult) -> dict:
                 for (rel, mul), err in result.fixed_vs_float.items()
             ],
             "seed": {
-                "table_i": [{"task": t, "build": b, **asdict(f)} for (t, b), f in SEED_TABLE_I.items()],
+                "table_i": [
+                    {"task": t, "build": b, **asdict(f)} for (t, b), f in reference_figures(result.spec.project).items()
+                ],
                 "mean_error_fixed_float": SEED_MEAN_ERROR_FIXED_FLOAT,
                 "mean_error_truth": SEED_MEAN_ERROR_TRUTH,
             },
@@ -595,8 +604,8 @@ def csv_rows(result: TableResult) -> list[list[object]]:
 
 
 def _seed(result: TableResult, task: str, build: str) -> SeedFigure | None:
-    """The seed's figure for a task and build, or None (a firmware project's task)."""
-    return None if result.spec.project else SEED_TABLE_I.get((task, build))
+    """The reference figure for a task and build (the seed's, for the shipped quadrotor project), or None."""
+    return reference_figures(result.spec.project).get((task, build))
 
 
 def _num(value: float, digits: int = 1) -> str:
@@ -622,7 +631,7 @@ _TASK_LINES: tuple[tuple[str, Callable[[TaskRow], float], Callable[[SeedFigure],
 
 def _task_lines(result: TableResult, task: str, runs: dict[str, BuildRun], labels: Sequence[str]) -> list[str]:
     out = []
-    name = task if result.spec.project else SEED_TASK_NAMES.get(task, task)
+    name = task_label(result.spec.project, task)
     for label, ours, seed_of, digits in _TASK_LINES:
         cells = []
         for b in labels:
@@ -665,7 +674,7 @@ def format_table(result: TableResult) -> list[str]:
             continue
         any_run = next(iter(runs.values()))
         whose = f"project {result.spec.project}, " if result.spec.project else ""
-        brackets = "" if result.spec.project else " (seed's figure in brackets)"
+        brackets = " (seed's figure in brackets)" if reference_figures(result.spec.project) else ""
         lines.append(
             f"Table I — {whose}{release} release, {any_run.source}, {any_run.samples} samples from take-off per "
             f"build{brackets}"
@@ -684,10 +693,9 @@ def format_table(result: TableResult) -> list[str]:
             if o.release != release:
                 continue
             ours = "-" if o.holds is None else ("yes" if o.holds else "NO")
-            lines.append(
-                f"  {SEED_TASK_NAMES[o.task]} {o.metric:<8} {o.name:<44} seed {'yes' if o.seed_holds else 'NO':<4}"
-                f" ours {ours}"
-            )
+            seed = "yes" if o.seed_holds else "NO"
+            label = task_label(result.spec.project, o.task)
+            lines.append(f"  {label} {o.metric:<8} {o.name:<44} seed {seed:<4} ours {ours}")
         if result.spec.project:
             lines.append("PWM commands against the float64 golden model (the built-in estimator and PID):")
             for b in labels:
@@ -730,8 +738,6 @@ __all__ = [
     "BUILDS",
     "CSV_FIELDS",
     "ORDERINGS",
-    "SEED_TABLE_I",
-    "TASKS",
     "BuildRun",
     "OrderingCheck",
     "TableResult",
@@ -745,6 +751,7 @@ __all__ = [
     "format_table",
     "measure_build",
     "measure_table",
+    "reference_figures",
     "summarise",
     "task_row",
     "to_json",
