@@ -358,10 +358,10 @@ class FirmwareProject:
         for i, figure in enumerate(self.reference):
             if figure.task not in names:
                 raise ValueError(f"reference[{i}].task: no task {figure.task!r} (tasks: {', '.join(names)})")
-            key = (figure.task, figure.build)
-            if key in figures:
-                raise ValueError(f"reference[{i}]: {figure.task} {figure.build} is also reference[{figures[key]}]")
-            figures[key] = i
+            pair = (figure.task, figure.build)
+            if pair in figures:
+                raise ValueError(f"reference[{i}]: {figure.task} {figure.build} is also reference[{figures[pair]}]")
+            figures[pair] = i
 
     @property
     def task_names(self) -> tuple[str, ...]:
