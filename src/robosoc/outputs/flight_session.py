@@ -210,11 +210,11 @@ def fly_scenario(
         powered[i].append(sample)
 
     def keep_row(i: int, row: np.ndarray) -> None:
-        flown[i].append(row.copy())
         controller = controllers[i]
         values = controller.telemetry_values() if names[i] and isinstance(controller, ChipController) else ()
         if names[i]:
-            told[i].append(values)
+            told[i].append(values)  # before the row: never fewer values than rows (an interruption)
+        flown[i].append(row.copy())
         if csv_logs:
             csv_logs[i].write(row, (*(powered[i][-1].columns if battery else ()), *values))
         if on_row is not None:
@@ -264,7 +264,7 @@ def _telemetry(
     names: list[tuple[str, ...]], told: list[list[tuple[float, ...]]], rows: list[np.ndarray]
 ) -> list[dict[str, np.ndarray]]:
     """Each vehicle's own-name telemetry as columns (name -> one value per row flown)."""
-    out = []
+    out: list[dict[str, np.ndarray]] = []
     for own, values, flown in zip(names, told, rows, strict=True):
         if not own:
             out.append({})
