@@ -80,6 +80,10 @@ def test_flight_csv_gets_the_column_with_the_counted_jobs(counted_run: Path) -> 
     np.testing.assert_array_equal(telemetry["jobs_counted"], _expected())
     assert read_run_folder(counted_run).telemetry.keys() == {"jobs_counted"}
 
+    out = counted_run.parent / "replayed"  # firmware replay reads the flight's columns past the telemetry
+    result = invoke("firmware", "replay", counted_run / "flight.csv", "--out", out)
+    assert result.exit_code == 0, result.output
+
 
 def test_the_mcap_file_has_a_topic_per_value_that_rosbags_decodes(counted_run: Path) -> None:
     messages, bag = read_bag(counted_run / "flight.mcap")
