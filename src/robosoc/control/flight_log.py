@@ -156,16 +156,47 @@ def check_flight_rows(rows: np.ndarray, where: str = "rows") -> np.ndarray:
     return rows
 
 
-def read_flight_log(path: Path, notes: list[str] | None = None, power: list[np.ndarray] | None = None) -> np.ndarray:
+def flight_header_problem(header: Sequence[str]) -> tuple[tuple[str, ...], str | None]:
+    """The flight's own columns of a ``flight.csv`` header (:data:`ROW_FIELDS`, or with a battery
+    flight's :data:`WITH_POWER_FIELDS`) and what is wrong with the header (``None``: nothing).
+
+    Columns after those are the firmware's own telemetry (:mod:`robosoc.host.telemetry`): each
+    named once, by a name that is not one of the flight's columns.
+    """
+    known = set(WITH_POWER_FIELDS)
+    core = [c for c in header if c in known]
+    expected = WITH_POWER_FIELDS if any(c in POWER_FIELDS for c in core) else ROW_FIELDS
+    if header_problem(core, expected) is not None:  # not a flight's: every column out of place named
+        return expected, header_problem(header, expected)
+    own = list(header[len(core) :])
+    if list(header[: len(core)]) != core:
+        stray = next(c for c in header[: len(core)] if c not in known)
+        return expected, f"unknown column {stray} among the flight's columns (telemetry columns come after them)"
+    if any(not c for c in own):
+        return expected, "a telemetry column without a name"
+    repeated = sorted({c for c in own if own.count(c) > 1})
+    if repeated:
+        return expected, f"repeated column{'s' if len(repeated) > 1 else ''} {', '.join(repeated)}"
+    return expected, None
+
+
+def read_flight_log(
+    path: Path,
+    notes: list[str] | None = None,
+    power: list[np.ndarray] | None = None,
+    telemetry: dict[str, np.ndarray] | None = None,
+) -> np.ndarray:
     """Read a CSV flight log back into an array with the columns of :data:`ROW_FIELDS`, checked by
-    :func:`check_flight_rows` (a battery flight's power columns, :data:`WITH_POWER_FIELDS`, are
-    read past).
+    :func:`check_flight_rows` (a battery flight's power columns, :data:`WITH_POWER_FIELDS`, and the
+    firmware's own telemetry columns after them are read past).
 
     Args:
         notes: given, a last line cut short (an interrupted flight) is skipped with a note there;
             without, it is an error.
         power: given, a battery flight's power columns (:data:`robosoc.records.POWER_FIELDS`, one
             row per flight row) are appended to it.
+        telemetry: given, each telemetry column (any number, NaN before the firmware's first
+            value) is put in it by its name.
 
     Raises:
         FlightLogError: the header is not a flight log's, or a row is bad (names the file, row, column).
@@ -174,12 +205,13 @@ def read_flight_log(path: Path, notes: list[str] | None = None, power: list[np.n
     with path.open(encoding="utf-8", newline="") as handle:
         reader = csv.reader(handle)
         header = next(reader, None)
-        expected = ROW_FIELDS if header is None or len(header) <= len(ROW_FIELDS) else WITH_POWER_FIELDS
-        problem = "empty file" if header is None else header_problem(header, expected)
+        expected, problem = ((), "empty file") if header is None else flight_header_problem(header)
         if problem is not None:
             raise FlightLogError(f"{path}: not a robosoc flight log ({problem})")
+        assert header is not None
         lines = list(reader)
-    width = len(expected)
+    names = tuple(header)
+    width = len(names)
     for k, line in enumerate(lines):
         if len(line) != width:
             if notes is not None and k == len(lines) - 1:
@@ -198,12 +230,26 @@ def read_flight_log(path: Path, notes: list[str] | None = None, power: list[np.n
                     if notes is not None and k == len(lines) - 1:
                         notes.append(f"{path.name}: last line incomplete (interrupted flight?), skipped")
                         rows = np.array(lines[:-1], dtype=float).reshape(-1, width)
-                        return _split_power(rows, str(path), power)
-                    raise FlightLogError(
-                        f"{_where(str(path), k, expected[c])}: {cell[:40]!r} is not a number"
-                    ) from None
+                        return _split_columns(rows, str(path), len(expected), names, power, telemetry)
+                    raise FlightLogError(f"{_where(str(path), k, names[c])}: {cell[:40]!r} is not a number") from None
         raise
-    return _split_power(rows, str(path), power)
+    return _split_columns(rows, str(path), len(expected), names, power, telemetry)
+
+
+def _split_columns(
+    rows: np.ndarray,
+    where: str,
+    own: int,
+    names: tuple[str, ...],
+    power: list[np.ndarray] | None,
+    telemetry: dict[str, np.ndarray] | None,
+) -> np.ndarray:
+    """The flight's columns of ``rows`` (the first ``own`` of ``names``), checked; the telemetry
+    columns after them to ``telemetry`` (by name; any number)."""
+    if telemetry is not None:
+        for c in range(own, len(names)):
+            telemetry[names[c]] = rows[:, c].copy()
+    return _split_power(rows[:, :own], where, power)
 
 
 def _split_power(rows: np.ndarray, where: str, power: list[np.ndarray] | None) -> np.ndarray:

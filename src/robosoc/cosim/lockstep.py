@@ -49,7 +49,7 @@ from robosoc.cosim.firmware_run import DEFAULT_FIRST_CYCLE, FirmwareRun, ReplayR
 from robosoc.cosim.replay import position_packet, sensor_packet
 from robosoc.host.firmware_image import FirmwareImage
 from robosoc.host.scenario_image import scenario_image
-from robosoc.host.telemetry import estimate_of
+from robosoc.host.telemetry import estimate_of, own_names
 from robosoc.physics import SensorSample, World
 from robosoc.physics.clock import PHYSICS_STEP_NS, FlightClock
 from robosoc.records import PowerSample, PwmCommand, SampleInput
@@ -131,6 +131,8 @@ class ChipController:
         self.run: FirmwareRun | None = None
         self.result: ReplayResult | None = None
         self._extra = tuple(name for name, _, _ in self.image.io_inputs)
+        #: the firmware's telemetry under names of its own: columns of flight.csv after the flight's
+        self.telemetry_names = own_names(self.image.telemetry)
         if "position" in self._extra and not scenario.sensors.position.enabled:
             raise ValueError(
                 "sensors.position.enabled: the firmware takes position packets from the I/O tile, but the "
@@ -237,6 +239,12 @@ class ChipController:
         if self.run is None or not self.run.latest:
             return UNKNOWN_ESTIMATE
         return estimate_of(self.run.latest)
+
+    def telemetry_values(self) -> tuple[float, ...]:
+        """The newest value of each of :attr:`telemetry_names` read so far (NaN before the first),
+        as the estimate: in row k, those read at or before the close of period k-1."""
+        latest = self.run.latest if self.run is not None else {}
+        return tuple(latest.get(name, math.nan) for name in self.telemetry_names)
 
 
 def fly_lockstep(

@@ -29,10 +29,12 @@ import numpy as np
 
 from robosoc.config.project import TelemetrySpec
 from robosoc.control import quaternion
+from robosoc.control.flight import ROW_FIELDS
 from robosoc.control.host import Estimate
 from robosoc.host.task_table import TaskTable
 from robosoc.program.dwarf import variable_field
 from robosoc.program.elf import ElfError, load_elf
+from robosoc.records import POWER_FIELDS
 from robosoc.toolchain.errors import ToolchainError
 
 if TYPE_CHECKING:
@@ -46,6 +48,7 @@ __all__ = [
     "TelemetryError",
     "TelemetryProbe",
     "estimate_of",
+    "own_names",
     "read_telemetry",
     "resolve_telemetry",
 ]
@@ -59,6 +62,8 @@ ESTIMATE_HEIGHT = "est_height"
 ESTIMATE_VERTICAL_SPEED = "est_vz"
 ESTIMATE_NAMES = (*ESTIMATE_QUATERNION, ESTIMATE_HEIGHT, ESTIMATE_VERTICAL_SPEED)
 """Telemetry names that fill the flight log's estimate columns rather than columns of their own."""
+_TAKEN = frozenset((*ROW_FIELDS, *POWER_FIELDS)) - frozenset(ESTIMATE_NAMES)
+"""Names a telemetry value cannot have: the flight log's other columns (its own would repeat one)."""
 _Q16 = 1.0 / 65536.0
 #: struct code and scale of each type (``real`` by the build's arithmetic)
 _DECODE: dict[str, tuple[str, float]] = {
@@ -112,6 +117,10 @@ def resolve_telemetry(
     table = TaskTable.of(elf)
     out = []
     for i, spec in enumerate(specs):
+        if spec.name in _TAKEN:
+            raise TelemetryError(
+                where, f"telemetry[{i}].name", f"{spec.name!r} is a column of flight.csv already: choose another name"
+            )
         key = f"telemetry[{i}].value"
         try:
             offset, size = variable_field(elf, spec.variable, spec.member)
@@ -146,6 +155,11 @@ def read_telemetry(chip: MPSoC, probes: Sequence[TelemetryProbe]) -> dict[str, f
             t = chip.config.tile_index(probe.tile)
             values[probe.name] = probe.decode(chip.cores.read(probe.address, VALUE_BYTES, tile=t))
     return values
+
+
+def own_names(probes: Sequence[TelemetryProbe]) -> tuple[str, ...]:
+    """The names of ``probes`` that are columns of their own (not the estimate's), in their order."""
+    return tuple(p.name for p in probes if p.name not in ESTIMATE_NAMES)
 
 
 def estimate_of(values: Mapping[str, float]) -> Estimate:

@@ -6,7 +6,9 @@ with its own controller: the firmware on its own chip (``controller = "chip"``) 
 host controller (``"host"``).  The run folder (``out``) gets, as the flight goes:
 
 * ``scenario.toml``: the resolved scenario, every field (loads back to the same scenario);
-* ``flight.csv``: one row per sensor sample, flushed row by row;
+* ``flight.csv``: one row per sensor sample, flushed row by row (after the flight's columns, a
+  battery flight's power columns, then one column per telemetry value the firmware publishes
+  under a name of its own, :mod:`robosoc.host.telemetry`);
 
 and at the end (or when the flight is interrupted or crashes, with ``"complete": false``):
 
@@ -29,7 +31,7 @@ import dataclasses
 import math
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -110,12 +112,14 @@ def vehicle_folder(out: Path, index: int, count: int) -> Path:
 
 @dataclass
 class ScenarioFlight:
-    """A flown scenario: its top-level summary, each vehicle's rows and firmware run, and where it is."""
+    """A flown scenario: its top-level summary, each vehicle's rows and firmware run, and where it
+    is; each vehicle's telemetry under names of its own (name -> one value per row, NaN before the first)."""
 
     summary: dict[str, Any]
     rows: list[np.ndarray]
     results: list[ReplayResult | None]
     out: Path | None
+    telemetry: list[dict[str, np.ndarray]] = field(default_factory=list)
 
 
 def _controllers(scenario: ScenarioConfig, on_status: Callable[[str], None], profile: bool) -> list[LockstepController]:
@@ -189,21 +193,30 @@ def fly_scenario(
         (folder / SUMMARY_JSON).unlink(missing_ok=True)  # speak for this one, even if it stops at once
     controllers = _controllers(scenario, say, profile)
     battery = scenario.power.battery_on
+    names = [c.telemetry_names if isinstance(c, ChipController) else () for c in controllers]
     csv_logs: list[CsvFlightLog] = []
     if out is not None:
         out.mkdir(parents=True, exist_ok=True)
         output_files.write_atomic(out / SCENARIO_TOML, scenario_toml(scenario))
-        csv_logs = [CsvFlightLog(folder / FLIGHT_CSV, POWER_FIELDS if battery else ()) for folder in folders]
+        csv_logs = [
+            CsvFlightLog(folder / FLIGHT_CSV, (*(POWER_FIELDS if battery else ()), *names[i]))
+            for i, folder in enumerate(folders)
+        ]
     flown: list[list[np.ndarray]] = [[] for _ in vehicles]
+    told: list[list[tuple[float, ...]]] = [[] for _ in vehicles]  # own-name telemetry, one per row
     powered: list[list[PowerSample]] = [[] for _ in vehicles]  # a battery flight: one per row, then the end
 
     def keep_power(i: int, sample: PowerSample) -> None:
         powered[i].append(sample)
 
     def keep_row(i: int, row: np.ndarray) -> None:
+        controller = controllers[i]
+        values = controller.telemetry_values() if names[i] and isinstance(controller, ChipController) else ()
+        if names[i]:
+            told[i].append(values)  # before the row: never fewer values than rows (an interruption)
         flown[i].append(row.copy())
         if csv_logs:
-            csv_logs[i].write(row, powered[i][-1].columns if battery else ())
+            csv_logs[i].write(row, (*(powered[i][-1].columns if battery else ()), *values))
         if on_row is not None:
             on_row(i, row)
 
@@ -218,6 +231,7 @@ def fly_scenario(
         stopped = "interrupted" if isinstance(exc, KeyboardInterrupt) else f"{type(exc).__name__}: {exc}"
         try:
             so_far = _summarize(scenario, vehicles, controllers, flown, host_s, stopped, folders, out, powered)
+            so_far.telemetry = _telemetry(names, told, so_far.rows)
             _extras(scenario, vehicles, controllers, so_far, folders, plot, logs)
         except KeyboardInterrupt:  # a second Ctrl-C: the summary (complete false) is written first
             pass
@@ -232,6 +246,7 @@ def fly_scenario(
     flight: ScenarioFlight | None = None
     try:
         flight = _summarize(scenario, vehicles, controllers, flown, host_s, None, folders, out, powered)
+        flight.telemetry = _telemetry(names, told, flight.rows)
         _extras(scenario, vehicles, controllers, flight, folders, plot, logs)
     except KeyboardInterrupt:
         if out is not None and not (out / SUMMARY_JSON).exists():
@@ -243,6 +258,20 @@ def fly_scenario(
         remove_partials([*folders, *([out] if out is not None else [])], SCRATCH_FILES)
     assert flight is not None
     return flight
+
+
+def _telemetry(
+    names: list[tuple[str, ...]], told: list[list[tuple[float, ...]]], rows: list[np.ndarray]
+) -> list[dict[str, np.ndarray]]:
+    """Each vehicle's own-name telemetry as columns (name -> one value per row flown)."""
+    out: list[dict[str, np.ndarray]] = []
+    for own, values, flown in zip(names, told, rows, strict=True):
+        if not own:
+            out.append({})
+            continue
+        table = np.array(values, dtype=float).reshape(-1, len(own))[: len(flown)]
+        out.append({name: table[:, c].copy() for c, name in enumerate(own)})
+    return out
 
 
 @deferred_interrupt()  # Ctrl-C waits until they are written: a summary.json always says what the flight was
@@ -332,4 +361,5 @@ def _extras(
 
             run = controller.run if isinstance(controller, ChipController) else None
             metadata = {"scenario": scenario.name, "seed": scenario.seed, "vehicle": i + 1}
-            write_run_logs(folder, rows, run, result, metadata)
+            telemetry = flight.telemetry[i] if i < len(flight.telemetry) else None
+            write_run_logs(folder, rows, run, result, metadata, telemetry)

@@ -4,7 +4,8 @@ Plots are matplotlib figures inlined as SVG, styles inline, no script or font fe
 anywhere: the page opens without a network.  It shows what the folder holds (see
 :mod:`robosoc.outputs.run_folder`): trajectory and setpoints (a mission's waypoints over their holds and
 from above, from ``summary.json``), estimated against true attitude,
-motor PWM (``flight.csv``); per-task response-time histograms and energy per task split into its
+motor PWM, the firmware's own telemetry values when it publishes any
+(``flight.csv``); per-task response-time histograms and energy per task split into its
 parts (``jobs.csv``); energy by tile and any other breakdown of ``summary.json``'s ``energy``
 (by instruction class, ``classes_uj``, when present); where cycles and energy go per firmware
 function, task and tile (``profile.json``, when the run was profiled: docs/profile.md); a battery
@@ -203,6 +204,23 @@ def _pwm(rows: np.ndarray) -> str:
         ax.grid(alpha=0.3)
 
     return _figure("pwm", "Motor PWM commands", _svg(draw, "pwm", (10, 3)))
+
+
+def _telemetry(rows: np.ndarray, telemetry: dict[str, np.ndarray]) -> str:
+    """The firmware's own telemetry values over time, one small panel each (gaps before the first)."""
+    step = max(1, math.ceil(len(rows) / MAX_POINTS))
+    t = _column(rows, "t")[::step]
+    names = list(telemetry)
+
+    def draw(*axes) -> None:
+        for ax, name in zip(axes, names, strict=True):
+            ax.step(t, telemetry[name][::step], where="post", label=name)
+            ax.set_ylabel(name)
+            ax.grid(alpha=0.3)
+        axes[-1].set_xlabel("time [s]")
+
+    caption = f"Telemetry the firmware publishes ({', '.join(names)}; flight.csv)"
+    return _figure("telemetry", caption, _svg(draw, "telem", (10, 0.6 + 1.4 * len(names)), len(names)))
 
 
 # --- job plots ----------------------------------------------------------------------------------
@@ -467,6 +485,8 @@ def _section(run: RunFolder, level: int) -> str:
         if isinstance(mission, dict) and waypoints:
             body.append(_mission_plan(run.rows, mission))
         body += [_attitude(run.rows), _pwm(run.rows)]
+        if run.telemetry:
+            body.append(_telemetry(run.rows, run.telemetry))
     else:
         body.append("<p>No flight log (flight.csv) in this folder.</p>")
     body.append(f"<{h}>Tasks on the chip</{h}>")

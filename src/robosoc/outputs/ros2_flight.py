@@ -12,6 +12,10 @@ model has no field strength, so the values are the unit vector as the firmware s
 estimate has a height but no horizontal position: its pose's x and y are NaN.  Rows whose estimate
 is unknown (NaN, as for the chip controller without an estimate probe) publish no estimate.
 
+The firmware's telemetry under names of its own (:mod:`robosoc.host.telemetry`) is one topic per
+value, ``/telemetry/<name>`` (``std_msgs/msg/Float64``), published from the first row that has a
+value (:func:`telemetry_messages`).
+
 Stamps are the row's simulated time after a start time (:data:`START_NS`, 2026-01-01T00:00:00Z by
 default): a fixed date, so that the same flight gives the same bytes, and one that viewers show as
 a date rather than as 1970.
@@ -20,7 +24,7 @@ a date rather than as 1970.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -293,6 +297,23 @@ def _transforms(topic: Topic, row: np.ndarray, ns: int) -> list[dict]:
     return out
 
 
+TELEMETRY_PREFIX = "/telemetry/"
+"""Topic of a telemetry value named ``name``: ``/telemetry/<name>``."""
+
+
+def telemetry_topic(name: str) -> Topic:
+    """The topic of the firmware's telemetry value ``name`` (a C identifier: a valid ROS 2 name)."""
+    return Topic(f"{TELEMETRY_PREFIX}{name}", "std_msgs/msg/Float64", None, {"data": (name, 1.0)})
+
+
+def telemetry_messages(topics: Sequence[Topic], values: Sequence[float], ns: int) -> Iterator[tuple[Topic, dict, int]]:
+    """(topic, message, stamp in ns) of one row's telemetry ``values`` (one per ``topics``, NaN:
+    none read yet, no message)."""
+    for topic, value in zip(topics, values, strict=True):
+        if not math.isnan(value):
+            yield topic, {"data": float(value)}, ns
+
+
 def row_messages(row: np.ndarray, start_ns: int = START_NS) -> Iterator[tuple[Topic, dict, int]]:
     """(topic, message as a dict for the CDR encoder, stamp in ns) of one flight row whose time
     counts from ``start_ns`` (ns since the Unix epoch)."""
@@ -315,6 +336,7 @@ def row_messages(row: np.ndarray, start_ns: int = START_NS) -> Iterator[tuple[To
 
 
 __all__ = [
-    "FRAME_BODY", "FRAME_ESTIMATE", "FRAME_WORLD", "START_NS", "START_TIME", "TF_TRANSFORMS", "TOPICS", "Topic",
-    "Transform", "cdr_encoder", "message_definition", "row_messages", "short_name", "stamp_ns",
+    "FRAME_BODY", "FRAME_ESTIMATE", "FRAME_WORLD", "START_NS", "START_TIME", "TELEMETRY_PREFIX", "TF_TRANSFORMS",
+    "TOPICS", "Topic", "Transform", "cdr_encoder", "message_definition", "row_messages", "short_name", "stamp_ns",
+    "telemetry_messages", "telemetry_topic",
 ]  # fmt: skip

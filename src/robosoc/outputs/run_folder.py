@@ -116,6 +116,8 @@ class RunFolder:
     scenario_text: str | None = None
     profile: dict | None = None
     power: np.ndarray | None = None  # a battery flight's power columns of flight.csv (POWER_FIELDS)
+    #: the firmware's own telemetry columns of flight.csv (name -> one value per row, NaN before the first)
+    telemetry: dict[str, np.ndarray] = field(default_factory=dict)
     vehicles: list[RunFolder] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
 
@@ -127,16 +129,22 @@ class RunFolder:
         return float(value) if isinstance(value, int | float) and value > 0 else None
 
 
-def read_flight_rows(path: Path, notes: list[str], power: list[np.ndarray] | None = None) -> np.ndarray:
+def read_flight_rows(
+    path: Path,
+    notes: list[str],
+    power: list[np.ndarray] | None = None,
+    telemetry: dict[str, np.ndarray] | None = None,
+) -> np.ndarray:
     """The rows of a flight log; a last line cut short (an interrupted flight) is skipped with a note;
-    a battery flight's power columns appended to ``power``.
+    a battery flight's power columns appended to ``power``, the firmware's own telemetry columns
+    put in ``telemetry`` by name.
 
     Raises:
         RunFolderError: the header is not the flight log's, or a row is bad
             (:func:`robosoc.control.flight_log.read_flight_log`: names the row and the column).
     """
     try:
-        return read_flight_log(path, notes, power)
+        return read_flight_log(path, notes, power, telemetry)
     except FlightLogError as exc:
         raise RunFolderError(str(exc)) from None
 
@@ -254,7 +262,7 @@ def read_run_folder(path: Path) -> RunFolder:
     try:
         if (path / FLIGHT_CSV).is_file():
             power: list[np.ndarray] = []
-            run.rows = read_flight_rows(path / FLIGHT_CSV, run.notes, power)
+            run.rows = read_flight_rows(path / FLIGHT_CSV, run.notes, power, run.telemetry)
             run.power = power[0] if power else None
         if (path / JOBS_CSV).is_file():
             run.jobs = read_jobs(path / JOBS_CSV, run.notes)

@@ -6,6 +6,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from pathlib import Path
 
 import numpy as np
@@ -23,15 +24,17 @@ def write_run_logs(
     run: FirmwareRun | None = None,
     result: ReplayResult | None = None,
     metadata: dict[str, object] | None = None,
+    telemetry: Mapping[str, np.ndarray] | None = None,
 ) -> dict[str, Path]:
     """Write the flight's MCAP, the chip's trace (for a chip flight whose chip recorded its
-    timeline) and the report into ``folder``; the paths written, by kind.
+    timeline) and the report into ``folder``; the paths written, by kind.  ``telemetry``: the
+    firmware's values under names of its own, one per row (a topic each in the MCAP file).
 
     Raises:
         robosoc.outputs.run_folder.RunFolderError: a run file in ``folder`` is malformed.
     """
     written = {"mcap": folder / FLIGHT_MCAP}
-    write_flight_mcap(rows, written["mcap"])
+    write_flight_mcap(rows, written["mcap"], telemetry=telemetry)
     if run is not None and result is not None and run.chip.recording:
         written["trace"] = folder / CHIP_TRACE_JSON
         write_chip_trace(run_trace(run, result, metadata), written["trace"])
