@@ -313,7 +313,14 @@ def _serve_physics_ros(console, resolved: ResolvedScenario, link, folder: Path |
         outcomes, records = run_ros_physics_side(config, link, folder, start_delay_s=start_delay)
     except RosUnavailable as exc:
         raise _ros_failed(exc) from None
-    for outcome, record in zip(outcomes, records, strict=True):
+    names = [str(record["namespace"]) for record in records]
+    _print_fleet(console, config, outcomes, records, names, with_host_time=True, folder=folder)
+
+
+def _print_fleet(console, config, outcomes, records, names, *, with_host_time: bool, folder: Path | None) -> None:
+    """One line per vehicle of a fleet's physics side (flown time, hover, commands), its files, and
+    the side's end (the first vehicle's)."""
+    for name, outcome, record in zip(names, outcomes, records, strict=True):
         f = record["flight"]
         hover = (
             f"hover RMS {f['hover_rms_m'] * 100:.2f} cm (max {f['hover_max_m'] * 100:.2f} cm)"
@@ -321,9 +328,10 @@ def _serve_physics_ros(console, resolved: ResolvedScenario, link, folder: Path |
             else "no hover figures"
         )
         c = outcome.commands
+        took = f" in {outcome.host_s:.1f} s" if with_host_time else ""
         console.print(
-            f"  {record['namespace']}: flown {outcome.simulated_s:g} of {config.duration_s:g} s in "
-            f"{outcome.host_s:.1f} s; {hover}; commands {c['received']}, late {c['late']}, missed {c['missed']}"
+            f"  {name}: flown {outcome.simulated_s:g} of {config.duration_s:g} s{took}; {hover}; "
+            f"commands {c['received']}, late {c['late']}, missed {c['missed']}"
         )
     if folder is not None:
         plain(console, f"files: {folder}")
@@ -347,18 +355,5 @@ def _serve_physics_fleet(console, resolved: ResolvedScenario, link, bind, folder
         outcomes, part = run_physics_fleet_side(config, link, bind, folder, on_listen=on_listen)
     except LinkError as exc:
         raise options.fail("--bind", str(exc)) from None
-    for i, (outcome, record) in enumerate(zip(outcomes, part["vehicles"], strict=True)):
-        f = record["flight"]
-        hover = (
-            f"hover RMS {f['hover_rms_m'] * 100:.2f} cm (max {f['hover_max_m'] * 100:.2f} cm)"
-            if f and math.isfinite(f["hover_rms_m"])
-            else "no hover figures"
-        )
-        c = outcome.commands
-        console.print(
-            f"  vehicle {i + 1}: flown {outcome.simulated_s:g} of {config.duration_s:g} s; {hover}; "
-            f"commands {c['received']}, late {c['late']}, missed {c['missed']}"
-        )
-    if folder is not None:
-        plain(console, f"files: {folder}")
-    end_of_side(outcomes[0].ended, outcomes[0].message, str(folder) if folder else "")
+    names = [f"vehicle {i + 1}" for i in range(len(outcomes))]
+    _print_fleet(console, config, outcomes, part["vehicles"], names, with_host_time=False, folder=folder)

@@ -120,16 +120,7 @@ def run_physics_fleet_side(
     ``link-physics.log`` and ``physics.json`` in its ``vehicle-N/`` folder of ``out``; the outcomes
     and ``{"vehicles": [physics.json records], "min_separation_m": ...}``."""
     vehicles = fleet_vehicles(scenario)
-    folders = [vehicle_folder(out, i, len(vehicles)) if out is not None else None for i in range(len(vehicles))]
-    for folder in folders:
-        if folder is not None:
-            folder.mkdir(parents=True, exist_ok=True)
-    logs = [CsvFlightLog(f / FLIGHT_CSV) if f is not None else None for f in folders]
-
-    def on_row(i: int, row: Any) -> None:
-        log = logs[i]
-        if log is not None:
-            log.write(row)
+    folders, logs, on_row = fleet_logs(out, len(vehicles))
 
     try:
         outcomes = serve_physics_fleet(
@@ -237,6 +228,41 @@ def _chip_process(conn: Connection, args: tuple) -> None:
         _send(conn, "status", f"chip: {text}")
 
     _report(conn, lambda: run_chip_side(*args, on_status=status))
+
+
+def fleet_logs(
+    out: Path | None, count: int
+) -> tuple[list[Path | None], list[CsvFlightLog | None], Callable[[int, Any], None]]:
+    """Each of ``count`` vehicles' folder in ``out`` (made; None without ``out``), its ``flight.csv``
+    log, and ``on_row(i, row)`` writing a row of vehicle i's flight to its log."""
+    folders = [vehicle_folder(out, i, count) if out is not None else None for i in range(count)]
+    for folder in folders:
+        if folder is not None:
+            folder.mkdir(parents=True, exist_ok=True)
+    logs = [CsvFlightLog(f / FLIGHT_CSV) if f is not None else None for f in folders]
+
+    def on_row(i: int, row: Any) -> None:
+        log = logs[i]
+        if log is not None:
+            log.write(row)
+
+    return folders, logs, on_row
+
+
+def _interrupt(sides: list[_Side], say: Callable[[str], None]) -> None:
+    """Ctrl-C: pass it on to every side and collect what they send while they end."""
+    for side in sides:
+        side.interrupt()
+    _collect(sides, say, None, deadline=time.monotonic() + SHUTDOWN_S)
+
+
+def _join(sides: list[_Side], interrupted: bool) -> None:
+    """Wait for every side's process; one that does not end in time is terminated (none is left)."""
+    for side in sides:
+        side.process.join(timeout=SHUTDOWN_S if not interrupted else 1.0)
+        if side.process.is_alive():
+            side.process.terminate()
+            side.process.join(timeout=5.0)
 
 
 def _report(conn: Connection, side: Callable[[], tuple[Any, dict]]) -> None:
@@ -360,15 +386,9 @@ def fly_decoupled(
         _collect(sides, say, on_progress, deadline=None)
     except KeyboardInterrupt:
         interrupted = True
-        for side in sides:
-            side.interrupt()
-        _collect(sides, say, None, deadline=time.monotonic() + SHUTDOWN_S)
+        _interrupt(sides, say)
     finally:
-        for side in sides:
-            side.process.join(timeout=SHUTDOWN_S if not interrupted else 1.0)
-            if side.process.is_alive():
-                side.process.terminate()
-                side.process.join(timeout=5.0)
+        _join(sides, interrupted)
     failed = [s for s in sides if s.error is not None and s.error[0] in ("link", "build", "internal")]
     records = {s.name: s.record or _read_record(out / f"{s.name}.json") for s in sides}
     result = DecoupledFlight(
@@ -419,15 +439,9 @@ def _fly_fleet(
         _collect(sides, say, on_progress, deadline=None)
     except KeyboardInterrupt:
         interrupted = True
-        for side in sides:
-            side.interrupt()
-        _collect(sides, say, None, deadline=time.monotonic() + SHUTDOWN_S)
+        _interrupt(sides, say)
     finally:
-        for side in sides:
-            side.process.join(timeout=SHUTDOWN_S if not interrupted else 1.0)
-            if side.process.is_alive():
-                side.process.terminate()
-                side.process.join(timeout=5.0)
+        _join(sides, interrupted)
     physics_part = sides[0].record or {} if sides else {}
     physics_records = list(physics_part.get("vehicles") or [])
     physics_records += [_read_record(f / PHYSICS_JSON) for f in folders[len(physics_records) :]]

@@ -21,7 +21,6 @@ from typing import Any
 from robosoc.config.link import LinkConfig
 from robosoc.config.scenario import ScenarioConfig
 from robosoc.config.vehicle import VehicleConfig, vehicle_preset
-from robosoc.control.flight_log import CsvFlightLog
 from robosoc.cosim.decoupled_chip import ChipOutcome
 from robosoc.cosim.decoupled_physics import PhysicsOutcome, scenario_digest
 from robosoc.cosim.firmware_run import FirmwareRun
@@ -30,10 +29,10 @@ from robosoc.cosim.ros1 import Node
 from robosoc.cosim.ros_chip import RosChipLink, check_topics
 from robosoc.cosim.ros_physics import serve_physics_ros
 from robosoc.cosim.ros_topics import vehicle_namespace
-from robosoc.outputs.decoupled_flight import run_chip_side
+from robosoc.outputs.decoupled_flight import fleet_logs, run_chip_side
 from robosoc.outputs.decoupled_summary import physics_record
-from robosoc.outputs.flight_session import fleet_vehicles, vehicle_folder
-from robosoc.outputs.run_folder import FLIGHT_CSV, LINK_PHYSICS_LOG, PHYSICS_JSON
+from robosoc.outputs.flight_session import fleet_vehicles
+from robosoc.outputs.run_folder import LINK_PHYSICS_LOG, PHYSICS_JSON
 from robosoc.outputs.run_summary import write_summary
 
 __all__ = ["firmware_digest", "run_ros_chip_side", "run_ros_physics_side"]
@@ -55,16 +54,7 @@ def run_ros_physics_side(
     """The physics node with its files in ``out`` (nothing if None); each vehicle's outcome and record."""
     vehicles = fleet_vehicles(scenario)
     count = len(vehicles)
-    folders = [vehicle_folder(out, i, count) if out is not None else None for i in range(count)]
-    for folder in folders:
-        if folder is not None:
-            folder.mkdir(parents=True, exist_ok=True)
-    logs = [CsvFlightLog(f / FLIGHT_CSV) if f is not None else None for f in folders]
-
-    def on_row(i: int, row: Any) -> None:
-        log = logs[i]
-        if log is not None:
-            log.write(row)
+    folders, logs, on_row = fleet_logs(out, count)
 
     try:
         outcomes = serve_physics_ros(

@@ -11,7 +11,9 @@ Only what the host readers need: typedefs, structs, arrays and base types in any
 from __future__ import annotations
 
 import functools
+from collections.abc import Iterator
 from pathlib import Path
+from typing import BinaryIO
 
 from elftools.dwarf.die import DIE
 from elftools.elf.elffile import ELFFile
@@ -52,23 +54,32 @@ def _member_location(member: DIE) -> int:
     raise ElfError(f"member {_name(member)}: unsupported location {attr.value!r}")
 
 
+def _top_dies(path: str, handle: BinaryIO) -> Iterator[DIE]:
+    """Every top-level debug entry (types, variables, functions) of every compilation unit.
+
+    Raises:
+        ElfError: the file has no DWARF information.
+    """
+    elf = ELFFile(handle)
+    if not elf.has_dwarf_info():
+        raise ElfError(f"{path}: no DWARF debug information (build with -g)")
+    for cu in elf.get_dwarf_info().iter_CUs():
+        yield from cu.get_top_DIE().iter_children()
+
+
 @functools.lru_cache(maxsize=64)
 def _members(path: str, mtime_ns: int, type_name: str) -> dict[str, tuple[int, int]]:
     """(dotted member path) -> (byte offset, byte size) for the struct ``type_name``, from the first
     compilation unit that defines it (every unit including its header has the same layout)."""
     with open(path, "rb") as handle:
-        elf = ELFFile(handle)
-        if not elf.has_dwarf_info():
-            raise ElfError(f"{path}: no DWARF debug information (build with -g)")
-        for cu in elf.get_dwarf_info().iter_CUs():
-            for die in cu.get_top_DIE().iter_children():
-                if die.tag not in (*_STRUCT_TAGS, "DW_TAG_typedef") or _name(die) != type_name:
-                    continue
-                body = _strip(die)
-                if body.tag in _STRUCT_TAGS:
-                    out: dict[str, tuple[int, int]] = {}
-                    _walk(body, "", 0, out)
-                    return out
+        for die in _top_dies(path, handle):
+            if die.tag not in (*_STRUCT_TAGS, "DW_TAG_typedef") or _name(die) != type_name:
+                continue
+            body = _strip(die)
+            if body.tag in _STRUCT_TAGS:
+                out: dict[str, tuple[int, int]] = {}
+                _walk(body, "", 0, out)
+                return out
     return {}
 
 
@@ -108,26 +119,22 @@ def _variables(path: str, mtime_ns: int, name: str) -> list[dict[str, tuple[int,
     "" the whole variable."""
     found = []
     with open(path, "rb") as handle:
-        elf = ELFFile(handle)
-        if not elf.has_dwarf_info():
-            raise ElfError(f"{path}: no DWARF debug information (build with -g)")
-        for cu in elf.get_dwarf_info().iter_CUs():
-            for die in cu.get_top_DIE().iter_children():
-                if die.tag != "DW_TAG_variable" or "DW_AT_declaration" in die.attributes:
-                    continue
-                if _name(die) != name and not (
-                    "DW_AT_specification" in die.attributes
-                    and _name(die.get_DIE_from_attribute("DW_AT_specification")) == name
-                ):
-                    continue
-                holder = die
-                if "DW_AT_type" not in holder.attributes and "DW_AT_specification" in holder.attributes:
-                    holder = holder.get_DIE_from_attribute("DW_AT_specification")
-                kind = _strip(holder.get_DIE_from_attribute("DW_AT_type"))
-                out: dict[str, tuple[int, int]] = {"": (0, _byte_size(kind))}
-                if kind.tag in _STRUCT_TAGS:
-                    _walk(kind, "", 0, out)
-                found.append(out)
+        for die in _top_dies(path, handle):
+            if die.tag != "DW_TAG_variable" or "DW_AT_declaration" in die.attributes:
+                continue
+            if _name(die) != name and not (
+                "DW_AT_specification" in die.attributes
+                and _name(die.get_DIE_from_attribute("DW_AT_specification")) == name
+            ):
+                continue
+            holder = die
+            if "DW_AT_type" not in holder.attributes and "DW_AT_specification" in holder.attributes:
+                holder = holder.get_DIE_from_attribute("DW_AT_specification")
+            kind = _strip(holder.get_DIE_from_attribute("DW_AT_type"))
+            out: dict[str, tuple[int, int]] = {"": (0, _byte_size(kind))}
+            if kind.tag in _STRUCT_TAGS:
+                _walk(kind, "", 0, out)
+            found.append(out)
     return found
 
 
@@ -155,15 +162,11 @@ def variable_field(path: Path | str, variable: str, member: str = "") -> tuple[i
 @functools.lru_cache(maxsize=64)
 def _type_size(path: str, mtime_ns: int, type_name: str) -> int:
     with open(path, "rb") as handle:
-        elf = ELFFile(handle)
-        if not elf.has_dwarf_info():
-            raise ElfError(f"{path}: no DWARF debug information (build with -g)")
-        for cu in elf.get_dwarf_info().iter_CUs():
-            for die in cu.get_top_DIE().iter_children():
-                if die.tag in (*_STRUCT_TAGS, "DW_TAG_typedef") and _name(die) == type_name:
-                    size = _byte_size(_strip(die))
-                    if size:
-                        return size
+        for die in _top_dies(path, handle):
+            if die.tag in (*_STRUCT_TAGS, "DW_TAG_typedef") and _name(die) == type_name:
+                size = _byte_size(_strip(die))
+                if size:
+                    return size
     return 0
 
 
