@@ -197,3 +197,45 @@ def test_cli_sweep_bad_file_names_file_and_field(tmp_path):
     result = CliRunner().invoke(app, ["sweep", str(sweep)])
     assert result.exit_code == 2 and "Traceback" not in result.output
     assert str(sweep) in result.output and "grid.firmware.arithmetic" in result.output and "arith" in result.output
+
+
+def test_a_sweep_over_two_projects_and_their_mapping(tmp_path: Path) -> None:
+    """Two firmware projects (copies of the blank and the quadrotor templates), each with its tasks
+    where its robosoc.toml puts them and moved by [[firmware.placement]]: every point flies its own
+    project's tasks on the tiles asked, and the default metrics cover both projects' tasks."""
+    from typer.testing import CliRunner
+
+    from robosoc.cli import app
+
+    for template in ("blank", "quadrotor"):
+        assert CliRunner().invoke(app, ["new", str(tmp_path / template), "--template", template]).exit_code == 0
+    sweep = tmp_path / "s.toml"
+    sweep.write_text(
+        '[base]\nduration_s = 0.05\n"chip.powered_off" = []\n'
+        '[[points]]\n"firmware.project" = "blank"\n'
+        '[[points]]\n"firmware.project" = "blank"\n"firmware.placement" = [{task = "controller", tile = [1, 1]}]\n'
+        '[[points]]\n"firmware.project" = "quadrotor"\n'
+        '[[points]]\n"firmware.project" = "quadrotor"\n"firmware.placement" = [{task = "pid", tile = [1, 1]}]\n'
+    )
+    config = load_sweep(sweep)
+    assert [m for m in config.metrics if m.startswith("tasks.")][::3] == [
+        "tasks.controller.response_us_mean", "tasks.estimator.response_us_mean", "tasks.pid.response_us_mean"
+    ]  # fmt: skip
+    # the projects' folders are the sweep file's neighbours, whatever the working folder
+    assert config.points[0] == (("firmware.project", str(tmp_path / "blank")),)
+    outcome = run_sweep(config, tmp_path / "out", workers=1)
+    tiles = {}
+    for record in outcome.records.values():
+        assert record["status"] == OK, record["error"]
+        summary = record["summary"]
+        assert all(t["jobs"] == 5 for t in summary["tasks"].values())  # one job per sample, 50 ms at 100 Hz
+        tiles[json.dumps(record["values"], sort_keys=True)] = summary["firmware"]["tiles"]
+    assert sorted(tiles.values(), key=json.dumps) == sorted(
+        [
+            {"controller": [0, 1]},
+            {"controller": [1, 1]},
+            {"estimator": [0, 1], "pid": [1, 0]},
+            {"estimator": [0, 1], "pid": [1, 1]},
+        ],
+        key=json.dumps,
+    )

@@ -198,6 +198,18 @@ def _check_point(
     raise first
 
 
+PROJECT_FIELD = "firmware.project"
+
+
+def _absolute_project(flat: dict[str, Any], folder: Path) -> dict[str, Any]:
+    """``flat`` with a relative ``firmware.project`` folder made absolute from ``folder`` (the
+    sweep or scenario file's), as a scenario file's own is from its folder."""
+    value = flat.get(PROJECT_FIELD)
+    if isinstance(value, str) and value and not Path(value).is_absolute():
+        return {**flat, PROJECT_FIELD: str((folder / value).absolute())}
+    return flat
+
+
 def sweep_from_mapping(data: dict[str, Any], where: str, folder: Path, default_name: str) -> SweepConfig:
     """Validate a parsed sweep file (``folder`` resolves a relative ``scenario`` path)."""
     known = {"name", "scenario", "seeds", "metrics", "base", "grid", "points"}
@@ -214,15 +226,17 @@ def sweep_from_mapping(data: dict[str, Any], where: str, folder: Path, default_n
         if not isinstance(path, str):
             raise ConfigError(where, "scenario", f"expected a file name, got {path!r}")
         scenario_path = folder / path
-        scenario_data = read_toml_mapping(scenario_path, "scenario TOML file")
+        scenario_flat = flatten(read_toml_mapping(scenario_path, "scenario TOML file"))
+        scenario_flat = _absolute_project(scenario_flat, scenario_path.parent)
+        scenario_data = nest(scenario_flat)
         base = from_mapping(ScenarioConfig, scenario_data, str(scenario_path))
-        base_data = flatten(scenario_data)
+        base_data = scenario_flat
     else:
         base = ScenarioConfig()
     changes = data.get("base", {})
     if not isinstance(changes, dict):
         raise ConfigError(where, "base", f"expected a table of scenario fields, got {changes!r}")
-    flat_changes = flatten(changes)  # quoted dotted keys ("chip.width" = 4) as nested tables
+    flat_changes = _absolute_project(flatten(changes), folder)  # quoted dotted keys as nested tables
     for key in flat_changes:
         check_field(key, where, f"base.{key}")
     base = from_mapping(ScenarioConfig, nest(flat_changes), f"{where}: [base]", base=base)
@@ -236,6 +250,7 @@ def sweep_from_mapping(data: dict[str, Any], where: str, folder: Path, default_n
         check_field(key, where, f"grid.{key}")
         if not isinstance(values, list) or not values:
             raise ConfigError(where, f"grid.{key}", f"expected a non-empty list of values, got {values!r}")
+        values = [_absolute_project({key: v}, folder)[key] for v in values]
         for i, value in enumerate(values):
             from_mapping(ScenarioConfig, nest({key: value}), f"{where}: grid.{key}[{i}]", base=base)
         grid.append((key, tuple(values)))
@@ -245,7 +260,7 @@ def sweep_from_mapping(data: dict[str, Any], where: str, folder: Path, default_n
         raise ConfigError(where, "points", "expected [[points]] tables of field = value")
     points = []
     for i, point in enumerate(raw_points):
-        flat = flatten(point)
+        flat = _absolute_project(flatten(point), folder)
         if not flat:
             raise ConfigError(where, f"points[{i}]", "an empty point: name at least one field")
         for key in flat:
@@ -285,11 +300,13 @@ def default_metrics(
     base: ScenarioConfig, grid: Sequence[tuple[str, Sequence[Any]]], points: Sequence[Sequence[tuple[str, Any]]]
 ) -> tuple[str, ...]:
     """The metrics of a sweep file that names none: :data:`TASK_METRICS` of every task of the
-    firmware projects its points fly (the base's, and each project a grid value or point names,
-    their tasks in file order), then :data:`DEFAULT_METRICS`."""
-    folders = [base.firmware.project]
-    folders += [str(v) for key, values in grid if key == "firmware.project" for v in values]
-    folders += [str(v) for point in points for key, v in point if key == "firmware.project"]
+    firmware projects its points fly (each project a grid value or point names, and the base's if a
+    point keeps it; their tasks in file order), then :data:`DEFAULT_METRICS`."""
+    varied = any(key == PROJECT_FIELD for key, _ in grid)
+    every_point = bool(points) and all(any(key == PROJECT_FIELD for key, _ in point) for point in points)
+    folders = [] if varied or every_point else [base.firmware.project]  # the base's, if a point flies it
+    folders += [str(v) for key, values in grid if key == PROJECT_FIELD for v in values]
+    folders += [str(v) for point in points for key, v in point if key == PROJECT_FIELD]
     tasks: dict[str, None] = {}
     for folder in dict.fromkeys(folders):
         try:
