@@ -37,7 +37,7 @@ def _firmware(flags: ScenarioFlags, config: Path | None, *, replay: bool = False
 
 
 def _build(fw: FirmwareConfig) -> Path:
-    """The ELF of ``fw``: the built-in application, or the project it names.
+    """The ELF of ``fw``: the project it names (the shipped quadrotor project by default).
 
     Raises:
         CliError: the compiler failed (file and line) or the program cannot fit.

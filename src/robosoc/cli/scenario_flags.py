@@ -132,7 +132,7 @@ Firmware = Annotated[
     typer.Option(
         metavar="DIR",
         help="Fly the firmware project in DIR (its robosoc.toml: robosoc new DIR makes one) instead of the "
-        "built-in application (default: the scenario's [firmware] project).",
+        "shipped quadrotor project (default: the scenario's [firmware] project).",
         callback=_folder,
     ),
 ]

@@ -64,7 +64,7 @@ def table(
         typer.Option(
             metavar="DIR",
             help="Measure the firmware project in DIR (one row per task of its robosoc.toml, the builds it "
-            "supports) instead of the built-in application (default: the scenario's firmware.project; "
+            "supports) instead of the shipped quadrotor project (default: the scenario's firmware.project; "
             "docs/firmware-projects.md).",
         ),
     ] = None,

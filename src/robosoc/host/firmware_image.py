@@ -53,7 +53,7 @@ class FirmwareImage:
         actuator_port: the I/O tile's port the PWM packets arrive on.
         telemetry: the values the host reads from the chip after each period
             (:mod:`robosoc.host.telemetry`; the estimate columns of ``flight.csv`` among them).
-        project: the project's name, or "" for the built-in application.
+        project: the project's name (``[project] name`` of its robosoc.toml).
     """
 
     elf: Path

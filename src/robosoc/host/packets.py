@@ -1,7 +1,7 @@
 """Packet formats between the I/O tile and the firmware tasks, written once.
 
 This module is the single source of the application packets' layout and units, and of the
-message ports the built-in application's travel to (:data:`PORTS`):
+message ports the quadrotor project's travel to (:data:`PORTS`):
 
 - ``sensor``: one sensor sample, I/O tile → estimator (EKF) task;
 - ``estimate``: the state estimate, estimator task → PID task;

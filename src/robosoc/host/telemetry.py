@@ -12,7 +12,7 @@ values until a later close.
 
 Names: the flight log's estimate columns (``est_qw``, ``est_qx``, ``est_qy``, ``est_qz``,
 ``est_height``; ``est_vz`` for the vertical speed) are filled from the telemetry of those names,
-the way the built-in application's estimate reaches ``flight.csv``; any other name becomes a
+the way the quadrotor project's estimate reaches ``flight.csv``; any other name becomes a
 column of its own after the flight log's columns.
 """
 

@@ -117,7 +117,7 @@ class TableSpec:
         seed: the flight's seed.
         workers: processes running builds at once (1: in this process).
         project: a firmware project's folder (docs/firmware-projects.md): its tasks, in the builds
-            it supports, instead of the built-in application's (no seed figures then).
+            it supports ("": the shipped quadrotor project, whose reference figures are the seed's).
         base: the scenario Table I runs under (sensors and their noise, wind, plan, vehicle, chip,
             the firmware section's mapping, kernel settings and Q16.16 multiply routine); each build
             replaces its arithmetic, multiplier and release, the duration is the calibration plus the
