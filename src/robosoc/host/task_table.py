@@ -59,23 +59,23 @@ class TaskTable:
             active_offset=member_offset(elf, TCB_TYPE, "job_active")[0],
         )
 
-    def _byte(self, chip: MPSoC, tile: Tile, address: int) -> int:
-        return chip.cores.read(address, 1, tile=chip.config.tile_index(tile))[0]
+    def _entries(self, chip: MPSoC, tile: Tile) -> bytes:
+        """The whole table as it stands on ``tile`` (one host read)."""
+        return chip.cores.read(self.address, self.entries * self.entry_bytes, tile=chip.config.tile_index(tile))
 
     def created(self, chip: MPSoC, tile: Tile) -> list[int]:
         """The TASK_IDs of the tasks created on ``tile`` (the idle task's excluded), in table order."""
         t = chip.config.tile_index(tile)
         used = int.from_bytes(chip.cores.read(self.count_address, 4, tile=t), "little")
-        return [
-            self._byte(chip, tile, self.address + i * self.entry_bytes + self.id_offset)
-            for i in range(1, min(used, self.entries))
-        ]
+        table = self._entries(chip, tile)
+        return [table[i * self.entry_bytes + self.id_offset] for i in range(1, min(used, self.entries))]
 
     def job_active(self, chip: MPSoC, tile: Tile, task_id: int) -> bool:
         """Whether task ``task_id`` has a job released and not completed on ``tile`` now (True for a
         task not created: there is nothing consistent to read of it)."""
-        for i in range(1, self.entries):
-            entry = self.address + i * self.entry_bytes
-            if self._byte(chip, tile, entry + self.id_offset) == task_id:
-                return self._byte(chip, tile, entry + self.active_offset) != 0
+        table = self._entries(chip, tile)
+        for i in range(1, self.entries):  # [0] is the idle task
+            entry = i * self.entry_bytes
+            if table[entry + self.id_offset] == task_id:
+                return table[entry + self.active_offset] != 0
         return True

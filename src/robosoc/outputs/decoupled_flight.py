@@ -196,26 +196,22 @@ def _send(conn: Connection, *message: object) -> None:
 
 
 def _physics_process(conn: Connection, args: tuple) -> None:
-    _interrupt_once()
-    _report(
-        conn,
-        lambda: run_physics_side(
-            *args,
-            on_listen=lambda address: _send(conn, "listening", address),
-            on_start=lambda: _send(conn, "status", "physics: the chip said hello; flying"),
-            on_sample=lambda done, total: _send(conn, "progress", done, total),
-        ),
-    )
+    _physics_side(conn, run_physics_side, args, "physics: the chip said hello; flying")
 
 
 def _physics_fleet_process(conn: Connection, args: tuple) -> None:
+    _physics_side(conn, run_physics_fleet_side, args, "physics: every chip said hello; flying")
+
+
+def _physics_side(conn: Connection, side: Callable[..., Any], args: tuple, started: str) -> None:
+    """One physics side's process (one vehicle's or a fleet's): its events to the parent."""
     _interrupt_once()
     _report(
         conn,
-        lambda: run_physics_fleet_side(
+        lambda: side(
             *args,
-            on_listen=lambda addresses: _send(conn, "listening", addresses),
-            on_start=lambda: _send(conn, "status", "physics: every chip said hello; flying"),
+            on_listen=lambda address: _send(conn, "listening", address),
+            on_start=lambda: _send(conn, "status", started),
             on_sample=lambda done, total: _send(conn, "progress", done, total),
         ),
     )
