@@ -13,6 +13,7 @@ from typer.testing import CliRunner
 
 from robosoc.cli import app, exit_codes
 from robosoc.cli.new import TEMPLATES
+from robosoc.cli.scenario_flags import ScenarioFlags, resolve
 from robosoc.config.firmware import FirmwareConfig
 from robosoc.config.project import load_project
 from robosoc.config.scenario import ScenarioConfig
@@ -82,7 +83,6 @@ def test_the_blank_project_takes_off_and_holds_its_height(tmp_path: Path) -> Non
 
 
 def test_a_scenario_names_its_project_relative_to_its_own_folder(tmp_path: Path) -> None:
-    from robosoc.cli.scenario_flags import ScenarioFlags, resolve
 
     assert invoke("new", tmp_path / "sc" / "fw").exit_code == 0
     scenario = tmp_path / "sc" / "flight.toml"
@@ -96,10 +96,14 @@ def test_project_errors_end_the_flight_before_it_starts(tmp_path: Path) -> None:
     assert missing.exit_code == exit_codes.USAGE and f"--firmware: no folder {tmp_path / 'none'}" in missing.output
     assert invoke("new", tmp_path / "p").exit_code == 0
     toml = tmp_path / "p" / "robosoc.toml"
-    toml.write_text(toml.read_text().replace("tile = [0, 1]", "tile = [1, 1]"))  # powered off on the seed's chip
-    off = invoke("fly", "--firmware", tmp_path / "p", "--no-out")
+    toml.write_text(toml.read_text().replace("tile = [0, 1]", "tile = [1, 1]"))  # the project's chip powers it
+    dark = tmp_path / "dark.toml"
+    dark.write_text("[chip]\npowered_off = [[1, 1]]\n")
+    off = invoke("fly", dark, "--firmware", tmp_path / "p", "--no-out")
     assert off.exit_code == exit_codes.USAGE
     assert "tasks[0].tile: [1, 1] (controller) is powered off" in off.output
+    mapped = resolve(ScenarioFlags.of(None, None, {"firmware": str(tmp_path / "p")})).config
+    assert mapped.chip.powered_off == ((0, 1), (1, 0))  # the seed's rule: every tile no task uses is off
     toml.write_text(toml.read_text().replace("stack_bytes = 8192", "stack_bytes = 8192\ncolour = 3"))
     bad = invoke("fly", "--firmware", tmp_path / "p", "--no-out")
     assert bad.exit_code == exit_codes.USAGE and f"{toml}: tasks[0].colour: unknown field" in bad.output

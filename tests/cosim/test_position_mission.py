@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import dataclasses
 import json
-import tomllib
 from pathlib import Path
 
 import pytest
@@ -16,8 +15,8 @@ from typer.testing import CliRunner
 
 from robosoc.cli import app, exit_codes
 from robosoc.config.project import load_project
+from robosoc.config.project_scenario import project_scenario
 from robosoc.config.scenario import ScenarioConfig
-from robosoc.config.validate import from_mapping
 from robosoc.control import mission
 
 BOUND_M = 0.20
@@ -37,14 +36,14 @@ def project(tmp_path_factory: pytest.TempPathFactory) -> Path:
     folder = tmp_path_factory.mktemp("position") / "m"
     result = invoke("new", folder, "--template", "position")
     assert result.exit_code == 0, result.output
-    assert f"fly it: robosoc fly {folder / 'mission.toml'}" in result.output
+    assert f"fly it: robosoc fly --firmware {folder}" in result.output
     return folder
 
 
 def _mission(project: Path, **firmware: object) -> ScenarioConfig:
-    data = tomllib.loads((project / "mission.toml").read_text())
-    data["firmware"] = {**data["firmware"], "project": str(project), **firmware}
-    return from_mapping(ScenarioConfig, data, str(project / "mission.toml"))
+    """The project's own mission (its robosoc.toml's [chip] and [scenario]), ``firmware`` changed."""
+    scenario = project_scenario(str(project))
+    return dataclasses.replace(scenario, firmware=dataclasses.replace(scenario.firmware, **firmware))
 
 
 def test_the_project_maps_three_tasks_on_the_three_core_tiles(project: Path) -> None:
@@ -78,9 +77,11 @@ def test_the_mission_is_flown_in_every_build(project: Path, arith: str, multipli
     assert figures["landing_error_m"] <= BOUND_M
 
 
-def test_fly_mission_toml_prints_the_mission_and_the_report_shows_the_waypoints(project: Path, tmp_path: Path) -> None:
+def test_fly_firmware_flies_the_projects_mission_and_the_report_shows_the_waypoints(
+    project: Path, tmp_path: Path
+) -> None:
     out = tmp_path / "run"
-    result = invoke("fly", project / "mission.toml", "--out", out)
+    result = invoke("fly", "--firmware", project, "--out", out)
     assert result.exit_code == 0, result.output
     assert "waypoints reached" in result.output and "4 of 4" in result.output
     assert "landed" in result.output and "position jobs" in result.output
@@ -106,16 +107,18 @@ def test_table_closed_loop_has_a_row_group_per_task(project: Path) -> None:
 
 def test_runs_that_cannot_give_it_position_packets_refuse_it(project: Path, tmp_path: Path) -> None:
     off = tmp_path / "off.toml"
-    off.write_text(f'duration_s = 1.0\n[firmware]\nproject = "{project}"\n[chip]\npowered_off = []\n')
+    off.write_text(f'duration_s = 1.0\n[firmware]\nproject = "{project}"\n[sensors.position]\nenabled = false\n')
     result = invoke("fly", off, "--no-out")
     assert result.exit_code == exit_codes.USAGE
     assert "sensors.position.enabled: the project 'position' takes position packets" in result.output
-    result = invoke("fly", "--firmware", project, "--no-out")
+    dark = tmp_path / "dark.toml"
+    dark.write_text("duration_s = 1.0\n[chip]\npowered_off = [[1, 1]]\n")
+    result = invoke("fly", dark, "--firmware", project, "--no-out")
     assert result.exit_code == exit_codes.USAGE and "tasks[1].tile: [1, 1] (position) is powered off" in result.output
     result = invoke("firmware", "replay", "--firmware", project, "--seconds", "0.1")
     assert result.exit_code == exit_codes.USAGE
     assert "messages[2]: the project takes position packets from the I/O tile" in result.output
-    result = invoke("fly", project / "mission.toml", "--decoupled", "--no-out")
+    result = invoke("fly", "--firmware", project, "--decoupled", "--no-out")
     assert result.exit_code == exit_codes.USAGE and "which the decoupled mode cannot send" in result.output
     result = invoke("table", "--firmware", project, "--iterations", "5")
     assert result.exit_code == exit_codes.USAGE and "--closed-loop flies each build instead" in result.output

@@ -32,7 +32,7 @@ def _firmware(flags: ScenarioFlags, config: Path | None, *, replay: bool = False
     fw = resolve_section(flags, fw, "firmware")
     sends = ("sensor",) if replay else IO_PACKETS
     what = "a replay of a flight log (robosoc fly flies it)"
-    check_firmware(fw, fw.default_chip(), "--firmware", sends=sends, what=what)
+    check_firmware(fw, None, "--firmware", sends=sends, what=what)
     return fw
 
 

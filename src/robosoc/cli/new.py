@@ -3,7 +3,7 @@
 The templates are ordinary projects shipped in ``robosoc/firmware/templates/`` (docs/firmware-projects.md):
 ``blank`` (one task: estimator and PID in one job on one tile), ``quadrotor`` (the seed's two
 tasks on two tiles, messages between them over the NoC) and ``position`` (three tasks on three
-tiles flying a waypoint mission, with the scenario ``mission.toml`` that flies it).
+tiles flying a waypoint mission: its robosoc.toml's ``[scenario]`` defaults).
 """
 
 from __future__ import annotations
@@ -18,7 +18,6 @@ from robosoc.cli import exit_codes, options
 from robosoc.cli.app import app
 from robosoc.cli.console import make_console, plain
 from robosoc.cli.errors import CliError
-from robosoc.config.project import PROJECT_FILE
 from robosoc.firmware import TEMPLATES_DIR
 
 TEMPLATES = tuple(sorted(p.name for p in TEMPLATES_DIR.iterdir() if (p / "robosoc.toml").is_file()))
@@ -48,9 +47,4 @@ def new_command(
     plain(console, f"made project {folder} from the {template} template:")
     for path in sorted(p for p in folder.rglob("*") if p.is_file()):
         plain(console, f"  {path.relative_to(folder)}")
-    scenarios = sorted(p for p in folder.glob("*.toml") if p.name != PROJECT_FILE)
-    if scenarios:  # a template with a scenario of its own (the position example's mission)
-        for scenario in scenarios:
-            plain(console, f"fly it: robosoc fly {scenario}   (docs/firmware-projects.md)")
-    else:
-        plain(console, f"fly it: robosoc fly --firmware {folder}   (docs/firmware-projects.md)")
+    plain(console, f"fly it: robosoc fly --firmware {folder}   (docs/firmware-projects.md)")

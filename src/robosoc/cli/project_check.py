@@ -59,18 +59,27 @@ def check_project(config: ScenarioConfig, source: str, *, sends: tuple[str, ...]
             raise CliError(
                 f"sensors.position.enabled: the project {project.project.name!r} takes position packets from "
                 f"the I/O tile (its message {message.name!r}), but the scenario's position sensor is off: "
-                "set [sensors.position] enabled = true (the position example's mission.toml does)"
+                "set [sensors.position] enabled = true (the position example's robosoc.toml does, in its [scenario])"
             )
 
 
 def check_firmware(
-    fw: FirmwareConfig, chip: ChipConfig, source: str, *, sends: tuple[str, ...] | None = None, what: str = ""
+    fw: FirmwareConfig, chip: ChipConfig | None, source: str, *, sends: tuple[str, ...] | None = None, what: str = ""
 ) -> FirmwareProject | None:
-    """:func:`check_project` of a firmware configuration and the chip it is to run on (without the
+    """:func:`check_project` of a firmware configuration and the chip it is to run on (None: the
+    project's own, :meth:`~robosoc.config.firmware.FirmwareConfig.project_chip`; without the
     scenario's sensors); the project it names, or None for the shipped default."""
+
     folder = fw.project
     if not folder:
         return None
+    if chip is None:
+        if not Path(folder).is_dir():
+            raise CliError(f"{source}: no folder {folder} (robosoc new DIR makes a project)")
+        try:
+            chip = fw.project_chip()
+        except ValueError as exc:  # ConfigError too: the project file and key named
+            raise CliError(f"{source}: {exc}") from exc
     project = load_checked(folder, chip, source, fw.mapping)
     try:
         fw.load_project()  # the placement's task names

@@ -7,8 +7,9 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from robosoc.cli import exit_codes, files
+from robosoc.cli import exit_codes
 from robosoc.cli.app import RobosocGroup, app
+from robosoc.cli.scenario_flags import Firmware
 
 if TYPE_CHECKING:
     from robosoc.config.scenario import ScenarioConfig
@@ -22,15 +23,18 @@ scenario_app = typer.Typer(
 app.add_typer(scenario_app, name="scenario")
 
 
-def load_scenario(path: Path | None, label: str | None) -> tuple[ScenarioConfig, tuple[str, ...]]:
-    """The scenario of ``path`` merged into the built-in default (the default itself for None), and
-    the dotted fields the file sets.  Errors name ``label`` (the option, or None for an argument),
-    the file and the field."""
-    from robosoc.config.scenario import ScenarioConfig
+def load_scenario(
+    path: Path | None, label: str | None, firmware: str | None = None
+) -> tuple[ScenarioConfig, tuple[str, ...]]:
+    """The scenario of ``path`` merged into the built-in default (the default itself for None) and
+    the defaults of the project it flies (``firmware``, as ``--firmware``, or the file's), and the
+    dotted fields the file sets.  Errors name ``label`` (the option, or None for an argument), the
+    file and the field."""
+    from robosoc.cli.scenario_flags import ScenarioFlags, resolve
 
-    if path is None:
-        return ScenarioConfig(), ()
-    return files.load_toml(ScenarioConfig, path, label)
+    resolved = resolve(ScenarioFlags(path, label, {"firmware": firmware} if firmware is not None else {}))
+    named = next((fields for source, fields in resolved.sources if source == str(path)), ())
+    return resolved.config, named
 
 
 @scenario_app.command("show", epilog=exit_codes.EPILOG)
@@ -41,9 +45,10 @@ def scenario_show(
             metavar="FILE", help="A scenario TOML file (it may name only the fields it changes); default: built-in."
         ),
     ] = None,
+    firmware: Firmware = None,
 ) -> None:
     """Print the resolved scenario, every field, as TOML: save it, edit it, fly it with robosoc fly FILE."""
     from robosoc.config.scenario import scenario_toml
 
-    config, _ = load_scenario(file, None)
+    config, _ = load_scenario(file, None, firmware)
     typer.echo(scenario_toml(config), nl=False)

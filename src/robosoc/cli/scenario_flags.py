@@ -11,7 +11,6 @@ row here, and nothing else.
 
 from __future__ import annotations
 
-import dataclasses
 import functools
 import inspect
 import re
@@ -27,6 +26,7 @@ from robosoc.cli.engine_option import Engine
 from robosoc.cli.errors import CliError
 from robosoc.config.firmware import ARITH_CHOICES, FIXED_MUL64_CHOICES
 from robosoc.config.power import SUPPLIES
+from robosoc.config.project_scenario import PROJECT_FIELD
 from robosoc.config.scenario import CONTROLLERS, MAX_VEHICLES
 from robosoc.config.vehicle import VEHICLE_PRESETS
 
@@ -131,8 +131,9 @@ Firmware = Annotated[
     str | None,
     typer.Option(
         metavar="DIR",
-        help="Fly the firmware project in DIR (its robosoc.toml: robosoc new DIR makes one) instead of the "
-        "shipped quadrotor project (default: the scenario's [firmware] project).",
+        help="The firmware project in DIR (its robosoc.toml: robosoc new DIR makes one; its chip and "
+        "scenario tables are the defaults) instead of the shipped quadrotor project (default: the "
+        "scenario's firmware.project).",
         callback=_folder,
     ),
 ]
@@ -175,7 +176,7 @@ FLAGS: tuple[ScenarioFlag, ...] = (
     ScenarioFlag("--mul/--no-mul", "mul", "firmware.multiplier", Mul, (FLY, SERVE_CHIP, FIRMWARE)),
     ScenarioFlag("--fixed-mul", "fixed_mul", "firmware.fixed_mul64", FixedMul, (FLY, SERVE_CHIP, FIRMWARE, TABLE)),
     ScenarioFlag("--engine", "engine", "chip.engine", Engine, (FLY,)),
-    ScenarioFlag("--firmware", "firmware", "firmware.project", Firmware, (FLY, SERVE_CHIP, FIRMWARE)),
+    ScenarioFlag("--firmware", "firmware", "firmware.project", Firmware, (FLY, SERVE_CHIP, FIRMWARE, TABLE)),
     ScenarioFlag("--supply", "supply", "power.supply", Supply, (FLY,)),
     ScenarioFlag("--noc-gating/--no-noc-gating", "noc_gating", "chip.noc.clock_gating", NocGating, (FLY,)),
 )
@@ -246,8 +247,6 @@ def resolve(flags: ScenarioFlags) -> ResolvedScenario:
         CliError: an unreadable or invalid file (file and field named), two options for one field,
             or a value that the scenario refuses (the option named).
     """
-    from robosoc.cli import files
-    from robosoc.config.scenario import ScenarioConfig
 
     given = flags.given()
     by_field: dict[str, list[str]] = {}
@@ -256,20 +255,47 @@ def resolve(flags: ScenarioFlags) -> ResolvedScenario:
     for names in by_field.values():
         if len(names) > 1:
             raise options.fail(names[0], f"cannot be combined with {' or '.join(names[1:])}")
-    named: tuple[str, ...]
-    if flags.path is None:
-        config, named = ScenarioConfig(), ()
-    else:
-        config, named = files.load_toml(ScenarioConfig, flags.path, flags.label)
-        project = config.firmware.project
-        if project and not Path(project).is_absolute():  # a project named by a file: from the file's folder
-            absolute = str((flags.path.parent / project).absolute())
-            config = dataclasses.replace(config, firmware=dataclasses.replace(config.firmware, project=absolute))
+    config, named = _file_scenario(flags, next((f for f in given if f.field == PROJECT_FIELD), None))
     sources = [(str(flags.path), named)] if flags.path is not None else []
     file_names = [str(flags.path)] if flags.path is not None else []
     config = override(config, {flag.option: (flag.field, flags.values[flag.param]) for flag in given}, file_names)
     sources += [(flag.option, (flag.field,)) for flag in given]
     return ResolvedScenario(config, flags.path, tuple(given), tuple(sources))
+
+
+def _file_scenario(flags: ScenarioFlags, project_flag: ScenarioFlag | None) -> tuple[ScenarioConfig, tuple[str, ...]]:
+    """The scenario file's fields (none without a file) over the defaults of the project flown
+    (:mod:`robosoc.config.project_scenario`: the option's project if given, else the file's, whose
+    relative folder is the file's neighbour), and the dotted fields the file sets."""
+    from robosoc.cli import files
+    from robosoc.config.project_scenario import project_scenario
+    from robosoc.config.scenario import ScenarioConfig
+    from robosoc.config.validate import ConfigError, from_mapping, named_fields
+
+    data: dict[str, Any] = {}
+    if flags.path is not None:
+        data = files.read_toml(flags.path, flags.label)
+    firmware = data.get("firmware")
+    project = firmware.get("project", "") if isinstance(firmware, dict) else ""
+    if isinstance(project, str) and project and not Path(project).is_absolute() and flags.path is not None:
+        project = str((flags.path.parent / project).absolute())  # a project named by a file: from its folder
+        data = {**data, "firmware": {**firmware, "project": project}}  # type: ignore[dict-item]
+    source = f"{flags.label + ': ' if flags.label else ''}{flags.path}: {PROJECT_FIELD}"
+    if project_flag is not None:  # the option's project: its defaults, under the file's other fields
+        project, source = flags.values[project_flag.param], project_flag.option
+        if isinstance(firmware, dict) and "project" in firmware:
+            data = {**data, "firmware": {k: v for k, v in firmware.items() if k != "project"}}
+    try:
+        base = project_scenario(project if isinstance(project, str) else "")  # a wrong type: the file's error below
+    except ConfigError as exc:
+        reason = exc.reason if exc.field == PROJECT_FIELD and not exc.where else str(exc)
+        raise CliError(f"{source}: {reason}") from exc
+    if flags.path is None:
+        return base, ()
+    try:
+        return from_mapping(ScenarioConfig, data, str(flags.path), base=base), named_fields(data)
+    except ConfigError as exc:
+        raise CliError(f"{flags.label}: {exc}" if flags.label else str(exc)) from exc
 
 
 C = TypeVar("C", bound="DataclassInstance")

@@ -16,7 +16,6 @@ from robosoc.cli.console import make_console, plain
 from robosoc.cli.errors import CliError
 from robosoc.cli.project_check import check_inputs, load_checked
 from robosoc.cli.scenario_flags import TABLE, ScenarioFlags, resolve, takes_scenario
-from robosoc.config.firmware import FirmwareConfig
 from robosoc.config.scenario import ScenarioConfig
 
 RELEASES = ("event", "periodic", "both")
@@ -59,15 +58,6 @@ def table(
         ),
     ] = None,
     out: Annotated[Path | None, typer.Option("--out", help="Folder for table.csv and table.json.")] = None,
-    firmware: Annotated[
-        Path | None,
-        typer.Option(
-            metavar="DIR",
-            help="Measure the firmware project in DIR (one row per task of its robosoc.toml, the builds it "
-            "supports) instead of the shipped quadrotor project (default: the scenario's firmware.project; "
-            "docs/firmware-projects.md).",
-        ),
-    ] = None,
     *,
     flags: ScenarioFlags,
 ) -> None:
@@ -84,18 +74,16 @@ def table(
 
     resolved = resolve(flags)
     scenario = resolved.config
-    given_file = resolved.path is not None
     folder = (
         files.output_dir(out, "--out", names=("table.csv", "table.json"), inputs=resolved.inputs)
         if out is not None
         else None
     )
     release = release or scenario.firmware.release
-    project = str(firmware.absolute()) if firmware is not None else scenario.firmware.project
+    project = scenario.firmware.project
     if project:
-        chip = scenario.chip if given_file else FirmwareConfig(project=project).default_chip()
-        source = "--firmware" if firmware is not None else resolved.source_of("firmware.project")
-        checked = load_checked(project, chip, source, scenario.firmware.mapping)
+        source = resolved.source_of("firmware.project")
+        checked = load_checked(project, scenario.chip, source, scenario.firmware.mapping)
         if release != "event" and not checked.project.main:
             raise options.fail("--release", OWN_RELEASE)
         if not closed_loop:

@@ -25,6 +25,7 @@ estimator, EKF and altitude filter, on (0, 1), the PID controller on (1, 0)), th
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -199,9 +200,37 @@ class FirmwareConfig:
                     )
 
     def default_chip(self) -> ChipConfig:
-        """The chip a replay runs on when none is given: the seed's for the shipped project
-        (:meth:`seed_chip`), the seed's 2×2 with every core tile powered for another project."""
-        return ChipConfig(width=2, height=2, io_tile=(0, 0)) if self.project else self.seed_chip()
+        """The chip a replay or Table I runs on when none is given: :meth:`project_chip`."""
+        return self.project_chip()
+
+    def project_chip(self, project: FirmwareProject | None = None) -> ChipConfig:
+        """The chip the project is made for: the seed's 2×2 (I/O tile (0, 0)) with the project
+        file's ``[chip]`` fields, and, unless those name ``powered_off``, every core tile no task
+        uses powered off (the seed's rule, :meth:`seed_chip`).  ``project``: the loaded project.
+
+        Raises:
+            ConfigError: a ``[chip]`` field is wrong (the project file and ``chip.<field>`` named).
+        """
+        from robosoc.config.dotted import nest
+        from robosoc.config.validate import ConfigError, from_mapping
+
+        project = project or self.load_project()
+        fields = dict(project.chip)
+        if not fields:
+            return self.seed_chip()
+        base = ChipConfig(width=2, height=2, io_tile=(0, 0))
+        try:
+            chip = from_mapping(ChipConfig, nest(fields), str(project.file), base=base)
+            if "powered_off" in fields:
+                return chip
+            used = set(project.tiles(self.mapping))
+            cores = (chip.tile_xy(i) for i in range(chip.n_tiles))
+            off = tuple(xy for xy in cores if xy != tuple(chip.io_tile) and xy not in used)
+            return dataclasses.replace(chip, powered_off=off)
+        except ConfigError as exc:
+            raise ConfigError(exc.where, f"chip.{exc.field}" if exc.field else "chip", exc.reason) from exc
+        except ValueError as exc:
+            raise ConfigError(str(project.file), "chip", str(exc)) from exc
 
     def seed_chip(self) -> ChipConfig:
         """The seed's 2×2 chip for this mapping: I/O tile (0, 0), every unused core tile powered off."""

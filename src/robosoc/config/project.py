@@ -50,6 +50,18 @@ no task there takes as its event port) it waits in the kernel until the task rea
     response_ms = 1.5                # mean response time per job
     energy_nj = 1200.0               # mean energy per job
 
+    [chip]                           # optional: the chip the project is made for, any chip field
+    powered_off = []                 # (robosoc scenario show lists them); default: the seed's 2x2,
+                                     # every core tile no task uses powered off
+
+    [scenario]                       # optional: scenario defaults, any field but chip and
+    duration_s = 29.0                # firmware.project (robosoc scenario show lists them)
+    sensors.position.enabled = true
+
+A scenario that flies the project starts from these defaults: the built-in scenario, the project's
+``[chip]`` and ``[scenario]``, then the scenario file's own fields, then the command's options
+(:mod:`robosoc.config.project_scenario`).
+
 The firmware's ``main`` is generated from the task table (:mod:`robosoc.host.project_main`): on
 each tile it calls the ``init`` of the tasks mapped there and creates them with the kernel, in
 the order of the file.  Errors name the file and the dotted key (``tasks[1].port``).
@@ -57,13 +69,15 @@ the order of the file.  Errors name the file and the dotted key (``tasks[1].port
 
 from __future__ import annotations
 
+import dataclasses
 import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Literal
+from typing import Any, Literal
 
 from robosoc.config.chip import ChipConfig
+from robosoc.config.dotted import flatten
 from robosoc.config.firmware import ARITH_CHOICES
 from robosoc.config.ranges import check_fields
 from robosoc.config.validate import ConfigError, from_mapping, read_toml_mapping
@@ -306,6 +320,11 @@ class FirmwareProject:
     telemetry: tuple[TelemetrySpec, ...] = ()
     reference: tuple[ReferenceFigure, ...] = ()
     folder: str = "."
+    chip: tuple[tuple[str, Any], ...] = field(default=(), hash=False)
+    """The ``[chip]`` table as dotted fields (checked when loaded; applied by
+    :meth:`robosoc.config.firmware.FirmwareConfig.project_chip`)."""
+    scenario: tuple[tuple[str, Any], ...] = field(default=(), hash=False)
+    """The ``[scenario]`` table as dotted fields: defaults of a scenario that flies the project."""
 
     def __post_init__(self) -> None:
         if not self.tasks:
@@ -362,6 +381,11 @@ class FirmwareProject:
             if pair in figures:
                 raise ValueError(f"reference[{i}]: {figure.task} {figure.build} is also reference[{figures[pair]}]")
             figures[pair] = i
+
+    @property
+    def file(self) -> Path:
+        """The project file."""
+        return Path(self.folder) / PROJECT_FILE
 
     @property
     def task_names(self) -> tuple[str, ...]:
@@ -428,7 +452,8 @@ def load_project(folder: str | Path) -> FirmwareProject:
 
     Raises:
         ConfigError: naming the file and the key: a missing file, unknown keys, wrong types, values
-            out of range, two tasks on one port, a message to no task, a source that is not there.
+            out of range, two tasks on one port, a message to no task, a source that is not there,
+            a ``[chip]`` or ``[scenario]`` field that is no field of its table.
     """
     path = Path(folder)
     if path.is_dir():
@@ -436,6 +461,8 @@ def load_project(folder: str | Path) -> FirmwareProject:
     data = read_toml_mapping(path, "project file")
     if "folder" in data:
         raise ConfigError(str(path), "folder", "unknown field (the project's folder is where its file is)")
+    chip = _defaults_table(data.pop("chip", {}), path, "chip")
+    scenario = _defaults_table(data.pop("scenario", {}), path, "scenario")
     data["folder"] = str(path.parent)
     project = from_mapping(FirmwareProject, data, str(path))
     for i, source in enumerate(project.project.sources):
@@ -444,4 +471,22 @@ def load_project(folder: str | Path) -> FirmwareProject:
     for i, include in enumerate(project.project.include_dirs):
         if not project.path(include).is_dir():
             raise ConfigError(str(path), f"project.include_dirs[{i}]", f"no such folder: {project.path(include)}")
-    return project
+    return dataclasses.replace(project, chip=chip, scenario=scenario)
+
+
+def _defaults_table(table: Any, path: Path, name: str) -> tuple[tuple[str, Any], ...]:
+    """The project's ``[chip]`` or ``[scenario]`` table as dotted fields, each name checked
+    (values are checked with the scenario that flies the project: they may need its other fields)."""
+    from robosoc.config.scenario_fields import check_field  # the scenario's fields (config.scenario names projects)
+
+    if not isinstance(table, dict):
+        raise ConfigError(str(path), name, f"expected a table of {name} fields, got {table!r}")
+    flat = flatten(table)
+    for key in flat:
+        dotted = f"{name}.{key}"
+        if name == "scenario" and key.split(".", 1)[0] == "chip":
+            raise ConfigError(str(path), dotted, "the chip's fields go in the project's [chip] table")
+        if name == "scenario" and key == "firmware.project":
+            raise ConfigError(str(path), dotted, "a project file does not name a project (it is one)")
+        check_field(key if name == "scenario" else dotted, str(path), dotted)
+    return tuple(flat.items())

@@ -34,24 +34,20 @@ combination (the listed values win where both set a field).
 
 from __future__ import annotations
 
-import dataclasses
 import math
-import typing
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
+from robosoc.config.dotted import flatten, nest
 from robosoc.config.firmware import FirmwareConfig
+from robosoc.config.project_scenario import PROJECT_FIELD, scenario_from_fields
 from robosoc.config.ranges import check_seed
 from robosoc.config.scenario import ScenarioConfig
+from robosoc.config.scenario_fields import SEED_FIELD, field_names
+from robosoc.config.scenario_fields import check_field as check_scenario_field
 from robosoc.config.validate import ConfigError, from_mapping, read_toml_mapping
-
-if TYPE_CHECKING:
-    from _typeshed import DataclassInstance
-
-SEED_FIELD = "seed"
-"""The scenario's seed: a sweep sets it from its ``seeds`` list, never from a grid or a point."""
 
 MAX_POINTS = 100_000
 """Largest sweep (points × seeds): a guard against a grid typed with one list too many."""
@@ -61,59 +57,27 @@ Assignment = tuple[tuple[str, Value], ...]
 """One point's field values: (dotted name, value) pairs in the file's order."""
 
 
-def flatten(table: dict[str, Any], prefix: str = "") -> dict[str, Any]:
-    """Nested TOML tables as dotted names: ``{"a": {"b": 1}}`` → ``{"a.b": 1}``."""
-    flat: dict[str, Any] = {}
-    for key, value in table.items():
-        name = f"{prefix}{key}"
-        if isinstance(value, dict):
-            flat.update(flatten(value, f"{name}."))
-        else:
-            flat[name] = value
-    return flat
-
-
-def nest(assignment: Assignment | dict[str, Any]) -> dict[str, Any]:
-    """Dotted names back to nested tables, as :func:`robosoc.config.validate.from_mapping` takes."""
-    items = assignment.items() if isinstance(assignment, dict) else assignment
-    tree: dict[str, Any] = {}
-    for name, value in items:
-        *tables, leaf = name.split(".")
-        node = tree
-        for table in tables:
-            node = node.setdefault(table, {})
-        node[leaf] = value
-    return tree
-
-
-def field_names(cls: type[DataclassInstance] | DataclassInstance = ScenarioConfig, prefix: str = "") -> list[str]:
-    """Every dotted field of ``cls``, nested dataclasses descended."""
-    names: list[str] = []
-    hints = typing.get_type_hints(cls)
-    for f in dataclasses.fields(cls):
-        hint = hints[f.name]
-        if dataclasses.is_dataclass(hint):
-            names.extend(field_names(hint, f"{prefix}{f.name}."))
-        else:
-            names.append(f"{prefix}{f.name}")
-    return names
-
-
 def check_field(name: str, where: str, key: str) -> None:
-    """Raise :class:`ConfigError` unless ``name`` is a dotted field of the scenario."""
+    """Raise :class:`ConfigError` unless ``name`` is a dotted field of the scenario a sweep may vary."""
     if name == SEED_FIELD:
         raise ConfigError(where, key, "vary the seed with seeds = [...] at the top of the sweep file")
-    cls: Any = ScenarioConfig
-    parts = name.split(".")
-    for i, part in enumerate(parts):
-        hints = typing.get_type_hints(cls) if dataclasses.is_dataclass(cls) else {}
-        if part not in hints:
-            known = ", ".join(sorted(hints)) if hints else "none: it is not a table"
-            parent = ".".join(parts[:i]) or "the scenario"
-            raise ConfigError(where, key, f"{name!r} is not a scenario field ({parent} has: {known})")
-        cls = hints[part]
-    if dataclasses.is_dataclass(cls):
-        raise ConfigError(where, key, f"{name!r} is a table; vary one of its fields ({', '.join(field_names(cls))})")
+    check_scenario_field(name, where, key, "vary")
+
+
+def point_scenario(
+    base: ScenarioConfig, base_fields: Sequence[tuple[str, Any]], assignment: Sequence[tuple[str, Any]], where: str
+) -> ScenarioConfig:
+    """The scenario of one point: ``base`` with the point's values; a point that flies another
+    project than the base's starts from that project's defaults under the base's fields
+    (``base_fields``, the scenario file's and ``[base]``'s: :mod:`robosoc.config.project_scenario`).
+
+    Raises:
+        ConfigError: a value is wrong (``where`` named) or the point's project is (its file named).
+    """
+    project = dict(assignment).get(PROJECT_FIELD)
+    if project is not None and project != base.firmware.project:
+        base = scenario_from_fields({**dict(base_fields), PROJECT_FIELD: project}, where)
+    return from_mapping(ScenarioConfig, nest(assignment), where, base=base)
 
 
 @dataclass(frozen=True)
@@ -156,7 +120,7 @@ class SweepConfig:
 
     def scenario(self, assignment: Assignment, where: str = "") -> ScenarioConfig:
         """The base scenario with one point's values (raises :class:`ConfigError` if invalid)."""
-        return from_mapping(ScenarioConfig, nest(assignment), where or self.source, base=self.base)
+        return point_scenario(self.base, self.base_fields, assignment, where or self.source)
 
 
 def _list_of(value: Any, where: str, key: str, kind: type, what: str) -> list[Any]:
@@ -169,14 +133,18 @@ def _list_of(value: Any, where: str, key: str, kind: type, what: str) -> list[An
 
 
 def _check_point(
-    point: dict[str, Any], grid: list[tuple[str, tuple[Value, ...]]], base: ScenarioConfig, where: str
+    point: dict[str, Any],
+    grid: list[tuple[str, tuple[Value, ...]]],
+    base: ScenarioConfig,
+    base_fields: Sequence[tuple[str, Any]],
+    where: str,
 ) -> None:
     """Check a listed point's values before anything runs, as the grid's are: the point as a whole
     (its values are meant together: ``chip.width = 4`` with a task on tile 3,0) against the base
     scenario.  If it is invalid there but a grid is given, it must be valid with at least one grid
     combination (the others are failed points, recorded); raises :class:`ConfigError` otherwise."""
     try:
-        from_mapping(ScenarioConfig, nest(point), where, base=base)
+        point_scenario(base, base_fields, tuple(point.items()), where)
         return
     except ConfigError as alone:
         if not grid:
@@ -191,14 +159,11 @@ def _check_point(
             raise first
     for combo in combos:
         try:
-            from_mapping(ScenarioConfig, nest({**combo, **point}), where, base=base)
+            point_scenario(base, base_fields, tuple({**combo, **point}.items()), where)
             return
         except ConfigError:
             continue
     raise first
-
-
-PROJECT_FIELD = "firmware.project"
 
 
 def _absolute_project(flat: dict[str, Any], folder: Path) -> dict[str, Any]:
@@ -228,8 +193,7 @@ def sweep_from_mapping(data: dict[str, Any], where: str, folder: Path, default_n
         scenario_path = folder / path
         scenario_flat = flatten(read_toml_mapping(scenario_path, "scenario TOML file"))
         scenario_flat = _absolute_project(scenario_flat, scenario_path.parent)
-        scenario_data = nest(scenario_flat)
-        base = from_mapping(ScenarioConfig, scenario_data, str(scenario_path))
+        base = scenario_from_fields(scenario_flat, str(scenario_path))
         base_data = scenario_flat
     else:
         base = ScenarioConfig()
@@ -239,7 +203,7 @@ def sweep_from_mapping(data: dict[str, Any], where: str, folder: Path, default_n
     flat_changes = _absolute_project(flatten(changes), folder)  # quoted dotted keys as nested tables
     for key in flat_changes:
         check_field(key, where, f"base.{key}")
-    base = from_mapping(ScenarioConfig, nest(flat_changes), f"{where}: [base]", base=base)
+    base = point_scenario(base, tuple(base_data.items()), tuple(flat_changes.items()), f"{where}: [base]")
     base_data.update(flat_changes)
 
     grid_table = data.get("grid", {})
@@ -252,7 +216,7 @@ def sweep_from_mapping(data: dict[str, Any], where: str, folder: Path, default_n
             raise ConfigError(where, f"grid.{key}", f"expected a non-empty list of values, got {values!r}")
         values = [_absolute_project({key: v}, folder)[key] for v in values]
         for i, value in enumerate(values):
-            from_mapping(ScenarioConfig, nest({key: value}), f"{where}: grid.{key}[{i}]", base=base)
+            point_scenario(base, tuple(base_data.items()), ((key, value),), f"{where}: grid.{key}[{i}]")
         grid.append((key, tuple(values)))
 
     raw_points = data.get("points", [])
@@ -265,7 +229,7 @@ def sweep_from_mapping(data: dict[str, Any], where: str, folder: Path, default_n
             raise ConfigError(where, f"points[{i}]", "an empty point: name at least one field")
         for key in flat:
             check_field(key, where, f"points[{i}].{key}")
-        _check_point(flat, grid, base, f"{where}: points[{i}]")
+        _check_point(flat, grid, base, tuple(base_data.items()), f"{where}: points[{i}]")
         points.append(tuple(flat.items()))
 
     seeds = tuple(_list_of(data.get("seeds", [1]), where, "seeds", int, "seeds (integers)"))

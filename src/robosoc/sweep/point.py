@@ -12,12 +12,14 @@ import dataclasses
 import tempfile
 import time
 import traceback
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from robosoc.config.scenario import ScenarioConfig
-from robosoc.config.validate import ConfigError, from_mapping
+from robosoc.config.sweep import point_scenario
+from robosoc.config.validate import ConfigError
 from robosoc.sweep.plan import Point
 
 OK = "ok"
@@ -46,11 +48,15 @@ def metric(summary: dict[str, Any] | None, name: str) -> Any:
     return node
 
 
-def run_point(base: ScenarioConfig, point: Point, source: str) -> PointResult:
-    """Fly ``point`` (the base scenario with its values) and return its summary and files."""
+def run_point(
+    base: ScenarioConfig, point: Point, source: str, base_fields: Sequence[tuple[str, Any]] = ()
+) -> PointResult:
+    """Fly ``point`` (the base scenario with its values; ``base_fields``, the fields that made the
+    base, for a point that flies another project: :func:`robosoc.config.sweep.point_scenario`) and
+    return its summary and files."""
     start = time.perf_counter()
     try:
-        scenario = from_mapping(ScenarioConfig, point.changes(), f"{source}: {point.label}", base=base)
+        scenario = point_scenario(base, base_fields, point.assignment, f"{source}: {point.label}")
         scenario = dataclasses.replace(scenario, seed=point.seed)
     except ConfigError as exc:
         return PointResult(point.key, FAILED, f"invalid combination: {exc}", worker_s=time.perf_counter() - start)

@@ -34,7 +34,6 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from robosoc.config.scenario import ScenarioConfig
 from robosoc.config.sweep import SweepConfig
 from robosoc.sweep.plan import Point, plan
 from robosoc.sweep.point import FAILED, PointResult, run_point
@@ -121,7 +120,7 @@ def warm_worker(parent: int | None = None) -> None:
 def prepare(config: SweepConfig, points: list[Point], on_status: Callable[[str], None]) -> None:
     """Build, once and before the workers start, every firmware image the points will load, and
     compile the chip kernels into numba's cache if they are not there (workers then only load)."""
-    from robosoc.config.validate import ConfigError, from_mapping
+    from robosoc.config.validate import ConfigError
     from robosoc.config.vehicle import vehicle_preset
     from robosoc.cosim.chip_warmup import prepare_chip
     from robosoc.host.scenario_image import scenario_image
@@ -129,7 +128,7 @@ def prepare(config: SweepConfig, points: list[Point], on_status: Callable[[str],
     seen: set[str] = set()
     for point in points:
         try:
-            scenario = from_mapping(ScenarioConfig, point.changes(), config.source, base=config.base)
+            scenario = config.scenario(point.assignment)
         except ConfigError:
             continue  # recorded as failed when it runs
         if scenario.controller != "chip":
@@ -176,7 +175,7 @@ class _LocalPool:
         while queue or running:
             while queue and len(running) < 2 * self.workers:
                 point = queue.pop(0)
-                running[self.pool.submit(run_point, config.base, point, config.source)] = point
+                running[self.pool.submit(run_point, config.base, point, config.source, config.base_fields)] = point
             done, _ = wait(running, return_when=FIRST_COMPLETED)
             broken = False
             for future in done:
@@ -242,10 +241,11 @@ class _DaskPool:
         from dask.distributed import as_completed
 
         base = self.client.scatter(config.base, broadcast=True)
+        fields = self.client.scatter(config.base_fields, broadcast=True)
         futures = {}
         for point in todo:
             key = f"robosoc-point-{point.key}"
-            futures[self.client.submit(run_point, base, point, config.source, key=key, pure=False)] = point
+            futures[self.client.submit(run_point, base, point, config.source, fields, key=key, pure=False)] = point
         for future in as_completed(futures):
             point = futures[future]
             try:
