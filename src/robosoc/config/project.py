@@ -32,11 +32,29 @@ A project is a folder with C sources and a ``robosoc.toml``::
     port = 1                         # the destination port
     source = "io"                    # "io" (the host's I/O tile) or a task's name
     destination = "ping"             # "io" or a task's name
-    packet = "sensor"                # from "io": what the I/O tile sends, "sensor" (default) or "position"
+    packet = "sensor"                # the format: one of robosoc's packets (robosoc_packets.h)
+
+    [[messages]]                     # between tasks, a format of the message's own:
+    name = "command"
+    port = 2
+    source = "ping"
+    destination = "pong"
+    fields = [{name = "roll_sp", type = "real"}, {name = "rates", type = "real", count = 3}]
 
 A message to a task on its event ``port`` releases a job; on another port of the task's tile (one
 no task there takes as its event port) it waits in the kernel until the task reads it with
 ``os_probe``/``os_recv``: how a task takes a second input (the position example's fix).
+
+A message's format is ``packet``, one of robosoc's packets (:data:`ROBOSOC_PACKETS`), or, between
+tasks, ``fields``, never both.  From ``io`` the packet is what the I/O tile sends,
+:data:`IO_PACKETS` (default ``sensor``); to ``io`` the PWM commands, :data:`TO_IO_PACKETS` (the
+default); between tasks any of robosoc's (``estimate``: the estimator and PID libraries') or
+none.  ``fields`` are ``{name, type, count = 1}``: a C identifier each, no name twice, ``type`` one
+of ``u16``, ``u32``, ``i32``, ``q16`` (Q16.16), ``f32``, ``real`` (the build's real_t, 4 bytes),
+``count`` 1..58; laid out in order without padding within one NoC packet's payload (116 bytes)
+by :func:`robosoc.config.packet_layout.lay_out`, which refuses a layout that would need padding,
+naming the field.  The generated header has, per message with a format, ``robosoc_msg_<name>_t``
+(``struct robosoc_msg_<name>`` for fields, each offset asserted) and ``ROBOSOC_MSG_<NAME>_BYTES``.
 
     [[telemetry]]                    # values the host reads from a task's memory (no simulated cycle)
     name = "est_height"              # the column in flight.csv and the MCAP topic's field
