@@ -117,7 +117,7 @@ static void position_step(const robosoc_msg_estimate_t *est, real_t *roll, real_
 
 void position_on_message(const os_msg_t *msg, void *arg)
 {
-    robosoc_msg_estimate_t est;             /* forwarded as the command (robosoc.toml: the same packet) */
+    robosoc_msg_estimate_t est;            /* forwarded as the command (robosoc.toml: the same packet) */
     robosoc_msg_command_t *command = &est; /* with its roll and pitch setpoints set */
     (void)arg;
     if (msg->len != ROBOSOC_MSG_ESTIMATE_BYTES) {
