@@ -260,3 +260,19 @@ def test_a_firmware_that_stops_commanding_marks_the_run(tmp_path: Path) -> None:
     scenario.write_text(scenario.read_text().replace("= 15", "= 21"))  # longer than the silence: not marked
     assert invoke("fly", scenario, "--out", tmp_path / "out2").exit_code == 0
     assert "no_actuator_command" not in json.loads((tmp_path / "out2" / "summary.json").read_text())
+
+
+def test_a_pwm_message_of_the_wrong_size_stops_the_flight_naming_it(tmp_path: Path) -> None:
+    """The I/O tile knows the size of the message it takes (robosoc_msg_pwm_t, 16 bytes): a
+    controller that sends 4 bytes short ends the flight with exit code 3, the message named."""
+    project = _broken(tmp_path, "    os_send(ROBOSOC_MSG_PWM_TILE", "")
+    source = project / "controller.c"
+    sent = "&out, ROBOSOC_MSG_PWM_BYTES);"
+    assert sent in source.read_text()
+    source.write_text(source.read_text().replace(sent, "&out, ROBOSOC_MSG_PWM_BYTES - 4u);"))
+    out = tmp_path / "run"
+    result = invoke("fly", "--firmware", project, "--duration", "0.05", "--out", out)
+    assert result.exit_code == exit_codes.SIMULATOR_STOP, result.output
+    text = " ".join(result.output.split())
+    assert "malformed message 'pwm' on its port 3: pwm: 12 bytes, expected 16" in text and "Traceback" not in text
+    assert json.loads((out / "summary.json").read_text())["complete"] is False

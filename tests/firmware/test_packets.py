@@ -6,6 +6,7 @@ from pathlib import Path
 
 import pytest
 
+from robosoc.config.packet_layout import MAX_PACKET_FLITS
 from robosoc.host import packets
 from robosoc.host.packets import ESTIMATE, FORMATS, POSITION, PWM, SENSOR, from_flits, to_flits
 from robosoc.toolchain import build_elf, compile_native, run_native
@@ -23,7 +24,7 @@ def test_header_is_generated_from_the_python_definitions() -> None:
 def test_every_packet_fits_one_noc_packet_with_the_messaging_header() -> None:
     for fmt in FORMATS:
         assert fmt.size % 4 == 0
-        assert packets.NOC_HEADER_FLITS + packets.MESSAGE_HEADER_FLITS + fmt.flits <= packets.MAX_PACKET_FLITS
+        assert packets.NOC_HEADER_FLITS + packets.MESSAGE_HEADER_FLITS + fmt.flits <= MAX_PACKET_FLITS
         assert [f.name for f in fmt.fields[:2]] == ["kind", "flags"]
     assert len({fmt.kind for fmt in FORMATS}) == len(FORMATS)
 

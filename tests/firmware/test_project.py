@@ -92,6 +92,16 @@ REF = '\n\n[[reference]]\ntask = "pong"\nbuild = "fixed+mul"\nresponse_ms = 1.0\
 TEL = '\n\n[[telemetry]]\nname = "count"\ntask = "pong"\nvalue = "pongs"\ntype = "u32"'
 
 
+_U32 = '{name = "a", type = "u32"}'
+_FIELDS = f"fields = [{_U32}]"
+_FULL = '{name = "a", type = "real", count = 29}'  # 116 bytes: a whole NoC packet's payload
+
+
+def _relay(fields: str, before: str = "") -> tuple[str, str]:
+    """A change declaring the relay message's (ping -> pong) ``fields``."""
+    return ('destination = "pong"', f'destination = "pong"\n{before}fields = [{fields}]')
+
+
 def _after_last(table: str, old: str = "", new: str = "") -> tuple[str, str]:
     """A change adding ``table`` (with ``old`` replaced by ``new`` in it) after the first message."""
     return (LAST, LAST + (table.replace(old, new) if old else table))
@@ -212,7 +222,26 @@ def test_a_refused_task_ends_the_program_with_its_index(tmp_path: Path) -> None:
             "only for periodic release",
         ),
         (('destination = "pong"', 'destination = "pang"'), "messages[1].destination", "no task 'pang'"),
-        (('destination = "pong"', 'destination = "pong"\npacket = "sensor"'), "messages[1].packet", "only for a"),
+        (('destination = "pong"', 'destination = "pong"\npacket = "gps"'), "messages[1].packet", "between tasks one"),
+        (('destination = "io"', 'destination = "io"\npacket = "sensor"'), "messages[2].packet", "takes 'pwm', got"),
+        (('destination = "io"', 'destination = "io"\n' + _FIELDS), "messages[2].fields", "takes 'pwm' packets only"),
+        ((LAST, LAST + "\n" + _FIELDS), "messages[0].fields", "what the I/O tile sends"),
+        (_relay('{name = "a", type = "u64"}'), "messages[1].fields[0].type", "'u16', 'u32', 'i32', 'q16', 'f32'"),
+        (_relay('{name = "a", type = 3}'), "messages[1].fields[0].type", "expected a string"),
+        (_relay('{name = "int", type = "u32"}'), "messages[1].fields[0].name", "must be a C identifier"),
+        (_relay('{name = "a b", type = "u32"}'), "messages[1].fields[0].name", "must be a C identifier"),
+        (_relay('{name = "a", type = "u32", count = 0}'), "messages[1].fields[0].count", "between 1 and 58, got 0"),
+        (_relay('{name = "a", type = "u16", count = 59}'), "messages[1].fields[0].count", "between 1 and 58"),
+        (_relay('{name = "a", type = "u32", count = 2.0}'), "messages[1].fields[0].count", "expected an integer"),
+        (_relay('{name = "a", type = "u32", unit = "m"}'), "messages[1].fields[0].unit", "unknown field"),
+        (_relay('{type = "u32"}'), "messages[1].fields[0].name", "missing required field"),
+        (_relay('"a"'), "messages[1].fields[0]", "expected a table"),
+        (('source = "ping"', 'source = "ping"\nfields = "a"'), "messages[1].fields", "expected a list"),
+        (_relay(_U32 + "," + _U32), "messages[1].fields[1].name", "'a' is also fields[0]"),
+        (_relay('{name = "a", type = "u16"}, {name = "b", type = "real"}'), "messages[1].fields[1]", "'b' (real)"),
+        (_relay('{name = "a", type = "u32"}, {name = "b", type = "u16"}'), "messages[1].fields", "padded at its end"),
+        (_relay(_FULL + ', {name = "b", type = "u32"}'), "messages[1].fields", "120 bytes, more than the 116"),
+        (_relay(_U32, 'packet = "estimate"\n'), "messages[1].fields", "not both"),
         (
             ('destination = "ping"', 'destination = "ping"\npacket = "gps"'),
             "messages[0].packet",

@@ -32,11 +32,29 @@ A project is a folder with C sources and a ``robosoc.toml``::
     port = 1                         # the destination port
     source = "io"                    # "io" (the host's I/O tile) or a task's name
     destination = "ping"             # "io" or a task's name
-    packet = "sensor"                # from "io": what the I/O tile sends, "sensor" (default) or "position"
+    packet = "sensor"                # the format: one of robosoc's packets (robosoc_packets.h)
+
+    [[messages]]                     # between tasks, a format of the message's own:
+    name = "command"
+    port = 2
+    source = "ping"
+    destination = "pong"
+    fields = [{name = "roll_sp", type = "real"}, {name = "rates", type = "real", count = 3}]
 
 A message to a task on its event ``port`` releases a job; on another port of the task's tile (one
 no task there takes as its event port) it waits in the kernel until the task reads it with
 ``os_probe``/``os_recv``: how a task takes a second input (the position example's fix).
+
+A message's format is ``packet``, one of robosoc's packets (:data:`ROBOSOC_PACKETS`), or, between
+tasks, ``fields``, never both.  From ``io`` the packet is what the I/O tile sends,
+:data:`IO_PACKETS` (default ``sensor``); to ``io`` the PWM commands, :data:`TO_IO_PACKETS` (the
+default); between tasks any of robosoc's (``estimate``: the estimator and PID libraries') or
+none.  ``fields`` are ``{name, type, count = 1}``: a C identifier each, no name twice, ``type`` one
+of ``u16``, ``u32``, ``i32``, ``q16`` (Q16.16), ``f32``, ``real`` (the build's real_t, 4 bytes),
+``count`` 1..58; laid out in order without padding within one NoC packet's payload (116 bytes)
+by :func:`robosoc.config.packet_layout.lay_out`, which refuses a layout that would need padding,
+naming the field.  The generated header has, per message with a format, ``robosoc_msg_<name>_t``
+(``struct robosoc_msg_<name>`` for fields, each offset asserted) and ``ROBOSOC_MSG_<NAME>_BYTES``.
 
     [[telemetry]]                    # values the host reads from a task's memory (no simulated cycle)
     name = "est_height"              # the column in flight.csv and the MCAP topic's field
@@ -79,6 +97,7 @@ from typing import Any, Literal
 from robosoc.config.chip import ChipConfig
 from robosoc.config.dotted import flatten
 from robosoc.config.firmware import ARITH_CHOICES
+from robosoc.config.packet_layout import FIELD_BYTES, FIELD_TYPES, MAX_PAYLOAD_FLITS, LayoutError, lay_out
 from robosoc.config.ranges import check_fields
 from robosoc.config.validate import ConfigError, from_mapping, read_toml_mapping
 from robosoc.firmware import LIBRARIES
@@ -86,9 +105,12 @@ from robosoc.firmware import LIBRARIES
 __all__ = [
     "BUILD_LABELS",
     "IO",
+    "IO_PACKETS",
     "PROJECT_FILE",
+    "ROBOSOC_PACKETS",
     "TELEMETRY_TYPES",
     "FirmwareProject",
+    "MessageField",
     "MessageSpec",
     "ProjectInfo",
     "ReferenceFigure",
@@ -111,6 +133,11 @@ _TELEMETRY_VALUE = re.compile(r"([A-Za-z_][A-Za-z0-9_]*)((?:\.[A-Za-z_][A-Za-z0-
 IO_PACKETS = ("sensor", "position")
 """What the I/O tile can send a project each sensor period (formats of robosoc.host.packets; a test
 checks they are there): the sensor sample, and the position fix with the position setpoint."""
+TO_IO_PACKETS = ("pwm",)
+"""What the I/O tile takes from a project: the motor commands (the only packet the host decodes)."""
+ROBOSOC_PACKETS = ("sensor", "estimate", "pwm", "position")
+"""robosoc's packet formats (robosoc_packets.h, from robosoc.host.packets; a test checks the list),
+which a message between tasks may carry too: the estimator and PID libraries speak ``estimate``."""
 
 _IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 _DEFINE = re.compile(r"[A-Za-z_][A-Za-z0-9_]*(=.*)?", re.DOTALL)
@@ -190,14 +217,37 @@ class TaskSpec:
 
 
 @dataclass(frozen=True)
+class MessageField:
+    """One field of a message's declared format: ``count`` values of ``type`` (a struct member)."""
+
+    name: str
+    type: str
+    count: int = 1
+
+    def __post_init__(self) -> None:
+        _identifier("name", self.name, "it names the struct member")
+        if self.type not in FIELD_TYPES:
+            raise ValueError(f"type: must be one of {', '.join(map(repr, FIELD_TYPES))}, got {self.type!r}")
+        if not 1 <= self.count <= MAX_PAYLOAD_FLITS:
+            raise ValueError(f"count: must be between 1 and {MAX_PAYLOAD_FLITS}, got {self.count}")
+
+
+def _quoted(names: tuple[str, ...]) -> str:
+    return ", ".join(map(repr, names))
+
+
+@dataclass(frozen=True)
 class MessageSpec:
-    """A message between two tasks, or between a task and the I/O tile, on the destination's port."""
+    """A message between two tasks, or between a task and the I/O tile, on the destination's port;
+    its format is one of robosoc's packets (``packet``) or declared as ``fields`` (a C struct of
+    the generated header, laid out without padding: config/packet_layout.py)."""
 
     name: str
     port: int
     source: str
     destination: str
     packet: str = ""
+    fields: tuple[MessageField, ...] = ()
 
     def __post_init__(self) -> None:
         _identifier("name", self.name, "it names the message in the generated header")
@@ -205,15 +255,58 @@ class MessageSpec:
             raise ValueError(f"port: must be between 1 and {MAX_PORT}, got {self.port}")
         if self.source == self.destination:
             raise ValueError(f"destination: the same as the source ({self.source!r})")
-        if self.packet and self.source != IO:
-            raise ValueError(f"packet: only for a message from {IO!r} (what the I/O tile sends), got {self.packet!r}")
-        if self.packet and self.packet not in IO_PACKETS:
-            raise ValueError(f"packet: the I/O tile sends {', '.join(map(repr, IO_PACKETS))}, got {self.packet!r}")
+        if self.packet and self.fields:
+            raise ValueError("fields: a message has either robosoc's packet (packet) or fields of its own, not both")
+        if self.source == IO:
+            if self.fields:
+                sends = _quoted(IO_PACKETS)
+                raise ValueError(f"fields: a message from {IO!r} is what the I/O tile sends (packet: {sends})")
+            if self.packet and self.packet not in IO_PACKETS:
+                raise ValueError(f"packet: the I/O tile sends {_quoted(IO_PACKETS)}, got {self.packet!r}")
+        elif self.destination == IO:
+            if self.fields:
+                raise ValueError(f"fields: the I/O tile takes {_quoted(TO_IO_PACKETS)} packets only (packet)")
+            if self.packet and self.packet not in TO_IO_PACKETS:
+                raise ValueError(f"packet: the I/O tile takes {_quoted(TO_IO_PACKETS)}, got {self.packet!r}")
+        elif self.packet and self.packet not in ROBOSOC_PACKETS:
+            raise ValueError(
+                f"packet: between tasks one of robosoc's packets ({_quoted(ROBOSOC_PACKETS)}), got {self.packet!r}; "
+                "or declare the message's own fields"
+            )
+        members: dict[str, int] = {}
+        for i, f in enumerate(self.fields):
+            if f.name in members:
+                raise ValueError(f"fields[{i}].name: {f.name!r} is also fields[{members[f.name]}]")
+            members[f.name] = i
+        try:
+            lay_out([(f.name, f.type, f.count) for f in self.fields])
+        except LayoutError as exc:
+            raise ValueError(f"fields{'' if exc.index is None else f'[{exc.index}]'}: {exc.reason}") from None
 
     @property
     def io_packet(self) -> str:
         """What the I/O tile sends in a message from it (``packet``, by default the sensor packet)."""
         return self.packet or IO_PACKETS[0]
+
+    @property
+    def robosoc_packet(self) -> str:
+        """The robosoc packet the message carries: ``packet``; from the I/O tile by default the
+        sensor packet, to it the PWM packet; "" for a message with ``fields`` or no format declared."""
+        if self.source == IO:
+            return self.io_packet
+        if self.destination == IO:
+            return self.packet or TO_IO_PACKETS[0]
+        return self.packet
+
+    @property
+    def offsets(self) -> tuple[int, ...]:
+        """The byte offset of each of ``fields`` in the message."""
+        return lay_out([(f.name, f.type, f.count) for f in self.fields])
+
+    @property
+    def size(self) -> int:
+        """Bytes of a message with ``fields`` (0 without)."""
+        return sum(FIELD_BYTES[f.type] * f.count for f in self.fields)
 
 
 @dataclass(frozen=True)

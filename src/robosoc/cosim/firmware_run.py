@@ -214,11 +214,27 @@ class FirmwareRun:
         for message in images.reassemble(self.chip.received()):
             if message.port != self.image.actuator_port:
                 continue
-            values = packets.PWM.unpack(message.data)
+            values = self._pwm_values(message.data)
             m0, m1, m2, m3 = (int(v) for v in packets.array(values, "pwm"))
             fresh.append(PwmCommand(int(packets.scalar(values, "seq")), (m0, m1, m2, m3), message.cycle))
         self.commands += fresh
         return fresh
+
+    def _pwm_values(self, data: bytes) -> dict[str, packets.Value]:
+        """The fields of a PWM message that reached the I/O tile.
+
+        Raises:
+            ChipError: not a PWM packet (its size or kind), naming the message.
+        """
+        try:
+            return packets.PWM.unpack(data)
+        except ValueError as exc:
+            name = self.image.actuator_message
+            raise ChipError(
+                f"the I/O tile received a malformed message {name!r} on its port {self.image.actuator_port}: "
+                f"{exc} (send a robosoc_msg_{name}_t of ROBOSOC_MSG_{name.upper()}_BYTES)",
+                None,
+            ) from None
 
     def _running_task(self, exc: Exception) -> str:
         """`` (task 'name')`` of the task that ran on the failed tile, or nothing."""

@@ -68,6 +68,8 @@ class FirmwareImage:
     task_order: tuple[str, ...] = ()
     #: the further packets the I/O tile sends with each sensor packet: (format name, tile, port)
     io_inputs: tuple[tuple[str, Tile, int], ...] = ()
+    #: the name of the message of the PWM packets (how an error names it)
+    actuator_message: str = "pwm"
 
     @property
     def tiles(self) -> list[Tile]:
@@ -152,4 +154,5 @@ def project_image(
         project=project.project.name,
         task_order=project.task_names,
         io_inputs=tuple((m.io_packet, task_tiles[m.destination][0], m.port) for m in further),
+        actuator_message=outputs[0].name,
     )

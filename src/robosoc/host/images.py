@@ -20,6 +20,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from robosoc.config.packet_layout import MAX_PACKET_FLITS, MESSAGE_HEADER_FLITS, NOC_HEADER_FLITS
 from robosoc.firmware import KERNEL_DIR, PORT_DIR, kernel_runtime_sources
 from robosoc.toolchain import DEFAULT_SRAM_SIZE, build_elf
 
@@ -36,8 +37,7 @@ FIRST_TASK_ID = 2
 JOB_MET, JOB_EVENT, JOB_DEPLETED = 1, 2, 4
 
 #: Message header: flits 0..5 (wire destination and size, then four flits of the kernel's own).
-HEADER_FLITS = 6
-MAX_PACKET_FLITS = 64
+HEADER_FLITS = NOC_HEADER_FLITS + MESSAGE_HEADER_FLITS
 
 _RECORD = struct.Struct("<BBHIIIII")  # os_job_record_t
 _LOG_HEADER = struct.Struct("<IIII")  # magic, capacity, count, tick_cycles

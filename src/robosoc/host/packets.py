@@ -17,8 +17,8 @@ robosoc.host.packets``); a test checks the file is up to date, and the header's 
 unsigned integers, ``q16`` a signed Q16.16 number (an ``int32`` holding value · 65536, rounded to
 nearest), the number format of the seed's firmware.  On the NoC the struct's bytes are 16-bit
 flits in memory order (flit k = byte 2k | byte 2k+1 << 8), as the network interface's DMA copies
-them.  A packet must fit one NoC packet: 64 flits, minus the 2-flit NoC header (destination, size)
-and the 4 flits reserved for the on-chip messaging header, leaves :data:`MAX_PAYLOAD_FLITS` = 58.
+them.  A packet must fit one NoC packet (:mod:`robosoc.config.packet_layout`, whose layout rule
+also checks the formats a firmware project declares): :data:`MAX_PAYLOAD_FLITS` = 58 flits.
 Every packet starts with ``kind`` (a per-format tag, so that a stray or malformed packet is
 recognised) and ``flags``.
 """
@@ -32,25 +32,25 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Literal
 
+from robosoc.config.packet_layout import (
+    FIELD_BYTES,
+    MAX_PAYLOAD_FLITS,
+    MESSAGE_HEADER_FLITS,
+    NOC_HEADER_FLITS,
+    LayoutError,
+    lay_out,
+)
 from robosoc.firmware import INCLUDE_DIR
 
 FieldType = Literal["u16", "u32", "q16"]
 
-NOC_HEADER_FLITS = 2
-"""Flit 0 destination, flit 1 size (platform.md §4)."""
-MESSAGE_HEADER_FLITS = 4
-"""Reserved for the on-chip messaging layer's header (ports, length, sequence)."""
-MAX_PACKET_FLITS = 64
-"""Longest NoC packet, header included (the network interface's memories hold 64 flits)."""
-MAX_PAYLOAD_FLITS = MAX_PACKET_FLITS - NOC_HEADER_FLITS - MESSAGE_HEADER_FLITS
-"""Flits left for an application packet."""
 Q16_ONE = 65536
 Q16_MIN = -(2**31)
 Q16_MAX = 2**31 - 1
 
 _STRUCT_CODE: dict[str, str] = {"u16": "H", "u32": "I", "q16": "i"}
 _C_TYPE: dict[str, str] = {"u16": "uint16_t", "u32": "uint32_t", "q16": "int32_t"}
-_SIZE: dict[str, int] = {"u16": 2, "u32": 4, "q16": 4}
+_SIZE = FIELD_BYTES
 
 Value = int | float | tuple[int, ...] | tuple[float, ...]
 
@@ -81,15 +81,11 @@ class PacketFormat:
     fields: tuple[Field, ...]
 
     def __post_init__(self) -> None:
-        offset = 0
-        for f in self.fields:
-            if offset % _SIZE[f.type]:
-                raise ValueError(f"{self.name}.{f.name}: offset {offset} is not aligned to its type {f.type}")
-            offset += f.size
-        if offset % 4:
-            raise ValueError(f"{self.name}: size {offset} is not a multiple of 4 (the C struct would be padded)")
-        if offset // 2 > MAX_PAYLOAD_FLITS:
-            raise ValueError(f"{self.name}: {offset // 2} flits exceed the {MAX_PAYLOAD_FLITS} available")
+        try:  # the one layout rule (config/packet_layout.py): no padding, one NoC packet
+            lay_out([(f.name, f.type, f.count) for f in self.fields])
+        except LayoutError as exc:
+            where = self.name if exc.index is None else f"{self.name}.{self.fields[exc.index].name}"
+            raise ValueError(f"{where}: {exc.reason}") from None
         if self.fields[:2] != HEAD_FIELDS:
             raise ValueError(f"{self.name}: must start with the kind and flags fields")
 

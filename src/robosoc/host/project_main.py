@@ -20,15 +20,28 @@ import hashlib
 from collections.abc import Mapping
 from pathlib import Path
 
-from robosoc.config.project import IO, FirmwareProject, TaskSpec
+from robosoc.config.project import IO, FirmwareProject, MessageSpec, TaskSpec
+from robosoc.host.packets import FORMATS
 
-__all__ = ["HEADER_NAME", "MAIN_NAME", "TASK_REFUSED_EXIT", "generated_dir", "header_text", "main_source", "task_ids"]
+__all__ = [
+    "C_TYPES",
+    "HEADER_NAME",
+    "MAIN_NAME",
+    "TASK_REFUSED_EXIT",
+    "generated_dir",
+    "header_text",
+    "main_source",
+    "task_ids",
+]
 
 HEADER_NAME = "robosoc_project.h"
 MAIN_NAME = "robosoc_main.c"
 TASK_REFUSED_EXIT = 0x7A5C00
 """Exit code base of a ``main`` whose task the kernel refused (+ the task's index in the file)."""
 FIRST_TASK_ID = 2
+C_TYPES = {"u16": "uint16_t", "u32": "uint32_t", "i32": "int32_t", "q16": "int32_t", "f32": "float", "real": "real_t"}
+"""The C type of each field type of a declared message (config/packet_layout.py: their sizes)."""
+PACKETS = {fmt.name: fmt for fmt in FORMATS}
 """TASK_ID of the first task created on a tile (0: the kernel, 1: the idle task)."""
 
 Tile = tuple[int, int]
@@ -62,7 +75,12 @@ def header_text(project: FirmwareProject, mapping: Mapping[str, Tile] | None = N
         "#ifndef ROBOSOC_PROJECT_H",
         "#define ROBOSOC_PROJECT_H",
         "",
+        "#include <stddef.h>",
+        "#include <stdint.h>",
+        "",
         '#include "os.h"',
+        *(['#include "real.h"'] if any(f.type == "real" for m in project.messages for f in m.fields) else []),
+        '#include "robosoc_packets.h"',
         "",
         f"#define ROBOSOC_TASKS {len(project.tasks)}",
     ]
@@ -80,8 +98,43 @@ def header_text(project: FirmwareProject, mapping: Mapping[str, Tile] | None = N
         else:
             lines.append(f"#define ROBOSOC_MSG_{name}_TILE ROBOSOC_TASK_{message.destination.upper()}_TILE")
         lines.append(f"#define ROBOSOC_MSG_{name}_PORT {message.port}u")
+    for message in project.messages:
+        lines += _message_format(message)
     lines += ["", "#endif", ""]
     return "\n".join(lines)
+
+
+def _message_format(message: MessageSpec) -> list[str]:
+    """The C type of a message with a declared format: ``robosoc_msg_<name>_t`` (for ``fields``
+    ``struct robosoc_msg_<name>``, each offset and the size asserted), and its size in bytes."""
+    upper = message.name.upper()
+    route = f"{message.source} -> {message.destination}, port {message.port}"
+    if message.robosoc_packet:
+        fmt = PACKETS[message.robosoc_packet]
+        c_type = f"struct {fmt.c_name}"
+        return [
+            "",
+            f"/* message {message.name!r} ({route}): robosoc's {fmt.name} packet (robosoc_packets.h) */",
+            f"typedef {c_type} robosoc_msg_{message.name}_t;",
+            f"#define ROBOSOC_MSG_{upper}_BYTES {fmt.size}u",
+            f'_Static_assert(sizeof(robosoc_msg_{message.name}_t) == {fmt.size}, "message {message.name} size");',
+        ]
+    if not message.fields:
+        return []
+    struct = f"struct robosoc_msg_{message.name}"
+    lines = ["", f"/* message {message.name!r} ({route}): its fields in robosoc.toml */", f"{struct} {{"]
+    for f in message.fields:
+        dims = f"[{f.count}]" if f.count > 1 else ""
+        lines.append(f"    {C_TYPES[f.type]} {f.name}{dims};{' /* Q16.16 */' if f.type == 'q16' else ''}")
+    lines += [
+        "};",
+        f"typedef {struct} robosoc_msg_{message.name}_t;",
+        f"#define ROBOSOC_MSG_{upper}_BYTES {message.size}u",
+        f'_Static_assert(sizeof({struct}) == {message.size}, "message {message.name} size");',
+    ]
+    for f, offset in zip(message.fields, message.offsets, strict=True):
+        lines.append(f'_Static_assert(offsetof({struct}, {f.name}) == {offset}, "{message.name}.{f.name} offset");')
+    return lines
 
 
 def _create(index: int, task: TaskSpec) -> list[str]:

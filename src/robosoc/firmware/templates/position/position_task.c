@@ -46,10 +46,10 @@
 #define POS_GRAVITY 9.81
 
 typedef struct {
-    struct robosoc_position_packet latest; /* the newest position packet */
-    int have;                              /* one has arrived */
-    real_t integral[2];                    /* of the position error, x and y [m s] */
-    uint32_t stale;                        /* estimates whose sample's position packet had not come */
+    robosoc_msg_position_t latest; /* the newest position packet */
+    int have;                      /* one has arrived */
+    real_t integral[2];            /* of the position error, x and y [m s] */
+    uint32_t stale;                /* estimates whose sample's position packet had not come */
 } position_t;
 
 static position_t pos;
@@ -59,11 +59,11 @@ void position_task_init(void) { memset(&pos, 0, sizeof pos); }
 /* Take every position packet waiting on its port, keep the newest. */
 static void take_position_packets(void)
 {
-    struct robosoc_position_packet in;
+    robosoc_msg_position_t in;
     os_msg_t info;
     while (os_probe(ROBOSOC_MSG_POSITION_PORT) >= 0) {
         int32_t n = os_recv(ROBOSOC_MSG_POSITION_PORT, &in, sizeof in, &info);
-        if (n == (int32_t)sizeof in && in.kind == ROBOSOC_POSITION_KIND) {
+        if (n == (int32_t)ROBOSOC_MSG_POSITION_BYTES && in.kind == ROBOSOC_POSITION_KIND) {
             pos.latest = in;
             pos.have = 1;
         }
@@ -76,9 +76,9 @@ static real_t clamp(real_t x, real_t limit)
 }
 
 /* Roll and pitch setpoints [rad] for the estimate `est` and the newest position packet. */
-static void position_step(const struct robosoc_estimate_packet *est, real_t *roll, real_t *pitch)
+static void position_step(const robosoc_msg_estimate_t *est, real_t *roll, real_t *pitch)
 {
-    const struct robosoc_position_packet *in = &pos.latest;
+    const robosoc_msg_position_t *in = &pos.latest;
     real_t dt = real_from_us(est->dt_us);
     real_t age = real_from_us(in->time_us - in->fix_time_us);
     real_t a[2];
@@ -117,9 +117,10 @@ static void position_step(const struct robosoc_estimate_packet *est, real_t *rol
 
 void position_on_message(const os_msg_t *msg, void *arg)
 {
-    struct robosoc_estimate_packet est;
+    robosoc_msg_estimate_t est;            /* forwarded as the command (robosoc.toml: the same packet) */
+    robosoc_msg_command_t *command = &est; /* with its roll and pitch setpoints set */
     (void)arg;
-    if (msg->len != sizeof est) {
+    if (msg->len != ROBOSOC_MSG_ESTIMATE_BYTES) {
         return;
     }
     memcpy(&est, msg->data, sizeof est);
@@ -138,7 +139,7 @@ void position_on_message(const os_msg_t *msg, void *arg)
         pos.integral[0] = REAL_ZERO;
         pos.integral[1] = REAL_ZERO;
     }
-    est.setpoint[0] = real_to_fix16(roll);
-    est.setpoint[1] = real_to_fix16(pitch);
-    os_send(ROBOSOC_MSG_COMMAND_TILE, ROBOSOC_MSG_COMMAND_PORT, &est, sizeof est);
+    command->setpoint[0] = real_to_fix16(roll);
+    command->setpoint[1] = real_to_fix16(pitch);
+    os_send(ROBOSOC_MSG_COMMAND_TILE, ROBOSOC_MSG_COMMAND_PORT, command, ROBOSOC_MSG_COMMAND_BYTES);
 }
