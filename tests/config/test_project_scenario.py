@@ -8,6 +8,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+from tests.firmware.test_project import PINGPONG, write_project
 
 from robosoc.cli.errors import CliError
 from robosoc.cli.scenario_flags import ScenarioFlags, resolve
@@ -17,7 +18,6 @@ from robosoc.config.project_scenario import project_scenario, scenario_from_fiel
 from robosoc.config.scenario import ScenarioConfig
 from robosoc.config.sweep import load_sweep
 from robosoc.config.validate import ConfigError
-from tests.firmware.test_project import PINGPONG, write_project
 
 DEFAULTS = """
 [chip]
@@ -61,7 +61,8 @@ def test_the_shipped_default_project_declares_no_defaults() -> None:
     loaded = load_project(DEFAULT_PROJECT)
     assert loaded.chip == () and loaded.scenario == ()
     assert project_scenario("") == ScenarioConfig()
-    assert project_scenario(str(DEFAULT_PROJECT)) == ScenarioConfig(firmware=FirmwareConfig(project=str(DEFAULT_PROJECT)))
+    shipped = FirmwareConfig(project=str(DEFAULT_PROJECT))
+    assert project_scenario(str(DEFAULT_PROJECT)) == ScenarioConfig(firmware=shipped)
 
 
 def test_a_scenario_file_and_the_options_win_over_the_projects_defaults(project: Path, tmp_path: Path) -> None:
