@@ -1,10 +1,12 @@
 """Telemetry under names of its own (issue 32, item 4): a project's value lands in ``flight.csv``
 (a column after the flight's), in ``flight.mcap`` (``/telemetry/<name>``, read back with rosbags)
-and in the report; the readers of ``flight.csv`` keep or read past it."""
+and in the report, in lockstep and in the decoupled mode (equal row for row); the readers of
+``flight.csv`` keep or read past it."""
 
 from __future__ import annotations
 
 import csv
+import json
 import math
 import re
 import shutil
@@ -151,3 +153,38 @@ def test_the_reader_keeps_or_reads_past_telemetry_and_names_bad_cells(tmp_path: 
     path.write_text(",".join(("a", *ROW_FIELDS)) + "\n")
     with pytest.raises(FlightLogError, match=r"unknown column a among the flight's columns"):
         read_flight_log(path)
+
+
+@pytest.fixture(scope="module")
+def decoupled_run(counted_run: Path) -> Path:
+    """The counting project flown in the decoupled mode (two processes over UDP), paced fast."""
+    out = counted_run.parent / "decoupled"
+    project = counted_run.parent / "p"
+    result = invoke("fly", "--decoupled", "--pace", "fast", "--firmware", project, "--duration", SECONDS, "--out", out)
+    assert result.exit_code == 0, result.output
+    assert f"telemetry entries logged {SAMPLES - 1} (datagrams refused 0)" in result.output
+    return out
+
+
+def test_the_decoupled_flight_logs_the_telemetry_as_lockstep(counted_run: Path, decoupled_run: Path) -> None:
+    """Paced fast without faults the decoupled flight is the lockstep flight: flight.csv has the same
+    header and every cell equal (the telemetry's column, the estimate's too), and flight.mcap the
+    same /telemetry/jobs_counted messages."""
+    for run in (counted_run, decoupled_run):
+        with (run / "flight.csv").open() as handle:
+            assert next(csv.reader(handle)) == [*ROW_FIELDS, "jobs_counted"]
+    told: dict[str, np.ndarray] = {}
+    rows = read_flight_log(decoupled_run / "flight.csv", telemetry=told)
+    lockstep_told: dict[str, np.ndarray] = {}
+    lockstep = read_flight_log(counted_run / "flight.csv", telemetry=lockstep_told)
+    np.testing.assert_array_equal(rows, lockstep)
+    assert np.isnan(rows[:, [ROW_FIELDS.index(n) for n in ROW_FIELDS if n.startswith("est_")]]).all()  # no estimate
+    np.testing.assert_array_equal(told["jobs_counted"], _expected())
+    np.testing.assert_array_equal(told["jobs_counted"], lockstep_told["jobs_counted"])
+    messages, _ = read_bag(decoupled_run / "flight.mcap")
+    expected, _ = read_bag(counted_run / "flight.mcap")
+    got = [(m.timestamp, m.message.data) for m in messages["/telemetry/jobs_counted"]]
+    assert got == [(m.timestamp, m.message.data) for m in expected["/telemetry/jobs_counted"]]
+    summary = json.loads((decoupled_run / "summary.json").read_text())
+    # the reads at the close of periods 0 .. SAMPLES-2 go out while the physics flies
+    assert summary["link"]["telemetry"] == {"received": SAMPLES - 1, "refused": 0}
