@@ -23,43 +23,20 @@ from robosoc.control.flight_log import CsvFlightLog, FlightLogError, read_flight
 from robosoc.outputs.ros2_flight import START_NS, stamp_ns
 from robosoc.outputs.run_folder import read_run_folder
 from ros_bags import read_bag
+from telemetry_project import counting_project
 
 SECONDS = 0.3
 SAMPLES = 30  # 100 Hz sensor samples in SECONDS
-
-COUNTER = """
-[[telemetry]]
-name = "jobs_counted"
-task = "controller"
-value = "jobs_done"
-type = "u32"
-"""
 
 
 def invoke(*args: object):
     return CliRunner().invoke(app, [str(a) for a in args])
 
 
-def _counting_project(tmp_path: Path, name: str = "jobs_counted") -> Path:
-    """The blank template with a counter of its controller's jobs, published as telemetry."""
-    project = tmp_path / "p"
-    assert invoke("new", project).exit_code == 0
-    source = project / "controller.c"
-    text = source.read_text()
-    entry = "    (void)arg;\n"
-    assert entry in text
-    counter = "static uint32_t jobs_done; /* jobs so far */\n"
-    text = text.replace("static est_t estimator;", counter + "static est_t estimator;")
-    source.write_text(text.replace(entry, entry + "    jobs_done++;\n", 1))
-    toml = project / "robosoc.toml"
-    toml.write_text(toml.read_text() + COUNTER.replace("jobs_counted", name))
-    return project
-
-
 @pytest.fixture(scope="module")
 def counted_run(tmp_path_factory: pytest.TempPathFactory) -> Path:
     tmp = tmp_path_factory.mktemp("telemetry")
-    project = _counting_project(tmp)
+    project = counting_project(tmp)
     out = tmp / "run"
     result = invoke("fly", "--firmware", project, "--duration", SECONDS, "--out", out)
     assert result.exit_code == 0, result.output
@@ -116,7 +93,7 @@ def test_the_report_plots_the_telemetry(counted_run: Path, tmp_path: Path) -> No
 
 
 def test_a_name_that_is_a_flight_column_is_refused(tmp_path: Path) -> None:
-    project = _counting_project(tmp_path, name="roll")
+    project = counting_project(tmp_path, name="roll")
     result = invoke("fly", "--firmware", project, "--duration", 0.05, "--no-out")
     assert result.exit_code == exit_codes.USAGE, result.output
     assert "telemetry[0].name: 'roll' is a column of flight.csv already" in " ".join(result.output.split())
