@@ -165,3 +165,26 @@ def test_the_decoupled_flight_logs_the_telemetry_as_lockstep(counted_run: Path, 
     summary = json.loads((decoupled_run / "summary.json").read_text())
     # the reads at the close of periods 0 .. SAMPLES-2 go out while the physics flies
     assert summary["link"]["telemetry"] == {"received": SAMPLES - 1, "refused": 0}
+
+
+def test_each_row_goes_to_the_live_view_with_its_telemetry(counted_run: Path) -> None:
+    """fly_scenario hands the live view (``fly --foxglove``) each row with the values of its
+    telemetry columns, the ones flight.csv gets."""
+    from robosoc.cli.fly import _live_rows
+    from robosoc.config.firmware import FirmwareConfig
+    from robosoc.config.scenario import ScenarioConfig
+    from robosoc.outputs.flight_session import fly_scenario
+
+    class Live:
+        def __init__(self) -> None:
+            self.told: list[dict[str, float]] = []
+
+        def publish(self, row: np.ndarray, telemetry: dict[str, float]) -> None:
+            self.told.append(telemetry)
+
+    live = Live()
+    project = counted_run.parent / "p"
+    config = ScenarioConfig(duration_s=SECONDS, firmware=FirmwareConfig(project=str(project)))
+    fly_scenario(config, None, on_row=_live_rows(live), plot=False, logs=False)
+    assert [list(t) for t in live.told] == [["jobs_counted"]] * SAMPLES
+    np.testing.assert_array_equal([t["jobs_counted"] for t in live.told], _expected())
