@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import contextlib
 import json
+import math
 import os
 import signal
 import socket
@@ -249,3 +250,53 @@ def test_fly_foxglove_keep_serves_until_ctrl_c(tmp_path: Path) -> None:
     bad = subprocess.run([sys.executable, "-m", "robosoc", "fly", "--foxglove-keep", "--no-out"], env=env,
                          capture_output=True, text=True, timeout=60, check=False)  # fmt: skip
     assert bad.returncode == 2 and "--foxglove-keep: only with --foxglove PORT" in bad.stderr
+
+
+def test_the_firmware_telemetry_is_published_live_as_in_the_file(host_flight: np.ndarray) -> None:
+    """Telemetry values under names of their own get the MCAP file's topics, /telemetry/<name>
+    (std_msgs/msg/Float64), advertised with the first row that names them; a message per row that
+    has a value (row k carries k here), none while a value is NaN (no read yet: row 0, and a
+    value never read)."""
+    rows = host_flight[:20]
+    times = [START_NS + round(float(t) * 1e9) for t in rows[:, ROW_FIELDS.index("t")]]
+
+    def told(k: int) -> dict[str, float]:
+        return {"jobs_counted": float(k) if k else math.nan, "never_read": math.nan}
+
+    with LiveFlight(0, pace=0) as live:
+        live.publish(rows[0], told(0))  # advertises the telemetry's channels
+        with connect(live.url, subprotocols=[SUBPROTOCOL], open_timeout=WAIT_S) as ws:
+            channels: dict[str, dict] = {}
+            while not {"/telemetry/jobs_counted", "/telemetry/never_read"} <= channels.keys():
+                frame = json.loads(ws.recv(timeout=WAIT_S))
+                if frame["op"] == "advertise":
+                    channels.update({c["topic"]: c for c in frame["channels"]})
+            telemetry = [channels["/telemetry/jobs_counted"], channels["/telemetry/never_read"]]
+            assert {c["schemaName"] for c in telemetry} == {"std_msgs/msg/Float64"}
+            subscriptions = _subscribe(ws, telemetry)
+            stop = threading.Event()
+
+            def publish() -> None:
+                while not stop.is_set():
+                    for k, row in enumerate(rows):
+                        live.publish(row, told(k))
+
+            publisher = threading.Thread(target=publish, daemon=True)
+            publisher.start()
+            got: dict[int, float] = {}
+            try:
+                deadline = time.monotonic() + WAIT_S
+                while len(got) < len(rows) - 1 and time.monotonic() < deadline:
+                    with contextlib.suppress(TimeoutError):
+                        frame = ws.recv(timeout=0.5)
+                        if isinstance(frame, bytes) and frame[0] == MESSAGE_DATA:
+                            subscription, ns = struct.unpack_from("<IQ", frame, 1)
+                            channel = subscriptions[subscription]
+                            assert channel["topic"] == "/telemetry/jobs_counted"  # never_read: no message
+                            schema = Schema(id=1, name=channel["schemaName"], encoding=channel["schemaEncoding"],
+                                            data=channel["schema"].encode())  # fmt: skip
+                            got[ns] = DecoderFactory().decoder_for("cdr", schema)(frame[13:]).data
+            finally:
+                stop.set()
+                publisher.join(WAIT_S)
+    assert got == {ns: float(k) for k, ns in enumerate(times) if k}

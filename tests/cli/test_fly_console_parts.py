@@ -201,19 +201,19 @@ def test_the_live_server_option(monkeypatch: pytest.MonkeyPatch) -> None:
     )
 
 
-def test_the_live_view_gets_the_first_vehicles_rows_only() -> None:
+def test_the_live_view_gets_the_first_vehicles_rows_and_telemetry_only() -> None:
     from robosoc.cli import fly as fly_cli
 
     class Live:
         def __init__(self) -> None:
-            self.rows: list[str] = []
+            self.rows: list[tuple[str, dict]] = []
 
-        def publish(self, row) -> None:  # type: ignore[no-untyped-def]
-            self.rows.append(row)
+        def publish(self, row, telemetry) -> None:  # type: ignore[no-untyped-def]
+            self.rows.append((row, telemetry))
 
     live = Live()
     on_row = fly_cli._live_rows(live)
     for vehicle, row in ((0, "a"), (1, "b"), (0, "c"), (2, "d")):
-        on_row(vehicle, row)
-    assert live.rows == ["a", "c"]
+        on_row(vehicle, row, {"jobs": ord(row)})
+    assert live.rows == [("a", {"jobs": 97}), ("c", {"jobs": 99})]  # with the row's telemetry
     assert fly_cli._live_rows(None) is None

@@ -93,7 +93,7 @@ def test_the_figures_of_a_flown_flight(monkeypatch: pytest.MonkeyPatch, tmp_path
         "on a core of its own)" in lines
     )
     assert any(line.startswith("to chip 100 99") for line in lines)
-    assert lines[-1] == f"run folder: {tmp_path} (flight.csv, jobs.csv, summary.json, link-*.log)"
+    assert lines[-1] == f"run folder: {tmp_path} (flight.csv, flight.mcap, jobs.csv, summary.json, link-*.log)"
     (_, seed, link, folder, bind, existed) = fake.calls[0]
     assert (seed, link.pace, folder, bind, existed) == (7, "fast", tmp_path, None, True)
 

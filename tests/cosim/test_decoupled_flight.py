@@ -36,6 +36,7 @@ from robosoc.cosim.decoupled_physics import scenario_digest
 from robosoc.cosim.link import Address, UdpLink
 from robosoc.cosim.lockstep import ChipController, fly_chip, fly_lockstep_fleet
 from robosoc.cosim.replay import sensor_packet
+from robosoc.host.telemetry import declared_names
 from robosoc.outputs.decoupled_flight import SideFailed, fly_decoupled
 from robosoc.outputs.flight_session import fleet_vehicles
 from robosoc.physics.clock import FlightClock
@@ -161,9 +162,8 @@ def test_the_physics_side_ends_when_the_chip_goes_silent(tmp_path: Path) -> None
     port = int(line.rsplit(":", 1)[1])
     config = ScenarioConfig(duration_s=3.0)
     chip = UdpLink(Address("127.0.0.1", 0), "chip", peer=Address("127.0.0.1", port))
-    chip.send_control(
-        Hello(scenario_digest(config, vehicle_preset(config.vehicle)), FlightClock.of(config).sample_period_ns)
-    )
+    digest = scenario_digest(config, vehicle_preset(config.vehicle))
+    chip.send_control(Hello(digest, FlightClock.of(config).sample_period_ns, declared_names(config.firmware)))
     got = []
     while not got:
         got = chip.receive(5.0)
@@ -187,7 +187,9 @@ def test_the_chip_side_ends_when_the_physics_goes_silent(tmp_path: Path) -> None
         assert chip.poll() is None, chip.stderr.read()  # type: ignore[union-attr]
         hello = physics.receive(5.0)
     assert hello[0].body == Hello(
-        scenario_digest(config, vehicle_preset(config.vehicle)), FlightClock.of(config).sample_period_ns
+        scenario_digest(config, vehicle_preset(config.vehicle)),
+        FlightClock.of(config).sample_period_ns,
+        ("est_qw", "est_qx", "est_qy", "est_qz", "est_height", "est_vz"),  # the quadrotor project's telemetry
     )
     row = np.zeros(len(ROW_FIELDS))
     readings = []

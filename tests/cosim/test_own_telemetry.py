@@ -1,10 +1,12 @@
 """Telemetry under names of its own (issue 32, item 4): a project's value lands in ``flight.csv``
 (a column after the flight's), in ``flight.mcap`` (``/telemetry/<name>``, read back with rosbags)
-and in the report; the readers of ``flight.csv`` keep or read past it."""
+and in the report, in lockstep and in the decoupled mode (equal row for row); the readers of
+``flight.csv`` keep or read past it."""
 
 from __future__ import annotations
 
 import csv
+import json
 import math
 import re
 import shutil
@@ -21,43 +23,20 @@ from robosoc.control.flight_log import CsvFlightLog, FlightLogError, read_flight
 from robosoc.outputs.ros2_flight import START_NS, stamp_ns
 from robosoc.outputs.run_folder import read_run_folder
 from ros_bags import read_bag
+from telemetry_project import counting_project
 
 SECONDS = 0.3
 SAMPLES = 30  # 100 Hz sensor samples in SECONDS
-
-COUNTER = """
-[[telemetry]]
-name = "jobs_counted"
-task = "controller"
-value = "jobs_done"
-type = "u32"
-"""
 
 
 def invoke(*args: object):
     return CliRunner().invoke(app, [str(a) for a in args])
 
 
-def _counting_project(tmp_path: Path, name: str = "jobs_counted") -> Path:
-    """The blank template with a counter of its controller's jobs, published as telemetry."""
-    project = tmp_path / "p"
-    assert invoke("new", project).exit_code == 0
-    source = project / "controller.c"
-    text = source.read_text()
-    entry = "    (void)arg;\n"
-    assert entry in text
-    counter = "static uint32_t jobs_done; /* jobs so far */\n"
-    text = text.replace("static est_t estimator;", counter + "static est_t estimator;")
-    source.write_text(text.replace(entry, entry + "    jobs_done++;\n", 1))
-    toml = project / "robosoc.toml"
-    toml.write_text(toml.read_text() + COUNTER.replace("jobs_counted", name))
-    return project
-
-
 @pytest.fixture(scope="module")
 def counted_run(tmp_path_factory: pytest.TempPathFactory) -> Path:
     tmp = tmp_path_factory.mktemp("telemetry")
-    project = _counting_project(tmp)
+    project = counting_project(tmp)
     out = tmp / "run"
     result = invoke("fly", "--firmware", project, "--duration", SECONDS, "--out", out)
     assert result.exit_code == 0, result.output
@@ -114,7 +93,7 @@ def test_the_report_plots_the_telemetry(counted_run: Path, tmp_path: Path) -> No
 
 
 def test_a_name_that_is_a_flight_column_is_refused(tmp_path: Path) -> None:
-    project = _counting_project(tmp_path, name="roll")
+    project = counting_project(tmp_path, name="roll")
     result = invoke("fly", "--firmware", project, "--duration", 0.05, "--no-out")
     assert result.exit_code == exit_codes.USAGE, result.output
     assert "telemetry[0].name: 'roll' is a column of flight.csv already" in " ".join(result.output.split())
@@ -151,3 +130,61 @@ def test_the_reader_keeps_or_reads_past_telemetry_and_names_bad_cells(tmp_path: 
     path.write_text(",".join(("a", *ROW_FIELDS)) + "\n")
     with pytest.raises(FlightLogError, match=r"unknown column a among the flight's columns"):
         read_flight_log(path)
+
+
+@pytest.fixture(scope="module")
+def decoupled_run(counted_run: Path) -> Path:
+    """The counting project flown in the decoupled mode (two processes over UDP), paced fast."""
+    out = counted_run.parent / "decoupled"
+    project = counted_run.parent / "p"
+    result = invoke("fly", "--decoupled", "--pace", "fast", "--firmware", project, "--duration", SECONDS, "--out", out)
+    assert result.exit_code == 0, result.output
+    assert f"telemetry entries logged {SAMPLES - 1} (datagrams refused 0)" in result.output
+    return out
+
+
+def test_the_decoupled_flight_logs_the_telemetry_as_lockstep(counted_run: Path, decoupled_run: Path) -> None:
+    """Paced fast without faults the decoupled flight is the lockstep flight: flight.csv has the same
+    header and every cell equal (the telemetry's column, the estimate's too), and flight.mcap the
+    same /telemetry/jobs_counted messages."""
+    for run in (counted_run, decoupled_run):
+        with (run / "flight.csv").open() as handle:
+            assert next(csv.reader(handle)) == [*ROW_FIELDS, "jobs_counted"]
+    told: dict[str, np.ndarray] = {}
+    rows = read_flight_log(decoupled_run / "flight.csv", telemetry=told)
+    lockstep_told: dict[str, np.ndarray] = {}
+    lockstep = read_flight_log(counted_run / "flight.csv", telemetry=lockstep_told)
+    np.testing.assert_array_equal(rows, lockstep)
+    assert np.isnan(rows[:, [ROW_FIELDS.index(n) for n in ROW_FIELDS if n.startswith("est_")]]).all()  # no estimate
+    np.testing.assert_array_equal(told["jobs_counted"], _expected())
+    np.testing.assert_array_equal(told["jobs_counted"], lockstep_told["jobs_counted"])
+    messages, _ = read_bag(decoupled_run / "flight.mcap")
+    expected, _ = read_bag(counted_run / "flight.mcap")
+    got = [(m.timestamp, m.message.data) for m in messages["/telemetry/jobs_counted"]]
+    assert got == [(m.timestamp, m.message.data) for m in expected["/telemetry/jobs_counted"]]
+    summary = json.loads((decoupled_run / "summary.json").read_text())
+    # the reads at the close of periods 0 .. SAMPLES-2 go out while the physics flies
+    assert summary["link"]["telemetry"] == {"received": SAMPLES - 1, "refused": 0}
+
+
+def test_each_row_goes_to_the_live_view_with_its_telemetry(counted_run: Path) -> None:
+    """fly_scenario hands the live view (``fly --foxglove``) each row with the values of its
+    telemetry columns, the ones flight.csv gets."""
+    from robosoc.cli.fly import _live_rows
+    from robosoc.config.firmware import FirmwareConfig
+    from robosoc.config.scenario import ScenarioConfig
+    from robosoc.outputs.flight_session import fly_scenario
+
+    class Live:
+        def __init__(self) -> None:
+            self.told: list[dict[str, float]] = []
+
+        def publish(self, row: np.ndarray, telemetry: dict[str, float]) -> None:
+            self.told.append(telemetry)
+
+    live = Live()
+    project = counted_run.parent / "p"
+    config = ScenarioConfig(duration_s=SECONDS, firmware=FirmwareConfig(project=str(project)))
+    fly_scenario(config, None, on_row=_live_rows(live), plot=False, logs=False)
+    assert [list(t) for t in live.told] == [["jobs_counted"]] * SAMPLES
+    np.testing.assert_array_equal([t["jobs_counted"] for t in live.told], _expected())

@@ -3,9 +3,9 @@ real ``roscore``: the flights they fly, what other ROS nodes see of them, and ba
 
 Skipped where ROS 1 is not installed (``tests/ros_master.py``), except what needs no ROS: a
 ``--ros`` command on a machine without it fails clearly.  Flights are short and paced on simulated
-time (``--pace fast``): the physics steps only once the chip has said how far it has simulated, so
-the flight must be the lockstep flight row for row (the chip's estimate aside, which the physics
-node does not have), however slow the host.
+time (``--pace fast``): the physics steps only once the chip has said how far it has simulated (and
+every command and telemetry message it counts by then has come), so the flight must be the
+lockstep flight row for row, the chip's estimate and telemetry columns too, however slow the host.
 """
 
 from __future__ import annotations
@@ -36,11 +36,10 @@ from robosoc.cosim.ros_topics import MSG_TEXT, TOPICS
 from robosoc.outputs.flight_session import fleet_vehicles
 from robosoc.physics.clock import START_NS
 from ros_master import SYSTEM_PYTHON, Master, running_master, stop, wait_all
+from telemetry_project import counting_project
 
 SCENARIO_TOML = "duration_s = {duration}\nvehicles = {vehicles}\n[flight]\ntakeoff_s = 0.3\nsteps = []\n"
 PUBLISHER = Path(__file__).resolve().parents[1] / "ros_hector_publisher.py"
-EST_COLUMNS = [ROW_FIELDS.index(n) for n in ROW_FIELDS if n.startswith("est_")]
-OTHER_COLUMNS = [i for i in range(len(ROW_FIELDS)) if i not in EST_COLUMNS]
 
 
 def scenario(duration: float = 1.0, vehicles: int = 1) -> ScenarioConfig:
@@ -69,7 +68,7 @@ HEADER_MD5 = md5("uint32 seq\ntime stamp\nstring frame_id")
 
 
 def test_md5_sums_follow_the_ros_rule_and_rosbags() -> None:
-    """hector's MotorPWM and Altimeter and robosoc's ChipStatus: the MD5 sum of the generated class
+    """hector's MotorPWM and Altimeter and robosoc's ChipStatus and Telemetry: the MD5 sum of the generated class
     is the one the ROS rule gives (comments out, a nested type replaced by its own sum) and the one
     rosbags (another implementation) computes from the same text."""
     if ros1_missing():
@@ -79,7 +78,8 @@ def test_md5_sums_follow_the_ros_rule_and_rosbags() -> None:
     by_rule = {
         "hector_uav_msgs/MotorPWM": md5(f"{HEADER_MD5} header\nuint8[] pwm"),
         "hector_uav_msgs/Altimeter": md5(f"{HEADER_MD5} header\nfloat32 altitude\nfloat32 pressure\nfloat32 qnh"),
-        "robosoc_msgs/ChipStatus": md5(f"{HEADER_MD5} header\nuint32 commands\nstring scenario"),
+        "robosoc_msgs/ChipStatus": md5(f"{HEADER_MD5} header\nuint32 commands\nuint32 telemetry\nstring scenario"),
+        "robosoc_msgs/Telemetry": md5(f"{HEADER_MD5} header\nuint32 sample\nstring[] names\nfloat64[] values"),
     }
     assert HEADER_MD5 == "2176decaecbce78abc3b96ef049fabed"  # std_msgs/Header, as every ROS 1 tool has it
     store = get_typestore(Stores.ROS1_NOETIC)
@@ -152,7 +152,7 @@ def test_no_master_is_a_clear_bounded_error(tmp_path: Path) -> None:
 def test_two_nodes_fly_the_lockstep_flight(master: Master, tmp_path: Path) -> None:
     """physics + chip through roscore fly the lockstep flight row for row; rosbag records it: 100 Hz
     sensors, /clock from the start time on, PWM commands with hector's type and MD5 sum, the chip's
-    estimate equal to the lockstep chip's, a response time per job."""
+    estimate and telemetry equal to the lockstep chip's, a response time per job."""
     config = scenario(1.0)
     toml = scenario_file(tmp_path)
     bag = tmp_path / "flight.bag"
@@ -168,7 +168,7 @@ def test_two_nodes_fly_the_lockstep_flight(master: Master, tmp_path: Path) -> No
     rows = read_flight_log(tmp_path / "p" / "flight.csv")
     lockstep = fly_chip(config, vehicle_preset(config.vehicle))
     assert rows.shape == lockstep.rows.shape
-    np.testing.assert_array_equal(rows[:, OTHER_COLUMNS], lockstep.rows[:, OTHER_COLUMNS])
+    np.testing.assert_array_equal(rows, lockstep.rows)  # the estimate too: the chip's telemetry, logged
     chip_json = json.loads((tmp_path / "c" / "chip.json").read_text())
     assert chip_json["complete"] and chip_json["readings"]["injected"] == 100
     assert chip_json["link"]["from_physics"]["imu"] == {
@@ -197,10 +197,59 @@ def test_two_nodes_fly_the_lockstep_flight(master: Master, tmp_path: Path) -> No
             row = lockstep.rows[k + 1]
             assert (w, x, y, z, h) == tuple(row[ROW_FIELDS.index(n)] for n in ("est_qw", "est_qx", "est_qy", "est_qz",
                                                                                  "est_height"))  # fmt: skip
+    telemetry = topics["/chip/telemetry"]
+    assert telemetry["type"] == "robosoc_msgs/Telemetry" and len(telemetry["values"]) >= 98
+    for stamp, (sample, names, values) in zip(telemetry["stamps"], telemetry["values"], strict=True):
+        assert names == ["est_qw", "est_qx", "est_qy", "est_qz", "est_height", "est_vz"]  # the project's
+        assert stamp == START_NS + sample * 10_000_000
+        if sample + 1 < len(lockstep.rows):
+            assert values[:5] == [lockstep.rows[sample + 1, ROW_FIELDS.index(n)] for n in names[:5]]
+    assert not any(t.startswith("/telemetry/") for t in topics)  # no value under a name of its own
     jobs = lockstep.run.jobs_of("estimator")
     responses = topics["/chip/response_time/estimator"]["values"]
     expected = [(j.completion_cycle - j.release_cycle) * lockstep.run.clock_ns / 1000 for j in jobs]
     assert len(responses) >= 98 and responses == pytest.approx(expected[: len(responses)], rel=1e-12)
+
+
+def test_the_project_telemetry_is_published_logged_and_recorded(master: Master, tmp_path: Path) -> None:
+    """A project with a value under a name of its own (a counter of its jobs): the chip node
+    publishes it on /telemetry/jobs_counted (std_msgs/Float64, the MCAP file's topic name) and every
+    name on /chip/telemetry; the physics node logs it in flight.csv, whose every row and column
+    equals the lockstep flight's; rosbag records both topics."""
+    project = counting_project(tmp_path)
+    toml = tmp_path / "scenario.toml"
+    toml.write_text(SCENARIO_TOML.format(duration=0.3, vehicles=1) + f'[firmware]\nproject = "{project}"\n')
+    lockstep = tmp_path / "lockstep"
+    result = CliRunner().invoke(app, ["fly", "--scenario", str(toml), "--out", str(lockstep)])
+    assert result.exit_code == 0, result.output
+    bag = tmp_path / "flight.bag"
+    # an earlier physics node set use_sim_time: a recorder started with it would wait for /clock
+    assert master.run(["rosparam", "set", "/use_sim_time", "false"]).returncode == 0
+    recorder = master.start(["rosbag", "record", "-a", "-O", str(bag)], tmp_path / "rosbag.log")
+    time.sleep(1.5)
+    physics = master.robosoc(["serve", "physics", str(toml), "--ros", "--pace", "fast", "--start-delay", "4",
+                              "--out", str(tmp_path / "p")], tmp_path / "physics.log")  # fmt: skip
+    chip = master.robosoc(["serve", "chip", str(toml), "--ros", "--out", str(tmp_path / "c")], tmp_path / "chip.log")
+    codes = wait_all([physics, chip], timeout=300)
+    time.sleep(1.0)
+    stop(recorder)
+    assert codes == [0, 0], (tmp_path / "physics.log").read_text() + (tmp_path / "chip.log").read_text()
+    told: dict[str, np.ndarray] = {}
+    rows = read_flight_log(tmp_path / "p" / "flight.csv", telemetry=told)
+    expected_told: dict[str, np.ndarray] = {}
+    np.testing.assert_array_equal(rows, read_flight_log(lockstep / "flight.csv", telemetry=expected_told))
+    np.testing.assert_array_equal(told["jobs_counted"], [math.nan, *range(1, 30)])
+    np.testing.assert_array_equal(told["jobs_counted"], expected_told["jobs_counted"])
+    physics_json = json.loads((tmp_path / "p" / "physics.json").read_text())
+    assert physics_json["telemetry"] == {"received": 29, "refused": 0}
+    topics = read_bag_by_system_rosbag(master, bag, tmp_path)
+    value = topics["/telemetry/jobs_counted"]
+    assert value["type"] == "std_msgs/Float64" and value["values"] == list(range(1, 30))
+    entries = topics["/chip/telemetry"]
+    assert [(stamp, v) for stamp, v in zip(entries["stamps"], entries["values"], strict=True)] == [
+        (START_NS + k * 10_000_000, [k, ["jobs_counted"], [k + 1.0]]) for k in range(29)
+    ]
+    assert "/chip/estimate" not in topics  # the project publishes no estimate
 
 
 BAG_READER = """
@@ -222,7 +271,9 @@ for topic, msg, t in bag.read_messages():
     elif topic.endswith("chip/estimate"):
         o = msg.pose.orientation
         d["values"].append([o.w, o.x, o.y, o.z, msg.pose.position.z])
-    elif "response_time" in topic:
+    elif topic.endswith("chip/telemetry"):
+        d["values"].append([msg.sample, list(msg.names), list(msg.values)])
+    elif "response_time" in topic or "/telemetry/" in topic:
         d["values"].append(msg.data)
 json.dump(out, open(sys.argv[2], "w"))
 """
@@ -345,7 +396,7 @@ def test_two_vehicles_in_namespaces(master: Master, tmp_path: Path) -> None:
     expected = fly_lockstep_fleet(config, vehicles, [ChipController(config, canonical) for _ in vehicles])
     for i in (1, 2):
         rows = read_flight_log(tmp_path / "p" / f"vehicle-{i}" / "flight.csv")
-        np.testing.assert_array_equal(rows[:, OTHER_COLUMNS], expected[i - 1][:, OTHER_COLUMNS])
+        np.testing.assert_array_equal(rows, expected[i - 1])
         physics_json = json.loads((tmp_path / "p" / f"vehicle-{i}" / "physics.json").read_text())
         assert physics_json["namespace"] == f"/uav{i}" and physics_json["commands"]["received"] == 60
     assert not np.array_equal(expected[0][:, 1:4], expected[1][:, 1:4])  # two vehicles, not one twice

@@ -494,8 +494,8 @@ def _live_rows(live):
     if live is None:
         return None
 
-    def on_row(vehicle: int, row) -> None:
+    def on_row(vehicle: int, row, telemetry) -> None:
         if vehicle == 0:
-            live.publish(row)
+            live.publish(row, telemetry)
 
     return on_row

@@ -110,7 +110,8 @@ def fly_decoupled_run(
     from robosoc.control.flight_plot import plot_flight
     from robosoc.outputs.decoupled_flight import SideFailed, fly_decoupled
     from robosoc.outputs.flight_session import vehicle_folder
-    from robosoc.outputs.run_folder import FLIGHT_CSV, FLIGHT_PNG
+    from robosoc.outputs.mcap_log import flight_csv_to_mcap
+    from robosoc.outputs.run_folder import FLIGHT_CSV, FLIGHT_MCAP, FLIGHT_PNG
 
     samples = scenario.samples
     console.print(
@@ -164,6 +165,7 @@ def fly_decoupled_run(
                 if rows is not None and len(rows):
                     title = f"{scenario.name}, seed {seed}, decoupled, vehicle {i + 1}"
                     plot_flight(rows, folder / FLIGHT_PNG, title=title)
+                    flight_csv_to_mcap(folder / FLIGHT_CSV, folder / FLIGHT_MCAP)
             plain(console, f"run folder: {out} (summary.json, vehicle-N/ with each vehicle's files)")
         elif temporary is not None:
             temporary.cleanup()
@@ -196,6 +198,9 @@ def fly_decoupled_run(
             f"commands applied {c['received']} (late {c['late']}, missed {c['missed']}); "
             f"real-time factor {summary['real_time_factor'] or 0:.2f}"
         )
+    told = lk.get("telemetry") or {}
+    if told.get("received") or told.get("refused"):
+        console.print(f"telemetry entries logged {told['received']} (datagrams refused {told['refused']})")
     if "cpu_s" in flight.physics and "cpu_s" in flight.chip:
         console.print(
             f"CPU time while flying: physics {flight.physics['cpu_s']:.1f} s, chip {flight.chip['cpu_s']:.1f} s "
@@ -208,7 +213,8 @@ def fly_decoupled_run(
             rows = read_flight_log(rows_path)
             if len(rows):
                 plot_flight(rows, out / FLIGHT_PNG, title=f"{scenario.name}, seed {seed}, decoupled")
-        plain(console, f"run folder: {out} (flight.csv, jobs.csv, summary.json, link-*.log)")
+                flight_csv_to_mcap(rows_path, out / FLIGHT_MCAP)  # the telemetry's topics among the flight's
+        plain(console, f"run folder: {out} (flight.csv, flight.mcap, jobs.csv, summary.json, link-*.log)")
     elif temporary is not None:  # (always, without an out folder)
         temporary.cleanup()
     if flight.ended != "done":

@@ -162,6 +162,8 @@ def serve_physics_command(
     resolved, craft = resolve_side(flags)
     config, seed = resolved.config, resolved.config.seed
     _no_udp_options(ros, bind=bind is not None, faults=faults is not None)
+    what = "a ROS physics node" if ros else "the decoupled mode"  # it logs the project's telemetry
+    check_project(config, resolved.source_of("firmware.project"), sends=("sensor",), what=what)
     link = link_options.link_config(pace, hold, faults, resend, peer_timeout, connect_timeout)
     folder = _out(out, no_out, "physics", config.name, seed, resolved.path)
     if not ros and start_delay:

@@ -5,7 +5,7 @@ Every datagram is a 20-byte header and a payload, little-endian::
     offset size  field
     0      4     magic b"RSoC"
     4      1     version (:data:`VERSION`)
-    5      1     kind: 1 hello, 2 sensor batch, 3 actuator commands, 4 bye, 5 estimates
+    5      1     kind: 1 hello, 2 sensor batch, 3 actuator commands, 4 bye, 5 telemetry
     6      2     flags (0)
     8      4     sequence number (data datagrams: 0, 1, 2 ... per sender; hello and bye: 0)
     12     4     payload length in bytes
@@ -15,7 +15,9 @@ Every datagram is a 20-byte header and a payload, little-endian::
 Payloads:
 
 * **hello** (chip → physics, repeated until the first sensor batch): an 8-byte digest of the
-  scenario and vehicle the chip's firmware was built for, and the sensor period in ns.
+  scenario and vehicle the chip's firmware was built for, the sensor period in ns, and the names
+  of the telemetry values the firmware publishes (its project's ``[[telemetry]]``, in order): what
+  each telemetry entry holds.
 * **sensor batch** (physics → chip): the physics' time ``now_ns`` when it left, a count, and that
   many readings ``(k, t_ns, sensor packet)``: every reading since the last send, each with its
   timestamp, plus the ``resend`` readings before them (the seed's latency compensation: the chip
@@ -24,11 +26,12 @@ Payloads:
   there: every command that left before is in this or an earlier datagram), a count, and that
   many commands ``(seq, left_ns, pwm[4])``: the PWM command of sensor sample ``seq`` with the chip
   time it reached the I/O tile, newest last.
-* **estimates** (chip → physics): the chip's time, a count, and that many state estimates
-  ``(k, t_ns, quaternion w x y z, height, vertical velocity)`` as f64: the estimator's state read
-  at the close of the period of sensor sample ``k`` (taken at ``t_ns``), newest last, plus the
-  ``resend`` before them; the flight log's estimate columns (the chip's newest estimate at each
-  sample time, as in lockstep).
+* **telemetry** (chip → physics): the chip's time, the number of values per entry, a count, and
+  that many entries ``(k, t_ns, values as f64)``: the newest value of each name of the hello (NaN
+  before its first read) after the read at the close of the period of sensor sample ``k`` (taken
+  at ``t_ns``), newest last, plus the ``resend`` before them.  The flight log's columns of the
+  firmware's telemetry, its estimate columns among them (:mod:`robosoc.host.telemetry`), as in
+  lockstep.
 * **bye**: why the sender stops, how many data datagrams it sent (so the peer can count losses at
   the end), and its final time in ns.
 
@@ -55,20 +58,22 @@ __all__ = [
     "Command",
     "CommandBatch",
     "Datagram",
-    "EstimateBatch",
     "Hello",
     "Kind",
     "Reading",
     "Rejected",
     "Rejection",
     "SensorBatch",
-    "StateEstimate",
+    "TelemetryBatch",
+    "TelemetryEntry",
     "decode",
     "encode",
+    "max_telemetry_entries",
 ]
 
 MAGIC = b"RSoC"
-VERSION = 1
+VERSION = 2
+"""2: the hello names the telemetry values, and telemetry entries replace version 1's estimates."""
 HEADER = struct.Struct("<4sBBHIII")
 HEADER_BYTES = HEADER.size
 #: Longest datagram a side sends or accepts whole (one Ethernet frame's IP payload, less IP and UDP).
@@ -80,7 +85,7 @@ class Kind(enum.IntEnum):
     SENSORS = 2
     COMMANDS = 3
     BYE = 4
-    ESTIMATES = 5
+    TELEMETRY = 5
 
 
 class ByeReason(enum.IntEnum):
@@ -108,8 +113,11 @@ class Rejection(enum.Enum):
 
 @dataclass(frozen=True)
 class Hello:
+    """``telemetry``: the names of the values of each :class:`TelemetryEntry` the chip sends."""
+
     digest: bytes
     sample_period_ns: int
+    telemetry: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -143,21 +151,20 @@ class CommandBatch:
 
 
 @dataclass(frozen=True)
-class StateEstimate:
-    """The estimator's state after sensor sample ``k`` (taken at ``t_ns``): attitude w, x, y, z
-    (body -> world), height [m] and vertical velocity [m/s]."""
+class TelemetryEntry:
+    """The firmware's telemetry after the read at the close of sensor sample ``k``'s period (the
+    sample taken at ``t_ns``): the newest value of each name of the chip's hello, NaN before its
+    first read."""
 
     k: int
     t_ns: int
-    quaternion: tuple[float, float, float, float]
-    height: float
-    vertical_velocity: float
+    values: tuple[float, ...]
 
 
 @dataclass(frozen=True)
-class EstimateBatch:
+class TelemetryBatch:
     chip_now_ns: int
-    estimates: tuple[StateEstimate, ...]
+    entries: tuple[TelemetryEntry, ...]
 
 
 @dataclass(frozen=True)
@@ -167,13 +174,13 @@ class Bye:
     end_ns: int
 
 
-Body = Hello | SensorBatch | CommandBatch | EstimateBatch | Bye
+Body = Hello | SensorBatch | CommandBatch | TelemetryBatch | Bye
 KIND_OF: dict[type, Kind] = {
     Hello: Kind.HELLO,
     SensorBatch: Kind.SENSORS,
     CommandBatch: Kind.COMMANDS,
     Bye: Kind.BYE,
-    EstimateBatch: Kind.ESTIMATES,
+    TelemetryBatch: Kind.TELEMETRY,
 }
 
 
@@ -191,25 +198,68 @@ class Rejected:
     size: int
 
 
-_HELLO = struct.Struct("<8sQ")
+_HELLO = struct.Struct("<8sQH")
 _BATCH = struct.Struct("<QH")
 _READING = struct.Struct("<IQ")
 _COMMAND = struct.Struct("<IQ4H")
 _BYE = struct.Struct("<BIQ")
-_ESTIMATE = struct.Struct("<IQ6d")
+_TELEMETRY = struct.Struct("<QHH")  # chip_now_ns, values per entry, entries
+_ENTRY = struct.Struct("<IQ")  # k, t_ns; then the values, f64 each
+_VALUE_BYTES = 8
 SENSOR_BYTES = packets.SENSOR.size
 READING_BYTES = _READING.size + SENSOR_BYTES
 #: Most readings or commands one datagram holds.
 MAX_READINGS = (MAX_DATAGRAM_BYTES - HEADER_BYTES - _BATCH.size) // READING_BYTES
 MAX_COMMANDS = (MAX_DATAGRAM_BYTES - HEADER_BYTES - _BATCH.size) // _COMMAND.size
-MAX_ESTIMATES = (MAX_DATAGRAM_BYTES - HEADER_BYTES - _BATCH.size) // _ESTIMATE.size
+#: Longest telemetry name a hello carries (a byte gives its length).
+MAX_NAME_BYTES = 255
+
+
+def max_telemetry_entries(values: int) -> int:
+    """Most telemetry entries of ``values`` values each that one datagram holds (0: not even one)."""
+    return (MAX_DATAGRAM_BYTES - HEADER_BYTES - _TELEMETRY.size) // (_ENTRY.size + _VALUE_BYTES * values)
+
+
+def _names_payload(names: tuple[str, ...]) -> bytes:
+    parts = []
+    for name in names:
+        raw = name.encode("ascii")
+        if not raw or len(raw) > MAX_NAME_BYTES:
+            raise ValueError(f"hello: telemetry name {name!r} is not 1..{MAX_NAME_BYTES} bytes")
+        parts += [bytes((len(raw),)), raw]
+    return b"".join(parts)
+
+
+def _names(payload: bytes, count: int) -> tuple[str, ...] | str:
+    """The ``count`` names in ``payload`` (a length byte and ASCII each), or why they do not parse."""
+    names: list[str] = []
+    offset = 0
+    for i in range(count):
+        if offset >= len(payload):
+            return f"hello: {count} telemetry names announced, {i} there"
+        size = payload[offset]
+        raw = payload[offset + 1 : offset + 1 + size]
+        offset += 1 + size
+        if len(raw) != size:
+            return f"hello: telemetry name {i} cut short"
+        if not raw.isascii() or not raw.decode("ascii").isidentifier():
+            return f"hello: telemetry name {i} is not an identifier: {raw[:32]!r}"
+        names.append(raw.decode("ascii"))
+    if offset != len(payload):
+        return f"hello: {len(payload) - offset} bytes after its {count} telemetry names"
+    if len(set(names)) != len(names):
+        return "hello: a telemetry name given twice"
+    return tuple(names)
 
 
 def _payload(body: Body) -> bytes:
     if isinstance(body, Hello):
         if len(body.digest) != 8:
             raise ValueError("hello: the digest is 8 bytes")
-        return _HELLO.pack(body.digest, body.sample_period_ns)
+        payload = _HELLO.pack(body.digest, body.sample_period_ns, len(body.telemetry)) + _names_payload(body.telemetry)
+        if HEADER_BYTES + len(payload) > MAX_DATAGRAM_BYTES:
+            raise ValueError(f"hello: {len(body.telemetry)} telemetry names do not fit a datagram")
+        return payload
     if isinstance(body, SensorBatch):
         if len(body.readings) > MAX_READINGS:
             raise ValueError(f"sensor batch: at most {MAX_READINGS} readings, got {len(body.readings)}")
@@ -225,11 +275,16 @@ def _payload(body: Body) -> bytes:
         parts = [_BATCH.pack(body.chip_now_ns, len(body.commands))]
         parts += [_COMMAND.pack(c.seq, c.left_ns, *c.pwm) for c in body.commands]
         return b"".join(parts)
-    if isinstance(body, EstimateBatch):
-        if len(body.estimates) > MAX_ESTIMATES:
-            raise ValueError(f"estimate batch: at most {MAX_ESTIMATES} estimates, got {len(body.estimates)}")
-        parts = [_BATCH.pack(body.chip_now_ns, len(body.estimates))]
-        parts += [_ESTIMATE.pack(e.k, e.t_ns, *e.quaternion, e.height, e.vertical_velocity) for e in body.estimates]
+    if isinstance(body, TelemetryBatch):
+        values = len(body.entries[0].values) if body.entries else 0
+        most = max_telemetry_entries(values)
+        if len(body.entries) > most:
+            raise ValueError(f"telemetry batch: at most {most} entries of {values} values, got {len(body.entries)}")
+        parts = [_TELEMETRY.pack(body.chip_now_ns, values, len(body.entries))]
+        for e in body.entries:
+            if len(e.values) != values:
+                raise ValueError(f"telemetry entry {e.k}: {len(e.values)} values, the batch's first has {values}")
+            parts += [_ENTRY.pack(e.k, e.t_ns), struct.pack(f"<{values}d", *e.values)]
         return b"".join(parts)
     return _BYE.pack(int(body.reason), body.data_sent, body.end_ns)
 
@@ -249,10 +304,13 @@ def encode(body: Body, seq: int = 0) -> bytes:
 def _parse(kind: Kind, payload: bytes) -> Body | str:
     """The body, or why the payload does not parse."""
     if kind is Kind.HELLO:
-        if len(payload) != _HELLO.size:
-            return f"hello payload of {len(payload)} bytes, expected {_HELLO.size}"
-        digest, period = _HELLO.unpack(payload)
-        return Hello(digest, period) if period > 0 else "hello with a sensor period of 0"
+        if len(payload) < _HELLO.size:
+            return f"hello payload of {len(payload)} bytes, shorter than its {_HELLO.size}-byte head"
+        digest, period, count = _HELLO.unpack_from(payload)
+        if period <= 0:
+            return "hello with a sensor period of 0"
+        names = _names(payload[_HELLO.size :], count)
+        return names if isinstance(names, str) else Hello(digest, period, names)
     if kind is Kind.BYE:
         if len(payload) != _BYE.size:
             return f"bye payload of {len(payload)} bytes, expected {_BYE.size}"
@@ -260,10 +318,12 @@ def _parse(kind: Kind, payload: bytes) -> Body | str:
         if reason not in ByeReason._value2member_map_:
             return f"bye with unknown reason {reason}"
         return Bye(ByeReason(reason), sent, end)
+    if kind is Kind.TELEMETRY:
+        return _telemetry(payload)
     if len(payload) < _BATCH.size:
         return f"batch payload of {len(payload)} bytes, shorter than its {_BATCH.size}-byte head"
     now, count = _BATCH.unpack_from(payload)
-    item = {Kind.SENSORS: READING_BYTES, Kind.ESTIMATES: _ESTIMATE.size}.get(kind, _COMMAND.size)
+    item = READING_BYTES if kind is Kind.SENSORS else _COMMAND.size
     if len(payload) != _BATCH.size + count * item:
         return f"{count} items need {_BATCH.size + count * item} payload bytes, got {len(payload)}"
     offset = _BATCH.size
@@ -277,13 +337,6 @@ def _parse(kind: Kind, payload: bytes) -> Body | str:
             readings.append(Reading(k, t, packet))
             offset += READING_BYTES
         return SensorBatch(now, tuple(readings))
-    if kind is Kind.ESTIMATES:
-        estimates = []
-        for _ in range(count):
-            k, t, w, x, y, z, height, vz = _ESTIMATE.unpack_from(payload, offset)
-            estimates.append(StateEstimate(k, t, (w, x, y, z), height, vz))
-            offset += _ESTIMATE.size
-        return EstimateBatch(now, tuple(estimates))
     commands = []
     for _ in range(count):
         seq, left, *pwm = _COMMAND.unpack_from(payload, offset)
@@ -292,6 +345,24 @@ def _parse(kind: Kind, payload: bytes) -> Body | str:
         commands.append(Command(seq, left, (pwm[0], pwm[1], pwm[2], pwm[3])))
         offset += _COMMAND.size
     return CommandBatch(now, tuple(commands))
+
+
+def _telemetry(payload: bytes) -> TelemetryBatch | str:
+    if len(payload) < _TELEMETRY.size:
+        return f"telemetry payload of {len(payload)} bytes, shorter than its {_TELEMETRY.size}-byte head"
+    now, values, count = _TELEMETRY.unpack_from(payload)
+    item = _ENTRY.size + _VALUE_BYTES * values
+    if len(payload) != _TELEMETRY.size + count * item:
+        need = _TELEMETRY.size + count * item
+        return f"{count} telemetry entries of {values} values need {need} payload bytes, got {len(payload)}"
+    entries = []
+    offset = _TELEMETRY.size
+    row = struct.Struct(f"<{values}d")
+    for _ in range(count):
+        k, t = _ENTRY.unpack_from(payload, offset)
+        entries.append(TelemetryEntry(k, t, row.unpack_from(payload, offset + _ENTRY.size)))
+        offset += item
+    return TelemetryBatch(now, tuple(entries))
 
 
 def decode(data: bytes) -> Datagram | Rejected:

@@ -21,7 +21,11 @@ the readings the physics side sends (docs/decoupled.md):
 * each PWM command that reaches the I/O tile is sent at once with the chip time it arrived, plus
   the ``resend`` commands before it; on reaching its limit the chip sends its time (a command
   datagram, so the physics side knows every earlier command is out) and repeats it every
-  ``heartbeat_s`` while it waits.
+  ``heartbeat_s`` while it waits;
+* the firmware's telemetry (its project's ``[[telemetry]]``, the estimate among it), read at each
+  sample period's close as lockstep reads it (a host read: no simulated cycle), goes out at once
+  in a telemetry datagram: the newest value of every name the hello announced, plus the
+  ``resend`` entries before.
 
 The counters and energy of the run are those of the replay harness: per-job records, charged to
 the sample period they were released in (:meth:`FirmwareRun.close_period` at each injection).
@@ -40,26 +44,29 @@ from pathlib import Path
 from robosoc.chip.mpsoc import ChipError
 from robosoc.chip.single import CoreError
 from robosoc.config.link import LinkConfig
+from robosoc.config.project import PROJECT_FILE
 from robosoc.config.scenario import ScenarioConfig
 from robosoc.config.vehicle import VehicleConfig
 from robosoc.cosim.datagram import (
     MAX_COMMANDS,
-    MAX_ESTIMATES,
+    MAX_DATAGRAM_BYTES,
     Bye,
     ByeReason,
     Command,
     CommandBatch,
-    EstimateBatch,
     Hello,
     Reading,
     SensorBatch,
-    StateEstimate,
+    TelemetryBatch,
+    TelemetryEntry,
+    encode,
+    max_telemetry_entries,
 )
 from robosoc.cosim.decoupled_physics import Ended, scenario_digest
 from robosoc.cosim.firmware_run import DEFAULT_FIRST_CYCLE, FirmwareRun, ReplayResult
 from robosoc.cosim.link import Address, ChipTransport, LinkLog, UdpLink
 from robosoc.host.scenario_image import scenario_image
-from robosoc.host.telemetry import ESTIMATE_NAMES, estimate_of
+from robosoc.host.telemetry import TelemetryError
 from robosoc.physics.clock import NS_PER_S, FlightClock
 from robosoc.records import SampleInput
 
@@ -119,9 +126,12 @@ class _Chip:
         self.counts = {"received": 0, "injected": 0, "late": 0, "stale": 0, "repeated": 0, "outside": 0}
         self.recent: deque[Command] = deque(maxlen=min(MAX_COMMANDS, config.resend + 16))
         self.commands_sent = 0
-        self.estimates_read = 0  # of run.telemetry, sent
+        #: the firmware's telemetry names, in its project's order: the values of each entry sent
+        self.names = tuple(probe.name for probe in run.image.telemetry)
+        self.telemetry_read = 0  # of run.telemetry, sent
         self.published: dict[str, float] = {}  # the newest value of each telemetry name read so far
-        self.recent_estimates: deque[StateEstimate] = deque(maxlen=min(MAX_ESTIMATES, config.resend + 1))
+        most = max_telemetry_entries(len(self.names))
+        self.recent_telemetry: deque[TelemetryEntry] = deque(maxlen=max(1, min(most, config.resend + 1)))
         self.last_send = time.monotonic()
         self.reported_ns = -1
 
@@ -179,22 +189,20 @@ class _Chip:
         self.last_send = time.monotonic()
         self.reported_ns = self.now_ns()
 
-    def send_estimates(self) -> None:
-        """Send the estimates read since the last call (with the ``resend`` before them): the
-        physics' flight log has the chip's estimate, as lockstep's."""
+    def send_telemetry(self) -> None:
+        """Send the telemetry read since the last call (with the ``resend`` entries before): the
+        physics' flight log has the firmware's values, its estimate among them, as lockstep's."""
         fresh = []
-        for read in self.run.telemetry[self.estimates_read :]:
+        for read in self.run.telemetry[self.telemetry_read :]:
             self.published.update(read.values)
-            if 0 <= read.sample < len(self.run.samples) and any(n in read.values for n in ESTIMATE_NAMES):
+            if 0 <= read.sample < len(self.run.samples):
                 s = self.run.samples[read.sample]
-                t_ns = round(s.time_s * NS_PER_S)
-                e = estimate_of(self.published)
-                q = (float(e.quaternion[0]), float(e.quaternion[1]), float(e.quaternion[2]), float(e.quaternion[3]))
-                fresh.append(StateEstimate(s.seq, t_ns, q, e.height, e.vertical_velocity))
-        self.estimates_read = len(self.run.telemetry)
+                values = tuple(self.published.get(name, math.nan) for name in self.names)
+                fresh.append(TelemetryEntry(s.seq & 0xFFFFFFFF, round(s.time_s * NS_PER_S), values))
+        self.telemetry_read = len(self.run.telemetry)
         if fresh:
-            self.recent_estimates.extend(fresh)
-            self.link.send_data(EstimateBatch(self.now_ns(), tuple(self.recent_estimates)))
+            self.recent_telemetry.extend(fresh)
+            self.link.send_data(TelemetryBatch(self.now_ns(), tuple(self.recent_telemetry)))
 
     def inject_due(self) -> bool:
         """Inject the oldest waiting reading if the chip has reached its cycle; whether it did."""
@@ -214,7 +222,7 @@ class _Chip:
             cycle = self.run.cycle
         if self.run.samples:
             self.run.close_period()
-            self.send_estimates()
+            self.send_telemetry()
             if self.on_period is not None:
                 self.on_period(self.run)
         self.run.inject(SampleInput(k, r.t_ns / NS_PER_S, cycle, r.packet))
@@ -254,6 +262,23 @@ class _Chip:
         self.check_peer()
 
 
+def _check_telemetry_fits(run: FirmwareRun, project_file: Path, period_ns: int) -> None:
+    """Refuse a project whose telemetry names do not fit the hello or whose values do not fit one
+    telemetry datagram (:class:`TelemetryError`, a build error naming the project file)."""
+    names = tuple(probe.name for probe in run.image.telemetry)
+    try:
+        encode(Hello(bytes(8), period_ns, names))
+        fits = max_telemetry_entries(len(names)) >= 1
+    except ValueError:
+        fits = False
+    if not fits:
+        raise TelemetryError(
+            str(project_file), "telemetry",
+            f"{len(names)} values named in {sum(map(len, names))} bytes do not fit a datagram of the decoupled "
+            f"mode ({MAX_DATAGRAM_BYTES} bytes: the names in the hello, each entry's values 8 bytes each)",
+        )  # fmt: skip
+
+
 def serve_chip(
     scenario: ScenarioConfig,
     vehicle: VehicleConfig,
@@ -279,7 +304,7 @@ def serve_chip(
         on_status: told what the side is doing (building, booting, waiting, flying).
         transport: makes the link to the physics from the side's log instead of a UDP socket
             (the ROS 1 node's, :mod:`robosoc.cosim.ros_chip`).
-        on_period: called with the firmware run at each sample period's close (its estimate and
+        on_period: called with the firmware run at each sample period's close (its telemetry and
             jobs so far are there).
 
     Returns:
@@ -290,6 +315,7 @@ def serve_chip(
         LinkError: ``bind`` cannot be bound or ``peer`` resolved.
         ValueError: the mapping does not fit the chip.
         CompileError: the firmware failed to build.
+        TelemetryError: the project declares more telemetry values than a datagram holds.
     """
     say = on_status or (lambda _text: None)
     period_ns = FlightClock.of(scenario).sample_period_ns
@@ -318,6 +344,7 @@ def serve_chip(
         fw = scenario.firmware
         say(f"building the firmware ({fw.label}) and loading the chip ...")
         run = FirmwareRun(fw, scenario_image(scenario, vehicle), chip=scenario.chip, first_cycle=DEFAULT_FIRST_CYCLE)
+        _check_telemetry_fits(run, fw.project_folder / PROJECT_FILE, period_ns)
         say("booting the chip (compiling the chip kernels on a fresh install) ...")
         run.run_to(DEFAULT_FIRST_CYCLE)
         if on_period is not None:
@@ -325,7 +352,7 @@ def serve_chip(
         samples = round(scenario.duration_s * scenario.sensors.rate_hz)  # as the physics side counts them
         state = _Chip(run, link, config, period_ns, log, samples, on_period)
         say(f"waiting for the physics at {peer} ...")
-        hello = Hello(scenario_digest(scenario, vehicle), period_ns)
+        hello = Hello(scenario_digest(scenario, vehicle), period_ns, state.names)
         deadline = time.monotonic() + config.connect_timeout_s
         last_hello = -math.inf
         while not state.pending and state.end_ns is None:

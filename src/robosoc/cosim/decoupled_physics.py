@@ -17,6 +17,11 @@ chip at the other end of a UDP link (docs/decoupled.md):
 4. at the end it sends a bye and waits (up to ``peer_timeout_s``) for the chip's, which says how
    many datagrams the chip sent.
 
+The chip's telemetry (its project's ``[[telemetry]]`` values, the estimate among them) comes in
+telemetry datagrams; the hello names the values, which must be the names the physics side was
+given (those of the scenario's project).  Row k shows the newest entry of a sample before k that
+has come (:class:`~robosoc.cosim.telemetry_rows.TelemetryRows`), as lockstep's row does.
+
 A side that waits repeats its newest datagram every ``heartbeat_s`` (a lost datagram cannot stall
 the flight), and ends when the peer has been silent for ``peer_timeout_s``.  With ``pace="fast"``
 and every command delivered in time the flight is the lockstep flight, row for row.
@@ -38,9 +43,7 @@ import numpy as np
 from robosoc.config.link import LinkConfig
 from robosoc.config.scenario import ScenarioConfig
 from robosoc.config.vehicle import VehicleConfig
-from robosoc.control import quaternion
 from robosoc.control.flight import ROW_FIELDS, flight_row
-from robosoc.control.host import Estimate
 from robosoc.control.setpoint import setpoint_at
 from robosoc.cosim.actuator_hold import ActuatorHold
 from robosoc.cosim.datagram import (
@@ -48,39 +51,26 @@ from robosoc.cosim.datagram import (
     Bye,
     ByeReason,
     CommandBatch,
-    EstimateBatch,
     Hello,
     Reading,
     SensorBatch,
-    StateEstimate,
+    TelemetryBatch,
 )
 from robosoc.cosim.link import Address, LinkLog, UdpLink
 from robosoc.cosim.lockstep import PWM_COLUMNS, UNKNOWN_ESTIMATE
 from robosoc.cosim.replay import sensor_packet
+from robosoc.cosim.telemetry_rows import TelemetryRows
 from robosoc.physics import World
 from robosoc.physics.clock import NS_PER_S, PHYSICS_STEP_NS, FlightClock
 
 __all__ = [
     "Ended",
     "PhysicsOutcome",
-    "estimate_columns",
     "fleet_binds",
     "scenario_digest",
     "serve_physics",
     "serve_physics_fleet",
 ]
-
-ESTIMATE_COLUMNS = [ROW_FIELDS.index(n) for n in ROW_FIELDS if n.startswith("est_")]
-
-
-def estimate_columns(e: StateEstimate) -> np.ndarray:
-    """The estimate columns of a flight row (``est_roll`` ... ``est_height``) from a chip's estimate."""
-    q = np.array(e.quaternion)
-    est = Estimate(q, quaternion.to_euler(q), e.height, e.vertical_velocity)
-    values = {f"est_{a}": v for a, v in zip(("roll", "pitch", "yaw"), est.euler, strict=True)}
-    values.update({f"est_q{a}": v for a, v in zip("wxyz", est.quaternion, strict=True)})
-    values["est_height"] = est.height
-    return np.array([values[ROW_FIELDS[i]] for i in ESTIMATE_COLUMNS])
 
 
 class Ended:
@@ -114,6 +104,10 @@ class PhysicsOutcome:
     commands: dict[str, int] = field(default_factory=dict)
     max_lag_s: float = 0.0
     period_s: float = 0.0
+    #: the firmware's telemetry under names of its own: name -> one value per row (NaN before the first)
+    telemetry: dict[str, np.ndarray] = field(default_factory=dict)
+    #: the chip's telemetry entries kept (``received``) and datagrams refused (not a value per name)
+    telemetry_counts: dict[str, int] = field(default_factory=dict)
 
     @property
     def simulated_s(self) -> float:
@@ -140,7 +134,9 @@ class Mismatch(Exception):
 class _Flight:
     """State of one flight on the physics side (the helpers of :func:`serve_physics`)."""
 
-    def __init__(self, link: UdpLink, config: LinkConfig, hold: ActuatorHold, log: LinkLog) -> None:
+    def __init__(
+        self, link: UdpLink, config: LinkConfig, hold: ActuatorHold, log: LinkLog, telemetry: TelemetryRows
+    ) -> None:
         self.link, self.config, self.hold, self.log = link, config, hold, log
         self.progress_ns = -1
         self.newest_seq = -1
@@ -152,19 +148,9 @@ class _Flight:
         self.last_send = time.monotonic()
         self.peer_bye: Bye | None = None
         self.finished = False  # the flight is over: commands are still counted, no longer applied
-        self.estimates: dict[int, StateEstimate] = {}  # by sensor sample, not yet superseded
-        self.estimate: StateEstimate | None = None  # the newest one a row has shown
-
-    def estimate_before(self, k: int) -> StateEstimate | None:
-        """The chip's newest estimate at sample ``k``'s time: of the newest sample before ``k``
-        whose estimate has come (lockstep's row k shows the estimate read at t_k)."""
-        ready = [j for j in self.estimates if j < k]
-        if ready:
-            newest = max(ready)
-            self.estimate = self.estimates[newest]
-            for j in ready:
-                del self.estimates[j]
-        return self.estimate
+        self.telemetry = telemetry
+        self.refused = 0  # telemetry datagrams whose entries do not hold a value per name of the hello
+        self.told: list[tuple[float, ...]] = []  # each row's own telemetry values
 
     def send(self, now_ns: int, fresh: list[Reading]) -> None:
         self.recent.extend(fresh)
@@ -194,10 +180,14 @@ class _Flight:
                         )
                         step = now
                     self.hold.schedule(step, c.pwm)
-            elif isinstance(body, EstimateBatch):
-                for e in body.estimates:
-                    if self.estimate is None or e.k > self.estimate.k:
-                        self.estimates[e.k] = e
+            elif isinstance(body, TelemetryBatch):
+                if not all([self.telemetry.arrive(e.k, e.values) for e in body.entries]):
+                    self.refused += 1
+                    self.log.write(
+                        f"telemetry #{d.seq} refused: entries of {len(body.entries[0].values)} values, the hello "
+                        f"named {len(self.telemetry.names)}",
+                        "telemetry refused",
+                    )
             elif isinstance(body, Bye):
                 self.peer_bye = body
                 raise PeerEnded(f"the chip said bye ({body.reason.name.lower()})")
@@ -224,7 +214,9 @@ class _Flight:
             self.last_send = time.monotonic()
 
 
-def _wait_for_hello(link: UdpLink, config: LinkConfig, digest: bytes, period_ns: int, log: LinkLog) -> Hello:
+def _wait_for_hello(
+    link: UdpLink, config: LinkConfig, digest: bytes, period_ns: int, telemetry: tuple[str, ...]
+) -> Hello:
     deadline = time.monotonic() + config.connect_timeout_s
     while True:
         for d in link.receive(min(0.1, max(0.0, deadline - time.monotonic()))):
@@ -234,9 +226,23 @@ def _wait_for_hello(link: UdpLink, config: LinkConfig, digest: bytes, period_ns:
                         "the chip's firmware was built for another scenario or vehicle "
                         "(give both sides the same --scenario, --seconds and --vehicle)"
                     )
+                if d.body.telemetry != telemetry:
+                    raise Mismatch(
+                        f"the chip's firmware publishes the telemetry {_listed(d.body.telemetry)}, the scenario's "
+                        f"project declares {_listed(telemetry)} (give both sides the same project)"
+                    )
                 return d.body
         if time.monotonic() > deadline:
-            raise PeerSilent(f"no hello from a chip within --connect-timeout {config.connect_timeout_s:g} s")
+            versions = link.counts.rejected.get("bad_version", 0)
+            hint = (
+                f" ({versions} datagrams of another robosoc version came: give both sides the same version)"
+                if versions else ""
+            )  # fmt: skip
+            raise PeerSilent(f"no hello from a chip within --connect-timeout {config.connect_timeout_s:g} s{hint}")
+
+
+def _listed(names: tuple[str, ...]) -> str:
+    return f"({', '.join(names)})" if names else "(none)"
 
 
 def serve_physics(
@@ -246,9 +252,10 @@ def serve_physics(
     bind: Address,
     *,
     log_path: Path | None = None,
+    telemetry: Sequence[str] = (),
     on_listen: Callable[[Address], None] | None = None,
     on_start: Callable[[], None] | None = None,
-    on_row: Callable[[np.ndarray], None] | None = None,
+    on_row: Callable[[np.ndarray, tuple[float, ...]], None] | None = None,
     on_sample: Callable[[int, int], None] | None = None,
 ) -> PhysicsOutcome:
     """Fly ``scenario`` with the chip at the other end of a UDP link; see the module docstring.
@@ -259,9 +266,13 @@ def serve_physics(
         config: pacing, hold, timeouts, redundancy and faults.
         bind: the address to listen on (port 0: a free port, given to ``on_listen``).
         log_path: the side's link log (``link-physics.log``), or None.
+        telemetry: the names of the telemetry values the chip's firmware publishes (its project's
+            ``[[telemetry]]``, in order: :func:`robosoc.host.telemetry.declared_names`); a chip whose
+            hello names others is refused.
         on_listen: called with the address bound, before waiting for the chip.
         on_start: called when the chip's hello has come and the flight starts.
-        on_row: called with each row as soon as it is complete (the flight log).
+        on_row: called with each row as soon as it is complete and the values of its own telemetry
+            columns (:attr:`TelemetryRows.own <robosoc.cosim.telemetry_rows.TelemetryRows.own>`; the flight log).
         on_sample: called with (samples done, samples in all).
 
     Returns:
@@ -272,9 +283,10 @@ def serve_physics(
         LinkError: ``bind`` cannot be bound.
     """
     (outcome,) = serve_physics_fleet(
-        scenario, [vehicle], vehicle, config, bind, log_paths=[log_path],
+        scenario, [vehicle], vehicle, config, bind, log_paths=[log_path], telemetry=telemetry,
         on_listen=None if on_listen is None else lambda addresses: on_listen(addresses[0]),
-        on_start=on_start, on_row=None if on_row is None else lambda _i, row: on_row(row), on_sample=on_sample,
+        on_start=on_start, on_row=None if on_row is None else lambda _i, row, own: on_row(row, own),
+        on_sample=on_sample,
     )  # fmt: skip
     return outcome
 
@@ -329,15 +341,17 @@ def serve_physics_fleet(
     bind: Address,
     *,
     log_paths: Sequence[Path | None] | None = None,
+    telemetry: Sequence[str] = (),
     on_listen: Callable[[list[Address]], None] | None = None,
     on_start: Callable[[], None] | None = None,
-    on_row: Callable[[int, np.ndarray], None] | None = None,
+    on_row: Callable[[int, np.ndarray, tuple[float, ...]], None] | None = None,
     on_sample: Callable[[int, int], None] | None = None,
 ) -> list[PhysicsOutcome]:
     """Fly ``scenario`` with ``vehicles`` in one world, vehicle i flown by the chip at the other end
     of UDP link i (listening on :func:`fleet_binds`); each vehicle as :func:`serve_physics`, all
     under one clock (a period's steps wait for every chip).  The chips' firmware must have been built
-    for ``scenario`` and ``firmware_vehicle`` (every chip of a fleet runs the same firmware).
+    for ``scenario`` and ``firmware_vehicle`` (every chip of a fleet runs the same firmware) and
+    publish the ``telemetry`` names.  ``on_row``: called with (vehicle index, row, its own telemetry values).
 
     Returns:
         Each vehicle's outcome (one ``ended`` for all: the first reason to stop).
@@ -373,7 +387,7 @@ def serve_physics_fleet(
         digest = scenario_digest(scenario, firmware_vehicle)
         for i, (link, log) in enumerate(zip(links, logs, strict=True)):
             try:
-                _wait_for_hello(link, config, digest, period_ns, log)
+                _wait_for_hello(link, config, digest, period_ns, tuple(telemetry))
             except (Mismatch, PeerSilent) as exc:
                 raise type(exc)(f"vehicle {i + 1}: {exc}" if count > 1 else str(exc)) from None
             log.write(f"flying {samples} samples, pace {config.pace}, hold {config.hold}, resend {config.resend}")
@@ -383,7 +397,7 @@ def serve_physics_fleet(
         world.reset(scenario.seed)
         quads = world.quadrotors
         flights = [
-            _Flight(link, config, ActuatorHold(config.hold, quad.pwm), log)
+            _Flight(link, config, ActuatorHold(config.hold, quad.pwm), log, TelemetryRows(telemetry))
             for link, log, quad in zip(links, logs, quads, strict=True)
         ]
         steps = clock.steps_per_sample
@@ -409,12 +423,11 @@ def serve_physics_fleet(
                     if s == 0:
                         row = pending[i]
                         row[PWM_COLUMNS] = quad.pwm
-                        estimate = f.estimate_before(k)
-                        if estimate is not None:
-                            row[ESTIMATE_COLUMNS] = estimate_columns(estimate)
+                        own = f.telemetry.fill(row, k)
+                        f.told.append(own)
                         rows[i][k] = row
                         if on_row is not None:
-                            on_row(i, row)
+                            on_row(i, row, own)
                 if s == 0:
                     done = k + 1
                     if on_sample is not None:
@@ -456,6 +469,9 @@ def serve_physics_fleet(
             link.close()
             received = flight.received if flight else 0
             commands = {"received": received, "late": flight.late if flight else 0, "missed": max(0, done - received)}
+            rows_telemetry = TelemetryRows(telemetry)
+            shown = flight.told[:done] if flight else []
+            told = np.array(shown, dtype=float).reshape(len(shown), len(rows_telemetry.own))
             outcome = PhysicsOutcome(
                 rows=rows[i][:done],
                 samples=samples,
@@ -467,8 +483,11 @@ def serve_physics_fleet(
                 commands=commands,
                 max_lag_s=max_lag,
                 period_s=period_ns / NS_PER_S,
+                telemetry={name: told[:, c].copy() for c, name in enumerate(rows_telemetry.own)},
             )
-            log.write(f"counts: {outcome.link}; commands {commands}")
+            if flight is not None:
+                outcome.telemetry_counts = {"received": flight.telemetry.received, "refused": flight.refused}
+            log.write(f"counts: {outcome.link}; commands {commands}; telemetry {outcome.telemetry_counts}")
             log.close()
             outcomes.append(outcome)
     return outcomes

@@ -28,11 +28,11 @@ from robosoc.cosim.datagram import (
     Bye,
     CommandBatch,
     Datagram,
-    EstimateBatch,
     Hello,
     Kind,
     Rejected,
     SensorBatch,
+    TelemetryBatch,
     decode,
     encode,
 )
@@ -155,10 +155,10 @@ def _describe(body: Body) -> str:
         return f"sensors k={[r.k for r in body.readings]}"
     if isinstance(body, CommandBatch):
         return f"commands seq={[c.seq for c in body.commands]} chip_now={body.chip_now_ns} ns"
-    if isinstance(body, EstimateBatch):
-        return f"estimates k={[e.k for e in body.estimates]}"
+    if isinstance(body, TelemetryBatch):
+        return f"telemetry k={[e.k for e in body.entries]}"
     if isinstance(body, Hello):
-        return f"hello period={body.sample_period_ns} ns"
+        return f"hello period={body.sample_period_ns} ns telemetry={list(body.telemetry)}"
     assert isinstance(body, Bye)
     return f"bye {body.reason.name.lower()} data_sent={body.data_sent} end={body.end_ns} ns"
 
@@ -170,7 +170,7 @@ class ChipTransport(Protocol):
     sent: int
 
     def receive(self, timeout: float) -> list[Datagram]: ...
-    def send_data(self, body: CommandBatch | EstimateBatch) -> None: ...
+    def send_data(self, body: CommandBatch | TelemetryBatch) -> None: ...
     def send_control(self, body: Hello | Bye) -> None: ...
     def silent_for(self, now: float) -> float: ...
     def report(self) -> dict[str, object]: ...
@@ -248,7 +248,7 @@ class UdpLink:
             self.send_errors += 1
             self.log.write(f"send error: {exc}", "send error")
 
-    def send_data(self, body: SensorBatch | CommandBatch | EstimateBatch) -> None:
+    def send_data(self, body: SensorBatch | CommandBatch | TelemetryBatch) -> None:
         """Send ``body`` as the next data datagram, through the fault injector."""
         datagram = encode(body, self.sent)
         self.sent += 1

@@ -22,9 +22,12 @@ latency compensation, counts, logs) with ROS topics instead of UDP datagrams
   a message stamped after the flight's end (``outside``, dropped);
 * **out**: each PWM command on ``motor_pwm`` (``hector_uav_msgs/MotorPWM``) stamped with the chip
   time it reached the I/O tile; ``chip/status`` (``robosoc_msgs/ChipStatus``: how far the chip has
-  simulated and how many commands it has published by then; the physics node paces on it); the
-  estimator's attitude and height on ``chip/estimate`` and each job's response time on
-  ``chip/response_time/TASK`` at each sample period's close.
+  simulated and how many commands and telemetry messages it has published by then; the physics
+  node paces on it); the firmware's telemetry (its project's ``[[telemetry]]``, read at each sample
+  period's close, no simulated cycle) on ``chip/telemetry`` (``robosoc_msgs/Telemetry``: every
+  name, stamped with the sample; the physics node logs it) and each value under a name of its own
+  on ``telemetry/NAME`` (``std_msgs/Float64``); the estimate among it on ``chip/estimate``; each
+  job's response time on ``chip/response_time/TASK`` at each sample period's close.
 
 :func:`check_topics` refuses, before the chip is built, a ROS graph in which a sensor topic is
 published with another type, or in which the vehicle's namespace has no ``raw_imu`` while other
@@ -49,17 +52,18 @@ from robosoc.cosim.datagram import (
     ByeReason,
     CommandBatch,
     Datagram,
-    EstimateBatch,
     Hello,
     Kind,
     Reading,
     SensorBatch,
+    TelemetryBatch,
 )
 from robosoc.cosim.firmware_run import FirmwareRun
 from robosoc.cosim.link import LinkLog
 from robosoc.cosim.replay import sensor_packet
 from robosoc.cosim.ros1 import Node, RosUnavailable, full_name, stamp_ns, to_time
 from robosoc.cosim.ros_topics import FRAME_BODY, FRAME_WORLD, SENSOR_TOPICS, topic
+from robosoc.host.telemetry import ESTIMATE_NAMES, estimate_of, own_columns
 from robosoc.physics.clock import NS_PER_S, FlightClock
 
 __all__ = ["AUX_WAIT_S", "NAMESPACE_GRACE_S", "RosChipLink", "check_topics"]
@@ -163,6 +167,11 @@ class RosChipLink:
         self.pwm_pub = node.publisher(self.names["motor_pwm"], topic("motor_pwm").type)
         self.status_pub = node.publisher(self.names["status"], topic("status").type, latch=True)
         self.estimate_pub = node.publisher(full_name(namespace, topic("estimate").name), topic("estimate").type)
+        self.telemetry_pub = node.publisher(full_name(namespace, topic("telemetry").name), topic("telemetry").type)
+        self.value_pubs: dict[str, Any] = {}  # telemetry/NAME, advertised with the hello (the names are its)
+        self.telemetry_names: tuple[str, ...] = ()
+        self.telemetry_sent = 0  # chip/telemetry messages published
+        self.telemetry_k = -1
         self.response_pubs: dict[str, Any] = {}
         self.pwm_class = self.pwm_pub.data_class
         self.status_class = self.status_pub.data_class
@@ -183,7 +192,6 @@ class RosChipLink:
         self.status_sent = 0
         self.published_seq = -1
         self.said_bye = False
-        self.estimated_k = -1
         self.jobs_seen = 0
 
     # --- in ---------------------------------------------------------------------------------------
@@ -294,9 +302,9 @@ class RosChipLink:
     def _ros_time(self, t_ns: int) -> Any:
         return to_time((self.t0 or 0) + t_ns)
 
-    def send_data(self, body: CommandBatch | EstimateBatch) -> None:
-        if isinstance(body, EstimateBatch):
-            self._estimates(body)
+    def send_data(self, body: CommandBatch | TelemetryBatch) -> None:
+        if isinstance(body, TelemetryBatch):
+            self._telemetry(body)
             return
         for c in body.commands:
             if self.published_seq >= 0 and c.seq <= self.published_seq:
@@ -314,31 +322,55 @@ class RosChipLink:
         msg = self.status_class()
         msg.header.stamp = self._ros_time(chip_ns) if self.t0 is not None else to_time(0)
         msg.commands = self.sent
+        msg.telemetry = self.telemetry_sent
         msg.scenario = self.digest
         self.status_pub.publish(msg)
         self.status_sent += 1
 
     def send_control(self, body: Hello | Bye) -> None:
         if isinstance(body, Hello):
+            if body.telemetry != self.telemetry_names:
+                self.telemetry_names = body.telemetry
+                for name in own_columns(body.telemetry):
+                    key = full_name(self.namespace, topic("telemetry_value").name.format(name=name))
+                    self.value_pubs[name] = self.node.publisher(key, topic("telemetry_value").type)
             self._status(0)
         else:
             self.said_bye = True
             self._status(body.end_ns)
 
-    def _estimates(self, body: EstimateBatch) -> None:
-        for e in body.estimates:
-            if e.k <= self.estimated_k:
+    def _telemetry(self, body: TelemetryBatch) -> None:
+        """Each new entry on chip/telemetry, its own-name values on telemetry/NAME, its estimate
+        (if the project publishes one) on chip/estimate."""
+        estimates = any(n in ESTIMATE_NAMES for n in self.telemetry_names)
+        for e in body.entries:
+            if e.k <= self.telemetry_k:
                 continue  # repeated for the UDP link's redundancy
-            self.estimated_k = e.k
-            msg = self.estimate_class()
-            msg.header.stamp = self._ros_time(e.t_ns)  # the sample it includes
-            msg.header.frame_id = FRAME_WORLD
-            msg.pose.position.x = msg.pose.position.y = math.nan
-            msg.pose.position.z = e.height
-            w, x, y, z = e.quaternion
-            msg.pose.orientation.w, msg.pose.orientation.x = w, x
-            msg.pose.orientation.y, msg.pose.orientation.z = y, z
-            self.estimate_pub.publish(msg)
+            self.telemetry_k = e.k
+            stamp = self._ros_time(e.t_ns)  # the sample it includes
+            msg = self.telemetry_pub.data_class()
+            msg.header.stamp, msg.header.frame_id = stamp, FRAME_BODY
+            msg.sample, msg.names, msg.values = e.k, list(self.telemetry_names), list(e.values)
+            self.telemetry_pub.publish(msg)
+            self.telemetry_sent += 1
+            values = dict(zip(self.telemetry_names, e.values, strict=True))
+            for name, pub in self.value_pubs.items():
+                if not math.isnan(values[name]):
+                    pub.publish(pub.data_class(data=values[name]))
+            if estimates:
+                self._estimate(stamp, values)
+
+    def _estimate(self, stamp: Any, values: dict[str, float]) -> None:
+        e = estimate_of(values)
+        msg = self.estimate_class()
+        msg.header.stamp = stamp
+        msg.header.frame_id = FRAME_WORLD
+        msg.pose.position.x = msg.pose.position.y = math.nan
+        msg.pose.position.z = e.height
+        w, x, y, z = (float(v) for v in e.quaternion)
+        msg.pose.orientation.w, msg.pose.orientation.x = w, x
+        msg.pose.orientation.y, msg.pose.orientation.z = y, z
+        self.estimate_pub.publish(msg)
 
     def period_closed(self, run: FirmwareRun) -> None:
         """Publish the job response times the chip has produced since the last call (the first
@@ -360,7 +392,12 @@ class RosChipLink:
 
     def report(self) -> dict[str, object]:
         return {
-            "to_physics": {"sent": self.sent, "status_sent": self.status_sent, "transport": "ros1"},
+            "to_physics": {
+                "sent": self.sent,
+                "status_sent": self.status_sent,
+                "telemetry_sent": self.telemetry_sent,
+                "transport": "ros1",
+            },
             "from_physics": {key: dict(c) for key, c in self.counts.items()},
         }
 

@@ -11,10 +11,13 @@ One world with the scenario's vehicles, each under its namespace (:func:`vehicle
 2. the node waits until the period's physics steps may be taken -- ``pace="realtime"``: the wall
    clock has reached ``t_k+1`` since the start; ``pace="fast"`` (simulated time: a slow host changes
    nothing): every chip's ``chip/status`` says it has simulated past ``t_k+1`` and every
-   ``motor_pwm`` message it counts there has come -- taking the commands meanwhile;
+   ``motor_pwm`` and ``chip/telemetry`` message it counts there has come -- taking the commands
+   and the telemetry meanwhile;
 3. each command applies from the physics step of its stamp or, if it came later (realtime), from
    the step it came in (counted late), held as :class:`~robosoc.cosim.actuator_hold.ActuatorHold`
-   says; the world takes the period's steps.
+   says; the world takes the period's steps.  Row k shows the chip's newest telemetry of a sample
+   before k (:class:`~robosoc.cosim.telemetry_rows.TelemetryRows`, as the UDP physics side): the
+   estimate columns and the project's own telemetry columns of ``flight.csv``.
 
 Before the first sample it waits (``connect_timeout_s``) for every vehicle's chip: its status
 (which names the scenario its firmware was built for: another is refused) and every subscription
@@ -43,6 +46,7 @@ from robosoc.cosim.link import LinkLog
 from robosoc.cosim.lockstep import PWM_COLUMNS, UNKNOWN_ESTIMATE
 from robosoc.cosim.ros1 import Node, full_name, message_class, stamp_ns, to_time
 from robosoc.cosim.ros_topics import FRAME_BODY, FRAME_WORLD, SENSOR_TOPICS, topic, vehicle_namespace
+from robosoc.cosim.telemetry_rows import TelemetryRows
 from robosoc.physics import World
 from robosoc.physics.clock import NS_PER_S, PHYSICS_STEP_NS, START_NS, FlightClock
 
@@ -61,6 +65,7 @@ class _Vehicle:
     namespace: str
     hold: ActuatorHold
     log: LinkLog
+    telemetry: TelemetryRows
     pubs: dict[str, Any] = field(default_factory=dict)
     subs: list[Any] = field(default_factory=list)
     frame: str = FRAME_BODY
@@ -70,6 +75,10 @@ class _Vehicle:
     late: int = 0
     out_of_order: int = 0
     malformed: int = 0
+    telemetry_announced: int = 0  # chip/telemetry messages the chip says it has published
+    telemetry_arrived: int = 0
+    telemetry_refused: int = 0  # not the project's names, or not a value per name
+    told: list[tuple[float, ...]] = field(default_factory=list)  # each row's own telemetry values
     last_step: int = 0
     heard: float | None = None
     digest: str | None = None
@@ -85,10 +94,11 @@ def serve_physics_ros(
     digest: bytes,
     config: LinkConfig,
     *,
+    telemetry: Sequence[str] = (),
     log_paths: Sequence[Any] | None = None,
     start_delay_s: float = 0.0,
     on_start: Callable[[], None] | None = None,
-    on_row: Callable[[int, np.ndarray], None] | None = None,
+    on_row: Callable[[int, np.ndarray, tuple[float, ...]], None] | None = None,
     on_sample: Callable[[int, int], None] | None = None,
 ) -> list[PhysicsOutcome]:
     """Fly ``scenario`` with ``vehicles`` in one world, each flown by a chip node over ROS 1; see
@@ -98,12 +108,15 @@ def serve_physics_ros(
         digest: what the chips' firmware must have been built for
             (:func:`robosoc.cosim.decoupled_physics.scenario_digest` of the scenario and vehicle).
         config: pacing (``realtime`` or ``fast``), hold, timeouts.
+        telemetry: the names of the telemetry values the chips' firmware publishes (its project's
+            ``[[telemetry]]``, in order); a ``chip/telemetry`` message naming others is refused (counted).
         log_paths: each vehicle's log (``link-physics.log``), or None.
         start_delay_s: wall time between the chips' arrival and the first sample (time for a
             recorder such as ``rosbag record -a``, which looks for new topics once a second, to
             subscribe to every topic first).
         on_start: called when every chip is there and the flight starts.
-        on_row: called with (vehicle index, row) as soon as a row is complete (the flight logs).
+        on_row: called with (vehicle index, row, its own telemetry values) as soon as a row is
+            complete (the flight logs).
         on_sample: called with (samples done, samples in all).
 
     Returns:
@@ -123,12 +136,14 @@ def serve_physics_ros(
     for i, quad in enumerate(quads):
         ns = vehicle_namespace(i, len(quads))
         log = LinkLog(log_paths[i] if log_paths is not None else None)
-        v = _Vehicle(i, ns, ActuatorHold(config.hold, quad.pwm), log)
+        v = _Vehicle(i, ns, ActuatorHold(config.hold, quad.pwm), log, TelemetryRows(telemetry))
         v.frame = full_name(ns, FRAME_BODY).lstrip("/")
         for key in PUBLISHED:
             v.pubs[key] = node.publisher(v.name(key), topic(key).type, queue_size=100)
         v.subs.append(node.subscribe(v.name("motor_pwm"), topic("motor_pwm").type, (i, "motor_pwm")))
         v.subs.append(node.subscribe(v.name("status"), topic("status").type, (i, "status")))
+        if telemetry:
+            v.subs.append(node.subscribe(v.name("telemetry"), topic("telemetry").type, (i, "telemetry")))
         log.write(f"physics: vehicle {i + 1} at {ns}; pace {config.pace}, hold {config.hold}")
         fleet.append(v)
     clock_pub = node.publisher(topic("clock").name, topic("clock").type, queue_size=10)
@@ -150,6 +165,7 @@ def serve_physics_ros(
             if kind == "status":
                 v.progress_ns = max(v.progress_ns, stamp_ns(msg.header.stamp) - START_NS)
                 v.announced = max(v.announced, int(msg.commands))
+                v.telemetry_announced = max(v.telemetry_announced, int(msg.telemetry))
                 if v.digest is None:
                     v.digest = str(msg.scenario)
                     if v.digest != expected:
@@ -157,6 +173,17 @@ def serve_physics_ros(
                             f"{v.namespace}: the chip's firmware was built for another scenario or vehicle "
                             "(give both nodes the same scenario options)"
                         )
+                continue
+            if kind == "telemetry":
+                v.telemetry_arrived += 1
+                names = tuple(msg.names)
+                if names != v.telemetry.names or not v.telemetry.arrive(int(msg.sample), msg.values):
+                    v.telemetry_refused += 1
+                    v.log.write(
+                        f"{v.name('telemetry')}: sample {msg.sample} refused: {len(msg.values)} values named "
+                        f"({', '.join(names)}), the project declares ({', '.join(v.telemetry.names)})",
+                        "telemetry refused",
+                    )
                 continue
             v.received += 1
             pwm = bytes(msg.pwm) if not isinstance(msg.pwm, bytes) else msg.pwm
@@ -249,7 +276,12 @@ def serve_physics_ros(
                         break
                     take(min(remaining, config.heartbeat_s), first, last, start)
                 else:
-                    if all(v.progress_ns >= end_ns and v.received >= v.announced for v in fleet):
+                    if all(
+                        v.progress_ns >= end_ns
+                        and v.received >= v.announced
+                        and (not telemetry or v.telemetry_arrived >= v.telemetry_announced)
+                        for v in fleet
+                    ):
                         break
                     take(config.heartbeat_s, first, last, start)
                 check_peers()
@@ -259,8 +291,10 @@ def serve_physics_ros(
                     if s == 0:
                         row = v.rows[-1]
                         row[PWM_COLUMNS] = quad.pwm
+                        own = v.telemetry.fill(row, k)
+                        v.told.append(own)
                         if on_row is not None:
-                            on_row(v.index, row)
+                            on_row(v.index, row, own)
                 if s == 0:
                     done = k + 1
                     if on_sample is not None:
@@ -285,9 +319,12 @@ def serve_physics_ros(
                           "malformed": v.malformed},
         }  # fmt: skip
         commands = {"received": v.received, "late": v.late, "missed": max(0, done - v.received)}
+        told = np.array(v.told[:done], dtype=float).reshape(len(v.told[:done]), len(v.telemetry.own))
         outcome = PhysicsOutcome(
             rows=rows, samples=samples, ended=ended, message=message, host_s=host_s, cpu_s=cpu_s, link=link,
             commands=commands, max_lag_s=max_lag, period_s=period_ns / NS_PER_S,
+            telemetry={name: told[:, c].copy() for c, name in enumerate(v.telemetry.own)},
+            telemetry_counts={"received": v.telemetry.received, "refused": v.telemetry_refused},
         )  # fmt: skip
         v.log.write(f"ended: {ended}: {message}")
         v.log.write(f"counts: {link}; commands {commands}")

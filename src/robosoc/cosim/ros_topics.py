@@ -68,7 +68,13 @@ TOPICS: tuple[Topic, ...] = (
     Topic("motor_pwm", "motor_pwm", "hector_uav_msgs/MotorPWM", CHIP,
           "the firmware's PWM command (0..255 per motor), stamped when it reached the I/O tile"),
     Topic("status", "chip/status", "robosoc_msgs/ChipStatus", CHIP,
-          "the chip's progress: simulated up to header.stamp, commands published by then"),
+          "the chip's progress: simulated up to header.stamp, commands and telemetry messages published by then"),
+    Topic("telemetry", "chip/telemetry", "robosoc_msgs/Telemetry", CHIP,
+          "the firmware's telemetry (its project's [[telemetry]], every name) after each read at a sample "
+          "period's close, stamped with the sensor sample it includes: what the physics node logs"),
+    Topic("telemetry_value", "telemetry/{name}", "std_msgs/Float64", CHIP,
+          "each telemetry value under a name of its own (not the estimate's), at each read: one topic "
+          "per value, named as in flight.mcap (rqt_plot NS/telemetry/NAME/data)"),
     Topic("estimate", "chip/estimate", "geometry_msgs/PoseStamped", CHIP,
           "the estimator task's attitude (orientation) and height (position.z; x and y NaN), "
           "stamped with the sensor sample it includes"),
@@ -90,8 +96,20 @@ MSG_TEXT: dict[str, str] = {
         "# sensor stamps), and had published `commands` motor_pwm messages by then.\n"
         "Header header\n"
         "uint32 commands\n"
+        "# chip/telemetry messages published by then\n"
+        "uint32 telemetry\n"
         "# digest of the scenario and vehicle the firmware was built for (hex)\n"
         "string scenario\n"
+    ),
+    "robosoc_msgs/Telemetry": (
+        "# The firmware's telemetry after the host's read at the close of a sensor sample's period\n"
+        "# (docs/firmware-projects.md): header.stamp is that sample's time.\n"
+        "Header header\n"
+        "# the sensor sample's number\n"
+        "uint32 sample\n"
+        "# the project's [[telemetry]] names, in its order, and the newest value of each (NaN before its first read)\n"
+        "string[] names\n"
+        "float64[] values\n"
     ),
 }
 

@@ -27,6 +27,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from robosoc.config.firmware import FirmwareConfig
 from robosoc.config.project import TelemetrySpec
 from robosoc.control import quaternion
 from robosoc.control.flight import ROW_FIELDS
@@ -47,7 +48,9 @@ __all__ = [
     "ESTIMATE_VERTICAL_SPEED",
     "TelemetryError",
     "TelemetryProbe",
+    "declared_names",
     "estimate_of",
+    "own_columns",
     "own_names",
     "read_telemetry",
     "resolve_telemetry",
@@ -157,13 +160,32 @@ def read_telemetry(chip: MPSoC, probes: Sequence[TelemetryProbe]) -> dict[str, f
     return values
 
 
+def own_columns(names: Sequence[str]) -> tuple[str, ...]:
+    """The telemetry ``names`` that are columns of their own (not the estimate's), in their order."""
+    return tuple(name for name in names if name not in ESTIMATE_NAMES)
+
+
 def own_names(probes: Sequence[TelemetryProbe]) -> tuple[str, ...]:
     """The names of ``probes`` that are columns of their own (not the estimate's), in their order."""
-    return tuple(p.name for p in probes if p.name not in ESTIMATE_NAMES)
+    return own_columns([p.name for p in probes])
+
+
+def declared_names(fw: FirmwareConfig) -> tuple[str, ...]:
+    """Every telemetry name ``fw``'s project declares, in its order: what its firmware publishes,
+    known from the project file without a build (the physics side of the decoupled mode and the
+    ROS node, which have no chip).
+
+    Raises:
+        ConfigError: the project file is missing or wrong.
+        ValueError: no such project folder.
+    """
+    return tuple(spec.name for spec in fw.load_project().telemetry)
 
 
 def estimate_of(values: Mapping[str, float]) -> Estimate:
-    """The state estimate that telemetry ``values`` publish (NaN for what they do not name)."""
+    """The state estimate that telemetry ``values`` publish (NaN for what they do not name: the
+    Euler angles too, unless the whole quaternion is known)."""
     q = np.array([values.get(name, math.nan) for name in ESTIMATE_QUATERNION])
     height = values.get(ESTIMATE_HEIGHT, math.nan)
-    return Estimate(q, quaternion.to_euler(q), height, values.get(ESTIMATE_VERTICAL_SPEED, math.nan))
+    euler = quaternion.to_euler(q) if not np.isnan(q).any() else np.full(3, math.nan)
+    return Estimate(q, euler, height, values.get(ESTIMATE_VERTICAL_SPEED, math.nan))

@@ -1,8 +1,9 @@
 """The decoupled mode as a whole: each side with its files, and both sides as processes.
 
 * :func:`run_physics_side` / :func:`run_chip_side`: one side (``robosoc serve physics|chip``) with
-  its files in the run folder: ``flight.csv`` (as it flies), ``link-physics.log``,
-  ``physics.json``; ``jobs.csv``, ``link-chip.log``, ``chip.json``.
+  its files in the run folder: ``flight.csv`` (as it flies; after the flight's columns one per
+  telemetry value the project publishes under a name of its own, as lockstep's),
+  ``link-physics.log``, ``physics.json``; ``jobs.csv``, ``link-chip.log``, ``chip.json``.
 * :func:`fly_decoupled` (``robosoc fly --decoupled``): starts both sides as separate processes
   (``multiprocessing``, spawn start method), the physics first on a free loopback port, then the
   chip pointed at it; they talk only over UDP.  The processes report their progress through a
@@ -35,6 +36,7 @@ from robosoc.control.flight_log import CsvFlightLog
 from robosoc.cosim.decoupled_chip import ChipOutcome, serve_chip
 from robosoc.cosim.decoupled_physics import Ended, PhysicsOutcome, serve_physics, serve_physics_fleet
 from robosoc.cosim.link import Address, LinkError
+from robosoc.host.telemetry import declared_names, own_columns
 from robosoc.outputs.decoupled_summary import chip_record, decoupled_summary, physics_record
 from robosoc.outputs.flight_session import fleet_vehicles, min_separation, vehicle_folder
 from robosoc.outputs.run_folder import (
@@ -90,12 +92,14 @@ def run_physics_side(
     **callbacks: Any,
 ) -> tuple[PhysicsOutcome, dict[str, Any]]:
     """:func:`serve_physics` writing ``flight.csv``, ``link-physics.log`` and ``physics.json`` in
-    ``out`` (nothing if None); the outcome and the ``physics.json`` record."""
-    log = CsvFlightLog(out / FLIGHT_CSV) if out is not None else None
+    ``out`` (nothing if None); the outcome and the ``physics.json`` record.  The telemetry the chip
+    must publish is the scenario's project's (:func:`robosoc.host.telemetry.declared_names`)."""
+    telemetry = declared_names(scenario.firmware)
+    log = CsvFlightLog(out / FLIGHT_CSV, own_columns(telemetry)) if out is not None else None
     try:
         outcome = serve_physics(
             scenario, vehicle, config, bind,
-            log_path=out / LINK_PHYSICS_LOG if out is not None else None,
+            log_path=out / LINK_PHYSICS_LOG if out is not None else None, telemetry=telemetry,
             on_row=log.write if log is not None else None,
             **callbacks,
         )  # fmt: skip
@@ -120,12 +124,14 @@ def run_physics_fleet_side(
     ``link-physics.log`` and ``physics.json`` in its ``vehicle-N/`` folder of ``out``; the outcomes
     and ``{"vehicles": [physics.json records], "min_separation_m": ...}``."""
     vehicles = fleet_vehicles(scenario)
-    folders, logs, on_row = fleet_logs(out, len(vehicles))
+    telemetry = declared_names(scenario.firmware)
+    folders, logs, on_row = fleet_logs(out, len(vehicles), own_columns(telemetry))
 
     try:
         outcomes = serve_physics_fleet(
             scenario, vehicles, vehicle_preset(scenario.vehicle), config, bind,
-            log_paths=[f / LINK_PHYSICS_LOG if f is not None else None for f in folders], on_row=on_row, **callbacks,
+            log_paths=[f / LINK_PHYSICS_LOG if f is not None else None for f in folders], telemetry=telemetry,
+            on_row=on_row, **callbacks,
         )  # fmt: skip
     finally:
         for log in logs:
@@ -227,20 +233,21 @@ def _chip_process(conn: Connection, args: tuple) -> None:
 
 
 def fleet_logs(
-    out: Path | None, count: int
-) -> tuple[list[Path | None], list[CsvFlightLog | None], Callable[[int, Any], None]]:
+    out: Path | None, count: int, telemetry: tuple[str, ...] = ()
+) -> tuple[list[Path | None], list[CsvFlightLog | None], Callable[[int, Any, tuple[float, ...]], None]]:
     """Each of ``count`` vehicles' folder in ``out`` (made; None without ``out``), its ``flight.csv``
-    log, and ``on_row(i, row)`` writing a row of vehicle i's flight to its log."""
+    log (``telemetry``: the columns after the flight's), and ``on_row(i, row, values)`` writing a
+    row of vehicle i's flight with its telemetry values to its log."""
     folders = [vehicle_folder(out, i, count) if out is not None else None for i in range(count)]
     for folder in folders:
         if folder is not None:
             folder.mkdir(parents=True, exist_ok=True)
-    logs = [CsvFlightLog(f / FLIGHT_CSV) if f is not None else None for f in folders]
+    logs = [CsvFlightLog(f / FLIGHT_CSV, telemetry) if f is not None else None for f in folders]
 
-    def on_row(i: int, row: Any) -> None:
+    def on_row(i: int, row: Any, values: tuple[float, ...]) -> None:
         log = logs[i]
         if log is not None:
-            log.write(row)
+            log.write(row, values)
 
     return folders, logs, on_row
 

@@ -58,7 +58,8 @@ def chip_part(result: ReplayResult, fw: FirmwareConfig, chip: ChipConfig) -> dic
 
 def link_summary(physics: Mapping[str, Any], chip: Mapping[str, Any], config: LinkConfig) -> dict[str, Any]:
     """The ``"link"`` object from the sides' parts: per direction the sender's ``sent`` and the
-    faults it injected, and what the receiver counted; the chip's readings, the physics' commands."""
+    faults it injected, and what the receiver counted; the chip's readings, the physics' commands
+    and telemetry entries."""
 
     def direction(sender: Mapping[str, Any], receiver: Mapping[str, Any]) -> dict[str, Any]:
         return {"sent": sender.get("sent", 0), **receiver, "injected": sender.get("injected", {})}
@@ -69,6 +70,7 @@ def link_summary(physics: Mapping[str, Any], chip: Mapping[str, Any], config: Li
         "to_physics": direction(c_link.get("to_physics", {}), p_link.get("from_chip", {})),
         "readings": chip.get("readings", {}),
         "commands": physics.get("commands", {}),
+        "telemetry": physics.get("telemetry", {}),
         "pace": config.pace,
         "hold": config.hold,
         "resend": config.resend,
@@ -125,6 +127,7 @@ def physics_record(outcome: Any, scenario: ScenarioConfig, vehicle: VehicleConfi
         "flight": flight_part(outcome.rows, scenario, vehicle),
         "link": outcome.link,
         "commands": outcome.commands,
+        "telemetry": outcome.telemetry_counts,
     }
 
 

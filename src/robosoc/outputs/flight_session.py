@@ -153,7 +153,7 @@ def fly_scenario(
     *,
     on_sample: Callable[[World, int], None] | None = None,
     on_status: Callable[[str], None] | None = None,
-    on_row: Callable[[int, np.ndarray], None] | None = None,
+    on_row: Callable[[int, np.ndarray, dict[str, float]], None] | None = None,
     plot: bool = True,
     logs: bool = True,
     profile: bool = False,
@@ -166,7 +166,8 @@ def fly_scenario(
         on_sample: called once per sensor sample with the world and the sample index (progress, video).
         on_status: told what is being done before the flight (building, compiling), for a newcomer
             who would otherwise watch a silent terminal.
-        on_row: called with the vehicle index and each row as soon as it is complete (a live view).
+        on_row: called with the vehicle index, each row as soon as it is complete and the
+            firmware's telemetry under names of its own at that row (name -> value; a live view).
         plot: also write ``flight.png`` per vehicle.
         logs: also write ``flight.mcap``, ``chip-trace.json`` (chip) and ``report.html`` per vehicle
             (:func:`robosoc.outputs.run_logs.write_run_logs`; docs/results-logs.md).
@@ -218,7 +219,7 @@ def fly_scenario(
         if csv_logs:
             csv_logs[i].write(row, (*(powered[i][-1].columns if battery else ()), *values))
         if on_row is not None:
-            on_row(i, row)
+            on_row(i, row, dict(zip(names[i], values, strict=True)))
 
     start = time.perf_counter()
     try:

@@ -7,6 +7,10 @@ in the file (:data:`robosoc.outputs.ros2_flight.START_NS`).  A flight faster tha
 held back to real time (``pace``) so that it can be watched; a slower one (the chip) goes at its
 own pace.
 
+The firmware's telemetry under names of its own is published as in the file, on
+``/telemetry/<name>`` (``std_msgs/msg/Float64``): a channel per value, advertised with the first
+row that carries the value's name, a message per row from its first read on.
+
 Besides the file's topics the server publishes ``/clock`` (``rosgraph_msgs/msg/Clock``, the row's
 time) and tells clients the time (the protocol's *time* capability), so Foxglove's clock follows
 the flight.  Clients must speak the protocol ``foxglove.sdk.v1`` (Foxglove's app does): the
@@ -17,6 +21,7 @@ library refuses the older ``foxglove.websocket.v1`` and a handshake without a su
 
 from __future__ import annotations
 
+import itertools
 import time
 from collections.abc import Callable, Mapping
 
@@ -25,7 +30,17 @@ import numpy as np
 from foxglove.websocket import Capability
 
 from robosoc.control.flight import ROW_FIELDS
-from robosoc.outputs.ros2_flight import START_NS, TOPICS, cdr_encoder, message_definition, row_messages, stamp_ns
+from robosoc.outputs.ros2_flight import (
+    START_NS,
+    TOPICS,
+    Topic,
+    cdr_encoder,
+    message_definition,
+    row_messages,
+    stamp_ns,
+    telemetry_messages,
+    telemetry_topic,
+)
 
 HOST = "127.0.0.1"
 SERVER_NAME = "robosoc"
@@ -67,11 +82,8 @@ class LiveFlight:
         self._channels: dict[str, foxglove.Channel] = {}
         self._encoders: dict[str, Callable[[Mapping[str, object]], bytes]] = {}
         for name, datatype in [(t.name, t.datatype) for t in TOPICS] + [(CLOCK_TOPIC, CLOCK_TYPE)]:
-            text = message_definition(datatype)
-            schema = foxglove.Schema(name=datatype, encoding=ROS2_SCHEMA_ENCODING, data=text.encode())
-            self._channels[name] = foxglove.Channel(name, schema=schema, message_encoding=CDR, context=self._context)
-            if datatype not in self._encoders:
-                self._encoders[datatype] = cdr_encoder(datatype)
+            self._channel(name, datatype)
+        self._telemetry: dict[str, Topic] = {}  # the telemetry topics advertised, by value name
         self._start: float | None = None
         self.published = 0
 
@@ -83,15 +95,31 @@ class LiveFlight:
     def url(self) -> str:
         return f"ws://{HOST}:{self.port}"
 
-    def publish(self, row: np.ndarray) -> None:
-        """Send one flight row (columns ``ROW_FIELDS``) to every subscribed client."""
+    def _channel(self, name: str, datatype: str) -> None:
+        text = message_definition(datatype)
+        schema = foxglove.Schema(name=datatype, encoding=ROS2_SCHEMA_ENCODING, data=text.encode())
+        self._channels[name] = foxglove.Channel(name, schema=schema, message_encoding=CDR, context=self._context)
+        if datatype not in self._encoders:
+            self._encoders[datatype] = cdr_encoder(datatype)
+
+    def publish(self, row: np.ndarray, telemetry: Mapping[str, float] | None = None) -> None:
+        """Send one flight row (columns ``ROW_FIELDS``) and the firmware's telemetry values of its
+        own names at that row (name -> value, NaN: none read yet) to every subscribed client."""
         if self.pace > 0:
             self._wait(float(row[_T]))
         ns = stamp_ns(float(row[_T]), self.start_ns)
         clock = {"clock": {"sec": ns // 1_000_000_000, "nanosec": ns % 1_000_000_000}}
         self._channels[CLOCK_TOPIC].log(self._encoders[CLOCK_TYPE](clock), log_time=ns)
         self._server.broadcast_time(ns)
-        for topic, message, log_ns in row_messages(row, self.start_ns):
+        messages = row_messages(row, self.start_ns)
+        if telemetry:
+            for name in telemetry:
+                if name not in self._telemetry:
+                    self._telemetry[name] = topic = telemetry_topic(name)
+                    self._channel(topic.name, topic.datatype)
+            topics = [self._telemetry[name] for name in telemetry]
+            messages = itertools.chain(messages, telemetry_messages(topics, list(telemetry.values()), ns))
+        for topic, message, log_ns in messages:
             self._channels[topic.name].log(self._encoders[topic.datatype](message), log_time=log_ns)
             self.published += 1
 

@@ -1,7 +1,8 @@
 """The ROS 1 nodes with their files: ``robosoc serve physics --ros`` and ``robosoc serve chip --ros``.
 
 * :func:`run_ros_physics_side`: :func:`robosoc.cosim.ros_physics.serve_physics_ros` with each
-  vehicle's ``flight.csv`` (as it flies), ``link-physics.log`` and ``physics.json`` -- in the run
+  vehicle's ``flight.csv`` (as it flies, with the project's telemetry columns),
+  ``link-physics.log`` and ``physics.json`` -- in the run
   folder for one vehicle, in ``vehicle-N/`` for several (as ``robosoc fly --vehicles N``);
 * :func:`run_ros_chip_side`: the chip node (:class:`robosoc.cosim.ros_chip.RosChipLink` under
   :func:`robosoc.cosim.decoupled_chip.serve_chip`) with ``jobs.csv``, ``link-chip.log`` and
@@ -29,6 +30,7 @@ from robosoc.cosim.ros1 import Node
 from robosoc.cosim.ros_chip import RosChipLink, check_topics
 from robosoc.cosim.ros_physics import serve_physics_ros
 from robosoc.cosim.ros_topics import vehicle_namespace
+from robosoc.host.telemetry import declared_names, own_columns
 from robosoc.outputs.decoupled_flight import fleet_logs, run_chip_side
 from robosoc.outputs.decoupled_summary import physics_record
 from robosoc.outputs.flight_session import fleet_vehicles
@@ -54,11 +56,12 @@ def run_ros_physics_side(
     """The physics node with its files in ``out`` (nothing if None); each vehicle's outcome and record."""
     vehicles = fleet_vehicles(scenario)
     count = len(vehicles)
-    folders, logs, on_row = fleet_logs(out, count)
+    telemetry = declared_names(scenario.firmware)
+    folders, logs, on_row = fleet_logs(out, count, own_columns(telemetry))
 
     try:
         outcomes = serve_physics_ros(
-            scenario, vehicles, firmware_digest(scenario), config,
+            scenario, vehicles, firmware_digest(scenario), config, telemetry=telemetry,
             log_paths=[f / LINK_PHYSICS_LOG if f is not None else None for f in folders], on_row=on_row,
             start_delay_s=start_delay_s, **callbacks,
         )  # fmt: skip
