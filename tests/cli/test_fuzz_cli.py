@@ -220,6 +220,8 @@ OPTIONS: dict[tuple[str, str], Spec] = {
     ("table", "--scenario"): Spec("in_file"),
     ("fly", "--firmware"): Spec("in_dir"),
     ("serve chip", "--firmware"): Spec("in_dir"),
+    ("serve physics", "--firmware"): Spec("in_dir"),
+    ("scenario show", "--firmware"): Spec("in_dir"),
     ("firmware build", "--firmware"): Spec("in_dir"),
     ("firmware size", "--firmware"): Spec("in_dir"),
     ("firmware replay", "--firmware"): Spec("in_dir"),

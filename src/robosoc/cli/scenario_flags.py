@@ -176,7 +176,7 @@ FLAGS: tuple[ScenarioFlag, ...] = (
     ScenarioFlag("--mul/--no-mul", "mul", "firmware.multiplier", Mul, (FLY, SERVE_CHIP, FIRMWARE)),
     ScenarioFlag("--fixed-mul", "fixed_mul", "firmware.fixed_mul64", FixedMul, (FLY, SERVE_CHIP, FIRMWARE, TABLE)),
     ScenarioFlag("--engine", "engine", "chip.engine", Engine, (FLY,)),
-    ScenarioFlag("--firmware", "firmware", "firmware.project", Firmware, (FLY, SERVE_CHIP, FIRMWARE, TABLE)),
+    ScenarioFlag("--firmware", "firmware", "firmware.project", Firmware, (*_EVERY, FIRMWARE, TABLE)),
     ScenarioFlag("--supply", "supply", "power.supply", Supply, (FLY,)),
     ScenarioFlag("--noc-gating/--no-noc-gating", "noc_gating", "chip.noc.clock_gating", NocGating, (FLY,)),
 )
