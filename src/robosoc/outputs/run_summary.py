@@ -159,6 +159,16 @@ def chip_figures(chip: ChipConfig, result: ReplayResult | None) -> dict[str, Any
     volts = chip.dvfs.voltage_at(chip.tile.clock_period_ns)
     if volts is not None:  # a DVFS operating point (docs/power.md)
         figures["dvfs_v"] = volts
+    clocks = {}
+    for t in range(chip.n_tiles):  # the tiles whose core runs on its own clock (docs/power.md, "Per-tile clock")
+        xy = chip.tile_xy(t)
+        if chip.is_powered(xy) and xy != tuple(chip.io_tile) and chip.tile_divider(xy) > 1:
+            own: dict[str, Any] = {"clock_ns": chip.tile_config(xy).clock_period_ns, "divider": chip.tile_divider(xy)}
+            if chip.tile_volts(xy) is not None:
+                own["dvfs_v"] = chip.tile_volts(xy)
+            clocks[f"{xy[0]},{xy[1]}"] = own
+    if clocks:
+        figures["tile_clocks"] = clocks
     return figures
 
 
@@ -507,7 +517,17 @@ _VEHICLE_FIELDS: dict[str, _Kind] = {
             "tiles": _map(_list(INTEGER), TASK_KEY, "TASK: a task of the project"),
         },
     ),
-    "chip": _object({"width": INTEGER, "height": INTEGER, "clock_ns": NUMBER, "dvfs_v": NUMBER}),
+    "chip": _object(
+        {
+            "width": INTEGER,
+            "height": INTEGER,
+            "clock_ns": NUMBER,
+            "dvfs_v": NUMBER,
+            "tile_clocks": _map(
+                _object({"clock_ns": NUMBER, "divider": INTEGER, "dvfs_v": NUMBER}, nullable=False), TILE_KEY, "X,Y"
+            ),
+        }
+    ),
     "simulated_s": NUMBER,
     "host_s": NUMBER,
     "real_time_factor": NUMBER,
