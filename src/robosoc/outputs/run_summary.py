@@ -280,9 +280,25 @@ def power_figures(
         else {
             "reserve_soc": power.reserve_soc,
             "at_s": end.low_at_s,
+            "height_m": power.failsafe_height_m,
+            "hold_s": power.failsafe_hold_s,
+            "reached_s": reached(rows, power.failsafe_height_m, end.low_at_s),
             "outcome": touchdown(rows, rest_height, end.low_at_s, "the pack reached its reserve"),
         },
     }
+
+
+FAILSAFE_REACHED_M = 0.1
+"""How close to the failsafe's hover height the vehicle must come for ``power.failsafe.reached_s``."""
+
+
+def reached(rows: np.ndarray, height_m: float, since_s: float) -> float | None:
+    """The first row's time at or after ``since_s`` at which the vehicle's height is within
+    :data:`FAILSAFE_REACHED_M` of ``height_m`` (None: never)."""
+    t, z = column(rows, "t"), column(rows, "z")
+    k = int(np.searchsorted(t, since_s))
+    near = np.flatnonzero(np.abs(z[k:] - height_m) <= FAILSAFE_REACHED_M)
+    return float(t[k + int(near[0])]) if len(near) else None
 
 
 def after_empty(rows: np.ndarray, rest_height: float, empty_at_s: float | None) -> str | None:
@@ -585,7 +601,16 @@ _VEHICLE_FIELDS: dict[str, _Kind] = {
             ),
             "empty_at_s": NUMBER,
             "after_empty": _Kind("a string or null", lambda v: v is None or isinstance(v, str)),
-            "failsafe": _object({"reserve_soc": NUMBER, "at_s": NUMBER, "outcome": TEXT}),
+            "failsafe": _object(
+                {
+                    "reserve_soc": NUMBER,
+                    "at_s": NUMBER,
+                    "height_m": NUMBER,
+                    "hold_s": NUMBER,
+                    "reached_s": NUMBER,
+                    "outcome": TEXT,
+                }
+            ),
         }
     ),
 }
