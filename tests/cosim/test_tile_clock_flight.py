@@ -17,7 +17,9 @@ from robosoc.chip.energy import LEAKAGE_TERMS, EnergyModel
 from robosoc.cli import app
 from robosoc.config.chip import DvfsConfig, TileOverride
 from robosoc.config.scenario import ScenarioConfig
+from robosoc.host.scenario_image import scenario_image
 from robosoc.outputs.flight_session import fly_scenario
+from robosoc.program.elf import load_elf
 
 MODEL = EnergyModel.load()
 POINTS = ((62.5, 0.7), (125.0, 0.8), (250.0, 1.0))
@@ -74,3 +76,25 @@ def test_a_tick_that_does_not_divide_into_the_tiles_cycles_is_refused(tmp_path) 
     result = CliRunner().invoke(app, ["fly", str(scenario), "--no-out"])
     assert result.exit_code == 2, result.output
     assert "chip.tiles[0].clock_period_ns: 6 ns is not a whole multiple of the chip's clock" in result.output
+
+
+def test_a_tile_whose_image_lays_out_differently_is_read_by_its_own_symbols() -> None:
+    """At a divider of 8 the estimator's kernel tick (32768 cycles) fits a shorter instruction
+    sequence, so its image's symbols lie elsewhere than the other tile's: the host reads the job log,
+    the task table and the estimate telemetry of that tile from its own image."""
+    _, result = fly(32.0)
+    base = ScenarioConfig(duration_s=0.5)
+    chip = dataclasses.replace(
+        base.chip, dvfs=DvfsConfig(points=POINTS), tiles=(TileOverride(x=0, y=1, clock_period_ns=32.0),)
+    )
+    scenario = dataclasses.replace(base, chip=chip)
+    built = scenario_image(scenario, scenario.vehicle_config())
+    own = built.elf_for(ESTIMATOR)
+    assert own != built.elf
+    assert load_elf(own).address_of("os_job_log") != load_elf(built.elf).address_of("os_job_log")
+    assert len(result.jobs_of("estimator")) == 50 and len(result.jobs_of("pid")) == 50
+    assert result.kernel_stats[ESTIMATOR].ticks == result.kernel_stats[(1, 0)].ticks
+    # the estimate columns come from the estimator tile's telemetry: on the ground, the resting height
+    heights = [read.values["est_height"] for read in result.telemetry[10:]]
+    rest = scenario.vehicle_config().rest_height
+    assert heights and all(abs(h - rest) < 0.05 for h in heights)

@@ -248,8 +248,8 @@ class FirmwareRun:
                 kernel, or never created by a project's own ``main``).
         """
         if not self._periods and self.image.task_table is not None:  # booted: main has created its tasks
-            table = self.image.task_table
-            problem = self.image.missing_tasks({xy: table.created(self.chip, xy) for xy in self.tiles})
+            tables = {xy: self.image.task_table_of(xy) for xy in self.tiles}
+            problem = self.image.missing_tasks({xy: t.created(self.chip, xy) for xy, t in tables.items() if t})
             if problem:
                 raise ChipError(problem, None)
         current = self._accounts()

@@ -25,7 +25,6 @@ from robosoc.host.project_build import build_project, firmware_defines
 from robosoc.host.project_main import TASK_REFUSED_EXIT, Tile, task_ids
 from robosoc.host.task_table import TaskTable
 from robosoc.host.telemetry import TelemetryProbe, resolve_telemetry
-from robosoc.program.elf import load_elf
 
 __all__ = ["FIRST_SAMPLE_CYCLE", "SAMPLE_PERIOD_US", "FirmwareImage", "project_image", "sample_cycle"]
 
@@ -70,12 +69,18 @@ class FirmwareImage:
     #: the further packets the I/O tile sends with each sensor packet: (format name, tile, port)
     io_inputs: tuple[tuple[str, Tile, int], ...] = ()
     #: the image of a tile whose core runs on a divided clock (docs/power.md, "Per-tile clock"): the
-    #: same program with the kernel's tick in that core's cycles, every symbol where ``elf`` has it
+    #: same program with the kernel's tick in that core's cycles
     tile_elfs: Mapping[Tile, Path] = field(default_factory=dict)
+    #: the kernel's task table in those images
+    tile_task_tables: Mapping[Tile, TaskTable] = field(default_factory=dict)
 
     def elf_for(self, xy: Tile) -> Path:
         """The image tile ``xy`` runs."""
         return self.tile_elfs.get(xy, self.elf)
+
+    def task_table_of(self, xy: Tile) -> TaskTable | None:
+        """The kernel's task table in the image tile ``xy`` runs."""
+        return self.tile_task_tables.get(xy, self.task_table)
 
     @property
     def tiles(self) -> list[Tile]:
@@ -147,14 +152,19 @@ def project_image(
         include_dirs=[control_include_dir(vehicle, scenario)],
         sram_size=min(chip.tile_config(xy).sram_bytes for xy in tiles) if chip is not None else None,
     )
-    tile_elfs = _divided_clock_images(project, fw, vehicle, scenario, chip, tiles, elf)
+    tile_elfs = _divided_clock_images(project, fw, vehicle, scenario, chip, tiles)
     where = str(project.path(PROJECT_FILE))
     ids = {xy: task_ids(project, xy, mapping) for xy in tiles}
     task_tiles = {name: (xy, tid) for xy, named in ids.items() for name, tid in named.items()}
+    telemetry = resolve_telemetry(project.telemetry, elf, fw.arith, task_tiles, where)
+    for other in dict.fromkeys(tile_elfs.values()):  # a divided tile's values where its own image has them
+        mine = {xy for xy, path in tile_elfs.items() if path == other}
+        theirs = resolve_telemetry(project.telemetry, other, fw.arith, task_tiles, where)
+        telemetry = tuple(b if b.tile in mine else a for a, b in zip(telemetry, theirs, strict=True))
     return FirmwareImage(
         elf=elf,
         tasks=ids,
-        telemetry=resolve_telemetry(project.telemetry, elf, fw.arith, task_tiles, where),
+        telemetry=telemetry,
         task_table=TaskTable.of(elf),
         sensor=(task_tiles[inputs[0].destination][0], inputs[0].port),
         actuator_port=outputs[0].port,
@@ -162,6 +172,7 @@ def project_image(
         task_order=project.task_names,
         io_inputs=tuple((m.io_packet, task_tiles[m.destination][0], m.port) for m in further),
         tile_elfs=tile_elfs,
+        tile_task_tables={xy: TaskTable.of(path) for xy, path in tile_elfs.items()},
     )
 
 
@@ -172,49 +183,30 @@ def _divided_clock_images(
     scenario: ScenarioConfig | None,
     chip: ChipConfig | None,
     tiles: list[Tile],
-    elf: Path,
 ) -> dict[Tile, Path]:
     """The images of the tiles whose core runs at the chip's clock divided by d > 1: the same build
     with ``OS_TICK_CYCLES`` = tick_cycles / d, so that their kernel's tick (and every period and
-    deadline counted in ticks) lasts as long as on the other tiles.  The host reads every tile by
-    ``elf``'s symbols, so each such image must have them all at the same addresses.
-
-    Raises:
-        ValueError: the tick is not divisible into that core's cycles, or the image's symbols moved
-            (naming the tile's ``clock_period_ns``).
-    """
+    deadline counted in ticks) lasts as long as on the other tiles.  Its symbols may lie elsewhere
+    (a smaller tick constant can take one instruction less): the host reads such a tile by its own
+    image (:meth:`FirmwareImage.task_table_of`, the telemetry probes, the chip's program per tile).
+    The tick's divisibility is checked before (``FirmwareConfig.check_chip``)."""
     if chip is None:
         return {}
     out: dict[Tile, Path] = {}
     built: dict[int, Path] = {}
-    reference: list[tuple[str, int]] | None = None
     for xy in tiles:
         d = chip.tile_divider(xy)
         if d == 1:
             continue
         if d not in built:
-            settings = {**firmware_defines(fw), "OS_TICK_CYCLES": fw.tick_cycles // d}
-            other = build_project(
+            built[d] = build_project(
                 project,
                 arith=fw.arith,
                 multiplier=fw.multiplier,
                 mapping=fw.mapping,
-                settings=settings,
+                settings={**firmware_defines(fw), "OS_TICK_CYCLES": fw.tick_cycles // d},
                 include_dirs=[control_include_dir(vehicle, scenario)],
                 sram_size=min(chip.tile_config(t).sram_bytes for t in tiles),
             )
-            if reference is None:
-                reference = _symbol_addresses(elf)
-            if _symbol_addresses(other) != reference:
-                raise ValueError(
-                    f"chip.tiles: tile {xy}'s clock_period_ns divides the chip's clock by {d}: its kernel tick "
-                    f"of {fw.tick_cycles // d} core cycles moves the program's symbols, which the host reads "
-                    "at one address for every tile; choose another firmware.tick_cycles or divider"
-                )
-            built[d] = other
         out[xy] = built[d]
     return out
-
-
-def _symbol_addresses(elf: Path) -> list[tuple[str, int]]:
-    return sorted((sym.name, sym.addr) for sym in load_elf(elf).symbols)
