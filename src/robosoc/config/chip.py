@@ -226,8 +226,9 @@ class NocConfig:
 class DvfsConfig:
     """The chip's voltage/frequency operating points (docs/power.md, "DVFS").
 
-    The chip has one clock (``tile.clock_period_ns``); with ``points`` given it runs at the voltage of
-    the slowest point at least as fast as that clock, and the energy coefficients, characterised at
+    The chip's clock (``tile.clock_period_ns``, the NoC's) and each tile's own (a ``tiles`` override's
+    ``clock_period_ns``, a whole multiple of it); with ``points`` given each runs at the voltage of
+    the slowest point at least as fast as its clock, and the energy coefficients, characterised at
     ``reference_v`` and the energy file's clock, are scaled: every switching energy (instructions,
     stalls, DMA, the routers' buffers and control) by ``(V/reference_v)²``, the leakage per cycle (a
     sleeping core's cycle, a router's leakage) by ``(V/reference_v)·(period/reference period)``.
