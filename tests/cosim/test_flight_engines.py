@@ -11,6 +11,7 @@ import dataclasses
 import numpy as np
 import pytest
 
+from robosoc.config.chip import TileOverride
 from robosoc.config.firmware import FirmwareConfig
 from robosoc.config.scenario import ScenarioConfig
 from robosoc.config.vehicle import vehicle_preset
@@ -57,3 +58,17 @@ def test_several_vehicles_fly_the_same_with_every_engine() -> None:
     other_rows, other_runs = flight(scenario, "jit")
     assert all(np.array_equal(a, b, equal_nan=True) for a, b in zip(rows, other_rows, strict=True))
     assert other_runs == runs
+
+
+def test_a_flight_with_the_estimators_tile_on_its_own_clock_is_the_same_with_every_engine() -> None:
+    # the estimator's tile at the chip's clock divided by 4 (docs/power.md, "Per-tile clock")
+    base = ScenarioConfig(duration_s=0.25, seed=3)
+    chip = dataclasses.replace(base.chip, tiles=(TileOverride(x=0, y=1, clock_period_ns=16.0),))
+    scenario = dataclasses.replace(base, chip=chip)
+    rows, runs = flight(scenario, "interp")
+    estimator = [j for j in runs[0][1] if j.task == "estimator"]
+    assert estimator and all(j.release_cycle % 4 == j.completion_cycle % 4 == 0 for j in estimator)  # its cycles
+    for engine in ("jit", "auto"):
+        other_rows, other_runs = flight(scenario, engine)
+        assert all(np.array_equal(a, b, equal_nan=True) for a, b in zip(rows, other_rows, strict=True)), engine
+        assert other_runs == runs, engine

@@ -145,33 +145,68 @@ def test_supply_option_sets_the_field() -> None:
     assert result.exit_code == 2 and "--supply" in result.output
 
 
-def test_below_the_reserve_the_firmwares_failsafe_lands_and_disarms(tmp_path: Path) -> None:
-    """A 0.01 Ah pack (36 A·s) with a 40 % reserve: the reserve comes at about 3.5 s, hovering at
-    1 m; the firmware (built with the failsafe for a battery flight) descends at 0.5 m/s and stops
-    the motors on the ground, long before the cut-off."""
-    pack = PowerConfig(supply="battery", reserve_soc=0.4, battery=BatteryConfig(capacity_ah=0.01))
-    scenario = dataclasses.replace(SHORT, power=pack, duration_s=7.0)
+def test_below_the_reserve_the_failsafe_returns_to_its_hover_height_holds_it_and_lands(tmp_path: Path) -> None:
+    """A 0.02 Ah pack (72 A·s) with a 60 % reserve: the reserve comes at about 4.8 s, hovering at
+    1 m; the firmware's failsafe (built for a battery flight) climbs at 0.5 m/s to its 1.5 m hover
+    height, holds it 0.5 s, descends at 0.5 m/s and stops the motors on the ground, before the
+    cut-off.  Checked on the rows' heights and motor commands."""
+    pack = PowerConfig(
+        supply="battery",
+        reserve_soc=0.6,
+        failsafe_height_m=1.5,
+        failsafe_hold_s=0.5,
+        battery=BatteryConfig(capacity_ah=0.02),
+    )
+    scenario = dataclasses.replace(SHORT, power=pack, duration_s=11.0)
     out = tmp_path / "run"
     fly_scenario(scenario, out, plot=False, logs=False)
     summary = json.loads((out / "summary.json").read_text())
     p = summary["power"]
     failsafe = p["failsafe"]
-    assert failsafe is not None and failsafe["reserve_soc"] == 0.4
+    assert failsafe is not None and failsafe["reserve_soc"] == 0.6
+    assert failsafe["height_m"] == 1.5 and failsafe["hold_s"] == 0.5
     rows = read_flight_log(out / "flight.csv")
     _, table = _power_columns(out / "flight.csv")
     soc = table[:, len(ROW_FIELDS) + POWER_FIELDS.index("soc")]
     t, z = column(rows, "t"), column(rows, "z")
     # the cue is the first step below the reserve, seen in the rows' state of charge
-    first_low = t[np.flatnonzero(soc < 0.4)[0]]
-    assert first_low - 0.01 <= failsafe["at_s"] <= first_low
-    assert z[t < failsafe["at_s"]][-1] > 0.8  # flying at the 1 m hover when it came
+    at = failsafe["at_s"]
+    first_low = t[np.flatnonzero(soc < 0.6)[0]]
+    assert first_low - 0.01 <= at <= first_low
+    assert abs(z[t < at][-1] - 1.0) < 0.1  # hovering at 1 m when it came, half a metre below 1.5 m
+    # it climbs to the failsafe height: there within 0.1 m about 1 s later (0.5 m at 0.5 m/s)
+    reached = failsafe["reached_s"]
+    assert reached is not None and at + 0.6 < reached < at + 1.6
+    assert np.all(np.abs(z[(t >= at) & (t < reached)] - 1.0) < 0.6)  # on its way up, no detour
+    assert z[(t >= at) & (t < reached)].min() > 0.9  # it does not descend first
+    # then holds it: the hold and the settling take it no lower than 1.35 m for the next 0.5 s
+    holding = (t >= reached) & (t < reached + 0.5)
+    assert np.all(z[holding] > 1.35) and np.all(z[holding] < 1.65)
+    # and lands: touchdown at a landing's speed, after the hold, the motors off from then on
     assert failsafe["outcome"].startswith("landed: touched down")
     speed = float(failsafe["outcome"].split(" at ")[-1].split(" m/s")[0])
-    assert speed <= 0.6  # the 0.5 m/s descent, not a fall
-    pwm = rows[:, [ROW_FIELDS.index(f"pwm{i}") for i in range(4)]]
     down = float(failsafe["outcome"].split("touched down at ")[1].split(" s")[0])
+    assert speed <= 0.65  # the 0.5 m/s descent, not a fall
+    assert reached + 0.5 + 1.5 / 0.5 * 0.7 < down  # 1.3 m down at 0.5 m/s takes 2.6 s
+    pwm = rows[:, [ROW_FIELDS.index(f"pwm{i}") for i in range(4)]]
     after = t > down + 0.5
-    assert np.all(pwm[after] == 0)  # disarmed on the ground and staying so
+    assert after.sum() > 100 and np.all(pwm[after] == 0)  # disarmed on the ground and staying so
     assert np.all(z[after] < 0.2)
     assert p["empty_at_s"] is None  # it landed on the reserve, before the cut-off
     assert p["pack"]["final_soc"] > 0.1
+
+
+@pytest.mark.parametrize(
+    "line,expect",
+    [
+        ("failsafe_height_m = 0.2", "power.failsafe_height_m: 0.2 m is not above the height at which"),
+        ("failsafe_height_m = -1.0", "power.failsafe_height_m: must be in (0, 100]"),
+        ("failsafe_hold_s = 120.0", "power.failsafe_hold_s: must be in [0, 60]"),
+    ],
+)
+def test_a_bad_failsafe_height_or_hold_is_refused_naming_the_field(tmp_path: Path, line: str, expect: str) -> None:
+    scenario = tmp_path / "failsafe.toml"
+    scenario.write_text(f'[power]\nsupply = "battery"\n{line}\n')
+    result = runner.invoke(app, ["fly", str(scenario), "--no-out"])
+    assert result.exit_code == 2, result.output
+    assert expect in result.output, result.output

@@ -172,3 +172,14 @@ def test_field_names_cover_the_scenario():
 )
 def test_pareto_front(costs, front):
     assert pareto_front([(float(x), float(y)) for x, y in costs]) == front
+
+
+def test_the_shipped_estimator_clock_sweep_plans_its_five_clocks() -> None:
+    """docs/sweeps/estimator-clock.toml (docs/power.md, "Per-tile clock"): five points, the estimator's
+    tile at 4..64 ns, every other tile at the chip's clock; each point's chip is valid."""
+    path = Path(__file__).parents[2] / "docs" / "sweeps" / "estimator-clock.toml"
+    config = load_sweep(path)
+    chips = [config.scenario(p.assignment).chip for p in plan(config)]
+    assert [chip.tile_config((0, 1)).clock_period_ns for chip in chips] == [4.0, 8.0, 16.0, 32.0, 64.0]
+    assert [chip.tile_volts((0, 1)) for chip in chips] == [1.0, 0.8, 0.7, 0.7, 0.7]
+    assert all(chip.tile_divider((1, 0)) == 1 and chip.tile.clock_period_ns == 4.0 for chip in chips)

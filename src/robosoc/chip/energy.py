@@ -135,6 +135,21 @@ class EnergyModel:
             return self
         return self.at_operating_point(volts, chip.dvfs.reference_v, period)
 
+    def for_tile(self, chip: ChipConfig, xy: tuple[int, int]) -> EnergyModel:
+        """The coefficients of tile ``xy``'s core (this model is the file's, unscaled): at the tile's own
+        DVFS point when the chip lists points; without points a core on a divided clock keeps the
+        chip's voltage, so its switching energies are the chip's and its leakage per (longer) core
+        cycle grows with the divider (docs/power.md, "Per-tile clock")."""
+        chip_model = self.for_chip(chip)
+        d = chip.tile_divider(xy)
+        if d == 1:
+            return chip_model
+        period = chip.tile_config(xy).clock_period_ns
+        volts = chip.tile_volts(xy)
+        if volts is not None:
+            return self.at_operating_point(volts, chip.dvfs.reference_v, period)
+        return chip_model.at_operating_point(1.0, 1.0, chip_model.clock_ns * d)
+
     def breakdown_pj(self, counts: dict[str, int]) -> dict[str, float]:
         """Energy per counter name in pJ, for counters named ``<class>`` or ``<kind>`` (see keys)."""
         out: dict[str, float] = {}

@@ -226,9 +226,12 @@ def chip_profile(
     tiles: Sequence[tuple[int, int]],
     model: EnergyModel,
     task_names: Mapping[tuple[tuple[int, int], int], str] | None = None,
+    tile_models: Mapping[tuple[int, int], EnergyModel] | None = None,
 ) -> FunctionProfile:
     """The profile of ``tiles`` of a chip run with profiling on (:meth:`MPSoC.enable_profile`), plus
     the NoC's row.  Finishes the chip's accounting (the per-task counters give the other rows).
+    ``tile_models``: a tile's own coefficients (a core on its own clock), else ``model``'s; a tile's
+    cycles are its core's own.
 
     Raises:
         RuntimeError: profiling was not enabled.
@@ -239,7 +242,8 @@ def chip_profile(
     for xy in tiles:
         t = chip.config.tile_index(xy)
         mine = {task: name for (where, task), name in names.items() if where == xy}
-        rows += tile_rows(chip.cores, t, xy, chip.programs.get(t), chip.task_counters(xy), model, mine)
+        own = (tile_models or {}).get(xy, model)
+        rows += tile_rows(chip.cores, t, xy, chip.programs.get(t), chip.task_counters(xy), own, mine)
     noc = math.fsum(model.noc_pj(chip.noc_counters()).values())
     rows.append(ProfileRow(None, None, "", NOC_ROW, 0, 0, {}, noc))
     return FunctionProfile(rows, chip.clock_ns)

@@ -136,11 +136,10 @@ class MPSoC:
                 (docs/translation.md).  Default: the configuration's ``engine``.
         """
         self.engine = resolve_engine(config.engine if engine is None else engine)
-        periods = {config.tile_config(config.tile_xy(t)).clock_period_ns for t in range(config.n_tiles)}
-        if len(periods) > 1:
-            raise ValueError("tiles: different clock periods per tile are not supported yet (one global clock)")
         self.config = config
-        self.clock_ns = periods.pop()
+        #: the chip's clock, the NoC's and every cycle count's unit; a tile's core may run at a whole
+        #: fraction of it (ChipConfig.tile_divider, docs/power.md "Per-tile clock")
+        self.clock_ns = config.tile.clock_period_ns
         n = config.n_tiles
         sizes = [config.tile_config(config.tile_xy(t)).sram_bytes for t in range(n)]
         check_memory("sram_bytes", n * max(sizes), f"{n} tiles x {format_bytes(max(sizes))} of SRAM")
@@ -165,6 +164,7 @@ class MPSoC:
         self.cst[:, kc.K_RX_READY] = nk.BIG
         self.cst[:, kc.K_RX_FREE_AT] = nk.BIG
         self.cst[self.io, kc.K_STATE] = kc.K_IO
+        self.cst[:, kc.K_DIV] = [config.tile_divider(config.tile_xy(t)) for t in range(n)]
         self.powered = powered
         self.acc = np.zeros((n, kc.NTASKS, kc.ACC_SIZE), dtype=np.int64)
         # touched here, not at the first accounting: a large zeroed array is mapped lazily (and numpy
@@ -488,7 +488,13 @@ class MPSoC:
         return int(self.cores.st[self.config.tile_index(xy), S_PC])
 
     def tile_cycle(self, xy: tuple[int, int]) -> int:
-        return int(self.cores.st[self.config.tile_index(xy), S_CYCLE])
+        """The chip cycle tile ``xy``'s core has reached (its own cycle times its divider)."""
+        t = self.config.tile_index(xy)
+        return int(self.cores.st[t, S_CYCLE]) * int(self.cst[t, kc.K_DIV])
+
+    def divider(self, xy: tuple[int, int]) -> int:
+        """How many chip cycles one core cycle of tile ``xy`` lasts (1: the chip's clock)."""
+        return int(self.cst[self.config.tile_index(xy), kc.K_DIV])
 
     def regs(self, xy: tuple[int, int]) -> np.ndarray:
         return self.cores.regs[self.config.tile_index(xy), :32]
@@ -502,7 +508,7 @@ class MPSoC:
         return program.symbolize(pc) if program else f"0x{pc:08x}"
 
     def counters(self, xy: tuple[int, int]) -> dict[str, int]:
-        """Counters of one tile's core, with sleep and DMA cycles."""
+        """Counters of one tile's core, with sleep and DMA cycles (in the core's own cycles)."""
         t = self.config.tile_index(xy)
         out = counters_dict(self.cores.ctr[t], self.cores.opc[t], int(self.cores.st[t, S_CYCLE]))
         out["sleep_cycle"] = int(self.cst[t, kc.K_SLEEP_CYCLES])

@@ -46,6 +46,7 @@ from robosoc.config.validate import load_toml
 __all__ = [
     "ARBITERS",
     "HERMES_ROUTING_LATENCY",
+    "MAX_CLOCK_DIVIDER",
     "MIN_PACKET_FLITS",
     "ChipConfig",
     "DvfsConfig",
@@ -67,6 +68,8 @@ NI_MEMORY_FLITS = 64
 #: (2 flits) keeps its connection open and swallows the next packet (platform.md §4).
 MIN_PACKET_FLITS = 3
 MAX_MESH_SIDE = 16
+#: The slowest core clock a tile may have, as a divider of the chip's (NoC) clock.
+MAX_CLOCK_DIVIDER = 64
 #: How the cores treat the HF-RISCV RTL's errata (see ``ChipConfig.errata``).
 ERRATA_CHOICES = ("spec", "rtl")
 ENGINE_CHOICES = ("interp", "jit", "auto")
@@ -127,7 +130,12 @@ class TileConfig:
 
 @dataclass(frozen=True)
 class TileOverride:
-    """Per-tile override: fields left at ``None`` keep the chip-wide :class:`TileConfig` value."""
+    """Per-tile override: fields left at ``None`` keep the chip-wide :class:`TileConfig` value.
+
+    ``clock_period_ns`` gives the tile's core its own clock: a whole multiple d (1..64) of the chip's
+    clock ``tile.clock_period_ns``, which stays the NoC's, the network interface's and every cycle
+    count's (the core executes one of its cycles every d chip cycles; docs/power.md, "Per-tile clock").
+    """
 
     x: int
     y: int
@@ -218,8 +226,9 @@ class NocConfig:
 class DvfsConfig:
     """The chip's voltage/frequency operating points (docs/power.md, "DVFS").
 
-    The chip has one clock (``tile.clock_period_ns``); with ``points`` given it runs at the voltage of
-    the slowest point at least as fast as that clock, and the energy coefficients, characterised at
+    The chip's clock (``tile.clock_period_ns``, the NoC's) and each tile's own (a ``tiles`` override's
+    ``clock_period_ns``, a whole multiple of it); with ``points`` given each runs at the voltage of
+    the slowest point at least as fast as its clock, and the energy coefficients, characterised at
     ``reference_v`` and the energy file's clock, are scaled: every switching energy (instructions,
     stalls, DMA, the routers' buffers and control) by ``(V/reference_v)²``, the leakage per cycle (a
     sleeping core's cycle, a router's leakage) by ``(V/reference_v)·(period/reference period)``.
@@ -323,11 +332,39 @@ class ChipConfig:
                 raise ValueError(f"tiles[{i}]: {xy} is overridden twice")
             overridden.add(xy)
         self._check_sram_total()
+        for i, over in enumerate(self.tiles):
+            if over.clock_period_ns is not None:
+                self._check_divider(f"tiles[{i}].clock_period_ns", over.clock_period_ns)
         if self.dvfs.points:
             for i, over in enumerate(self.tiles):
                 if over.clock_period_ns is not None:
                     self._check_point(f"tiles[{i}].clock_period_ns", over.clock_period_ns)
             self._check_point("tile.clock_period_ns", self.tile.clock_period_ns)
+
+    def _check_divider(self, name: str, period_ns: float) -> None:
+        """A tile's core clock is the chip's divided by a whole number (the NoC keeps the chip's)."""
+        chip = self.tile.clock_period_ns
+        ratio = period_ns / chip
+        d = round(ratio)
+        if d < 1 or abs(ratio - d) > 1e-9 * ratio:
+            raise ValueError(
+                f"{name}: {period_ns:g} ns is not a whole multiple of the chip's clock (tile.clock_period_ns = "
+                f"{chip:g} ns, the NoC's): a tile's core runs at the chip's clock divided by 1..{MAX_CLOCK_DIVIDER}"
+            )
+        if d > MAX_CLOCK_DIVIDER:
+            raise ValueError(
+                f"{name}: {period_ns:g} ns is the chip's clock ({chip:g} ns) divided by {d}, more than "
+                f"{MAX_CLOCK_DIVIDER}"
+            )
+
+    def tile_divider(self, xy: tuple[int, int]) -> int:
+        """How many chip (NoC) cycles one core cycle of tile ``xy`` lasts: 1 unless its override
+        gives it a slower clock (docs/power.md, "Per-tile clock")."""
+        return round(self.tile_config(xy).clock_period_ns / self.tile.clock_period_ns)
+
+    def tile_volts(self, xy: tuple[int, int]) -> float | None:
+        """The supply voltage of tile ``xy``'s core at its clock (None without DVFS points)."""
+        return self.dvfs.voltage_at(self.tile_config(xy).clock_period_ns)
 
     def _check_point(self, name: str, period_ns: float) -> None:
         """A clock faster than every DVFS point has no voltage to run at."""

@@ -198,6 +198,16 @@ class FirmwareConfig:
                         f"multiplier: the build uses the multiplier but task {task.name!r} runs on {list(xy)}, "
                         "which has none (chip.tile or chip.tiles)"
                     )
+        low = TICK_CYCLES_RANGE[0]
+        for task in project.tasks:
+            xy = self.mapping.get(task.name, (int(task.tile[0]), int(task.tile[1])))
+            d = chip.tile_divider(xy)
+            if d > 1 and (self.tick_cycles % (16 * d) or self.tick_cycles // d < low):
+                raise ValueError(
+                    f"tick_cycles: task {task.name!r} runs on {list(xy)}, whose core clock is the chip's divided by "
+                    f"{d} (chip.tiles clock_period_ns): its kernel's tick of {self.tick_cycles} chip cycles must be "
+                    f"a multiple of 16 of its cycles and at least {low} of them, got {self.tick_cycles} / {d}"
+                )
 
     def default_chip(self) -> ChipConfig:
         """The chip a replay or Table I runs on when none is given: :meth:`project_chip`."""

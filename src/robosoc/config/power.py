@@ -36,6 +36,14 @@ Supply = Literal["constant", "battery"]
 SUPPLIES: tuple[Supply, ...] = get_args(Supply)
 
 
+FAILSAFE_LAND_RATE_MPS = 0.5
+"""The low-battery failsafe's vertical speed, climbing to its hover height or landing [m/s] (assumed:
+half the controller's descent limit, a gentle touchdown)."""
+FAILSAFE_LANDED_MARGIN_M = 0.05
+"""The failsafe disarms once the estimated height is within this of the resting height [m]; its
+height setpoint stops as far below the resting height, so that the vehicle does settle."""
+
+
 def _require(condition: bool, name: str, reason: str) -> None:
     if not condition:
         raise ValueError(f"{name}: {reason}")
@@ -146,13 +154,21 @@ class PowerConfig:
         battery: the pack (used with ``supply = "battery"``).
         avionics_w: the rest of the avionics besides the chip and the motors, as one constant draw
             (sensors, receiver, ESC logic, regulators; assumed, no source): 3 W.
-        reserve_soc: the state of charge an endurance estimate stops at (a landing reserve).
+        reserve_soc: the state of charge an endurance estimate stops at (a landing reserve), and
+            below which the firmware's low-battery failsafe takes over.
+        failsafe_height_m: the hover height the failsafe first climbs or descends to [m, the body's
+            height above the ground, as the setpoints'] (assumed: 1 m, the default scenario's hover);
+            it must be above the height at which the failsafe counts the vehicle landed
+            (checked against the vehicle's resting height when the firmware is built).
+        failsafe_hold_s: how long the failsafe holds that height before it lands [s] (assumed: 1 s).
     """
 
     supply: Supply = "constant"
     battery: BatteryConfig = field(default_factory=BatteryConfig)
     avionics_w: float = 3.0
     reserve_soc: float = 0.2
+    failsafe_height_m: float = 1.0
+    failsafe_hold_s: float = 1.0
 
     def __post_init__(self) -> None:
         _require(

@@ -284,6 +284,8 @@ FLOAT_FIELDS: dict[str, FloatRange] = {
     "BatteryConfig.initial_soc": FloatRange(0.0, 1.0, "(state of charge)"),
     "PowerConfig.avionics_w": FloatRange(0.0, 1000.0, "W"),
     "PowerConfig.reserve_soc": FloatRange(0.0, 1.0, "(state of charge)"),
+    "PowerConfig.failsafe_height_m": FloatRange(0.0, 100.0, "m (the body's height above the ground)", lo_open=True),
+    "PowerConfig.failsafe_hold_s": FloatRange(0.0, 60.0, "s"),
 }
 """Every float field of every configuration file, ``"<dataclass>.<field>"``, and its range (a tuple of
 floats, a vector, has the range for each element).  Checked in each dataclass's ``__post_init__``

@@ -34,6 +34,7 @@ import time
 from collections import Counter
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
@@ -47,7 +48,7 @@ from robosoc.host import images, packets
 from robosoc.host.firmware_image import FIRST_SAMPLE_CYCLE, FirmwareImage
 from robosoc.host.telemetry import read_telemetry
 from robosoc.kernels.chip import K_TASK, NTASKS
-from robosoc.program.elf import load_elf
+from robosoc.program.elf import Program, load_elf
 from robosoc.records import JobRecord, PwmCommand, SampleInput
 
 #: Cycle of the first sample's injection: the firmware has booted by then.
@@ -126,14 +127,20 @@ class FirmwareRun:
         self.image = image
         self.chip_config = chip or self.fw.default_chip()
         self.fw.check_chip(self.chip_config)
-        self.model = (energy or EnergyModel.load()).for_chip(self.chip_config)  # DVFS: at its operating point
+        base = energy or EnergyModel.load()
+        self.model = base.for_chip(self.chip_config)  # DVFS: at its operating point
         self.first_cycle = first_cycle
         self.chip = MPSoC(self.chip_config)
         self.chip.record_timeline()  # for the chip trace (cosim/chip_timeline.py)
-        program = load_elf(image.elf, self.chip.regions())
         self.tiles = image.tiles
+        #: each tile's core coefficients (a tile on its own clock has its own operating point)
+        self.tile_models = {xy: base.for_tile(self.chip_config, xy) for xy in self.tiles}
+        programs: dict[Path, Program] = {}
         for xy in self.tiles:
-            self.chip.load(xy, program)
+            elf = image.elf_for(xy)  # a tile on a divided clock: its kernel's tick in its own cycles
+            if elf not in programs:
+                programs[elf] = load_elf(elf, self.chip.regions())
+            self.chip.load(xy, programs[elf])
         if profile:
             self.chip.enable_profile()  # exact counts per function: function_profile() reads them
         self.names = {(xy, tid): name for xy, ids in image.tasks.items() for name, tid in ids.items()}
@@ -257,8 +264,8 @@ class FirmwareRun:
                 kernel, or never created by a project's own ``main``).
         """
         if not self._periods and self.image.task_table is not None:  # booted: main has created its tasks
-            table = self.image.task_table
-            problem = self.image.missing_tasks({xy: table.created(self.chip, xy) for xy in self.tiles})
+            tables = {xy: self.image.task_table_of(xy) for xy in self.tiles}
+            problem = self.image.missing_tasks({xy: t.created(self.chip, xy) for xy, t in tables.items() if t})
             if problem:
                 raise ChipError(problem, None)
         current = self._accounts()
@@ -276,7 +283,8 @@ class FirmwareRun:
             except ValueError as exc:
                 raise RuntimeError(f"{exc} (between two samples)") from exc
             for r in fresh:
-                self._logged.append((xy, r, _period_of(self._sample_cycles, _full_cycle(r.release, now)), now))
+                release = self._chip_cycle(xy, r.release, now)
+                self._logged.append((xy, r, _period_of(self._sample_cycles, release), now))
             self._seen[xy] = count
 
     def energy_pj(self) -> dict[str, float]:
@@ -284,9 +292,15 @@ class FirmwareRun:
         (``"noc"``): what :meth:`result` reports as the run's totals, at the present cycle."""
         chip_, model = self.chip, self.model
         chip_.finish_accounting()
-        total = {f"tile {xy}": _pj(model, chip_.counters(xy)) for xy in self.tiles}
+        total = {f"tile {xy}": _pj(self.tile_models[xy], chip_.counters(xy)) for xy in self.tiles}
         total["noc"] = sum(model.noc_pj(chip_.noc_counters()).values())
         return total
+
+    def _chip_cycle(self, xy: tuple[int, int], stamp: int, now: int) -> int:
+        """A job record's 32-bit TIMER0 stamp of tile ``xy`` (its core's cycles) as a chip cycle,
+        the record read at chip cycle ``now``."""
+        d = self.chip.divider(xy)
+        return _full_cycle(stamp, now // d) * d
 
     def jobs_logged(self, since: int = 0) -> list[tuple[str, int, int]]:
         """(task, release cycle, completion cycle) of the jobs collected so far by
@@ -295,7 +309,7 @@ class FirmwareRun:
         out = []
         for xy, r, _, now in self._logged[since:]:
             name = self.names.get((xy, r.task), f"task {r.task}")
-            out.append((name, _full_cycle(r.release, now), _full_cycle(r.completion, now)))
+            out.append((name, self._chip_cycle(xy, r.release, now), self._chip_cycle(xy, r.completion, now)))
         return out
 
     def _accounts(self) -> tuple[np.ndarray, float]:
@@ -313,12 +327,12 @@ class FirmwareRun:
         for xy in self.tiles:
             names.setdefault((xy, images.KERNEL_TASK_ID), "kernel")
             names.setdefault((xy, images.IDLE_TASK_ID), "idle")
-        return chip_profile(self.chip, self.tiles, self.model, names)
+        return chip_profile(self.chip, self.tiles, self.model, names, self.tile_models)
 
     def result(self) -> ReplayResult:
         """Job records with their energy, the PWM commands, and the run's totals."""
         seconds = time.perf_counter() - self._start
-        model, chip_, samples = self.model, self.chip, self.samples
+        chip_, samples = self.chip, self.samples
         per_period = Counter(p for _, _, p, _ in self._logged)
         per_tile_period = Counter((xy, p) for xy, _, p, _ in self._logged)
         per_task_period = Counter((xy, r.task, p) for xy, r, p, _ in self._logged)
@@ -328,7 +342,7 @@ class FirmwareRun:
 
         @functools.cache
         def shared_pj(p: int, i: int, task: int) -> float:  # the kernel's and idle's, per tile and period
-            return _pj(model, self._periods[p].counters(i, task))
+            return _pj(self.tile_models[self.tiles[i]], self._periods[p].counters(i, task))
 
         for xy, r, p, now in self._logged:
             name = self.names.get((xy, r.task))
@@ -343,16 +357,18 @@ class FirmwareRun:
             seen[(xy, r.task, p)] += 1
             quotient, remainder = divmod(int(own.get("instructions", 0)), alike)
             energy_pj = {
-                "task": _pj(model, own) / alike,
+                "task": _pj(self.tile_models[xy], own) / alike,
                 "kernel": shared_pj(p, i, images.KERNEL_TASK_ID) / shared,
                 "idle": shared_pj(p, i, images.IDLE_TASK_ID) / shared,
                 "noc": delta.noc_pj / per_period[p],
             }
-            completion = _full_cycle(r.completion, now)
+            completion = self._chip_cycle(xy, r.completion, now)
+            d = chip_.divider(xy)
             jobs.append(
                 JobRecord(
-                    task=name, tile=xy, job=r.job, release_cycle=_full_cycle(r.release, now),
-                    start_cycle=_full_cycle(r.start, now), completion_cycle=completion, exec_cycles=r.exec_cycles,
+                    task=name, tile=xy, job=r.job, release_cycle=self._chip_cycle(xy, r.release, now),
+                    start_cycle=self._chip_cycle(xy, r.start, now), completion_cycle=completion,
+                    exec_cycles=r.exec_cycles * d,
                     deadline_met=r.met,
                     instructions=quotient + int(k < remainder), energy_pj=energy_pj,
                     spans_periods=p + 1 < len(samples) and completion > samples[p + 1].cycle,
@@ -360,7 +376,9 @@ class FirmwareRun:
             )  # fmt: skip
         total = self.energy_pj()
         counters = {xy: chip_.counters(xy) for xy in self.tiles}
-        task_energy = {(xy, task): _pj(model, c) for xy in self.tiles for task, c in chip_.task_counters(xy).items()}
+        task_energy = {
+            (xy, task): _pj(self.tile_models[xy], c) for xy in self.tiles for task, c in chip_.task_counters(xy).items()
+        }
         return ReplayResult(
             firmware=self.fw, clock_ns=chip_.clock_ns, samples=list(samples), commands=list(self.commands),
             jobs=jobs, kernel_stats={xy: images.read_stats(chip_, xy) for xy in self.tiles}, counters=counters,

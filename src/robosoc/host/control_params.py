@@ -27,6 +27,7 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
+from robosoc.config.power import FAILSAFE_LAND_RATE_MPS, FAILSAFE_LANDED_MARGIN_M
 from robosoc.config.scenario import ScenarioConfig
 from robosoc.config.vehicle import VehicleConfig, vehicle_preset
 from robosoc.control.altitude import GRAVITY, AltitudeFilter
@@ -84,14 +85,6 @@ def _loop_lines(name: str, gains: PidGains) -> list[str]:
     stored = gains.integral_limit * 2**PID_INTEGRAL_SHIFT
     _check_fits(f"{name}.integral_limit (stored · 2^{PID_INTEGRAL_SHIFT})", stored)
     return lines
-
-
-FAILSAFE_LAND_RATE_MPS = 0.5
-"""Descent speed of the low-battery landing [m/s] (assumed: half the controller's descent limit, a
-gentle touchdown)."""
-FAILSAFE_LANDED_MARGIN_M = 0.05
-"""The failsafe disarms once the estimated height is within this of the resting height [m]; its
-height setpoint stops as far below the resting height, so that the vehicle does settle."""
 
 
 def control_header(vehicle: VehicleConfig | None = None, scenario: ScenarioConfig | None = None) -> str:
@@ -196,9 +189,12 @@ def control_header(vehicle: VehicleConfig | None = None, scenario: ScenarioConfi
         lines += [
             "",
             "/* Low-battery failsafe (docs/power.md): below the reserve the I/O tile sets ROBOSOC_FLAG_LOW_BATTERY;",
-            " * the PID task then levels the vehicle, descends at CTL_LAND_RATE and disarms on the ground */",
+            " * the PID task then levels the vehicle, climbs or descends at CTL_LAND_RATE to CTL_FAILSAFE_HEIGHT,",
+            " * holds it CTL_FAILSAFE_HOLD seconds, descends at CTL_LAND_RATE and disarms on the ground */",
             "#define CTL_FAILSAFE 1",
             f"#define CTL_LAND_RATE {_c(FAILSAFE_LAND_RATE_MPS)} /* [m/s] */",
+            f"#define CTL_FAILSAFE_HEIGHT {_c(scenario.power.failsafe_height_m)} /* [m] */",
+            f"#define CTL_FAILSAFE_HOLD {_c(scenario.power.failsafe_hold_s)} /* [s] */",
             f"#define CTL_LANDED_HEIGHT {_c(vehicle.rest_height + FAILSAFE_LANDED_MARGIN_M)} /* estimated height"
             " at which it disarms [m] */",
             f"#define CTL_LAND_FLOOR {_c(vehicle.rest_height - FAILSAFE_LANDED_MARGIN_M)} /* lowest setpoint [m] */",

@@ -12,7 +12,7 @@ contract; :func:`project_image` makes one for a firmware project.
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from robosoc.config.chip import ChipConfig
@@ -70,6 +70,19 @@ class FirmwareImage:
     io_inputs: tuple[tuple[str, Tile, int], ...] = ()
     #: the name of the message of the PWM packets (how an error names it)
     actuator_message: str = "pwm"
+    #: the image of a tile whose core runs on a divided clock (docs/power.md, "Per-tile clock"): the
+    #: same program with the kernel's tick in that core's cycles
+    tile_elfs: Mapping[Tile, Path] = field(default_factory=dict)
+    #: the kernel's task table in those images
+    tile_task_tables: Mapping[Tile, TaskTable] = field(default_factory=dict)
+
+    def elf_for(self, xy: Tile) -> Path:
+        """The image tile ``xy`` runs."""
+        return self.tile_elfs.get(xy, self.elf)
+
+    def task_table_of(self, xy: Tile) -> TaskTable | None:
+        """The kernel's task table in the image tile ``xy`` runs."""
+        return self.tile_task_tables.get(xy, self.task_table)
 
     @property
     def tiles(self) -> list[Tile]:
@@ -141,13 +154,19 @@ def project_image(
         include_dirs=[control_include_dir(vehicle, scenario)],
         sram_size=min(chip.tile_config(xy).sram_bytes for xy in tiles) if chip is not None else None,
     )
+    tile_elfs = _divided_clock_images(project, fw, vehicle, scenario, chip, tiles)
     where = str(project.path(PROJECT_FILE))
     ids = {xy: task_ids(project, xy, mapping) for xy in tiles}
     task_tiles = {name: (xy, tid) for xy, named in ids.items() for name, tid in named.items()}
+    telemetry = resolve_telemetry(project.telemetry, elf, fw.arith, task_tiles, where)
+    for other in dict.fromkeys(tile_elfs.values()):  # a divided tile's values where its own image has them
+        mine = {xy for xy, path in tile_elfs.items() if path == other}
+        theirs = resolve_telemetry(project.telemetry, other, fw.arith, task_tiles, where)
+        telemetry = tuple(b if b.tile in mine else a for a, b in zip(telemetry, theirs, strict=True))
     return FirmwareImage(
         elf=elf,
         tasks=ids,
-        telemetry=resolve_telemetry(project.telemetry, elf, fw.arith, task_tiles, where),
+        telemetry=telemetry,
         task_table=TaskTable.of(elf),
         sensor=(task_tiles[inputs[0].destination][0], inputs[0].port),
         actuator_port=outputs[0].port,
@@ -155,4 +174,42 @@ def project_image(
         task_order=project.task_names,
         io_inputs=tuple((m.io_packet, task_tiles[m.destination][0], m.port) for m in further),
         actuator_message=outputs[0].name,
+        tile_elfs=tile_elfs,
+        tile_task_tables={xy: TaskTable.of(path) for xy, path in tile_elfs.items()},
     )
+
+
+def _divided_clock_images(
+    project: FirmwareProject,
+    fw: FirmwareConfig,
+    vehicle: VehicleConfig | None,
+    scenario: ScenarioConfig | None,
+    chip: ChipConfig | None,
+    tiles: list[Tile],
+) -> dict[Tile, Path]:
+    """The images of the tiles whose core runs at the chip's clock divided by d > 1: the same build
+    with ``OS_TICK_CYCLES`` = tick_cycles / d, so that their kernel's tick (and every period and
+    deadline counted in ticks) lasts as long as on the other tiles.  Its symbols may lie elsewhere
+    (a smaller tick constant can take one instruction less): the host reads such a tile by its own
+    image (:meth:`FirmwareImage.task_table_of`, the telemetry probes, the chip's program per tile).
+    The tick's divisibility is checked before (``FirmwareConfig.check_chip``)."""
+    if chip is None:
+        return {}
+    out: dict[Tile, Path] = {}
+    built: dict[int, Path] = {}
+    for xy in tiles:
+        d = chip.tile_divider(xy)
+        if d == 1:
+            continue
+        if d not in built:
+            built[d] = build_project(
+                project,
+                arith=fw.arith,
+                multiplier=fw.multiplier,
+                mapping=fw.mapping,
+                settings={**firmware_defines(fw), "OS_TICK_CYCLES": fw.tick_cycles // d},
+                include_dirs=[control_include_dir(vehicle, scenario)],
+                sram_size=min(chip.tile_config(t).sram_bytes for t in tiles),
+            )
+        out[xy] = built[d]
+    return out

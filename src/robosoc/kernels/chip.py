@@ -16,6 +16,15 @@ it makes are scheduled on the receiving cores before they run.  With one core aw
 NoC, the quantum stretches to the next wake-up.  An access to NI registers stops the core just
 before it (run_cores returns RUN_NI) and is performed here.  Sleeping cores cost nothing; their
 wake-up cycle is computed from their timers and the deliveries.
+
+Divided core clocks (docs/power.md, "Per-tile clock"): a tile whose core runs at the chip's clock
+divided by d (``cst[t, K_DIV]``) keeps its core's own cycles in ``st`` (S_CYCLE, its timers, its
+interrupt controller, its counters and sleep cycles: the core kernels and the translated code are
+unchanged); its core cycle c begins in chip cycle c·d.  The chip loop converts at the boundary:
+the core runs to the first core cycle at or after a chip horizon (:func:`core_until`), stops and
+sleeps are ordered at c·d (:func:`chip_cycle`), and an event of chip cycle r (a packet's arrival, a
+receive memory's state) is seen by the core from its first cycle c with c·d >= r.  With every
+divider 1 (the default) each conversion is the identity.
 """
 
 from __future__ import annotations
@@ -94,6 +103,7 @@ K_ERR_INFO = 14
 K_OUT_LEN = 15  # bytes waiting in xout
 K_SENT = 16
 K_RECEIVED = 17
+K_DIV = 18  # the core's clock divider: one core cycle every K_DIV chip (NoC) cycles (1: the chip's clock)
 CST_SIZE = 20
 
 # gst: global scalars
@@ -178,6 +188,19 @@ ACC_SIZE = A_CYCLES + 4
 
 IO_COLS = 3 + nk.MEM_FLITS  # io_out rows: cycle, length, first-flit cycle, flits
 SINGLE_QUANTUM = 1 << 20  # default G_LOOK_SINGLE (bounds the output of one quantum)
+
+
+@njit("int64(int64, int64)", cache=True, inline="always")
+def chip_cycle(c, d):
+    """The chip cycle in which core cycle ``c`` of a core at divider ``d`` begins (NEVER stays NEVER)."""
+    return c if d == 1 or c >= NEVER else c * d
+
+
+@njit("int64(int64, int64)", cache=True, inline="always")
+def core_until(h, d):
+    """The first core cycle (divider ``d``) beginning at or after chip cycle ``h``: a core run to it
+    executes exactly the instructions that begin before ``h`` (NEVER stays NEVER)."""
+    return h if d == 1 or h >= NEVER else (h + d - 1) // d
 
 
 class ChipBook(NamedTuple):
@@ -339,8 +362,9 @@ def ni_access(t, core, book, noc):
         opc[t, pb] += 1
         opc[t, pb + U1] -= 1
     width = cfg[nk.C_WIDTH]
+    d = cst[t, K_DIV]
     if op == LW:
-        x = s - 1  # registered read: the value of the cycle before the load
+        x = chip_cycle(s - 1, d)  # registered read: the value of the (core) cycle before the load
         v = 0
         if off == ni.NI_STATUS:
             busy = _send_done(tile, t) > x
@@ -388,7 +412,8 @@ def ni_access(t, core, book, noc):
         st[t, S_CYCLE] = end
         st[t, S_PC] = pc + 4
         account(t, core, book, end)
-        record(book.rec, gst, R_TASK, t, end, v, cst[t, K_TASK], pc, cst[t, K_SLEEP_CYCLES], 0)
+        slept = chip_cycle(cst[t, K_SLEEP_CYCLES], d)
+        record(book.rec, gst, R_TASK, t, chip_cycle(end, d), v, cst[t, K_TASK], pc, slept, 0)
         cst[t, K_TASK] = v
         st[t, S_PROF_BASE] = OPC_SIZE + v * st[t, S_PROF_STRIDE]  # the task's profile bank (kernels/core.py)
         return True
@@ -397,8 +422,8 @@ def ni_access(t, core, book, noc):
         st[t, S_PC] = pc + 4
         cst[t, K_STATE] = K_SLEEP
         cst[t, K_SLEEP_FROM] = end
-        cst[t, K_WAKE] = wake_time(row(st, t), end)
-        record(book.rec, gst, R_SLEEP, t, end, 0, 0, pc, cst[t, K_SLEEP_CYCLES], 0)
+        cst[t, K_WAKE] = chip_cycle(wake_time(row(st, t), end), d)
+        record(book.rec, gst, R_SLEEP, t, chip_cycle(end, d), 0, 0, pc, chip_cycle(cst[t, K_SLEEP_CYCLES], d), 0)
         return True
     elif off == ni.NI_CMD:
         if v == ni.CMD_SEND:
@@ -410,24 +435,24 @@ def ni_access(t, core, book, noc):
             if n > nk.MEM_FLITS or a < 0 or a + 2 * n > size or (a & 1):
                 _fault(cst, t, CE_DMA_RANGE, cst[t, K_SEND_ADDR], n)
                 return False
-            if _send_done(tile, t) > s:
+            if _send_done(tile, t) > chip_cycle(s, d):
                 _fault(cst, t, CE_SEND_BUSY, addr, 0)
                 return False
             h = a >> 1
             for k in range(n):
                 mem[t, nk.SEND, k] = m16[t, h + k]
-            start = end + n
-            code = nk.noc_send(cfg, glob, tile, mem, t, n, start)
+            start = end + n  # the DMA copies a flit per core cycle
+            code = nk.noc_send(cfg, glob, tile, mem, t, n, chip_cycle(start, d))
             if code != nk.STATUS_OK:
                 _fault(cst, t, CE_BAD_PACKET, cst[t, K_SEND_ADDR], code)
                 return False
             cst[t, K_DMA_CYCLES] += n
             cst[t, K_SENT] += 1
             st[t, S_CYCLE] = start
-            record(book.rec, gst, R_SEND, t, start, mem[t, nk.SEND, 0], n, mem[t, nk.SEND, 2],
+            record(book.rec, gst, R_SEND, t, chip_cycle(start, d), mem[t, nk.SEND, 0], n, mem[t, nk.SEND, 2],
                    mem[t, nk.SEND, 3], mem[t, nk.SEND, 5] if n > 5 else 0)  # fmt: skip
         elif v == ni.CMD_RECV:
-            if cst[t, K_RX_READY] > s - 1:
+            if cst[t, K_RX_READY] > chip_cycle(s - 1, d):
                 _fault(cst, t, CE_NO_PACKET, addr, 0)
                 return False
             n = cst[t, K_RX_LEN]
@@ -445,7 +470,7 @@ def ni_access(t, core, book, noc):
             cst[t, K_RECEIVED] += 1
             cst[t, K_RX_READY] = NEVER
             cst[t, K_RX_LEN] = 0
-            cst[t, K_RX_FREE_AT] = end + n
+            cst[t, K_RX_FREE_AT] = chip_cycle(end + n, d)
             st[t, S_EXT_RISE] = NEVER
             st[t, S_CYCLE] = end + n
         else:
@@ -491,21 +516,25 @@ def _wake_if_due(t, st, cst, H):
     interrupt controller before H is known (deliveries of the quantum are scheduled, and no
     packet sent in it can arrive before H), so the controller may look up to H for good.
     """
+    d = cst[t, K_DIV]
+    h = core_until(H, d)  # in the core's cycles
     start = cst[t, K_SLEEP_FROM]
     st_t = row(st, t)
     if requests_possible(st_t):
-        irq_scan(st_t, H)
+        irq_scan(st_t, h)
         w = max(earliest_entry(st_t), start)
-        if w < H:
+        if w < h:
             _wake(t, st, cst, w)
             return
     else:
         w = cst[t, K_WAKE]
-        if w < H and cause_enabled(st_t, w - 1):
+        if w < NEVER:
+            w //= d  # K_WAKE is a chip cycle, a multiple of d
+        if w < h and cause_enabled(st_t, w - 1):
             _wake(t, st, cst, w)
             return
         start = max(start, w)  # a point the search reached without finding the cause
-    cst[t, K_WAKE] = wake_time(st_t, start)
+    cst[t, K_WAKE] = chip_cycle(wake_time(st_t, start), d)
 
 
 @njit(cache=True)
@@ -573,35 +602,47 @@ def _take_deliveries(st, book, noc):
         cst[d, K_RX_LEN] = ev[r, nk.EV_LEN]
         record(book.rec, gst, R_DELIVER, d, rise, ev[r, nk.EV_FIRST], ev[r, nk.EV_LEN], ev[r, nk.EV_FLITS + 2],
                ev[r, nk.EV_FLITS + 3], ev[r, nk.EV_FLITS + 5])  # fmt: skip
+        div = cst[d, K_DIV]
+        line = core_until(rise, div)  # the core's first cycle that sees the line up
         if (st[d, S_IRQ_MASK] & CAUSE_PACKET) != 0:
-            irq_external_rise(row(st, d), rise)
+            irq_external_rise(row(st, d), line)
         else:
             # the line feeds the controller only through IRQ_MASK bit 1: with it clear only IRQ_CAUSE
             # reads see it (and those wait for S_EXT_FINAL), so a core that ran ahead of the rise in a
             # long quantum is told without rewinding its controller into its past
-            st[d, S_EXT_RISE] = rise
+            st[d, S_EXT_RISE] = line
         if cst[d, K_STATE] == K_SLEEP:
-            cst[d, K_WAKE] = wake_time(row(st, d), cst[d, K_SLEEP_FROM])
+            cst[d, K_WAKE] = chip_cycle(wake_time(row(st, d), cst[d, K_SLEEP_FROM]), div)
     glob[nk.G_NEV] = 0
 
 
 @njit(cache=True, inline="always")
-def _run_awake(core, tiles, until, jit_tables, jit_on, jit_params, one, rest, gst, prof):
-    """Run ``tiles`` to ``until``: each translating tile alone in the dispatch loop, the interpreted
-    ones together (through ``interpret_cores``, the dispatch loop's own copy of the interpreter:
-    numba compiles one, and one variant of the chip loop whatever the engine).  With ``prof`` the
-    host ticks of each go to gst (G_TK_JIT, G_TK_INTERP)."""
+def _run_awake(core, tiles, until, jit_tables, jit_on, jit_params, one, rest, gst, prof, cst):
+    """Run ``tiles`` to chip cycle ``until``: each translating tile alone in the dispatch loop, each
+    tile on a divided clock alone to its own cycle (:func:`core_until`), the other interpreted ones
+    together (through ``interpret_cores``, the dispatch loop's own copy of the interpreter: numba
+    compiles one, and one variant of the chip loop whatever the engine).  With ``prof`` the host
+    ticks of each go to gst (G_TK_JIT, G_TK_INTERP)."""
     k = 0
     st = core.st
     for i in range(tiles.shape[0]):
         t = tiles[i]
-        if jit_on[t] != 0 and (st[t, S_RUN] == RUN_ENTRY or until - st[t, S_CYCLE] >= JIT_MIN_SLICE):
+        d = cst[t, K_DIV]
+        mine = core_until(until, d)
+        if jit_on[t] != 0 and (st[t, S_RUN] == RUN_ENTRY or mine - st[t, S_CYCLE] >= JIT_MIN_SLICE):
             one[0] = t
             k0 = ticks() if prof else 0
-            run_translated(core, one, until, jit_tables[t], jit_params[J_THRESHOLD], jit_params[J_STRETCH], False)
+            run_translated(core, one, mine, jit_tables[t], jit_params[J_THRESHOLD], jit_params[J_STRETCH], False)
             if prof:
                 gst[G_TK_JIT] += ticks() - k0
                 gst[G_N_JIT] += 1
+        elif d != 1:
+            one[0] = t
+            k0 = ticks() if prof else 0
+            interpret_cores(core, one, mine)
+            if prof:
+                gst[G_TK_INTERP] += ticks() - k0
+                gst[G_N_INTERP] += 1
         else:
             rest[k] = t
             k += 1
@@ -778,7 +819,7 @@ def run_chip(core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int, jit
                 if cst[t, K_STATE] == K_RUN:
                     run[k] = t
                     k += 1
-                    st[t, S_EXT_FINAL] = final
+                    st[t, S_EXT_FINAL] = core_until(final, cst[t, K_DIV])
                     st[t, S_MASK_LOCK] = 1 if long_q else 0
                     if st[t, S_RUN] != RUN_ERROR:  # a core that failed ahead of H waits to report it
                         runx[kx] = t
@@ -797,14 +838,14 @@ def run_chip(core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int, jit
             if hi > lo:
                 # the awake cores to H, then each stopped one on
                 _run_awake(core, runx[lo:hi] if bulk else run[lo:hi], H, jit_tables, jit_on, jit_params, one, rest,
-                           gst, prof)  # fmt: skip
+                           gst, prof, cst)  # fmt: skip
                 if not fill:  # the one core handled last, at its next stop
-                    nq = stop_queue.push(queue, qcyc, nq, lo, st[run[lo], S_CYCLE])
+                    nq = stop_queue.push(queue, qcyc, nq, lo, chip_cycle(st[run[lo], S_CYCLE], cst[run[lo], K_DIV]))
                 hi = lo
                 bulk = False
             if fill:
                 for r in range(k):
-                    nq = stop_queue.push(queue, qcyc, nq, r, st[run[r], S_CYCLE])
+                    nq = stop_queue.push(queue, qcyc, nq, r, chip_cycle(st[run[r], S_CYCLE], cst[run[r], K_DIV]))
                 fill = False
             t = np.int64(-1)  # not the literal -1: numba would compile ni_access and its callees for it too
             rt = 0  # t is run[rt]
@@ -815,7 +856,8 @@ def run_chip(core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int, jit
                 # a stop at or after H waits for a later quantum (a long quantum cut short leaves cores
                 # ahead of H; H only shrinks, so it stays out); only an exit is taken at once (the core
                 # must not run again)
-                if cst[u, K_STATE] != K_RUN or (st[u, S_CYCLE] >= H and st[u, S_RUN] != RUN_EXIT):
+                ahead = chip_cycle(st[u, S_CYCLE], cst[u, K_DIV]) >= H
+                if cst[u, K_STATE] != K_RUN or (ahead and st[u, S_RUN] != RUN_EXIT):
                     continue
                 t = u
                 rt = r
@@ -824,7 +866,7 @@ def run_chip(core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int, jit
                 break
             why = st[t, S_RUN]
             if why == RUN_NI:
-                s0 = st[t, S_CYCLE]
+                s0 = chip_cycle(st[t, S_CYCLE], cst[t, K_DIV])
                 sent = cst[t, K_SENT]
                 received = cst[t, K_RECEIVED]
                 if not active and not quiet:
@@ -847,7 +889,7 @@ def run_chip(core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int, jit
                         continue
                     # an IRQ_CAUSE read: every stop before s0 is done, so no packet reaches t before
                     # s0 + look_idle (and t does not run past H)
-                    st[t, S_EXT_FINAL] = s0 + look_idle
+                    st[t, S_EXT_FINAL] = core_until(s0 + look_idle, cst[t, K_DIV])
                     lo, hi = rt, rt + 1
                     continue
                 k0 = ticks() if prof else 0
@@ -921,8 +963,8 @@ def run_chip(core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int, jit
             state = cst[t, K_STATE]
             if state == K_RUN or state == K_SLEEP:
                 alive = True
-            elif state == K_EXITED and st[t, S_CYCLE] > last:
-                last = st[t, S_CYCLE]
+            elif state == K_EXITED and chip_cycle(st[t, S_CYCLE], cst[t, K_DIV]) > last:
+                last = chip_cycle(st[t, S_CYCLE], cst[t, K_DIV])
         if not alive:
             H = last  # the run ends when the last core has completed its exit store
         if quiet:
@@ -959,4 +1001,15 @@ def run_chip(core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int, jit
     return status
 
 
-__all__ = ["ChipBook", "account", "account_all", "bad_pcs", "ni_access", "record", "run_chip", "wake_time"]
+__all__ = [
+    "ChipBook",
+    "account",
+    "account_all",
+    "bad_pcs",
+    "chip_cycle",
+    "core_until",
+    "ni_access",
+    "record",
+    "run_chip",
+    "wake_time",
+]

@@ -159,6 +159,16 @@ def chip_figures(chip: ChipConfig, result: ReplayResult | None) -> dict[str, Any
     volts = chip.dvfs.voltage_at(chip.tile.clock_period_ns)
     if volts is not None:  # a DVFS operating point (docs/power.md)
         figures["dvfs_v"] = volts
+    clocks = {}
+    for t in range(chip.n_tiles):  # the tiles whose core runs on its own clock (docs/power.md, "Per-tile clock")
+        xy = chip.tile_xy(t)
+        if chip.is_powered(xy) and xy != tuple(chip.io_tile) and chip.tile_divider(xy) > 1:
+            own: dict[str, Any] = {"clock_ns": chip.tile_config(xy).clock_period_ns, "divider": chip.tile_divider(xy)}
+            if chip.tile_volts(xy) is not None:
+                own["dvfs_v"] = chip.tile_volts(xy)
+            clocks[f"{xy[0]},{xy[1]}"] = own
+    if clocks:
+        figures["tile_clocks"] = clocks
     return figures
 
 
@@ -270,9 +280,25 @@ def power_figures(
         else {
             "reserve_soc": power.reserve_soc,
             "at_s": end.low_at_s,
+            "height_m": power.failsafe_height_m,
+            "hold_s": power.failsafe_hold_s,
+            "reached_s": reached(rows, power.failsafe_height_m, end.low_at_s),
             "outcome": touchdown(rows, rest_height, end.low_at_s, "the pack reached its reserve"),
         },
     }
+
+
+FAILSAFE_REACHED_M = 0.1
+"""How close to the failsafe's hover height the vehicle must come for ``power.failsafe.reached_s``."""
+
+
+def reached(rows: np.ndarray, height_m: float, since_s: float) -> float | None:
+    """The first row's time at or after ``since_s`` at which the vehicle's height is within
+    :data:`FAILSAFE_REACHED_M` of ``height_m`` (None: never)."""
+    t, z = column(rows, "t"), column(rows, "z")
+    k = int(np.searchsorted(t, since_s))
+    near = np.flatnonzero(np.abs(z[k:] - height_m) <= FAILSAFE_REACHED_M)
+    return float(t[k + int(near[0])]) if len(near) else None
 
 
 def after_empty(rows: np.ndarray, rest_height: float, empty_at_s: float | None) -> str | None:
@@ -507,7 +533,17 @@ _VEHICLE_FIELDS: dict[str, _Kind] = {
             "tiles": _map(_list(INTEGER), TASK_KEY, "TASK: a task of the project"),
         },
     ),
-    "chip": _object({"width": INTEGER, "height": INTEGER, "clock_ns": NUMBER, "dvfs_v": NUMBER}),
+    "chip": _object(
+        {
+            "width": INTEGER,
+            "height": INTEGER,
+            "clock_ns": NUMBER,
+            "dvfs_v": NUMBER,
+            "tile_clocks": _map(
+                _object({"clock_ns": NUMBER, "divider": INTEGER, "dvfs_v": NUMBER}, nullable=False), TILE_KEY, "X,Y"
+            ),
+        }
+    ),
     "simulated_s": NUMBER,
     "host_s": NUMBER,
     "real_time_factor": NUMBER,
@@ -565,7 +601,16 @@ _VEHICLE_FIELDS: dict[str, _Kind] = {
             ),
             "empty_at_s": NUMBER,
             "after_empty": _Kind("a string or null", lambda v: v is None or isinstance(v, str)),
-            "failsafe": _object({"reserve_soc": NUMBER, "at_s": NUMBER, "outcome": TEXT}),
+            "failsafe": _object(
+                {
+                    "reserve_soc": NUMBER,
+                    "at_s": NUMBER,
+                    "height_m": NUMBER,
+                    "hold_s": NUMBER,
+                    "reached_s": NUMBER,
+                    "outcome": TEXT,
+                }
+            ),
         }
     ),
 }

@@ -22,7 +22,7 @@ from __future__ import annotations
 import dataclasses
 import math
 
-from robosoc.config.power import BatteryConfig, PowerConfig
+from robosoc.config.power import FAILSAFE_LANDED_MARGIN_M, BatteryConfig, PowerConfig
 from robosoc.config.vehicle import VehicleConfig
 from robosoc.physics.battery import Battery
 from robosoc.physics.mjcf import GRAVITY
@@ -162,11 +162,19 @@ def full_throttle(vehicle: VehicleConfig) -> tuple[float, float, float]:
 
 def lift_problem(vehicle: VehicleConfig) -> tuple[str, str] | None:
     """Why the battery of ``vehicle`` cannot fly it, as (the scenario field to blame, the reason):
-    empty at the start, or too weak to lift it at full throttle.  None if it can (and for a
-    constant supply).  Said before a flight starts."""
+    empty at the start, too weak to lift it at full throttle, or a failsafe hover height at which the
+    failsafe would count it landed.  None if it can (and for a constant supply).  Said before a
+    flight starts."""
     config = vehicle.power
     if not config.battery_on:
         return None
+    landed = vehicle.rest_height + FAILSAFE_LANDED_MARGIN_M
+    if not config.failsafe_height_m > landed:
+        return "power.failsafe_height_m", (
+            f"{config.failsafe_height_m:g} m is not above the height at which the low-battery failsafe counts "
+            f"the vehicle landed ({landed:g} m: its resting height {vehicle.rest_height:g} m + "
+            f"{FAILSAFE_LANDED_MARGIN_M:g} m)"
+        )
     pack = config.battery
     battery = Battery(pack)
     if not battery.terminal_v(0.0) > pack.cutoff_pack_v:

@@ -172,30 +172,61 @@ void pid_step(pid_controller_t *ctl, const real_t q[4], const real_t rate[3], re
 }
 
 #ifdef CTL_FAILSAFE
-/* The low-battery failsafe (docs/power.md), built only for a battery flight: from the first packet
- * flagged ROBOSOC_FLAG_LOW_BATTERY the setpoint is level attitude and a height that falls from the
- * commanded one at CTL_LAND_RATE (feed-forward included) down to CTL_LAND_FLOOR; once the estimated
- * height is at most CTL_LANDED_HEIGHT the motors stop and the vehicle stays disarmed. */
-static int failsafe_landing;
-static int failsafe_landed;
+/* The low-battery failsafe (docs/power.md), built only for a battery flight.  From the first packet
+ * flagged ROBOSOC_FLAG_LOW_BATTERY the setpoint is level attitude and a height that moves from the
+ * commanded one at CTL_LAND_RATE (feed-forward included) to CTL_FAILSAFE_HEIGHT, stays there
+ * CTL_FAILSAFE_HOLD seconds, then falls at CTL_LAND_RATE down to CTL_LAND_FLOOR; once landing, as
+ * soon as the estimated height is at most CTL_LANDED_HEIGHT the motors stop and the vehicle stays
+ * disarmed.  A vehicle already on the ground when the flag comes is disarmed at once. */
+enum { FAILSAFE_OFF, FAILSAFE_RETURN, FAILSAFE_HOLD, FAILSAFE_LAND, FAILSAFE_LANDED };
+static int failsafe_phase;
 static real_t failsafe_height;
+static real_t failsafe_held;
 
 static int pid_failsafe(pid_setpoint_t *sp, real_t height, real_t dt)
 {
-    if (failsafe_landed) {
+    if (failsafe_phase == FAILSAFE_LANDED) {
         return 0;
     }
-    if (!failsafe_landing) {
-        failsafe_landing = 1;
+    if (failsafe_phase == FAILSAFE_OFF) {
+        if (height <= REAL_C(CTL_LANDED_HEIGHT)) {
+            failsafe_phase = FAILSAFE_LANDED;
+            return 0;
+        }
+        failsafe_phase = FAILSAFE_RETURN;
         failsafe_height = sp->height;
+        failsafe_held = REAL_ZERO;
     }
-    real_t floor = REAL_C(CTL_LAND_FLOOR);
+    real_t speed = REAL_C(CTL_LAND_RATE);
+    real_t step = real_mul(speed, dt);
     real_t rate = REAL_ZERO;
-    if (failsafe_height > floor) {
-        failsafe_height = real_sub(failsafe_height, real_mul(REAL_C(CTL_LAND_RATE), dt));
-        rate = real_neg(REAL_C(CTL_LAND_RATE));
-        if (failsafe_height < floor) {
-            failsafe_height = floor;
+    if (failsafe_phase == FAILSAFE_RETURN) {
+        real_t target = REAL_C(CTL_FAILSAFE_HEIGHT);
+        real_t gap = real_sub(target, failsafe_height);
+        if (gap > step) {
+            failsafe_height = real_add(failsafe_height, step);
+            rate = speed;
+        } else if (gap < real_neg(step)) {
+            failsafe_height = real_sub(failsafe_height, step);
+            rate = real_neg(speed);
+        } else {
+            failsafe_height = target;
+            failsafe_phase = FAILSAFE_HOLD;
+        }
+    } else if (failsafe_phase == FAILSAFE_HOLD) {
+        failsafe_held = real_add(failsafe_held, dt);
+        if (failsafe_held >= REAL_C(CTL_FAILSAFE_HOLD)) {
+            failsafe_phase = FAILSAFE_LAND;
+        }
+    }
+    if (failsafe_phase == FAILSAFE_LAND) {
+        real_t floor = REAL_C(CTL_LAND_FLOOR);
+        if (failsafe_height > floor) {
+            failsafe_height = real_sub(failsafe_height, step);
+            rate = real_neg(speed);
+            if (failsafe_height < floor) {
+                failsafe_height = floor;
+            }
         }
     }
     sp->roll = REAL_ZERO;
@@ -203,8 +234,8 @@ static int pid_failsafe(pid_setpoint_t *sp, real_t height, real_t dt)
     sp->height = failsafe_height;
     sp->height_rate = rate;
     sp->height_accel = REAL_ZERO;
-    if (height <= REAL_C(CTL_LANDED_HEIGHT)) {
-        failsafe_landed = 1;
+    if (failsafe_phase == FAILSAFE_LAND && height <= REAL_C(CTL_LANDED_HEIGHT)) {
+        failsafe_phase = FAILSAFE_LANDED;
         return 0;
     }
     return 1;
