@@ -131,3 +131,11 @@ def test_a_wrong_value_is_named_with_the_project_file_when_flown(tmp_path: Path,
         resolve(ScenarioFlags.of(None, None, {"firmware": str(folder)}))
     text = str(caught.value)
     assert text.startswith("--firmware: ") and f"{folder / PROJECT_FILE}: {shown}" in text
+
+
+def test_a_sweep_point_whose_project_is_missing_names_the_sweep_file_and_key(project: Path, tmp_path: Path) -> None:
+    sweep = tmp_path / "sweep.toml"
+    sweep.write_text(f'[grid]\n"firmware.project" = ["{project}", "{tmp_path / "nope"}"]\n')
+    with pytest.raises(ConfigError) as caught:
+        load_sweep(sweep)
+    assert str(caught.value).startswith(f"{sweep}: grid.firmware.project[1]: firmware.project: no folder")

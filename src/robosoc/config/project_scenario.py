@@ -69,5 +69,10 @@ def scenario_from_fields(fields: Mapping[str, Any], where: str) -> ScenarioConfi
             (the project file named).
     """
     project = fields.get(PROJECT_FIELD, "")
-    base = project_scenario(project) if isinstance(project, str) else ScenarioConfig()  # else: a type error below
+    try:
+        base = project_scenario(project) if isinstance(project, str) else ScenarioConfig()  # else: a type error below
+    except ConfigError as exc:
+        if exc.where:  # the project file's own error
+            raise
+        raise ConfigError(where, exc.field, exc.reason) from exc
     return from_mapping(ScenarioConfig, nest(fields), where, base=base)
