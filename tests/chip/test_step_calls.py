@@ -5,10 +5,11 @@ the round's other steps were sent their results, and a failing call is thrown in
 from __future__ import annotations
 
 import threading
+import time
 
 import pytest
 
-from robosoc.chip.step_calls import ChipThreads, StepCalls, run_calls
+from robosoc.chip.step_calls import ALONE_ROUNDS, PROBE_ROUNDS, ChipThreads, StepCalls, run_calls
 
 
 def counting(name: str, calls: int, log: list[tuple[str, int]], fail_at: int | None = None) -> StepCalls[str]:
@@ -77,3 +78,17 @@ def test_run_calls_sends_each_call_its_status() -> None:
 def test_no_threads_is_refused() -> None:
     with pytest.raises(ValueError, match="threads: at least 1, got 0"):
         ChipThreads(0)
+
+
+def test_rounds_that_do_not_pay_on_the_threads_run_alone_and_the_threads_are_tried_again() -> None:
+    # a call that sleeps takes wall time but no CPU time: on the threads its round never pays
+    def step(rounds: int) -> StepCalls[int]:
+        for _ in range(rounds):
+            yield lambda: time.sleep(0.0005) or 0
+        return rounds
+
+    total = PROBE_ROUNDS + ALONE_ROUNDS + PROBE_ROUNDS + 5
+    with ChipThreads(2) as pool:
+        assert pool.run_together([step(total), step(total)]) == [total, total]
+        # probe, alone, probe again (not paid: twice as long alone, of which 5 rounds are left)
+        assert pool.rounds == [2 * PROBE_ROUNDS, ALONE_ROUNDS + 5]

@@ -54,8 +54,26 @@ def host_cores() -> int:
         return os.cpu_count() or 1
 
 
+#: Parallel rounds measured per look at whether the helper threads pay.
+PROBE_ROUNDS = 16
+#: Rounds run in the calling thread alone after a look found that they did not (doubled at each
+#: further such look, up to :data:`MAX_ALONE_ROUNDS`).
+ALONE_ROUNDS = 64
+MAX_ALONE_ROUNDS = 1024
+#: The threads pay while a round's wall time stays under this share of its calls' CPU time (what
+#: the calling thread alone would have taken).
+PAYS = 0.9
+
+
 class ChipThreads:
     """Helper threads that run the loop calls of several chips beside the calling thread.
+
+    On a shared host the second core may be taken: a helper thread then waits for a core, or is
+    preempted in a call that the calling thread waits for, and a round takes longer than the same
+    calls one after the other.  So the rounds look at what they gain: every :data:`PROBE_ROUNDS`
+    rounds on the threads, their wall time against their calls' CPU time; when that is above
+    :data:`PAYS`, the next rounds run in the calling thread alone, and then the threads are tried
+    again.  Which thread runs a call changes nothing of what it computes.
 
     Args:
         threads: how many threads run loop calls at once, the caller's included (1: the caller
@@ -67,6 +85,11 @@ class ChipThreads:
             raise ValueError(f"threads: at least 1, got {threads}")
         self.threads = threads
         self._pool = ThreadPoolExecutor(threads - 1, thread_name_prefix="robosoc-chip") if threads > 1 else None
+        self._alone_left = 0  # rounds still to run in the calling thread alone
+        self._alone_next = ALONE_ROUNDS
+        self._probe = [0.0, 0.0, 0]  # wall s, the calls' CPU s, rounds: since the last look
+        #: rounds run on the threads, and in the calling thread alone (what the looks chose)
+        self.rounds = [0, 0]
 
     def close(self) -> None:
         """Stop the helper threads (after their calls have returned)."""
@@ -119,25 +142,51 @@ class ChipThreads:
         return [values[i] for i in range(len(steps))]
 
     def _run_round(self, calls: list[ChipCall]) -> list[CallResult | BaseException]:
-        """Run ``calls`` on the threads at once (each taken by the first free thread); each one's
-        result, or what it raised."""
+        """Run ``calls`` on the threads at once (each taken by the first free thread), or in this
+        thread alone (see the class); each one's result, or what it raised."""
         results: list[CallResult | BaseException | None] = [None] * len(calls)
         order = iter(range(len(calls)))  # shared: next() on it holds the GIL, so each index is taken once
+        cpu = [0.0] * len(calls)
 
         def work() -> None:
             for j in order:
+                start = time.thread_time()
                 try:
                     results[j] = _timed(calls[j])
                 except BaseException as exc:  # handed to the caller in the call's turn
                     results[j] = exc
+                cpu[j] = time.thread_time() - start
 
         pool = self._pool
-        helpers = [] if pool is None else [pool.submit(work) for _ in range(min(self.threads, len(calls)) - 1)]
-        try:
+        if pool is None or len(calls) < 2 or self._alone_left > 0:
+            self._alone_left = max(self._alone_left - 1, 0)
+            self.rounds[1] += 1
             work()
-        finally:
-            wait(helpers)  # no loop call outlives the round, even on Ctrl-C
+        else:
+            self.rounds[0] += 1
+            start = time.perf_counter()
+            helpers = [pool.submit(work) for _ in range(min(self.threads, len(calls)) - 1)]
+            try:
+                work()
+            finally:
+                wait(helpers)  # no loop call outlives the round, even on Ctrl-C
+            self._look(time.perf_counter() - start, sum(cpu))
         return [r if r is not None else RuntimeError("a chip loop call was not run") for r in results]
+
+    def _look(self, wall: float, cpu: float) -> None:
+        """Count a round on the threads; every :data:`PROBE_ROUNDS`, whether they paid."""
+        probe = self._probe
+        probe[0] += wall
+        probe[1] += cpu
+        probe[2] += 1
+        if probe[2] < PROBE_ROUNDS:
+            return
+        if probe[0] > PAYS * probe[1]:
+            self._alone_left = self._alone_next
+            self._alone_next = min(2 * self._alone_next, MAX_ALONE_ROUNDS)
+        else:
+            self._alone_next = ALONE_ROUNDS
+        self._probe = [0.0, 0.0, 0]
 
 
 __all__ = ["CallResult", "ChipCall", "ChipThreads", "StepCalls", "host_cores", "run_calls"]
