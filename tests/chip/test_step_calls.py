@@ -5,11 +5,10 @@ the round's other steps were sent their results, and a failing call is thrown in
 from __future__ import annotations
 
 import threading
-import time
 
 import pytest
 
-from robosoc.chip.step_calls import ALONE_ROUNDS, PROBE_ROUNDS, ChipThreads, StepCalls, run_calls
+from robosoc.chip.step_calls import CHOSEN_ROUNDS, PROBE_ROUNDS, ChipThreads, StepCalls, WayChooser, run_calls
 
 
 def counting(name: str, calls: int, log: list[tuple[str, int]], fail_at: int | None = None) -> StepCalls[str]:
@@ -39,11 +38,14 @@ def test_the_calls_of_a_round_run_on_several_threads_at_once() -> None:
     barrier = threading.Barrier(3, timeout=10)  # passes only if three calls wait at the same time
 
     def step() -> StepCalls[int]:
+        for _ in range(PROBE_ROUNDS):  # a look's rounds alone come first
+            yield lambda: 0
         status, _ = yield lambda: barrier.wait() * 0 + 7
         return status
 
     with ChipThreads(3) as pool:
         assert pool.run_together([step(), step(), step()]) == [7, 7, 7]
+        assert pool.rounds == [1, PROBE_ROUNDS]
 
 
 def test_the_first_failing_step_is_raised_after_the_round_is_done() -> None:
@@ -80,15 +82,12 @@ def test_no_threads_is_refused() -> None:
         ChipThreads(0)
 
 
-def test_rounds_that_do_not_pay_on_the_threads_run_alone_and_the_threads_are_tried_again() -> None:
-    # a call that sleeps takes wall time but no CPU time: on the threads its round never pays
-    def step(rounds: int) -> StepCalls[int]:
-        for _ in range(rounds):
-            yield lambda: time.sleep(0.0005) or 0
-        return rounds
-
-    total = PROBE_ROUNDS + ALONE_ROUNDS + PROBE_ROUNDS + 5
-    with ChipThreads(2) as pool:
-        assert pool.run_together([step(total), step(total)]) == [total, total]
-        # probe, alone, probe again (not paid: twice as long alone, of which 5 rounds are left)
-        assert pool.rounds == [2 * PROBE_ROUNDS, ALONE_ROUNDS + 5]
+def test_each_look_times_rounds_alone_then_on_the_threads_and_takes_the_faster_way() -> None:
+    for threads_s, chosen in ((0.89, True), (0.91, False)):  # a round alone takes 1 s
+        chooser = WayChooser()
+        ways = []
+        for _ in range(2 * (2 * PROBE_ROUNDS + CHOSEN_ROUNDS)):  # two looks
+            ways.append(chooser.on_threads())
+            chooser.took(threads_s if ways[-1] else 1.0)
+        look = [False] * PROBE_ROUNDS + [True] * PROBE_ROUNDS + [chosen] * CHOSEN_ROUNDS
+        assert ways == look + look, threads_s

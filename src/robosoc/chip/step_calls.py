@@ -54,26 +54,55 @@ def host_cores() -> int:
         return os.cpu_count() or 1
 
 
-#: Parallel rounds measured per look at whether the helper threads pay.
+#: Rounds timed in each way (the calling thread alone, then on the threads) per look.
 PROBE_ROUNDS = 16
-#: Rounds run in the calling thread alone after a look found that they did not (doubled at each
-#: further such look, up to :data:`MAX_ALONE_ROUNDS`).
-ALONE_ROUNDS = 64
-MAX_ALONE_ROUNDS = 1024
-#: The threads pay while a round's wall time stays under this share of its calls' CPU time (what
-#: the calling thread alone would have taken).
+#: Rounds run in the way the last look chose, before the next look.
+CHOSEN_ROUNDS = 128
+#: The threads are chosen when their rounds took less than this share of the wall time of the
+#: rounds run alone just before.
 PAYS = 0.9
+
+
+class WayChooser:
+    """Whether a round of several loop calls runs on the threads: a look's :data:`PROBE_ROUNDS`
+    rounds alone, then as many on the threads, then :data:`CHOSEN_ROUNDS` the way that was faster
+    (the threads only when they took under :data:`PAYS` of the time alone); then the next look."""
+
+    def __init__(self) -> None:
+        self._round = 0  # rounds since the last look began
+        self._alone_s = 0.0  # the look's wall seconds alone, and on the threads
+        self._threads_s = 0.0
+        self.chosen = False  # the threads won the last look
+
+    def on_threads(self) -> bool:
+        """Whether the next round runs on the threads."""
+        if self._round < PROBE_ROUNDS:
+            return False
+        return self._round < 2 * PROBE_ROUNDS or self.chosen
+
+    def took(self, seconds: float) -> None:
+        """The round just run (the way :meth:`on_threads` said) took ``seconds`` of wall time."""
+        if self._round < PROBE_ROUNDS:
+            self._alone_s += seconds
+        elif self._round < 2 * PROBE_ROUNDS:
+            self._threads_s += seconds
+            if self._round == 2 * PROBE_ROUNDS - 1:
+                self.chosen = self._threads_s < PAYS * self._alone_s
+        self._round += 1
+        if self._round == 2 * PROBE_ROUNDS + CHOSEN_ROUNDS:
+            self._round, self._alone_s, self._threads_s = 0, 0.0, 0.0
 
 
 class ChipThreads:
     """Helper threads that run the loop calls of several chips beside the calling thread.
 
     On a shared host the second core may be taken: a helper thread then waits for a core, or is
-    preempted in a call that the calling thread waits for, and a round takes longer than the same
-    calls one after the other.  So the rounds look at what they gain: every :data:`PROBE_ROUNDS`
-    rounds on the threads, their wall time against their calls' CPU time; when that is above
-    :data:`PAYS`, the next rounds run in the calling thread alone, and then the threads are tried
-    again.  Which thread runs a call changes nothing of what it computes.
+    preempted in a call that the calling thread waits for, and a round on the threads takes as
+    long as the same calls one after the other, or longer.  So the rounds look at what the
+    threads gain: a look times :data:`PROBE_ROUNDS` rounds in the calling thread alone and as
+    many on the threads, and the next :data:`CHOSEN_ROUNDS` rounds run the way that was faster
+    (the threads only when they took under :data:`PAYS` of the time alone).  Which thread runs
+    a call changes nothing of what it computes (:class:`WayChooser`).
 
     Args:
         threads: how many threads run loop calls at once, the caller's included (1: the caller
@@ -85,10 +114,8 @@ class ChipThreads:
             raise ValueError(f"threads: at least 1, got {threads}")
         self.threads = threads
         self._pool = ThreadPoolExecutor(threads - 1, thread_name_prefix="robosoc-chip") if threads > 1 else None
-        self._alone_left = 0  # rounds still to run in the calling thread alone
-        self._alone_next = ALONE_ROUNDS
-        self._probe = [0.0, 0.0, 0]  # wall s, the calls' CPU s, rounds: since the last look
-        #: rounds run on the threads, and in the calling thread alone (what the looks chose)
+        self.chooser = WayChooser()
+        #: rounds run on the threads, and in the calling thread alone
         self.rounds = [0, 0]
 
     def close(self) -> None:
@@ -146,47 +173,29 @@ class ChipThreads:
         thread alone (see the class); each one's result, or what it raised."""
         results: list[CallResult | BaseException | None] = [None] * len(calls)
         order = iter(range(len(calls)))  # shared: next() on it holds the GIL, so each index is taken once
-        cpu = [0.0] * len(calls)
 
         def work() -> None:
             for j in order:
-                start = time.thread_time()
                 try:
                     results[j] = _timed(calls[j])
                 except BaseException as exc:  # handed to the caller in the call's turn
                     results[j] = exc
-                cpu[j] = time.thread_time() - start
 
         pool = self._pool
-        if pool is None or len(calls) < 2 or self._alone_left > 0:
-            self._alone_left = max(self._alone_left - 1, 0)
-            self.rounds[1] += 1
-            work()
-        else:
-            self.rounds[0] += 1
-            start = time.perf_counter()
+        on_threads = pool is not None and len(calls) > 1 and self.chooser.on_threads()
+        self.rounds[0 if on_threads else 1] += 1
+        start = time.perf_counter()
+        if pool is not None and on_threads:
             helpers = [pool.submit(work) for _ in range(min(self.threads, len(calls)) - 1)]
             try:
                 work()
             finally:
                 wait(helpers)  # no loop call outlives the round, even on Ctrl-C
-            self._look(time.perf_counter() - start, sum(cpu))
+        else:
+            work()
+        if pool is not None and len(calls) > 1:
+            self.chooser.took(time.perf_counter() - start)
         return [r if r is not None else RuntimeError("a chip loop call was not run") for r in results]
 
-    def _look(self, wall: float, cpu: float) -> None:
-        """Count a round on the threads; every :data:`PROBE_ROUNDS`, whether they paid."""
-        probe = self._probe
-        probe[0] += wall
-        probe[1] += cpu
-        probe[2] += 1
-        if probe[2] < PROBE_ROUNDS:
-            return
-        if probe[0] > PAYS * probe[1]:
-            self._alone_left = self._alone_next
-            self._alone_next = min(2 * self._alone_next, MAX_ALONE_ROUNDS)
-        else:
-            self._alone_next = ALONE_ROUNDS
-        self._probe = [0.0, 0.0, 0]
 
-
-__all__ = ["CallResult", "ChipCall", "ChipThreads", "StepCalls", "host_cores", "run_calls"]
+__all__ = ["CallResult", "ChipCall", "ChipThreads", "StepCalls", "WayChooser", "host_cores", "run_calls"]
