@@ -43,7 +43,7 @@ def run_calls(calls: StepCalls[T]) -> T:
         while True:
             call = calls.send(_timed(call))
     except StopIteration as done:
-        return done.value  # type: ignore[no-any-return]
+        return done.value
 
 
 def host_cores() -> int:
