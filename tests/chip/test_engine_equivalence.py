@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import threading
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -807,3 +808,26 @@ def test_a_trap_whose_shadow_starts_a_translated_block_runs_as_on_the_interprete
     soc = assert_same(words, engine, 100_000, len(words))
     assert soc.counters()["traps"] == 2 and int(soc.state.st[0, S_ERR]) == 0
     assert int(soc.state.regs[0, a5]) == 5  # the shadow twice, and 3 times through E + 4 and the loop
+
+
+def test_compiled_or_cached_does_not_take_another_checkouts_kernel_for_this_ones(tmp_path: Path) -> None:
+    import importlib.util
+
+    from robosoc.kernels import compiled_or_cached
+
+    source = "from numba import njit\n\n@njit(cache=True)\ndef twice(x):\n    return 2 * x\n"
+    kernels = []
+    for checkout in ("one", "two"):  # the same source in two folders, as in two checkouts
+        folder = tmp_path / checkout
+        folder.mkdir()
+        (folder / "twice_kernel.py").write_text(source)
+        spec = importlib.util.spec_from_file_location("twice_kernel", folder / "twice_kernel.py")
+        assert spec is not None and spec.loader is not None
+        module = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(module)
+        kernels.append(module.twice)
+    one, two = kernels
+    assert not compiled_or_cached(one)
+    assert one(21) == 42  # compiled and cached under the first folder's name
+    assert compiled_or_cached(one)
+    assert not compiled_or_cached(two)  # the second checkout's kernel is not in numba's cache

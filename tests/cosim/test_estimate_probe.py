@@ -1,6 +1,7 @@
 """Telemetry: the chip's estimator state read from its tile's memory between jobs, no cycle spent."""
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -93,3 +94,23 @@ def test_lockstep_rows_carry_the_chips_estimate() -> None:
         assert est[k, 4] == e["est_height"]
     norms = [np.linalg.norm([e[n] for n in ESTIMATE_QUATERNION]) for e in by_sample.values()]
     assert all(math.isclose(n, 1.0, abs_tol=1e-3) for n in norms)
+
+
+def test_the_debug_index_kept_in_a_folder_is_read_back_the_same(tmp_path: Path) -> None:
+    from robosoc.program import dwarf
+
+    elf = firmware_image(FirmwareConfig()).elf
+    store = tmp_path / "dwarf"
+    first = dwarf.debug_index(elf, store)
+    kept = list(store.iterdir())
+    assert [p.suffix for p in kept] == [".json"]  # one file, no scratch left
+    dwarf._index.cache_clear()  # a later process: the kept file, not the DWARF
+    again = dwarf.debug_index(elf, store)
+    assert again == first and again is not first
+    assert again.member_offset("est_t", "alt.h") == member_offset(elf, "est_t", "alt.h")
+    assert again.variable_field("app_est", "alt.h") == variable_field(elf, "app_est", "alt.h")
+    assert again.type_size("os_tcb") == 128
+    kept[0].write_text("{not json")  # a damaged file is read again from the DWARF and replaced
+    dwarf._index.cache_clear()
+    assert dwarf.debug_index(elf, store) == first
+    assert dwarf.DebugIndex.from_json(str(elf), kept[0].read_text()) == first

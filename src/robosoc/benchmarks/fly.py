@@ -41,9 +41,13 @@ def run_fly_benchmark(
     duration_s: float = 10.0,
     host: bool = True,
     console: Console | None = None,
+    vehicles: int = 1,
 ) -> float:
     """Fly the default scenario for ``duration_s`` with each build (and the host controller first if
-    ``host``); print the figures and the last line; the last build's real-time factor.
+    ``host``); print the figures and the last line; the last build's real-time factor.  With
+    ``vehicles`` > 1 every flight flies that many vehicles in one world (their chips on the host's
+    cores at once, :func:`robosoc.cosim.lockstep.fly_lockstep_fleet`): the real-time factor is the
+    fleet's, the chip cycles all chips', the flight figures the first vehicle's.
 
     Raises:
         ValueError: ``duration_s`` is not a whole number of ms of at least one sensor period, or no build.
@@ -51,8 +55,11 @@ def run_fly_benchmark(
     if not builds:
         raise ValueError("builds: at least one firmware build")
     console = console or Console()
-    base = ScenarioConfig(duration_s=duration_s)
-    console.print(f"lockstep flight of the default scenario, {duration_s:g} s simulated per build, seed {base.seed}")
+    base = ScenarioConfig(duration_s=duration_s, vehicles=vehicles)
+    fleet = f", {vehicles} vehicles per flight" if vehicles > 1 else ""
+    console.print(
+        f"lockstep flight of the default scenario, {duration_s:g} s simulated per build{fleet}, seed {base.seed}"
+    )
     table = Table(show_edge=False, pad_edge=False)
     headers = (
         "controller", "real time", "of host", "per CPU second", "chip Mcycles/s", "hover RMS",
@@ -72,21 +79,22 @@ def run_fly_benchmark(
         flight = fly_scenario(scenario, None, plot=False)
         cpu = time.process_time() - cpu
         summary = flight.summary
+        first = summary["vehicles"][0] if vehicles > 1 else summary
         z = column(flight.rows[0], "z")
         if scenario.controller == "host":
             host_z = z
         armed = column(flight.rows[0], "armed") > 0.5
         versus = math.sqrt(float(np.mean((z - host_z)[armed] ** 2))) if host_z is not None and armed.any() else math.nan
-        rises = [s["rise_s"] for s in (summary["flight"] or {}).get("step_rise_s", []) if s["axis"] != "yaw"]
+        rises = [s["rise_s"] for s in (first["flight"] or {}).get("step_rise_s", []) if s["axis"] != "yaw"]
         slowest = max((math.inf if r is None or math.isnan(r) else r for r in rises), default=math.nan)
         factor = summary["real_time_factor"]
         if scenario.controller == "host":
             host_factor = factor
         mcycles = "-"
         if scenario.controller == "chip":
-            cycles = summary["simulated_s"] * 1e9 / summary["chip"]["clock_ns"]
+            cycles = vehicles * summary["simulated_s"] * 1e9 / first["chip"]["clock_ns"]
             mcycles = f"{cycles / summary['host_s'] / 1e6:.0f}"
-        hover = (summary["flight"] or {}).get("hover_rms_m", math.nan)
+        hover = (first["flight"] or {}).get("hover_rms_m", math.nan)
         table.add_row(
             name,
             f"{factor:.2f}×",

@@ -30,6 +30,7 @@ from robosoc.chip.single import (
     errata_report,
     exit_word,
 )
+from robosoc.chip.step_calls import StepCalls, run_calls
 from robosoc.chip.translation import ChipTranslation
 from robosoc.config.chip import MIN_PACKET_FLITS, ChipConfig
 from robosoc.config.ranges import check_memory, format_bytes
@@ -333,6 +334,12 @@ class MPSoC:
         Raises:
             CoreError: a running tile's pc is not an instruction of its loaded code.
         """
+        return run_calls(self.step_calls(until))
+
+    def step_calls(self, until: int) -> StepCalls[int]:
+        """:meth:`step` as the chip loop calls it makes (:mod:`robosoc.chip.step_calls`): yields
+        each call, to be run (in any thread, while nothing else touches this chip) and sent back its
+        status and host seconds; the step's Python runs here.  Its value is :meth:`step`'s."""
         # the awake and sleeping cores' pcs, all at once (a Python call per tile per step cost a
         # sleeping 16x16 chip a tenth of its run time); check_pc words the error of the first bad one
         for t in kc.bad_pcs(self.cores.st, self.cst):
@@ -344,9 +351,10 @@ class MPSoC:
             # auto looks at the tiles that do not translate yet every jit.look_cycles()
             to = min(until, self.cycle + jit.look_cycles()) if jit.watching() else until
             while True:
-                start = time.perf_counter()
-                status = kc.run_chip(self.cores.arrays(), self.noc, self.book(), to, *jit.arguments())
-                jit.ran(time.perf_counter() - start)
+                status, seconds = yield functools.partial(
+                    kc.run_chip, self.cores.arrays(), self.noc, self.book(), to, *jit.arguments()
+                )
+                jit.ran(seconds)
                 if status != kc.CHIP_TRANSLATE:
                     break
                 jit.translate(int(self.gst[kc.G_BREAK_TILE]))

@@ -10,6 +10,7 @@ from robosoc.cli.app import bench_app
 from robosoc.cli.console import make_console
 from robosoc.cli.engine_option import check_engine
 from robosoc.config.firmware import ARITH_CHOICES
+from robosoc.config.scenario import MAX_VEHICLES
 
 MAX_RUNS = 1000
 #: Largest NoC benchmark: generated-cycles x tiles (the traffic draws one number per tile and cycle).
@@ -222,6 +223,14 @@ def bench_fly(
             help="Instead: where each build's flight spends its host time, per cause (docs/translation.md).",
         ),
     ] = False,
+    vehicles: Annotated[
+        int,
+        typer.Option(
+            help=f"Vehicles per flight, 1..{MAX_VEHICLES} (their chips run on the host's cores at once); "
+            "not with --breakdown.",
+            callback=options.int_range(1, MAX_VEHICLES),
+        ),
+    ] = 1,
 ) -> None:
     """Real-time factor of the lockstep flight (physics + firmware on the chip), per firmware build,
     the host controller as reference, and each build's speed as a share of the host controller's
@@ -236,11 +245,13 @@ def bench_fly(
     )
     chosen = arith is not None or mul_given
     if breakdown:
+        if vehicles != 1:
+            raise options.fail("--vehicles", "the breakdown flies one vehicle: leave --vehicles out with --breakdown")
         from robosoc.benchmarks.fly_breakdown import run_fly_breakdown
 
         run_fly_breakdown(builds, duration_s=duration, console=make_console())
         return
-    run_fly_benchmark(builds, duration_s=duration, host=not chosen, console=make_console())
+    run_fly_benchmark(builds, duration_s=duration, host=not chosen, console=make_console(), vehicles=vehicles)
 
 
 @bench_app.command("sweep", epilog=exit_codes.EPILOG)

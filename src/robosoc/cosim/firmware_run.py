@@ -42,6 +42,7 @@ from robosoc.chip.energy import EnergyModel
 from robosoc.chip.function_profile import FunctionProfile, chip_profile
 from robosoc.chip.mpsoc import ChipError, MPSoC, account_counter_map
 from robosoc.chip.single import CoreError
+from robosoc.chip.step_calls import StepCalls
 from robosoc.config.chip import ChipConfig
 from robosoc.config.firmware import FirmwareConfig
 from robosoc.host import images, packets
@@ -207,7 +208,15 @@ class FirmwareRun:
         Raises:
             robosoc.chip.mpsoc.ChipError / CoreError: the firmware faulted (names tile, pc, symbol).
         """
-        status = self.chip.step(cycle)
+        return self._arrived(self.chip.step(cycle))
+
+    def run_to_calls(self, cycle: int) -> StepCalls[list[PwmCommand]]:
+        """:meth:`run_to` as the chip loop calls it makes (:meth:`robosoc.chip.mpsoc.MPSoC.step_calls`)."""
+        status = yield from self.chip.step_calls(cycle)
+        return self._arrived(status)
+
+    def _arrived(self, status: int) -> list[PwmCommand]:
+        """After a step that returned ``status``: the PWM commands that reached the I/O tile in it."""
         try:
             self.chip.raise_failure(status)
         except (ChipError, CoreError) as exc:

@@ -39,6 +39,7 @@ from typing import Protocol
 import numpy as np
 
 from robosoc.chip.energy import EnergyModel
+from robosoc.chip.step_calls import ChipThreads, StepCalls, host_cores
 from robosoc.config.scenario import ScenarioConfig
 from robosoc.config.vehicle import VehicleConfig
 from robosoc.control import mission
@@ -153,6 +154,7 @@ class ChipController:
         self.low_battery = False
         self._period_end = self.first_cycle
         self._ahead: list[PwmCommand] = []  # commands received ahead of the physics
+        self._caught_up = False  # the chip ran this step's part already (catch_up_calls)
         self._home = (0.0, 0.0)  # the take-off point, from the first row
 
     def _run(self) -> FirmwareRun:
@@ -189,12 +191,23 @@ class ChipController:
             target = ((x0 + x, y0 + y, z), velocity, accel)
         return (("position", position_packet(fix, target, k, sample.time, setpoint.armed)),)
 
+    def catch_up_calls(self) -> StepCalls[None]:
+        """What the next :meth:`advance` runs of the chip, as the chip loop calls it makes
+        (:mod:`robosoc.chip.step_calls`; a fleet runs its chips' at once); that :meth:`advance`
+        then only hands out the commands."""
+        run = self._run()
+        if run.cycle < self._period_end:
+            self._ahead.extend((yield from run.run_to_calls(self._period_end)))
+        self._caught_up = True
+
     def advance(self, t_ns: int) -> Pwm | None:
         # Nothing reaches the chip between two samples, so the chip runs to the next sample in one go
         # (one kernel call instead of one per physics step) and each command is handed out at the
         # step it arrived in, exactly as if the chip had been run step by step.
         run = self._run()
-        if run.cycle < self._period_end:
+        if self._caught_up:
+            self._caught_up = False
+        elif run.cycle < self._period_end:
             self._ahead.extend(run.run_to(self._period_end))
         if not self._ahead:  # most physics steps: no command waits
             return None
@@ -273,6 +286,7 @@ def fly_lockstep_fleet(
     on_row: Callable[[int, np.ndarray], None] | None = None,
     on_sample: Callable[[World, int], None] | None = None,
     on_power: Callable[[int, PowerSample], None] | None = None,
+    threads: int | None = None,
 ) -> list[np.ndarray]:
     """Fly ``scenario`` with several vehicles in one world, vehicle i flown by ``controllers[i]``,
     all under one clock; the flight of each vehicle (columns :data:`ROW_FIELDS`).
@@ -290,12 +304,34 @@ def fly_lockstep_fleet(
         on_sample: called once per sample with the world and the sample index.
         on_power: for a vehicle on a battery, called with (vehicle index, its power system's state)
             just before each of its rows, and once more after the last step (the flight's totals).
+        threads: how many host threads run the chips of several chip controllers at once
+            (:class:`robosoc.chip.step_calls.ChipThreads`; default: one per host core, at most one
+            per chip; 1: one chip after the other).  The flight is the same whatever the number.
+            With a failing chip the others have run to the end of the same sample period.
 
     Raises:
         ValueError: not one controller per vehicle.
     """
     if len(controllers) != len(vehicles):
         raise ValueError(f"controllers: one per vehicle, got {len(controllers)} for {len(vehicles)} vehicles")
+    chips = [c for c in controllers if isinstance(c, ChipController)]
+    count = min(len(chips), host_cores() if threads is None else threads)
+    with ChipThreads(max(count, 1)) as pool:
+        together = chips if count > 1 else []
+        return _fly_fleet(scenario, vehicles, controllers, on_row, on_sample, on_power, together, pool)
+
+
+def _fly_fleet(
+    scenario: ScenarioConfig,
+    vehicles: Sequence[VehicleConfig],
+    controllers: Sequence[LockstepController],
+    on_row: Callable[[int, np.ndarray], None] | None,
+    on_sample: Callable[[World, int], None] | None,
+    on_power: Callable[[int, PowerSample], None] | None,
+    together: list[ChipController],
+    pool: ChipThreads,
+) -> list[np.ndarray]:
+    """:func:`fly_lockstep_fleet`'s loop; the chips of ``together`` run their sample periods on ``pool`` at once."""
     clock = FlightClock.of(scenario)
     world = World(list(vehicles), scenario.sensors, scenario.wind)
     world.reset(scenario.seed)
@@ -323,6 +359,8 @@ def fly_lockstep_fleet(
             controller.sense(k, t_ns, sample, setpoint, given)
             pending.append(flight_row(sample, truth, controller.estimate, setpoint, quad.pwm, wind))
         for s, t_end in clock.steps(k):
+            if s == 0 and together:  # each chip runs the sample's period in the first step's advance
+                pool.run_together([c.catch_up_calls() for c in together])
             for quad, controller in zip(quads, controllers, strict=True):
                 pwm = controller.advance(t_end)
                 if pwm is not None:

@@ -13,7 +13,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from robosoc.program.dwarf import member_offset, type_size, variable_field
+from robosoc.cache import dwarf_dir
+from robosoc.program.dwarf import debug_index
 from robosoc.program.elf import load_elf
 
 if TYPE_CHECKING:
@@ -49,14 +50,15 @@ class TaskTable:
             ElfError: not a kernel image built with debug information.
         """
         program = load_elf(elf)
-        entry_bytes = type_size(elf, TCB_TYPE)
+        index = debug_index(elf, dwarf_dir())
+        entry_bytes = index.type_size(TCB_TYPE)
         return cls(
             address=program.address_of(TCB_SYMBOL),
             count_address=program.address_of(COUNT_SYMBOL),
-            entries=variable_field(elf, TCB_SYMBOL)[1] // entry_bytes,
+            entries=index.variable_field(TCB_SYMBOL)[1] // entry_bytes,
             entry_bytes=entry_bytes,
-            id_offset=member_offset(elf, TCB_TYPE, "id")[0],
-            active_offset=member_offset(elf, TCB_TYPE, "job_active")[0],
+            id_offset=index.member_offset(TCB_TYPE, "id")[0],
+            active_offset=index.member_offset(TCB_TYPE, "job_active")[0],
         )
 
     def _entries(self, chip: MPSoC, tile: Tile) -> bytes:

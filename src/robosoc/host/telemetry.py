@@ -27,13 +27,14 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from robosoc.cache import dwarf_dir
 from robosoc.config.firmware import FirmwareConfig
 from robosoc.config.project import TelemetrySpec
 from robosoc.control import quaternion
 from robosoc.control.flight import ROW_FIELDS
 from robosoc.control.host import Estimate
 from robosoc.host.task_table import TaskTable
-from robosoc.program.dwarf import variable_field
+from robosoc.program.dwarf import debug_index
 from robosoc.program.elf import ElfError, load_elf
 from robosoc.records import POWER_FIELDS
 from robosoc.toolchain.errors import ToolchainError
@@ -118,6 +119,7 @@ def resolve_telemetry(
         return ()
     program = load_elf(elf)
     table = TaskTable.of(elf)
+    index = debug_index(elf, dwarf_dir())
     out = []
     for i, spec in enumerate(specs):
         if spec.name in _TAKEN:
@@ -126,7 +128,7 @@ def resolve_telemetry(
             )
         key = f"telemetry[{i}].value"
         try:
-            offset, size = variable_field(elf, spec.variable, spec.member)
+            offset, size = index.variable_field(spec.variable, spec.member)
             base = program.address_of(spec.variable)
         except ElfError as exc:
             reason = str(exc).removeprefix(f"{elf}: ")  # the cached ELF's path says nothing to the author

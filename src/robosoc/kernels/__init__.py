@@ -42,6 +42,11 @@ def compiled_or_cached(kernel: numba.core.dispatcher.Dispatcher) -> bool:
     (its first call then takes about a second, instead of compiling for tens of seconds)."""
     if kernel.signatures:
         return True
+    # numba keeps a kernel's index in a folder named after its source folder's path: another checkout
+    # of the same sources shares the digest folder but not that one (nor, if lines moved, the name)
+    index = getattr(getattr(getattr(kernel, "_cache", None), "_cache_file", None), "_index_path", None)
+    if isinstance(index, str):
+        return Path(index).is_file()
     func = kernel.py_func
     index = f"{func.__module__.rsplit('.', 1)[-1]}.{func.__qualname__}-*.nbi"  # numba's index file of it
     cache = Path(numba.config.CACHE_DIR)  # type: ignore[attr-defined]  # numba.config: made at run time

@@ -157,6 +157,7 @@ def fly_scenario(
     plot: bool = True,
     logs: bool = True,
     profile: bool = False,
+    threads: int | None = None,
 ) -> ScenarioFlight:
     """Fly ``scenario`` and write the run folder ``out``.
 
@@ -174,6 +175,8 @@ def fly_scenario(
         profile: count every instruction per firmware function, tile and task (chip controller) and
             write ``profile.json`` and ``profile.csv`` per vehicle (docs/profile.md); the results'
             ``profile`` holds it.
+        threads: how many host threads run the vehicles' chips at once
+            (:func:`robosoc.cosim.lockstep.fly_lockstep_fleet`; default: one per host core).
 
     Raises:
         KeyboardInterrupt, or whatever stopped the flight (a firmware fault: ChipError, CoreError),
@@ -224,7 +227,9 @@ def fly_scenario(
     start = time.perf_counter()
     try:
         on_power = keep_power if battery else None
-        fly_lockstep_fleet(scenario, vehicles, controllers, on_row=keep_row, on_sample=on_sample, on_power=on_power)
+        fly_lockstep_fleet(
+            scenario, vehicles, controllers, on_row=keep_row, on_sample=on_sample, on_power=on_power, threads=threads
+        )
     except BaseException as exc:
         host_s = time.perf_counter() - start
         for log in csv_logs:
