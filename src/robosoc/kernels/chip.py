@@ -29,7 +29,7 @@ from robosoc.isa.table import MEMORY_CYCLES
 from robosoc.kernels import ni_registers as ni
 from robosoc.kernels import noc as nk
 from robosoc.kernels import stop_queue
-from robosoc.kernels.borrowed import borrow, row
+from robosoc.kernels.borrowed import borrow, item, row
 from robosoc.kernels.core import LW, SW, U1, U2, CoreArrays, fields, interpret_cores
 from robosoc.kernels.core_layout import (
     C_MMIO,
@@ -598,7 +598,7 @@ def _run_awake(core, tiles, until, jit_tables, jit_on, jit_params, one, rest, gs
         if jit_on[t] != 0 and (st[t, S_RUN] == RUN_ENTRY or until - st[t, S_CYCLE] >= JIT_MIN_SLICE):
             one[0] = t
             k0 = ticks() if prof else 0
-            run_translated(core, one, until, jit_tables[t], jit_params[J_THRESHOLD], jit_params[J_STRETCH], False)
+            run_translated(core, one, until, item(jit_tables, t), jit_params[J_THRESHOLD], jit_params[J_STRETCH], False)
             if prof:
                 gst[G_TK_JIT] += ticks() - k0
                 gst[G_N_JIT] += 1
@@ -617,7 +617,7 @@ def _run_awake(core, tiles, until, jit_tables, jit_on, jit_params, one, rest, gs
 def _check_translated(core, t, jit_tables, jit_on) -> None:
     """Forget tile ``t``'s translations if a word they were made from changed (a DMA into code)."""
     if jit_on[t] != 0:
-        forget_if_changed(jit_tables[t], row(core.m32, t), row(core.dec, t))
+        forget_if_changed(item(jit_tables, t), row(core.m32, t), row(core.dec, t))
 
 
 @njit(cache=True, nogil=True)
@@ -854,7 +854,7 @@ def run_chip(core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int, jit
                 if a - ni.NI_BASE == ni.TASK_ID and jit_on[t] != 0:
                     # the task accounting reads the counters: the translated blocks' counts first (a
                     # tile that ran on the interpreter in a short quantum has not flushed them)
-                    flush_counts(jit_tables[t], row(core.opc, t), row(core.ctr, t))
+                    flush_counts(item(jit_tables, t), row(core.opc, t), row(core.ctr, t))
                 if not ni_access(t, core, book, noc):
                     failed = t
                     break
@@ -949,7 +949,7 @@ def run_chip(core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int, jit
     k0 = ticks() if prof else 0
     for t in range(n):
         if jit_on[t] != 0:  # the translated blocks' counts of the quanta that ran to their end
-            flush_counts(jit_tables[t], row(core.opc, t), row(core.ctr, t))
+            flush_counts(item(jit_tables, t), row(core.opc, t), row(core.ctr, t))
     gst[G_TIME] = T
     gst[G_STATUS] = status
     if prof:
