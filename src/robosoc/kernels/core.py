@@ -747,9 +747,10 @@ def run_cores(core: CoreArrays, tiles: np.ndarray, until: int) -> None:
         ctr[t, C_MUL_STALL] = n_mulstall
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def interpret_cores(core: CoreArrays, tiles: np.ndarray, until: int) -> None:
     """``run_cores`` as a function of its own, not inlined: a kernel that calls the interpreter from
     several places (the translator's dispatch loop, the chip loop with translating tiles) calls this
-    one, so numba compiles the interpreter once for it instead of once per call site."""
+    one, so numba compiles the interpreter once for it instead of once per call site.  Compiled
+    without reference counts (``_nrt=False``: see :mod:`robosoc.kernels.borrowed`)."""
     run_cores(core, tiles, until)

@@ -251,7 +251,7 @@ def forget_if_changed(jt: JitArrays, m32_t: np.ndarray, dec_t: np.ndarray) -> No
             return
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, _nrt=False)
 def run_translated(
     core: CoreArrays, tiles: np.ndarray, until: int, jt: JitArrays, threshold: int, stretch: int, flush: bool
 ) -> None:

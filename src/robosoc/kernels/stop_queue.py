@@ -21,7 +21,7 @@ def _before(cyc: np.ndarray, a: int, b: int) -> bool:
     return cyc[a] < cyc[b] or (cyc[a] == cyc[b] and a < b)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def push(heap: np.ndarray, cyc: np.ndarray, size: int, r: int, cycle: int) -> int:
     """Add index ``r`` stopped at ``cycle``; returns the new size."""
     cyc[r] = cycle
@@ -36,7 +36,7 @@ def push(heap: np.ndarray, cyc: np.ndarray, size: int, r: int, cycle: int) -> in
     return size + 1
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def pop(heap: np.ndarray, cyc: np.ndarray, size: int) -> int:
     """Remove ``heap[0]`` (read it first); returns the new size."""
     size -= 1
