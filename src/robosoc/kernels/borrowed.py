@@ -18,13 +18,13 @@ The functions the chip calls per instruction stop or device access -- the interp
 ``dev_timer``, ``dev_output``, ``soc_bus``), the stop queue and the chip's network-interface,
 sleep and wake functions -- are compiled with ``_nrt=False`` (numba counts no reference in them;
 they make no array and keep none), which removed about 40 such calls per interpreter call: a
-fifth of a sleeping 16x16 chip's time (``perf``, 2026-11-28).
+fifth of a sleeping 16x16 chip's time (``perf``, 2026-11-28).  They are compiled with ``njit(**UNCOUNTED)``.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, TypeVar
+from typing import TYPE_CHECKING, Any, TypeVar
 
 import numpy as np
 from llvmlite import ir
@@ -32,6 +32,10 @@ from numba import types
 from numba.core import cgutils
 from numba.extending import intrinsic
 from numba.typed.typedobjectutils import _container_get_data
+
+#: the njit options of the kernels' functions compiled without reference counts (see the module doc;
+#: numba's typing stubs do not list ``_nrt``)
+UNCOUNTED: dict[str, Any] = {"cache": True, "_nrt": False}
 
 if TYPE_CHECKING:
     # what a kernel sees; numba's stubs type the call of an @intrinsic as taking the typing context
@@ -122,4 +126,4 @@ else:
         return ty(items, i), codegen
 
 
-__all__ = ["borrow", "item", "row"]
+__all__ = ["UNCOUNTED", "borrow", "item", "row"]

@@ -29,7 +29,7 @@ from robosoc.isa.table import MEMORY_CYCLES
 from robosoc.kernels import ni_registers as ni
 from robosoc.kernels import noc as nk
 from robosoc.kernels import stop_queue
-from robosoc.kernels.borrowed import borrow, item, row
+from robosoc.kernels.borrowed import UNCOUNTED, borrow, item, row
 from robosoc.kernels.core import LW, SW, U1, U2, CoreArrays, fields, interpret_cores
 from robosoc.kernels.core_layout import (
     C_MMIO,
@@ -275,7 +275,7 @@ def account_all(core, book):
             account(t, core, book, st[t, S_CYCLE])
 
 
-@njit(cache=True, _nrt=False)
+@njit(**UNCOUNTED)
 def wake_time(st_t: np.ndarray, x: int) -> int:
     """The cycle a core asleep since instruction cycle ``x`` resumes (NEVER if nothing is due).
 
@@ -292,7 +292,7 @@ def wake_time(st_t: np.ndarray, x: int) -> int:
     return NEVER if y >= NEVER else max(x, y + 1)
 
 
-@njit(cache=True, _nrt=False)
+@njit(**UNCOUNTED)
 def _send_done(tile, t):
     """First cycle at which tile t's send memory is free again (NEVER while it cannot be known).
 
@@ -315,7 +315,7 @@ def _fault(cst, t, code, addr, info):
     cst[t, K_ERR_INFO] = info
 
 
-@njit(cache=True, _nrt=False)
+@njit(**UNCOUNTED)
 def ni_access(t, core, book, noc):
     """Perform the NI-register load or store tile t stopped before; returns False on a fault."""
     st, ctr, opc, regs, m16, dec = core.st, core.ctr, core.opc, core.regs, core.m16, core.dec
@@ -464,7 +464,7 @@ def ni_access(t, core, book, noc):
     return True
 
 
-@njit(cache=True, _nrt=False)
+@njit(**UNCOUNTED)
 def _stop_address(t, core):
     """The address of the load or store tile t stopped before (RUN_NI)."""
     st, regs, dec = core.st, core.regs, core.dec
@@ -473,7 +473,7 @@ def _stop_address(t, core):
     return (regs[t, rs1] + imm) & 0xFFFFFFFC
 
 
-@njit(cache=True, _nrt=False)
+@njit(**UNCOUNTED)
 def _wake(t, st, cst, w):
     """A sleeping core resumes in cycle w."""
     cst[t, K_STATE] = K_RUN
@@ -483,7 +483,7 @@ def _wake(t, st, cst, w):
         st[t, S_IRQ_CHECK] = w
 
 
-@njit(cache=True, _nrt=False)
+@njit(**UNCOUNTED)
 def _wake_if_due(t, st, cst, H):
     """Wake sleeping core t if its interrupt is entered before cycle H, else refresh its wake-up.
 

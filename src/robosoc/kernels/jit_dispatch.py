@@ -36,7 +36,7 @@ from numba.extending import intrinsic
 from numba.typed import List
 
 from robosoc.isa.table import OP_ENTRY
-from robosoc.kernels.borrowed import row
+from robosoc.kernels.borrowed import UNCOUNTED, row
 from robosoc.kernels.core import CoreArrays, fetch_error, interpret_cores
 from robosoc.kernels.core_layout import (
     ERR_FETCH_DATA,
@@ -251,7 +251,7 @@ def forget_if_changed(jt: JitArrays, m32_t: np.ndarray, dec_t: np.ndarray) -> No
             return
 
 
-@njit(cache=True, nogil=True, _nrt=False)
+@njit(nogil=True, **UNCOUNTED)
 def run_translated(
     core: CoreArrays, tiles: np.ndarray, until: int, jt: JitArrays, threshold: int, stretch: int, flush: bool
 ) -> None:
