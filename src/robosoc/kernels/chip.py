@@ -38,7 +38,7 @@ from robosoc.isa.table import MEMORY_CYCLES
 from robosoc.kernels import ni_registers as ni
 from robosoc.kernels import noc as nk
 from robosoc.kernels import stop_queue
-from robosoc.kernels.borrowed import borrow, row
+from robosoc.kernels.borrowed import UNCOUNTED, borrow, item, row
 from robosoc.kernels.core import LW, SW, U1, U2, CoreArrays, fields, interpret_cores
 from robosoc.kernels.core_layout import (
     C_MMIO,
@@ -298,7 +298,7 @@ def account_all(core, book):
             account(t, core, book, st[t, S_CYCLE])
 
 
-@njit(cache=True)
+@njit(**UNCOUNTED)
 def wake_time(st_t: np.ndarray, x: int) -> int:
     """The cycle a core asleep since instruction cycle ``x`` resumes (NEVER if nothing is due).
 
@@ -315,7 +315,7 @@ def wake_time(st_t: np.ndarray, x: int) -> int:
     return NEVER if y >= NEVER else max(x, y + 1)
 
 
-@njit(cache=True)
+@njit(**UNCOUNTED)
 def _send_done(tile, t):
     """First cycle at which tile t's send memory is free again (NEVER while it cannot be known).
 
@@ -338,7 +338,7 @@ def _fault(cst, t, code, addr, info):
     cst[t, K_ERR_INFO] = info
 
 
-@njit(cache=True)
+@njit(**UNCOUNTED)
 def ni_access(t, core, book, noc):
     """Perform the NI-register load or store tile t stopped before; returns False on a fault."""
     st, ctr, opc, regs, m16, dec = core.st, core.ctr, core.opc, core.regs, core.m16, core.dec
@@ -489,7 +489,7 @@ def ni_access(t, core, book, noc):
     return True
 
 
-@njit(cache=True)
+@njit(**UNCOUNTED)
 def _stop_address(t, core):
     """The address of the load or store tile t stopped before (RUN_NI)."""
     st, regs, dec = core.st, core.regs, core.dec
@@ -498,7 +498,7 @@ def _stop_address(t, core):
     return (regs[t, rs1] + imm) & 0xFFFFFFFC
 
 
-@njit(cache=True)
+@njit(**UNCOUNTED)
 def _wake(t, st, cst, w):
     """A sleeping core resumes in cycle w."""
     cst[t, K_STATE] = K_RUN
@@ -508,7 +508,7 @@ def _wake(t, st, cst, w):
         st[t, S_IRQ_CHECK] = w
 
 
-@njit(cache=True)
+@njit(**UNCOUNTED)
 def _wake_if_due(t, st, cst, H):
     """Wake sleeping core t if its interrupt is entered before cycle H, else refresh its wake-up.
 
@@ -632,7 +632,7 @@ def _run_awake(core, tiles, until, jit_tables, jit_on, jit_params, one, rest, gs
         if jit_on[t] != 0 and (st[t, S_RUN] == RUN_ENTRY or mine - st[t, S_CYCLE] >= JIT_MIN_SLICE):
             one[0] = t
             k0 = ticks() if prof else 0
-            run_translated(core, one, mine, jit_tables[t], jit_params[J_THRESHOLD], jit_params[J_STRETCH], False)
+            run_translated(core, one, mine, item(jit_tables, t), jit_params[J_THRESHOLD], jit_params[J_STRETCH], False)
             if prof:
                 gst[G_TK_JIT] += ticks() - k0
                 gst[G_N_JIT] += 1
@@ -658,7 +658,7 @@ def _run_awake(core, tiles, until, jit_tables, jit_on, jit_params, one, rest, gs
 def _check_translated(core, t, jit_tables, jit_on) -> None:
     """Forget tile ``t``'s translations if a word they were made from changed (a DMA into code)."""
     if jit_on[t] != 0:
-        forget_if_changed(jit_tables[t], row(core.m32, t), row(core.dec, t))
+        forget_if_changed(item(jit_tables, t), row(core.m32, t), row(core.dec, t))
 
 
 @njit(cache=True, nogil=True)
@@ -896,7 +896,7 @@ def run_chip(core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int, jit
                 if a - ni.NI_BASE == ni.TASK_ID and jit_on[t] != 0:
                     # the task accounting reads the counters: the translated blocks' counts first (a
                     # tile that ran on the interpreter in a short quantum has not flushed them)
-                    flush_counts(jit_tables[t], row(core.opc, t), row(core.ctr, t))
+                    flush_counts(item(jit_tables, t), row(core.opc, t), row(core.ctr, t))
                 if not ni_access(t, core, book, noc):
                     failed = t
                     break
@@ -991,7 +991,7 @@ def run_chip(core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int, jit
     k0 = ticks() if prof else 0
     for t in range(n):
         if jit_on[t] != 0:  # the translated blocks' counts of the quanta that ran to their end
-            flush_counts(jit_tables[t], row(core.opc, t), row(core.ctr, t))
+            flush_counts(item(jit_tables, t), row(core.opc, t), row(core.ctr, t))
     gst[G_TIME] = T
     gst[G_STATUS] = status
     if prof:

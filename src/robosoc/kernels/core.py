@@ -42,7 +42,7 @@ from robosoc.isa.table import (
     TRAP_CYCLES,
     Fmt,
 )
-from robosoc.kernels.borrowed import row
+from robosoc.kernels.borrowed import UNCOUNTED, row
 from robosoc.kernels.core_layout import (
     C_MMIO,
     C_MUL_STALL,
@@ -747,9 +747,10 @@ def run_cores(core: CoreArrays, tiles: np.ndarray, until: int) -> None:
         ctr[t, C_MUL_STALL] = n_mulstall
 
 
-@njit(cache=True)
+@njit(**UNCOUNTED)
 def interpret_cores(core: CoreArrays, tiles: np.ndarray, until: int) -> None:
     """``run_cores`` as a function of its own, not inlined: a kernel that calls the interpreter from
     several places (the translator's dispatch loop, the chip loop with translating tiles) calls this
-    one, so numba compiles the interpreter once for it instead of once per call site."""
+    one, so numba compiles the interpreter once for it instead of once per call site.  Compiled
+    without reference counts (``_nrt=False``: see :mod:`robosoc.kernels.borrowed`)."""
     run_cores(core, tiles, until)

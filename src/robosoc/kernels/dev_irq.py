@@ -49,6 +49,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from robosoc.kernels.borrowed import UNCOUNTED
 from robosoc.kernels.core_layout import (
     C_ENTRY_STALL,
     C_IRQ,
@@ -99,12 +100,12 @@ VECTOR_BUBBLES = 2  # the first vector instruction executes in b + 2 (and again 
 M32 = 0xFFFFFFFF
 
 
-@njit(cache=True)
+@njit(**UNCOUNTED)
 def s0_cause(st: np.ndarray, x: int) -> int:
     return S0_TIMER_BIT if timer_line(st, x) else 0
 
 
-@njit(cache=True)
+@njit(**UNCOUNTED)
 def irq_cause(st: np.ndarray, x: int) -> int:
     """IRQ_CAUSE during device cycle ``x``."""
     ext = st[S_EXT_IRQ] & 0xFE
@@ -113,25 +114,25 @@ def irq_cause(st: np.ndarray, x: int) -> int:
     return (1 if s0_cause(st, x) != 0 else 0) | ext
 
 
-@njit(cache=True)
+@njit(**UNCOUNTED)
 def irq_pending(st: np.ndarray, x: int) -> bool:
     """Whether an idle controller starts a request in device cycle ``x``."""
     return (st[S_IRQ_STATUS] & 1) != 0 and (irq_cause(st, x) & st[S_IRQ_MASK]) != 0
 
 
-@njit(cache=True)
+@njit(**UNCOUNTED)
 def cause_enabled(st: np.ndarray, x: int) -> bool:
     """Whether (IRQ_CAUSE & IRQ_MASK) != 0 in device cycle ``x``, whatever IRQ_STATUS says."""
     return (irq_cause(st, x) & st[S_IRQ_MASK]) != 0
 
 
-@njit(cache=True)
+@njit(**UNCOUNTED)
 def requests_possible(st: np.ndarray) -> bool:
     """Whether the controller can raise a request without a store first (enabled, not done)."""
     return (st[S_IRQ_STATUS] & 1) != 0 and st[S_IRQ_IDLE] < NEVER
 
 
-@njit(cache=True)
+@njit(**UNCOUNTED)
 def next_cause_change(st: np.ndarray, x: int) -> int:
     """Earliest device cycle > x at which ``irq_pending`` may change (NEVER if it cannot)."""
     if (st[S_IRQ_STATUS] & 1) == 0:
@@ -139,7 +140,7 @@ def next_cause_change(st: np.ndarray, x: int) -> int:
     return next_masked_change(st, x)
 
 
-@njit(cache=True)
+@njit(**UNCOUNTED)
 def next_masked_change(st: np.ndarray, x: int) -> int:
     """Earliest device cycle > x at which ``cause_enabled`` may change (NEVER if it cannot)."""
     best = NEVER
@@ -150,7 +151,7 @@ def next_masked_change(st: np.ndarray, x: int) -> int:
     return best
 
 
-@njit(cache=True)
+@njit(**UNCOUNTED)
 def irq_scan(st: np.ndarray, upto: int) -> None:
     """Let the controller look at device cycles [scan, upto) with the registers as they are now.
 
@@ -169,7 +170,7 @@ def irq_scan(st: np.ndarray, upto: int) -> None:
     st[S_IRQ_SCAN] = x
 
 
-@njit(cache=True)
+@njit(**UNCOUNTED)
 def earliest_entry(st: np.ndarray) -> int:
     """The first instruction boundary at which an entry can happen, as things stand (NEVER: none)."""
     t = st[S_IRQ_RISE]
@@ -178,7 +179,7 @@ def earliest_entry(st: np.ndarray) -> int:
     return NEVER if t >= NEVER else t + ENTRY_DELAY
 
 
-@njit(cache=True)
+@njit(**UNCOUNTED)
 def irq_input_changed(st: np.ndarray, x: int) -> None:
     """A register feeding the controller changed from device cycle ``x`` on (after ``irq_scan(st, x)``)."""
     if st[S_IRQ_RISE] < 0 and st[S_IRQ_SCAN] > x:
@@ -186,14 +187,14 @@ def irq_input_changed(st: np.ndarray, x: int) -> None:
     st[S_IRQ_CHECK] = min(st[S_IRQ_CHECK], earliest_entry(st))
 
 
-@njit(cache=True)
+@njit(**UNCOUNTED)
 def irq_external_rise(st: np.ndarray, x: int) -> None:
     """IRQ_CAUSE bit 1 (a packet waits) rises in device cycle ``x`` (not before the core's present)."""
     st[S_EXT_RISE] = x
     irq_input_changed(st, x)
 
 
-@njit(cache=True)
+@njit(**UNCOUNTED)
 def first_request(st: np.ndarray, horizon: int) -> int:
     """Device cycle of the next request if no store intervenes (NEVER if none before ``horizon``).
 
@@ -213,7 +214,7 @@ def first_request(st: np.ndarray, horizon: int) -> int:
     return x  # not found yet: a conservative wake-up that looks again from there
 
 
-@njit(cache=True)
+@njit(**UNCOUNTED)
 def first_cause(st: np.ndarray, x: int) -> int:
     """First device cycle >= x with ``cause_enabled`` if no store intervenes (NEVER: none).
 
@@ -227,7 +228,7 @@ def first_cause(st: np.ndarray, x: int) -> int:
     return x
 
 
-@njit(cache=True)
+@njit(**UNCOUNTED)
 def _enter(st: np.ndarray, epc: int) -> int:
     """Bookkeeping of an interrupt entry; returns the vector address."""
     st[S_IRQ_EPC] = epc & M32
@@ -238,7 +239,7 @@ def _enter(st: np.ndarray, epc: int) -> int:
     return st[S_IRQ_VECTOR] & 0xFFFFFFFC
 
 
-@njit(cache=True)
+@njit(**UNCOUNTED)
 def trap(st: np.ndarray, pc: int, cyc: int) -> None:
     """A SYSTEM instruction at ``pc`` executed in ``cyc``: EPC = pc + 8, the shadow at pc + 8 runs next.
 
@@ -250,7 +251,7 @@ def trap(st: np.ndarray, pc: int, cyc: int) -> None:
     st[S_IRQ_CHECK] = cyc + 1
 
 
-@njit(cache=True)
+@njit(**UNCOUNTED)
 def irq_event(st: np.ndarray, ctr: np.ndarray, pc: int, cyc: int) -> tuple[int, int]:
     """The core is at instruction boundary ``cyc`` >= S_IRQ_CHECK, about to run ``pc``.
 
@@ -314,7 +315,7 @@ def irq_event(st: np.ndarray, ctr: np.ndarray, pc: int, cyc: int) -> tuple[int, 
     return vector, cyc + VECTOR_BUBBLES
 
 
-@njit(cache=True)
+@njit(**UNCOUNTED)
 def irq_load(st: np.ndarray, a: int, x: int) -> tuple[int, bool]:
     """Read register ``a`` (word address) as it was in device cycle ``x``; (value, mapped)."""
     if a == IRQ_VECTOR:
@@ -332,7 +333,7 @@ def irq_load(st: np.ndarray, a: int, x: int) -> tuple[int, bool]:
     return 0, False
 
 
-@njit(cache=True)
+@njit(**UNCOUNTED)
 def irq_store(st: np.ndarray, a: int, v: int, s: int) -> int:
     """Write register ``a`` with a store starting in instruction cycle ``s`` (holds from device cycle s)."""
     if a == IRQ_VECTOR:

@@ -18,6 +18,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from robosoc.kernels.borrowed import UNCOUNTED
 from robosoc.kernels.core_layout import (
     DEV_EXIT,
     DEV_READONLY,
@@ -35,7 +36,7 @@ UART0_DIV = 0xE1034010
 DEBUG = 0xF00000D0
 
 
-@njit(cache=True)
+@njit(**UNCOUNTED)
 def output_load(st: np.ndarray, a: int) -> tuple[int, bool]:
     """Read register ``a`` (word address); (value, mapped)."""
     if a == UART0_DIV:
@@ -45,7 +46,7 @@ def output_load(st: np.ndarray, a: int) -> tuple[int, bool]:
     return 0, False
 
 
-@njit(cache=True)
+@njit(**UNCOUNTED)
 def output_store(st: np.ndarray, out: np.ndarray, a: int, value: int) -> int:
     """Write register ``a`` (``value`` as the store put it on the bus).  A DEV_* code."""
     if a == DEBUG or a == UART0:

@@ -27,6 +27,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from robosoc.kernels.borrowed import UNCOUNTED
 from robosoc.kernels.core_layout import (
     DEV_READONLY,
     DEV_UNMAPPED,
@@ -61,13 +62,13 @@ def _ceil_div(a: int, b: int) -> int:
     return -((-a) // b)
 
 
-@njit(cache=True)
+@njit(**UNCOUNTED)
 def t1_period(st: np.ndarray) -> int:
     """Device cycles between TIMER1 count pulses for the current prescaler."""
     return np.int64(1) << (2 * st[S_T1_PRE])
 
 
-@njit(cache=True)
+@njit(**UNCOUNTED)
 def t1_pulses(st: np.ndarray, x0: int, x1: int) -> int:
     """Number of TIMER1 pulses in device cycles [x0, x1)."""
     if x1 <= x0:
@@ -82,7 +83,7 @@ def t1_pulses(st: np.ndarray, x0: int, x1: int) -> int:
     return _ceil_div(x1 - 1, p) - _ceil_div(x0 - 1, p)
 
 
-@njit(cache=True)
+@njit(**UNCOUNTED)
 def t1_advance(val: int, flag: int, ctc: int, k: int) -> tuple[int, int]:
     """TIMER1 value and compare flag after ``k`` pulses from (val, flag)."""
     if k <= 0:
@@ -96,7 +97,7 @@ def t1_advance(val: int, flag: int, ctc: int, k: int) -> tuple[int, int]:
     return k % period, flag ^ (wraps & 1)
 
 
-@njit(cache=True)
+@njit(**UNCOUNTED)
 def t1_at(st: np.ndarray, x: int) -> tuple[int, int]:
     """TIMER1 value and compare flag during device cycle ``x`` (x >= the reference cycle - 3)."""
     ref = st[S_T1_REF]
@@ -107,7 +108,7 @@ def t1_at(st: np.ndarray, x: int) -> tuple[int, int]:
     return t1_advance(st[S_T1_VAL], st[S_T1_FLAG], st[S_T1_CTC], k)
 
 
-@njit(cache=True)
+@njit(**UNCOUNTED)
 def _ocr_at(st: np.ndarray, x: int) -> int:
     ref = st[S_T1_REF]
     if x < ref:
@@ -128,7 +129,7 @@ def _t1_count(v: int, f: int, ctc: int) -> tuple[int, int]:
     return 0, f ^ 1
 
 
-@njit(cache=True)
+@njit(**UNCOUNTED)
 def t1_write(st: np.ndarray, w: int, reg: int, value: int) -> None:
     """Apply a bus write to the TIMER1 block at the end of device cycle w - 1 (it holds from w).
 
@@ -166,7 +167,7 @@ def t1_write(st: np.ndarray, w: int, reg: int, value: int) -> None:
     st[S_T1_FLAG] = f
 
 
-@njit(cache=True)
+@njit(**UNCOUNTED)
 def timer_cause(st: np.ndarray, x: int) -> int:
     """TIMERCAUSE during device cycle ``x``."""
     v, f = t1_at(st, x)
@@ -178,13 +179,13 @@ def timer_cause(st: np.ndarray, x: int) -> int:
     return cause
 
 
-@njit(cache=True)
+@njit(**UNCOUNTED)
 def timer_line(st: np.ndarray, x: int) -> bool:
     """The timer block's interrupt line during device cycle ``x``."""
     return ((timer_cause(st, x) ^ st[S_TINV]) & st[S_TMASK]) != 0
 
 
-@njit(cache=True)
+@njit(**UNCOUNTED)
 def _t1_steps_to(val: int, target: int, ctc: int) -> int:
     """Pulses until TIMER1 first equals ``target`` (-1 if it never does before a wrap)."""
     if val <= ctc:
@@ -197,7 +198,7 @@ def _t1_steps_to(val: int, target: int, ctc: int) -> int:
     return -1
 
 
-@njit(cache=True)
+@njit(**UNCOUNTED)
 def next_timer_change(st: np.ndarray, x: int) -> int:
     """Earliest device cycle > x at which an unmasked timer cause may change (NEVER if none can)."""
     mask = st[S_TMASK]
@@ -225,7 +226,7 @@ def next_timer_change(st: np.ndarray, x: int) -> int:
     return best
 
 
-@njit(cache=True)
+@njit(**UNCOUNTED)
 def timer_load(st: np.ndarray, a: int, x: int) -> tuple[int, bool]:
     """Read timer register ``a`` (word address) as it was in device cycle ``x``; (value, mapped)."""
     if a == TIMER0:
@@ -247,7 +248,7 @@ def timer_load(st: np.ndarray, a: int, x: int) -> tuple[int, bool]:
     return 0, False
 
 
-@njit(cache=True)
+@njit(**UNCOUNTED)
 def timer_store(st: np.ndarray, a: int, v: int, w: int) -> int:
     """Write timer register ``a``; the value holds from device cycle ``w``.  A DEV_* code."""
     if a == TIMERMASK:

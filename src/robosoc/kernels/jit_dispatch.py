@@ -36,7 +36,7 @@ from numba.extending import intrinsic
 from numba.typed import List
 
 from robosoc.isa.table import OP_ENTRY
-from robosoc.kernels.borrowed import row
+from robosoc.kernels.borrowed import UNCOUNTED, row
 from robosoc.kernels.core import CoreArrays, fetch_error, interpret_cores
 from robosoc.kernels.core_layout import (
     ERR_FETCH_DATA,
@@ -100,6 +100,7 @@ NEVER_TRANSLATE = -(1 << 30)
 MIDBLOCK_FACTOR = 8  # hot counter of a word no region can start at
 
 _JAL_X0_OPCODE = 0x6F  # jal with rd = x0 (low 12 bits)
+_LOAD_STORE_OPCODE = 0x03  # the major opcode of loads (0x03) and stores (0x23) without bit 5
 _NOP = 0x13
 M32 = 0xFFFFFFFF
 
@@ -250,7 +251,7 @@ def forget_if_changed(jt: JitArrays, m32_t: np.ndarray, dec_t: np.ndarray) -> No
             return
 
 
-@njit(cache=True, nogil=True)
+@njit(nogil=True, **UNCOUNTED)
 def run_translated(
     core: CoreArrays, tiles: np.ndarray, until: int, jt: JitArrays, threshold: int, stretch: int, flush: bool
 ) -> None:
@@ -357,6 +358,7 @@ def run_translated(
                         break
                 if stretch > 0:  # auto: stretch cycles at the interpreter's speed
                     step_to = min(stop, cyc + stretch)
+        ahead = -1  # the word after a load or store the interpreter runs on from (see below)
         if step_to < 0:
             # one instruction by the interpreter (two for a trap: its shadow runs before the vector)
             i = (pc - base) >> 2
@@ -366,6 +368,16 @@ def run_translated(
                 (word >> 12) == 0 or (word == 0xFFDFF06F and i > 0 and (np.int64(m32[t, i - 1]) & M32) == _NOP)
             ):
                 step_to = next_event  # an idle loop: the interpreter skips its iterations up to the event
+            elif (word & 0x5F) == _LOAD_STORE_OPCODE and (pc - base) + 4 < code:
+                # a load or store (a device access, mostly) goes on at the next word: when that word
+                # lies inside a translated block without starting one, the interpreter also runs
+                # the rest of that block in the same call, as the loop would do next (one call and
+                # one turn of the loop less per access; the arrival there is counted below), unless
+                # this arrival would make it hot
+                left = jt.tmap[i + 1]
+                if left != 0 and jt.entry_fn[i + 1] == 0 and jt.hot[i + 1] + 1 < threshold * MIDBLOCK_FACTOR:
+                    ahead = i + 1
+                    step_to = min(next_event, cyc + 1 + left)  # each instruction takes a cycle or more
             ctx[CTX_STEPS] += 1
         st_t[S_PC] = pc
         st_t[S_CYCLE] = cyc
@@ -374,10 +386,15 @@ def run_translated(
         if 0 <= pc - base < code and dec_t[2 * i] == OP_ENTRY:
             dec_t[2 * i] = 0  # the interpreter starts with this block's first instruction
             ctx[CTX_UNMARKED] = i + 1
+        was = pc
         interpret_cores(core, tiles, step_to)
         pc = st_t[S_PC]
         cyc = st_t[S_CYCLE]
         status = st_t[S_RUN]
+        if ahead >= 0 and pc != was:  # the access executed (no stop before it): the next word was reached
+            ctx[CTX_MIDBLOCK] += 1
+            if jt.hot[ahead] > NEVER_TRANSLATE:
+                jt.hot[ahead] += 1
         if st_t[S_CODE_STORES] != stores:
             forget_if_changed(jt, row(m32, t), dec_t)  # the interpreter stored into the loaded code
         if status == RUN_ENTRY:

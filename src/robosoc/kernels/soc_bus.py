@@ -16,6 +16,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from robosoc.kernels.borrowed import UNCOUNTED
 from robosoc.kernels.core_layout import (
     DEV_NI,
     DEV_UNMAPPED,
@@ -47,7 +48,7 @@ LD_UNMAPPED = 1
 LD_NI = 2
 
 
-@njit(cache=True)
+@njit(**UNCOUNTED)
 def mmio_load(st: np.ndarray, addr: int, c: int) -> tuple[int, int]:
     """Read a device register with a load that starts in instruction cycle ``c``.
 
@@ -70,7 +71,7 @@ def mmio_load(st: np.ndarray, addr: int, c: int) -> tuple[int, int]:
     return (v, LD_OK) if ok else (0, LD_UNMAPPED)
 
 
-@njit(cache=True)
+@njit(**UNCOUNTED)
 def mmio_store(st: np.ndarray, out: np.ndarray, addr: int, value: int, s: int) -> int:
     """Write a device register with a store starting in instruction cycle ``s``.  A DEV_* code.
 

@@ -14,6 +14,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from robosoc.kernels.borrowed import UNCOUNTED
+
 
 @njit(cache=True, inline="always")
 def _before(cyc: np.ndarray, a: int, b: int) -> bool:
@@ -21,7 +23,7 @@ def _before(cyc: np.ndarray, a: int, b: int) -> bool:
     return cyc[a] < cyc[b] or (cyc[a] == cyc[b] and a < b)
 
 
-@njit(cache=True)
+@njit(**UNCOUNTED)
 def push(heap: np.ndarray, cyc: np.ndarray, size: int, r: int, cycle: int) -> int:
     """Add index ``r`` stopped at ``cycle``; returns the new size."""
     cyc[r] = cycle
@@ -36,7 +38,7 @@ def push(heap: np.ndarray, cyc: np.ndarray, size: int, r: int, cycle: int) -> in
     return size + 1
 
 
-@njit(cache=True)
+@njit(**UNCOUNTED)
 def pop(heap: np.ndarray, cyc: np.ndarray, size: int) -> int:
     """Remove ``heap[0]`` (read it first); returns the new size."""
     size -= 1
