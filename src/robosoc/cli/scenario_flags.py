@@ -268,7 +268,7 @@ def _file_scenario(flags: ScenarioFlags, project_flag: ScenarioFlag | None) -> t
     (:mod:`robosoc.config.project_scenario`: the option's project if given, else the file's, whose
     relative folder is the file's neighbour), and the dotted fields the file sets."""
     from robosoc.cli import files
-    from robosoc.config.project_scenario import project_scenario
+    from robosoc.config.project_scenario import project_beside, project_scenario
     from robosoc.config.scenario import ScenarioConfig
     from robosoc.config.validate import ConfigError, from_mapping, named_fields
 
@@ -276,10 +276,10 @@ def _file_scenario(flags: ScenarioFlags, project_flag: ScenarioFlag | None) -> t
     if flags.path is not None:
         data = files.read_toml(flags.path, flags.label)
     firmware = data.get("firmware")
-    project = firmware.get("project", "") if isinstance(firmware, dict) else ""
-    if isinstance(project, str) and project and not Path(project).is_absolute() and flags.path is not None:
-        project = str((flags.path.parent / project).absolute())  # a project named by a file: from its folder
-        data = {**data, "firmware": {**firmware, "project": project}}  # type: ignore[dict-item]
+    project: Any = ""
+    if isinstance(firmware, dict) and "project" in firmware and flags.path is not None:
+        project = project_beside(firmware["project"], flags.path.parent)  # a project named by a file: its neighbour
+        data = {**data, "firmware": {**firmware, "project": project}}
     source = f"{flags.label + ': ' if flags.label else ''}{flags.path}: {PROJECT_FIELD}"
     if project_flag is not None:  # the option's project: its defaults, under the file's other fields
         project, source = flags.values[project_flag.param], project_flag.option

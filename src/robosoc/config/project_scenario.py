@@ -19,6 +19,7 @@ its own (a test keeps it so).
 from __future__ import annotations
 
 from collections.abc import Mapping
+from pathlib import Path
 from typing import Any
 
 from robosoc.config.dotted import nest
@@ -26,9 +27,17 @@ from robosoc.config.firmware import FirmwareConfig
 from robosoc.config.scenario import ScenarioConfig
 from robosoc.config.validate import ConfigError, from_mapping
 
-__all__ = ["PROJECT_FIELD", "project_scenario", "scenario_from_fields"]
+__all__ = ["PROJECT_FIELD", "project_beside", "project_scenario", "scenario_from_fields"]
 
 PROJECT_FIELD = "firmware.project"
+
+
+def project_beside(value: Any, folder: Path) -> Any:
+    """A ``firmware.project`` value read from a file in ``folder``: a relative folder is the file's
+    neighbour (made absolute); anything else (absolute, "", a wrong type) as it is."""
+    if isinstance(value, str) and value and not Path(value).is_absolute():
+        return str((folder / value).absolute())
+    return value
 
 
 def project_scenario(project: str) -> ScenarioConfig:

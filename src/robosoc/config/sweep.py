@@ -42,7 +42,7 @@ from typing import Any
 
 from robosoc.config.dotted import flatten, nest
 from robosoc.config.firmware import FirmwareConfig
-from robosoc.config.project_scenario import PROJECT_FIELD, scenario_from_fields
+from robosoc.config.project_scenario import PROJECT_FIELD, project_beside, scenario_from_fields
 from robosoc.config.ranges import check_seed
 from robosoc.config.scenario import ScenarioConfig
 from robosoc.config.scenario_fields import SEED_FIELD, field_names
@@ -169,10 +169,7 @@ def _check_point(
 def _absolute_project(flat: dict[str, Any], folder: Path) -> dict[str, Any]:
     """``flat`` with a relative ``firmware.project`` folder made absolute from ``folder`` (the
     sweep or scenario file's), as a scenario file's own is from its folder."""
-    value = flat.get(PROJECT_FIELD)
-    if isinstance(value, str) and value and not Path(value).is_absolute():
-        return {**flat, PROJECT_FIELD: str((folder / value).absolute())}
-    return flat
+    return {**flat, PROJECT_FIELD: project_beside(flat[PROJECT_FIELD], folder)} if PROJECT_FIELD in flat else flat
 
 
 def sweep_from_mapping(data: dict[str, Any], where: str, folder: Path, default_name: str) -> SweepConfig:
