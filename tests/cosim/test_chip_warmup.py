@@ -37,6 +37,7 @@ def test_ahead_compiled_callees_have_the_main_loop_types() -> None:
     # the ordinary run path: the main loop compiles (or loads) its callees for the types it uses
     mpsoc = throwaway_chip(FirmwareConfig().seed_chip())
     mpsoc.step(10_000)
+    mpsoc.finish_accounting()
     signatures = kernel_signatures(mpsoc)
     assert set(signatures) == set(CHILD_KERNELS) | set(PARENT_KERNELS)
     assert not set(CHILD_KERNELS) & set(PARENT_KERNELS)

@@ -2,7 +2,7 @@
 
 numba compiles the chip's kernels (:mod:`robosoc.kernels`) the first time they run and keeps them
 in its on-disk cache (under ``$ROBOSOC_CACHE/numba/<digest of the kernel sources>``).  On a fresh
-install that takes on the order of a minute of CPU, during which a flight would sit silently at
+install that takes about half a minute of CPU, during which a flight would sit silently at
 0 %.  A flight therefore first checks the cache (:func:`kernels_cached`) and, when it is empty,
 tells the user and compiles by running a throwaway chip (:func:`compile_kernels`), so that the
 flight's progress bar and real-time factor measure flying only.  The firmware build (the zig
@@ -11,10 +11,11 @@ it is cold too.
 
 numba compiles one function at a time, in one thread, but a callee (``cache=True``) that another
 process has compiled meanwhile is loaded from the cache when the caller's compilation reaches it.
-:func:`compile_kernels` therefore splits the main loop's larger callees in two groups: a child
-process compiles the interpreter (:data:`CHILD_KERNELS`, the largest by far) while this one compiles
-the others (:data:`PARENT_KERNELS`), each for the exact argument types the main loop calls them with;
-then this process compiles the main loop, which finds both groups in the cache.
+:func:`compile_kernels` therefore splits the main loop's callees in two groups: a child process
+compiles the interpreter and the dispatch loop that calls it (:data:`CHILD_KERNELS`, the largest)
+while this one compiles the others (:data:`PARENT_KERNELS`), each for the exact argument types the
+main loop calls them with; then this process compiles the main loop, which finds both groups in the
+cache.
 """
 
 from __future__ import annotations
@@ -36,7 +37,7 @@ if TYPE_CHECKING:
 
 T = TypeVar("T")
 
-COMPILING = "compiling the chip simulator with numba (first run only, cached afterwards; about a minute) ..."
+COMPILING = "compiling the chip simulator with numba (first run only, cached afterwards; about half a minute) ..."
 
 #: ``jal x0, 0``: a core spinning on one instruction, enough to make numba compile everything.
 SPIN = (0x0000006F).to_bytes(4, "little")
@@ -59,22 +60,28 @@ def kernels_cached() -> bool:
     return compiled_or_cached(run_chip)
 
 
-#: Callees of the main loop a child process compiles (module, function): the interpreter, which the
-#: dispatch loop calls and which alone is about half of the whole compilation (31 of 66 s of CPU,
-#: 2026-11-28); the main loop and the dispatch loop themselves are a sixth.
-CHILD_KERNELS = (("core", "interpret_cores"),)
-#: Callees of the main loop this process compiles meanwhile, largest first (about a third).
+#: Callees of the main loop a child process compiles (module, function): the interpreter and the
+#: dispatch loop, which calls it; 13 and 2.4 s of CPU, about 40 % of the whole compilation
+#: (2026-11-28: the interpreter took 31 s before numba stopped copying its IR into a wrapper).
+CHILD_KERNELS = (("core", "run_cores"), ("jit_dispatch", "run_translated"))
+#: Callees of the main loop (and the functions a flight calls around it) this process compiles
+#: meanwhile, largest first (about 12 s of CPU): the main loop itself then compiles alone, about 6 s.
 PARENT_KERNELS = (
     ("chip", "_noc_advance"),
     ("chip", "ni_access"),
     ("dev_irq", "irq_event"),
     ("soc_bus", "mmio_store"),
     ("soc_bus", "mmio_load"),
+    ("chip", "bad_pcs"),
     ("chip", "_take_deliveries"),
     ("chip", "_wake_if_due"),
-    ("chip", "_noc_next"),
+    ("stop_queue", "pop"),
     ("core", "decode_word"),
+    ("chip", "account_all"),
+    ("chip", "_noc_next"),
     ("chip", "_keep_output"),
+    ("chip", "_stop_address"),
+    ("stop_queue", "push"),
     ("dev_irq", "trap"),
 )
 
@@ -97,12 +104,15 @@ def kernel_signatures(mpsoc: MPSoC) -> dict[tuple[str, str], tuple[Any, ...]]:
     import numpy as np
     from numba import typeof, types
 
+    from robosoc.kernels.jit_dispatch import empty_tables
+
     core, noc, book = mpsoc.cores.arrays(), mpsoc.noc, mpsoc.book()
     i64 = types.int64
     st, cst, row = typeof(core.st), typeof(book.cst), typeof(core.st[0])
     tiles = typeof(np.zeros(1, dtype=np.int64))  # a slice of a row of the chip's work array
     return {
-        ("core", "interpret_cores"): (typeof(core), tiles, i64),
+        ("core", "run_cores"): (typeof(core), tiles, i64),
+        ("jit_dispatch", "run_translated"): (typeof(core), tiles, i64, typeof(empty_tables()), i64, i64, types.boolean),
         ("chip", "ni_access"): (i64, typeof(core), typeof(book), typeof(noc)),
         ("chip", "_take_deliveries"): (st, typeof(book), typeof(noc)),
         ("chip", "_wake_if_due"): (i64, st, cst, i64),
@@ -114,6 +124,11 @@ def kernel_signatures(mpsoc: MPSoC) -> dict[tuple[str, str], tuple[Any, ...]]:
         ("core", "decode_word"): (typeof(core.m32[0, 0]), typeof(core.dec[0]), types.uint64),
         ("chip", "_keep_output"): (i64, st, cst, typeof(core.out), typeof(book.xout)),
         ("dev_irq", "trap"): (row, i64, i64),
+        ("chip", "bad_pcs"): (st, cst),
+        ("chip", "account_all"): (typeof(core), typeof(book)),
+        ("chip", "_stop_address"): (i64, typeof(core)),
+        ("stop_queue", "push"): (tiles, tiles, i64, i64, i64),
+        ("stop_queue", "pop"): (tiles, tiles, i64),
     }
 
 

@@ -14,7 +14,7 @@ arrays down to the functions they call.
 A null count is still a call: numba calls ``NRT_incref`` and ``NRT_decref`` for every array a
 function binds (each argument, each array of a named tuple it unpacks), and they return at once.
 The functions the chip calls per instruction stop or device access -- the interpreter
-(``interpret_cores``), the dispatch loop (``run_translated``), the devices (``dev_irq``,
+(``run_cores``), the dispatch loop (``run_translated``), the devices (``dev_irq``,
 ``dev_timer``, ``dev_output``, ``soc_bus``), the stop queue and the chip's network-interface,
 sleep and wake functions -- are compiled with ``_nrt=False`` (numba counts no reference in them;
 they make no array and keep none), which removed about 40 such calls per interpreter call: a

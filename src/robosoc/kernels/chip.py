@@ -39,7 +39,7 @@ from robosoc.kernels import ni_registers as ni
 from robosoc.kernels import noc as nk
 from robosoc.kernels import stop_queue
 from robosoc.kernels.borrowed import UNCOUNTED, borrow, item, row
-from robosoc.kernels.core import LW, SW, U1, U2, CoreArrays, fields, interpret_cores
+from robosoc.kernels.core import LW, SW, U1, U2, CoreArrays, fields, run_cores
 from robosoc.kernels.core_layout import (
     C_MMIO,
     CTR_SIZE,
@@ -127,13 +127,13 @@ G_LONG_OFF = 15  # 1: no long quanta at all (a debugger holds a tile: nobody may
 # is 1: host cycle-counter ticks (:mod:`robosoc.kernels.host_ticks`) per part, and counts
 G_PROF = 16
 G_TK_CALL = 17  # ticks from the loop's entry to its return
-G_TK_INTERP = 18  # in the interpreter (interpret_cores, the tiles without translated code)
+G_TK_INTERP = 18  # in the interpreter (run_cores, the tiles without translated code)
 G_TK_JIT = 19  # in the dispatch loop (translated code and its interpreter steps)
 G_TK_NI = 20  # network-interface accesses (ni_access)
 G_TK_WAKE = 21  # waking sleeping cores (_wake_if_due)
 G_TK_NOC = 22  # the NoC: running it, taking its deliveries
 G_TK_FLUSH = 23  # adding the translated blocks' counts to the counters
-G_N_INTERP = 24  # interpret_cores calls
+G_N_INTERP = 24  # run_cores calls
 G_N_JIT = 25  # dispatch-loop calls
 G_N_NI = 26  # network-interface accesses
 G_N_WAKE = 27  # cores woken
@@ -620,8 +620,8 @@ def _take_deliveries(st, book, noc):
 def _run_awake(core, tiles, until, jit_tables, jit_on, jit_params, one, rest, gst, prof, cst):
     """Run ``tiles`` to chip cycle ``until``: each translating tile alone in the dispatch loop, each
     tile on a divided clock alone to its own cycle (:func:`core_until`), the other interpreted ones
-    together (through ``interpret_cores``, the dispatch loop's own copy of the interpreter: numba
-    compiles one, and one variant of the chip loop whatever the engine).  With ``prof`` the host
+    together (through ``run_cores``, the interpreter the dispatch loop calls too: numba compiles
+    one, and one variant of the chip loop whatever the engine).  With ``prof`` the host
     ticks of each go to gst (G_TK_JIT, G_TK_INTERP)."""
     k = 0
     st = core.st
@@ -632,14 +632,17 @@ def _run_awake(core, tiles, until, jit_tables, jit_on, jit_params, one, rest, gs
         if jit_on[t] != 0 and (st[t, S_RUN] == RUN_ENTRY or mine - st[t, S_CYCLE] >= JIT_MIN_SLICE):
             one[0] = t
             k0 = ticks() if prof else 0
-            run_translated(core, one, mine, item(jit_tables, t), jit_params[J_THRESHOLD], jit_params[J_STRETCH], False)
+            # flush: np.bool_(False), not the literal False, for which numba would compile the dispatch
+            # loop a second time (the single-core engine passes a bool)
+            run_translated(core, one, mine, item(jit_tables, t), jit_params[J_THRESHOLD], jit_params[J_STRETCH],
+                           np.bool_(False))  # fmt: skip
             if prof:
                 gst[G_TK_JIT] += ticks() - k0
                 gst[G_N_JIT] += 1
         elif d != 1:
             one[0] = t
             k0 = ticks() if prof else 0
-            interpret_cores(core, one, mine)
+            run_cores(core, one, mine)
             if prof:
                 gst[G_TK_INTERP] += ticks() - k0
                 gst[G_N_INTERP] += 1
@@ -648,7 +651,7 @@ def _run_awake(core, tiles, until, jit_tables, jit_on, jit_params, one, rest, gs
             k += 1
     if k > 0:
         k0 = ticks() if prof else 0
-        interpret_cores(core, rest[:k], until)
+        run_cores(core, rest[:k], until)
         if prof:
             gst[G_TK_INTERP] += ticks() - k0
             gst[G_N_INTERP] += 1
@@ -824,7 +827,7 @@ def run_chip(core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int, jit
                     if st[t, S_RUN] != RUN_ERROR:  # a core that failed ahead of H waits to report it
                         runx[kx] = t
                         kx += 1
-            lo, hi = 0, kx
+            lo, hi = np.int64(0), kx  # (not the literal 0: numba would compile push for it too)
             bulk = True  # runx[lo:hi] first
         # Stopped cores are handled in global cycle order, so that an NI access sees the network
         # exactly as it is in its cycle: in an idle quantum the NoC is brought up to the access
@@ -832,7 +835,9 @@ def run_chip(core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int, jit
         # within the quantum, but it can hold up the sender's own injection, which NI_STATUS shows).
         failed = -1
         suspended = False
-        nq = 0  # the stopped cores waiting in the queue (kernels/stop_queue.py), as indices into run
+        # the stopped cores waiting in the queue (kernels/stop_queue.py), as indices into run (not the
+        # literal 0: numba would compile push for it too)
+        nq = np.int64(0)
         fill = True  # the queue starts with every awake core, once they have run to their first stop
         while True:
             if hi > lo:

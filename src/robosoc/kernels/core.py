@@ -338,7 +338,7 @@ class CoreArrays(NamedTuple):
     out: np.ndarray
 
 
-@njit(cache=True, inline="always")
+@njit(**UNCOUNTED)
 def run_cores(core: CoreArrays, tiles: np.ndarray, until: int) -> None:
     """Run each core in ``tiles`` until cycle ``until`` or until it must stop.
 
@@ -367,6 +367,12 @@ def run_cores(core: CoreArrays, tiles: np.ndarray, until: int) -> None:
     bank up to i.  The column W further on (W = half the row beyond OPC_SIZE) adds the dynamic extra
     cycles of taken branches and multiplies.  Sequential instructions cost nothing; not profiling, a
     jump costs a load and a well-predicted branch more.
+
+    One compiled function, called (not inlined) by the chip loop, the dispatch loop and the host's
+    single-core engines, and compiled without reference counts (``_nrt=False``: see
+    :mod:`robosoc.kernels.borrowed`).  numba's ``inline="always"`` would copy its IR into each
+    caller: copying this function's 439 blocks was 8 of the 21 s its compilation took, and up to
+    39 s nested inside another compilation (2026-11-28).
     """
     st, ctr, opc, regs, m8, m16, m32, dec, out = core
     for k in range(tiles.shape[0]):
@@ -745,12 +751,3 @@ def run_cores(core: CoreArrays, tiles: np.ndarray, until: int) -> None:
         st[t, S_RUN] = status
         ctr[t, C_TAKEN] = n_taken
         ctr[t, C_MUL_STALL] = n_mulstall
-
-
-@njit(**UNCOUNTED)
-def interpret_cores(core: CoreArrays, tiles: np.ndarray, until: int) -> None:
-    """``run_cores`` as a function of its own, not inlined: a kernel that calls the interpreter from
-    several places (the translator's dispatch loop, the chip loop with translating tiles) calls this
-    one, so numba compiles the interpreter once for it instead of once per call site.  Compiled
-    without reference counts (``_nrt=False``: see :mod:`robosoc.kernels.borrowed`)."""
-    run_cores(core, tiles, until)

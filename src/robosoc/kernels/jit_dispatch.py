@@ -37,7 +37,7 @@ from numba.typed import List
 
 from robosoc.isa.table import OP_ENTRY
 from robosoc.kernels.borrowed import UNCOUNTED, row
-from robosoc.kernels.core import CoreArrays, fetch_error, interpret_cores
+from robosoc.kernels.core import CoreArrays, fetch_error, run_cores
 from robosoc.kernels.core_layout import (
     ERR_FETCH_DATA,
     OPC_SIZE,
@@ -387,7 +387,7 @@ def run_translated(
             dec_t[2 * i] = 0  # the interpreter starts with this block's first instruction
             ctx[CTX_UNMARKED] = i + 1
         was = pc
-        interpret_cores(core, tiles, step_to)
+        run_cores(core, tiles, step_to)
         pc = st_t[S_PC]
         cyc = st_t[S_CYCLE]
         status = st_t[S_RUN]
