@@ -83,6 +83,9 @@ PARENT_KERNELS = (
     ("chip", "_stop_address"),
     ("stop_queue", "push"),
     ("dev_irq", "trap"),
+    # the dispatch loop's own callees, ready in the cache before the child reaches them
+    ("jit_dispatch", "forget_if_changed"),
+    ("jit_dispatch", "flush_counts"),
 )
 
 
@@ -110,9 +113,10 @@ def kernel_signatures(mpsoc: MPSoC) -> dict[tuple[str, str], tuple[Any, ...]]:
     i64 = types.int64
     st, cst, row = typeof(core.st), typeof(book.cst), typeof(core.st[0])
     tiles = typeof(np.zeros(1, dtype=np.int64))  # a slice of a row of the chip's work array
+    jit = typeof(empty_tables())  # a tile's translation tables
     return {
         ("core", "run_cores"): (typeof(core), tiles, i64),
-        ("jit_dispatch", "run_translated"): (typeof(core), tiles, i64, typeof(empty_tables()), i64, i64, types.boolean),
+        ("jit_dispatch", "run_translated"): (typeof(core), tiles, i64, jit, i64, i64, types.boolean),
         ("chip", "ni_access"): (i64, typeof(core), typeof(book), typeof(noc)),
         ("chip", "_take_deliveries"): (st, typeof(book), typeof(noc)),
         ("chip", "_wake_if_due"): (i64, st, cst, i64),
@@ -129,6 +133,8 @@ def kernel_signatures(mpsoc: MPSoC) -> dict[tuple[str, str], tuple[Any, ...]]:
         ("chip", "_stop_address"): (i64, typeof(core)),
         ("stop_queue", "push"): (tiles, tiles, i64, i64, i64),
         ("stop_queue", "pop"): (tiles, tiles, i64),
+        ("jit_dispatch", "forget_if_changed"): (jit, typeof(core.m32[0]), typeof(core.dec[0])),
+        ("jit_dispatch", "flush_counts"): (jit, typeof(core.opc[0]), typeof(core.ctr[0])),
     }
 
 
