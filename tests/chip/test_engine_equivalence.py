@@ -735,15 +735,23 @@ def test_auto_on_a_fresh_install_interprets_until_compiling_the_dispatch_loop_pa
     assert soc.translator.stats.regions >= 1
 
 
-def test_compiled_or_cached_knows_a_kernel_numba_has_not_compiled() -> None:
+def test_compiled_or_cached_knows_a_kernel_numba_has_not_compiled(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import numba
     from numba import njit
 
     from robosoc.kernels import compiled_or_cached
     from robosoc.kernels.jit_dispatch import run_translated
 
-    @njit(cache=True)
-    def never_cached(x: int) -> int:  # a closure: numba cannot cache it, and it is not compiled yet
-        return x + 1
+    with monkeypatch.context() as m:
+        # numba caches this function too: an empty cache folder of its own, or a second run of the
+        # test would find the first one's
+        m.setattr(numba.config, "CACHE_DIR", str(tmp_path))
+
+        @njit(cache=True)
+        def never_cached(x: int) -> int:  # not compiled yet, nor in its cache
+            return x + 1
 
     assert not compiled_or_cached(never_cached)
     assert never_cached(1) == 2
