@@ -41,11 +41,12 @@ AUTO_COMPILE_SHARE = 0.25
 #: the test programs: about 0.25 ms per guest instruction and 2 ms per module, CPU time).
 ESTIMATED_SECONDS_PER_INSTRUCTION = 0.3e-3
 ESTIMATED_SECONDS_PER_MODULE = 3e-3
-#: numba's compile time of the dispatch loop (``run_translated``, with its copy of the interpreter), 20
-#: to 36 s on the 2-core machine: ``auto`` on one core of a fresh install interprets (``run_cores``,
-#: which ``interp`` compiles too) until it has run 1/AUTO_COMPILE_SHARE times that long.  Any chip
-#: run, or a ``jit`` run, compiles it (into numba's cache) on the way.
-ESTIMATED_DISPATCH_LOOP_SECONDS = 30.0
+#: numba's compile time of the dispatch loop (``run_translated``) once the interpreter it calls is
+#: compiled: 2.4 s of CPU on the 2-core machine (2026-11-28; 19 s while numba copied the interpreter
+#: into it): ``auto`` on one core of a fresh install interprets (``run_cores``, which ``interp``
+#: compiles too) until it has run 1/AUTO_COMPILE_SHARE times that long.  Any chip run, or a ``jit``
+#: run, compiles it (into numba's cache) on the way.
+ESTIMATED_DISPATCH_LOOP_SECONDS = 3.0
 _dispatch_loop_ready = False  # compiled or cached: looked up until it is
 #: ``auto`` translates nothing (unless its objects are cached) before the core (the chip), or the
 #: cores of the same build in this process, have run this long: a shorter run is interpreted as by
