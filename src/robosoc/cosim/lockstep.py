@@ -131,6 +131,8 @@ class ChipController:
         self.image = image if image is not None else scenario_image(scenario, vehicle)
         self.run: FirmwareRun | None = None
         self.result: ReplayResult | None = None
+        #: (telemetry reads, run, estimate): the estimate of that run after that many reads
+        self._estimate: tuple[int, FirmwareRun, Estimate] | None = None
         self._extra = tuple(name for name, _, _ in self.image.io_inputs)
         #: the firmware's telemetry under names of its own: columns of flight.csv after the flight's
         self.telemetry_names = own_names(self.image.telemetry)
@@ -251,7 +253,10 @@ class ChipController:
         :func:`robosoc.host.telemetry.estimate_of`), NaN where it publishes none."""
         if self.run is None or not self.run.latest:
             return UNKNOWN_ESTIMATE
-        return estimate_of(self.run.latest)
+        reads = len(self.run.telemetry)  # the newest values change only with a telemetry read
+        if self._estimate is None or self._estimate[0] != reads or self._estimate[1] is not self.run:
+            self._estimate = (reads, self.run, estimate_of(self.run.latest))
+        return self._estimate[2]
 
     def telemetry_values(self) -> tuple[float, ...]:
         """The newest value of each of :attr:`telemetry_names` read so far (NaN before the first),
