@@ -315,11 +315,12 @@ class MPSoC:
     def _drain_io(self) -> None:
         n = int(self.gst[kc.G_IO_COUNT])
         for row in self.io_out[:n]:
-            length = int(row[1])
-            self._io_received.append((int(row[0]), [int(v) for v in row[3 : 3 + length]]))
+            last, length, first = row[:3].tolist()  # Python ints, a conversion per slice, not per value
+            flits = row[3 : 3 + length].tolist()
+            self._io_received.append((last, flits))
             if self.recording:  # visible from the cycle after the last flit, as on a core tile
-                head = [int(row[3 + k]) for k in (2, 3, 5)]
-                event = [kc.R_DELIVER, self.io, int(row[0]) + 1, int(row[2]), length, *head]
+                head = [int(row[3 + k]) for k in (2, 3, 5)]  # (a short packet: what the row holds there)
+                event = [kc.R_DELIVER, self.io, last + 1, first, length, *head]
                 self._keep(np.array([event], dtype=np.int64))
         self.gst[kc.G_IO_COUNT] = 0
 

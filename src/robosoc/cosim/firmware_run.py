@@ -348,36 +348,41 @@ class FirmwareRun:
         seen: Counter[tuple] = Counter()  # jobs of each (tile, task, period) charged so far
         jobs = []
         position = {xy: i for i, xy in enumerate(self.tiles)}
+        dividers = {xy: chip_.divider(xy) for xy in self.tiles}
+        values = _period_values(self._periods, len(self._keys))
+        energy = _rows_pj(values, [self.tile_models[self.tiles[i]] for i in self._keys // NTASKS])
+        instructions = values[:, :, account_counter_map()[0].index("instructions")].tolist()
+        energy_of = energy.tolist()  # [period][accounting row] in pJ, Python floats
+        row_of = {int(key): r for r, key in enumerate(self._keys)}
 
-        @functools.cache
-        def shared_pj(p: int, i: int, task: int) -> float:  # the kernel's and idle's, per tile and period
-            return _pj(self.tile_models[self.tiles[i]], self._periods[p].counters(i, task))
+        def stamp(xy: tuple[int, int], value: int, now: int) -> int:  # _chip_cycle, the divider known
+            d = dividers[xy]
+            return (now // d - ((now // d - value) & 0xFFFFFFFF)) * d
 
         for xy, r, p, now in self._logged:
             name = self.names.get((xy, r.task))
             if name is None:
                 continue
-            delta = self._periods[p]
             i = position[xy]
-            own = delta.counters(i, r.task)
+            own = row_of[i * NTASKS + r.task]
             shared = per_tile_period[(xy, p)]
             # jobs of one task released in one period (periodic release) share its counters
             alike, k = per_task_period[(xy, r.task, p)], seen[(xy, r.task, p)]
             seen[(xy, r.task, p)] += 1
-            quotient, remainder = divmod(int(own.get("instructions", 0)), alike)
+            quotient, remainder = divmod(instructions[p][own], alike)
+            period_pj = energy_of[p]
             energy_pj = {
-                "task": _pj(self.tile_models[xy], own) / alike,
-                "kernel": shared_pj(p, i, images.KERNEL_TASK_ID) / shared,
-                "idle": shared_pj(p, i, images.IDLE_TASK_ID) / shared,
-                "noc": delta.noc_pj / per_period[p],
+                "task": period_pj[own] / alike,
+                "kernel": period_pj[row_of[i * NTASKS + images.KERNEL_TASK_ID]] / shared,
+                "idle": period_pj[row_of[i * NTASKS + images.IDLE_TASK_ID]] / shared,
+                "noc": self._periods[p].noc_pj / per_period[p],
             }
-            completion = self._chip_cycle(xy, r.completion, now)
-            d = chip_.divider(xy)
+            completion = stamp(xy, r.completion, now)
             jobs.append(
                 JobRecord(
-                    task=name, tile=xy, job=r.job, release_cycle=self._chip_cycle(xy, r.release, now),
-                    start_cycle=self._chip_cycle(xy, r.start, now), completion_cycle=completion,
-                    exec_cycles=r.exec_cycles * d,
+                    task=name, tile=xy, job=r.job, release_cycle=stamp(xy, r.release, now),
+                    start_cycle=stamp(xy, r.start, now), completion_cycle=completion,
+                    exec_cycles=r.exec_cycles * dividers[xy],
                     deadline_met=r.met,
                     instructions=quotient + int(k < remainder), energy_pj=energy_pj,
                     spans_periods=p + 1 < len(samples) and completion > samples[p + 1].cycle,
@@ -410,6 +415,31 @@ def _period_of(sample_cycles: Sequence[int], cycle: int) -> int:
 
 def _pj(model: EnergyModel, counters: dict[str, int]) -> float:
     return model.total_pj(counters) if counters else 0.0
+
+
+def _period_values(periods: Sequence[_Period], rows: int) -> np.ndarray:
+    """The periods' counter differences as one array: [period, accounting row, counter]."""
+    width = len(account_counter_map()[0])
+    if not periods:
+        return np.zeros((0, rows, width), dtype=np.int64)
+    return np.stack([p.values for p in periods])
+
+
+def _rows_pj(values: np.ndarray, models: Sequence[EnergyModel]) -> np.ndarray:
+    """:meth:`EnergyModel.total_pj` of every period's every accounting row at once ([period, row];
+    row r with ``models[r]``): each row's sum takes the same products in the same order as
+    ``total_pj`` of its counters' dict, so every value is the same to the bit (a counter the
+    accounting rows do not have adds ``0 * pj``, which leaves a sum unchanged)."""
+    names = {name: c for c, name in enumerate(account_counter_map()[0])}
+    out = np.zeros(values.shape[:2])
+    for r, model in enumerate(models):
+        total = np.zeros(values.shape[0])
+        for key, coeff in (*model.instruction.items(), *model.stall.items()):
+            c = names.get(key)
+            if c is not None:
+                total += values[:, r, c] * coeff.pj
+        out[:, r] = total
+    return out
 
 
 def noc_traffic_pj(model: EnergyModel, noc: dict[str, int]) -> float:

@@ -131,6 +131,8 @@ class ChipController:
         self.image = image if image is not None else scenario_image(scenario, vehicle)
         self.run: FirmwareRun | None = None
         self.result: ReplayResult | None = None
+        #: (telemetry reads, run, estimate): the estimate of that run after that many reads
+        self._estimate: tuple[int, FirmwareRun, Estimate] | None = None
         self._extra = tuple(name for name, _, _ in self.image.io_inputs)
         #: the firmware's telemetry under names of its own: columns of flight.csv after the flight's
         self.telemetry_names = own_names(self.image.telemetry)
@@ -153,6 +155,7 @@ class ChipController:
         self.result = None
         self.low_battery = False
         self._period_end = self.first_cycle
+        self._at_period_end = False  # the chip has been run to _period_end
         self._ahead: list[PwmCommand] = []  # commands received ahead of the physics
         self._caught_up = False  # the chip ran this step's part already (catch_up_calls)
         self._home = (0.0, 0.0)  # the take-off point, from the first row
@@ -176,6 +179,7 @@ class ChipController:
         extra = self._extra_packets(k, sample, setpoint) if self._extra else ()
         run.inject(SampleInput(k, sample.time, self.cycle_of(t_ns), packet, extra))
         self._period_end = self.cycle_of(t_ns + self.sample_period_us * 1000)
+        self._at_period_end = False
 
     def _extra_packets(self, k: int, sample: SensorSample, setpoint: Setpoint) -> tuple[tuple[str, bytes], ...]:
         """The position packet of sample ``k``: its fix, and the mission's setpoint in the world frame
@@ -204,11 +208,13 @@ class ChipController:
         # Nothing reaches the chip between two samples, so the chip runs to the next sample in one go
         # (one kernel call instead of one per physics step) and each command is handed out at the
         # step it arrived in, exactly as if the chip had been run step by step.
-        run = self._run()
         if self._caught_up:
             self._caught_up = False
-        elif run.cycle < self._period_end:
-            self._ahead.extend(run.run_to(self._period_end))
+        elif not self._at_period_end:  # (once there, the chip stays: only sense moves the period's end)
+            run = self._run()
+            if run.cycle < self._period_end:
+                self._ahead.extend(run.run_to(self._period_end))
+            self._at_period_end = run.cycle >= self._period_end
         if not self._ahead:  # most physics steps: no command waits
             return None
         until = self.cycle_of(t_ns)
@@ -251,7 +257,10 @@ class ChipController:
         :func:`robosoc.host.telemetry.estimate_of`), NaN where it publishes none."""
         if self.run is None or not self.run.latest:
             return UNKNOWN_ESTIMATE
-        return estimate_of(self.run.latest)
+        reads = len(self.run.telemetry)  # the newest values change only with a telemetry read
+        if self._estimate is None or self._estimate[0] != reads or self._estimate[1] is not self.run:
+            self._estimate = (reads, self.run, estimate_of(self.run.latest))
+        return self._estimate[2]
 
     def telemetry_values(self) -> tuple[float, ...]:
         """The newest value of each of :attr:`telemetry_names` read so far (NaN before the first),

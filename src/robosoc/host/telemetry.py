@@ -152,12 +152,16 @@ def read_telemetry(chip: MPSoC, probes: Sequence[TelemetryProbe]) -> dict[str, f
     job may be half-way through updating them)."""
     values: dict[str, float] = {}
     quiet: dict[tuple[Tile, int], bool] = {}
+    index: dict[Tile, int] = {}  # each tile's index, looked up once (a flight reads every sample)
     for probe in probes:
         key = (probe.tile, probe.task_id)
-        if key not in quiet:
-            quiet[key] = not probe.table.job_active(chip, probe.tile, probe.task_id)
-        if quiet[key]:
-            t = chip.config.tile_index(probe.tile)
+        readable = quiet.get(key)
+        if readable is None:
+            readable = quiet[key] = not probe.table.job_active(chip, probe.tile, probe.task_id)
+        if readable:
+            t = index.get(probe.tile)
+            if t is None:
+                t = index[probe.tile] = chip.config.tile_index(probe.tile)
             values[probe.name] = probe.decode(chip.cores.read(probe.address, VALUE_BYTES, tile=t))
     return values
 

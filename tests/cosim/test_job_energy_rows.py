@@ -1,0 +1,30 @@
+"""The flight end's job energies, computed for all periods' accounting rows at once, are the
+energy model's ``total_pj`` of each period's counters (the per-row computation), to the bit."""
+
+import dataclasses
+
+from robosoc.config.scenario import ScenarioConfig
+from robosoc.config.vehicle import vehicle_preset
+from robosoc.cosim.firmware_run import _period_values, _rows_pj
+from robosoc.cosim.lockstep import ChipController, fly_lockstep
+from robosoc.kernels.chip import NTASKS
+
+
+def test_all_periods_energies_at_once_equal_total_pj_row_by_row():
+    scenario = dataclasses.replace(ScenarioConfig(), duration_s=0.3)
+    vehicle = vehicle_preset(scenario.vehicle)
+    controller = ChipController(scenario, vehicle)
+    fly_lockstep(scenario, vehicle, controller)
+    run = controller.run
+    assert run is not None
+    periods = run._periods
+    models = [run.tile_models[run.tiles[i]] for i in run._keys // NTASKS]
+    energy = _rows_pj(_period_values(periods, len(run._keys)), models)
+    assert energy.shape == (len(periods), len(run._keys))
+    nonzero = 0
+    for p, period in enumerate(periods):
+        for r, key in enumerate(run._keys.tolist()):
+            expected = models[r].total_pj(period.counters(key // NTASKS, key % NTASKS))
+            assert energy[p, r] == expected  # exactly: the same products summed in the same order
+            nonzero += expected > 0
+    assert nonzero > len(periods)  # the tasks, kernel and idle did spend energy
