@@ -5,6 +5,8 @@ Public API: :class:`World` (``reset``, ``step``, ``advance``) holding :class:`Qu
 See ``docs/physics.md`` for the model.
 """
 
+# First: imports mujoco without its GLFW context (see mujoco_import.py).
+from robosoc.physics import mujoco_import  # noqa: F401
 from robosoc.physics.sensors import PositionFix, SensorSample, Truth
 from robosoc.physics.world import Quadrotor, World
 
