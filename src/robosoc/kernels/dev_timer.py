@@ -58,14 +58,15 @@ T1_CAUSES = 0x1C  # the causes that depend on TIMER1 (flag, compare, bit 15)
 
 
 @njit(cache=True, inline="always")
-def _ceil_div(a: int, b: int) -> int:
-    return -((-a) // b)
+def _ceil_shift(a: int, s: int) -> int:
+    """ceil(a / 2**s) for any integer a (an arithmetic shift rounds towards minus infinity)."""
+    return -((-a) >> s)
 
 
-@njit(**UNCOUNTED)
-def t1_period(st: np.ndarray) -> int:
-    """Device cycles between TIMER1 count pulses for the current prescaler."""
-    return np.int64(1) << (2 * st[S_T1_PRE])
+@njit(cache=True, inline="always")
+def _t1_shift(st: np.ndarray) -> int:
+    """log2 of the prescaler period: the period is a power of two, so pulses are counted by shifts."""
+    return 2 * st[S_T1_PRE]
 
 
 @njit(**UNCOUNTED)
@@ -78,9 +79,9 @@ def t1_pulses(st: np.ndarray, x0: int, x1: int) -> int:
     x0 = max(x0, 2)
     if x1 <= x0:
         return 0
-    p = t1_period(st)
-    # pulse in cycle y  <=>  (y - 1) % p == 0: count multiples of p in [x0 - 1, x1 - 1)
-    return _ceil_div(x1 - 1, p) - _ceil_div(x0 - 1, p)
+    sh = _t1_shift(st)
+    # pulse in cycle y  <=>  (y - 1) % p == 0: count multiples of p = 2**sh in [x0 - 1, x1 - 1)
+    return _ceil_shift(x1 - 1, sh) - _ceil_shift(x0 - 1, sh)
 
 
 @njit(**UNCOUNTED)
@@ -92,9 +93,11 @@ def t1_advance(val: int, flag: int, ctc: int, k: int) -> tuple[int, int]:
     if k <= to_ctc:
         return (val + k) & 0xFFFF, flag
     k -= to_ctc + 1  # the pulse at CTC clears to 0 and toggles the flag
+    if k <= ctc:  # no further clearing pulse (the common case: read within one period)
+        return k, flag ^ 1
     period = ctc + 1
-    wraps = 1 + k // period
-    return k % period, flag ^ (wraps & 1)
+    q = k // period  # k >= 0, period > 0: one division, the remainder from it
+    return k - q * period, flag ^ ((1 + q) & 1)
 
 
 @njit(**UNCOUNTED)
@@ -220,9 +223,9 @@ def next_timer_change(st: np.ndarray, x: int) -> int:
             if s > 0:
                 k = min(k, s)
         if k < NEVER:
-            p = t1_period(st)
-            first = 1 + _ceil_div(max(x, 2) - 1, p) * p  # first pulse cycle >= x
-            best = min(best, first + (k - 1) * p + 1)
+            sh = _t1_shift(st)
+            first = 1 + (_ceil_shift(max(x, 2) - 1, sh) << sh)  # first pulse cycle >= x
+            best = min(best, first + ((k - 1) << sh) + 1)
     return best
 
 
