@@ -285,6 +285,7 @@ def test_auto_compiles_in_the_background_and_changes_nothing(monkeypatch) -> Non
     assert states["auto"] == states["interp"]
 
 
+@pytest.mark.usefixtures("no_records")
 def test_the_chip_looks_at_its_tiles_again_only_when_something_changed(monkeypatch) -> None:
     """Before each run of the chip loop every tile is given what other tiles translated and its
     current tables; when nothing changed since the last look (no region entered anywhere, no tile

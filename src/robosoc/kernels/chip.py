@@ -79,7 +79,7 @@ from robosoc.kernels.dev_irq import (
     requests_possible,
 )
 from robosoc.kernels.host_ticks import ticks
-from robosoc.kernels.jit_dispatch import RUN_TRANSLATE, flush_counts, forget_if_changed, run_translated
+from robosoc.kernels.jit_dispatch import RUN_TRANSLATE, flush_entered_counts, forget_if_changed, run_translated
 
 # tile states
 K_OFF, K_RUN, K_SLEEP, K_EXITED, K_FAULT, K_IO = 0, 1, 2, 3, 4, 5
@@ -896,7 +896,7 @@ def run_chip(core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int, jit
                 if a - ni.NI_BASE == ni.TASK_ID and jit_on[t] != 0:
                     # the task accounting reads the counters: the translated blocks' counts first (a
                     # tile that ran on the interpreter in a short quantum has not flushed them)
-                    flush_counts(item(jit_tables, t), row(core.opc, t), row(core.ctr, t))
+                    flush_entered_counts(item(jit_tables, t), row(core.opc, t), row(core.ctr, t))
                 if not ni_access(t, core, book, noc):
                     failed = t
                     break
@@ -991,7 +991,7 @@ def run_chip(core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int, jit
     k0 = ticks() if prof else 0
     for t in range(n):
         if jit_on[t] != 0:  # the translated blocks' counts of the quanta that ran to their end
-            flush_counts(item(jit_tables, t), row(core.opc, t), row(core.ctr, t))
+            flush_entered_counts(item(jit_tables, t), row(core.opc, t), row(core.ctr, t))
     gst[G_TIME] = T
     gst[G_STATUS] = status
     if prof:
