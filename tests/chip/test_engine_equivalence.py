@@ -909,7 +909,7 @@ def test_a_flush_of_the_entered_regions_counts_as_a_flush_of_every_slot() -> Non
     jt = tr.tables()
     assert len(jt.slot_mark) >= 2 and jt.slot_mark[0] == 0  # the process's regions, each from its mark
     assert (jt.slot_ptr[jt.slot_mark] == jt.slot_ptr[jt.slot_mark + 1]).all()  # marks have no histogram
-    starts = [*jt.slot_mark.tolist(), len(jt.cnt)]
+    starts = [*jt.slot_mark.tolist(), len(jt.slot_next)]  # (bank 0: a single core's)
     left_out = flushed = 0
     for until in (40, 333, 1_000, 2_501, 7_777, 1_000_000):
         run_translated(soc.state.arrays(), tr._tiles, until, jt, 1, 0, False)  # the counts left in the slots
@@ -927,3 +927,48 @@ def test_a_flush_of_the_entered_regions_counts_as_a_flush_of_every_slot() -> Non
         flush_entered_counts(jt, soc.state.opc[0], soc.state.ctr[0])
         assert np.array_equal(soc.state.opc[0], again)
     assert left_out > 0 and flushed > 0  # flushes passed over regions, and flushed others
+
+
+@pytest.mark.usefixtures("no_records")
+def test_the_chips_flush_charges_each_tasks_bank_to_that_task() -> None:
+    """On the chip the blocks count into the bank of the tile's running task (``CTX_BANK``), so a
+    TASK_ID store needs no flush: :func:`flush_task_counts` adds every bank to the counters and
+    the banks of the tasks not running to their accounting rows and to the snapshot (the running
+    task's are accounted for at its next TASK_ID store)."""
+    from robosoc.kernels.chip import ACC_SIZE, NTASKS
+    from robosoc.kernels.jit_dispatch import CTX_BANK, flush_counts, flush_task_counts, run_translated
+
+    words = indirect_calls(300)
+    make_soc(words, engine="jit").run(max_cycles=1_000_000)  # every region translated
+    soc = make_soc(words, engine="jit")
+    tr = soc.translator
+    jt = tr.tables()
+    n = len(jt.slot_next)
+    assert len(jt.cnt) == NTASKS * n
+    parts = []  # (task, counts of its stretch)
+    for task, until in ((0, 500), (3, 2_000), (0, 3_000), (5, 4_500)):
+        jt.ctx[CTX_BANK] = task
+        before = jt.cnt.copy()
+        run_translated(soc.state.arrays(), tr._tiles, until, jt, 1, 0, False)
+        parts.append((task, jt.cnt - before))
+    opc, ctr = soc.state.opc[0].copy(), soc.state.ctr[0].copy()
+    acc = np.zeros((NTASKS, ACC_SIZE), dtype=np.int64)
+    snap = np.zeros(ACC_SIZE, dtype=np.int64)
+    running = 5
+    flush_task_counts(jt, soc.state.opc[0], soc.state.ctr[0], acc, snap, running)
+    assert not jt.cnt.any()
+    want_opc, want_ctr = opc.copy(), ctr.copy()
+    want_acc = np.zeros_like(acc)
+    for task, counts in parts:
+        assert not counts[: task * n].any() and not counts[(task + 1) * n :].any()  # its own bank only
+        assert counts.any()
+        o, c = np.zeros_like(opc), np.zeros_like(ctr)
+        flush_counts(jt._replace(cnt=counts.copy()), o, c)
+        want_opc += o
+        want_ctr += c
+        if task != running:
+            want_acc[task, : len(o)] += o
+            want_acc[task, len(o) : len(o) + len(c)] += c
+    assert np.array_equal(soc.state.opc[0], want_opc) and np.array_equal(soc.state.ctr[0], want_ctr)
+    assert np.array_equal(acc, want_acc)
+    assert np.array_equal(snap, want_acc.sum(axis=0))

@@ -23,7 +23,7 @@ import numpy as np
 from robosoc.isa.table import OP_ENTRY
 from robosoc.jit.target import Target
 from robosoc.kernels.core_layout import ERRATA_RTL, S_CODE_SIZE, S_ERRATA, S_MEM_BASE, S_MEM_SIZE, S_MUL
-from robosoc.kernels.jit_dispatch import CTX_WORDS, NEVER_TRANSLATE, JitArrays, empty_tables
+from robosoc.kernels.jit_dispatch import COUNT_BANKS, CTX_WORDS, NEVER_TRANSLATE, JitArrays, empty_tables
 
 if TYPE_CHECKING:
     from robosoc.jit.emit_ir import EmittedRegion
@@ -472,7 +472,7 @@ class CoreTables:
         jt = self._jt
         assert jt is not None
         self._jt = jt._replace(
-            cnt=np.zeros(self._nslots, dtype=np.int64),
+            cnt=np.zeros(self._nslots * COUNT_BANKS, dtype=np.int64),  # a bank per task (flush_task_counts)
             slot_ptr=ptr,
             slot_next=np.concatenate(self._slot_next),
             slot_kc=rows[:, 0].copy(),
