@@ -30,13 +30,16 @@ if TYPE_CHECKING:
 
 #: auto on the chip: a tile gets its translator once, since the last look, it executed at least
 #: AUTO_BUSY_SHARE instructions per chip cycle and AUTO_MIN_INSTRUCTIONS in all.  A tile that works
-#: in short bursts between sleeps pays a call of the dispatch loop per quantum and per wake-up, which
-#: eats what its translated blocks save: on the 3.6 s test flight the EKF tile of the float build with
-#: the multiplier (0.07 instructions per cycle) flew slower translated than interpreted (0.47 against
-#: 0.36 host seconds in the chip, every region already compiled), while without the multiplier (0.37)
-#: it flew 2.3x faster.  A busy core runs 0.3..1 instruction per cycle.
-AUTO_BUSY_SHARE = 0.25
-AUTO_MIN_INSTRUCTIONS = 200_000
+#: in short bursts between sleeps pays a call of the dispatch loop per quantum and per wake-up, and
+#: the flush of its blocks' counts once per chip-loop call costs about what counting the distinct
+#: instructions it ran costs the interpreter, which eats what its translated blocks save when it
+#: runs little.  Measured on the 10 s lockstep flight (2026-11-28, docs/translation.md), the EKF
+#: tile runs 0.49 instructions per cycle (float, no mul), 0.095 (float + mul), 0.078 (fixed, no
+#: mul) and 0.026 (fixed + mul), the other tile 0.005-0.05; `jit` flew the first three builds
+#: 15-60 % faster than `interp` and the fixed+mul build about 8 % slower.  The sleeping 16x16
+#: chip's tiles run about 0.002.  A busy core runs 0.3..1 instruction per cycle.
+AUTO_BUSY_SHARE = 0.04
+AUTO_MIN_INSTRUCTIONS = 100_000
 #: auto: chip cycles between looks at the tiles that do not translate yet (a long step is cut into
 #: pieces of this length while there are such tiles: stopping the chip loop anywhere is exact)
 AUTO_LOOK_CYCLES = 1 << 20
