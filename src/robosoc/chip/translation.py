@@ -80,14 +80,20 @@ class ChipTranslation:
         if not self.engine.translates:
             return
         situation = self._situation(chip)
-        if situation is not None and situation == self._prepared:
-            # nothing new for any tile (a per-tile look cost a sleeping 16x16 chip 1 ms per step):
-            # only auto's threshold moves with the run time
+        busy = self._busy(chip) if self.engine.waits_for_busy_tiles and self._watched else None
+        turned = busy is not None and bool(busy[sorted(self._watched)].any())  # a watched tile turned busy
+        if situation is not None and situation == self._prepared and not turned:
+            # nothing new for any tile (a per-tile look cost a sleeping 16x16 chip 1 ms per step,
+            # and auto's flight 0.2 ms per step while it watched its other tile): only auto's
+            # threshold moves with the run time, and the next look at watched tiles comes later
             first = next((tr for tr in self.translators if tr is not None), None)
             if first is not None:
                 self._set_threshold(first)
+            if busy is not None:
+                self._look = min(2 * self._look, AUTO_LOOK_MAX_CYCLES)
             return
-        busy = self._busy(chip) if self.engine.waits_for_busy_tiles else None
+        if busy is None and self.engine.waits_for_busy_tiles:
+            busy = self._busy(chip)
         new: list[int] = []
         for t in range(len(self.on)):
             if self._stopped[t] or t not in chip.programs or int(chip.cores.st[t, S_CODE_SIZE]) == 0:
@@ -117,9 +123,10 @@ class ChipTranslation:
 
     def _situation(self, chip: MPSoC) -> tuple[int, int, bytes] | None:
         """What decides the tiles' tables: regions entered in the process, code loaded into tiles,
-        the code sizes (None: a look is due anyway, for auto's watched tiles or regions still
-        compiling).  A stopped tile needs no look: :meth:`stop` took its tables away."""
-        if self._watched or any(tr is not None and tr.compiling() for tr in self.translators):
+        the code sizes (None: a look is due anyway, for regions still compiling; auto's watched
+        tiles are looked at by :meth:`prepare`).  A stopped tile needs no look: :meth:`stop` took
+        its tables away."""
+        if any(tr is not None and tr.compiling() for tr in self.translators):
             return None
         entered = 0
         if self.stats is not None:  # a translator was made: the engine is imported

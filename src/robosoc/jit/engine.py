@@ -87,6 +87,7 @@ class TranslatingCore(CoreTables):
         self._tiles = np.array([tile], dtype=np.int64)
         self.manifest = Manifest()  # made again for each code loaded
         self._next_manifest = self.manifest  # read before the tables are made for new code
+        self._records_missing: set[int] = set()  # recorded regions whose object was not in the cache
         self._compiling: list[tuple[Pending, Region, EmittedRegion, np.ndarray, np.ndarray]] = []
         if self.background:
             _LIVE.add(self)
@@ -119,6 +120,8 @@ class TranslatingCore(CoreTables):
         manifest = self._next_manifest = Manifest(key)
         if manifest.records:
             self._enter_records(key, manifest)
+        # what is left of the records for the policy to install at once: those whose object was gone
+        manifest.cached = frozenset(manifest.cached & self._records_missing)
 
     def _enter_records(self, key: str, manifest: Manifest) -> None:
         """The recorded regions of ``manifest`` whose objects are in the cache, as regions of this
@@ -128,6 +131,7 @@ class TranslatingCore(CoreTables):
 
         build = self._key()
         done_list = _TRANSLATED.get(build)
+        self._records_missing = set()
         if done_list is not None and _RECORDS_IN.get(key) is done_list:
             return  # entered already (a test may replace the process's list: entered again then)
         m32 = self.state.m32[self.tile]
@@ -137,6 +141,7 @@ class TranslatingCore(CoreTables):
                 continue
             addresses = self.compiler.add_cached(record.object_key, NAME_PLACEHOLDER, [record.function])
             if addresses is None:  # its object is gone: translated afresh when it turns hot
+                self._records_missing.add(record.start)
                 continue
             pcs = record.arrays["pcs"]
             note_translated(build, Translated.of_record(record, addresses[0], m32[pcs].copy()))
@@ -280,7 +285,8 @@ class TranslatingCore(CoreTables):
 
     # --- running ------------------------------------------------------------------------------
     def has_cached_regions(self) -> bool:
-        """Whether an earlier run compiled regions of this code (``auto``: installed at once when hot)."""
+        """Whether an earlier run compiled regions of this code that are not entered yet (their
+        records are entered with the tables; ``auto`` installs these at once when hot)."""
         self._tables()
         return bool(self.manifest.cached)
 

@@ -120,7 +120,8 @@ def add_to_manifest(key: str, record: RegionRecord) -> None:
 
 class Manifest:
     """What one core knows of its loaded code's manifest: the starts listed or noted since, and
-    the records an earlier run wrote (``cached``: their starts)."""
+    the records an earlier run wrote (``cached``: their starts; the core keeps those it could not
+    enter with its tables, their object gone from the cache)."""
 
     def __init__(self, key: str | None = None) -> None:
         """``key``: read the list of the code with that key now; None: start empty, the key made
