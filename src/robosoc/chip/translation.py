@@ -65,6 +65,7 @@ class ChipTranslation:
         self._watched: set[int] = set()  # auto: loaded tiles without a translator yet
         self._cached = False  # auto: some translator's code has regions compiled by an earlier run
         self._look = AUTO_LOOK_CYCLES  # auto: chip cycles to the next look
+        self._looked = 0  # auto: the chip cycle of the last look
         #: what :meth:`prepare` last saw (:meth:`_situation`): the same again, it has nothing to do
         self._prepared: tuple[int, int, bytes] | None = None
         self._changes = 0  # tiles whose code was loaded since the chip was made
@@ -80,7 +81,8 @@ class ChipTranslation:
         if not self.engine.translates:
             return
         situation = self._situation(chip)
-        busy = self._busy(chip) if self.engine.waits_for_busy_tiles and self._watched else None
+        due = bool(self._watched) and chip.cycle - self._looked >= self._look  # auto's look at watched tiles
+        busy = self._busy(chip) if self.engine.waits_for_busy_tiles and due else None
         turned = busy is not None and bool(busy[sorted(self._watched)].any())  # a watched tile turned busy
         if situation is not None and situation == self._prepared and not turned:
             # nothing new for any tile (a per-tile look cost a sleeping 16x16 chip 1 ms per step,
@@ -183,6 +185,7 @@ class ChipTranslation:
         cycles = now - self._seen[:, 1]
         self._seen[:, 0] = done
         self._seen[:, 1] = now
+        self._looked = now
         return (instructions >= AUTO_MIN_INSTRUCTIONS) & (instructions >= AUTO_BUSY_SHARE * cycles)
 
     def _give(self, t: int) -> None:
