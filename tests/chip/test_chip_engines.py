@@ -350,6 +350,56 @@ def test_the_chip_looks_at_its_tiles_again_only_when_something_changed(monkeypat
     assert chip.run(max_cycles=100_000).exit_codes == {(1, 0): 50, (0, 1): 60}
 
 
+@pytest.mark.usefixtures("no_records")
+def test_auto_does_not_look_at_its_translators_while_only_an_idle_tile_is_watched(monkeypatch) -> None:
+    """auto watches a loaded tile without a translator (it may turn busy): at a look that finds it
+    still idle, and between looks, the tiles with translators are not looked at again unless
+    something changed (before, every step of a flight looked at them: 0.2 ms per step), and the
+    next look at the idle tile comes twice as late."""
+    from robosoc.chip.translation import AUTO_LOOK_CYCLES
+    from robosoc.jit.engine import TranslatingCore
+
+    monkeypatch.setattr("robosoc.jit.policy.AUTO_WARMUP_SECONDS", 0.0)
+    monkeypatch.setattr("robosoc.jit.policy.AUTO_BACKGROUND", False)
+    monkeypatch.setattr("robosoc.jit.policy.AutoPolicy.budget", lambda self: float("inf"))
+    looks = []
+    install_known = TranslatingCore.install_known
+
+    def counted(self: TranslatingCore) -> None:
+        looks.append(self.tile)
+        install_known(self)
+
+    monkeypatch.setattr(TranslatingCore, "install_known", counted)
+
+    def counting(rounds: int) -> Program:
+        loop = [A.i("addi", A0, A0, 1), A.i("addi", T1, T1, -1), A.branch("bne", T1, 0, -8)]
+        return program([A.i("addi", A0, 0, 0), *A.li(T1, rounds), *loop, *exit_with(A0)])
+
+    chip = MPSoC(ChipConfig(), engine="auto")
+    busy, idle = (chip.config.tile_index(xy) for xy in ((1, 0), (0, 1)))
+    chip.load((1, 0), counting(10**7))
+    chip.load((0, 1), counting(1))  # exits at once: loaded, never busy
+    jit = chip._jit
+    for k in range(1, 5):
+        chip.step(k * AUTO_LOOK_CYCLES)
+    assert jit.translators[busy] is not None and jit.translators[idle] is None
+    assert jit.watching()
+    jit.prepare(chip)
+    looks.clear()
+    look = jit.look_cycles()
+    for _ in range(3):  # between looks
+        jit.prepare(chip)
+    assert looks == [] and jit.look_cycles() == look
+    chip.step(chip.cycle + look)
+    jit.prepare(chip)  # a look at the idle tile: still idle
+    assert looks == [] and jit.look_cycles() == min(2 * look, 1 << 24)
+    assert jit.translators[idle] is None
+    assert jit.translators[busy].tables().entry_fn[0] == 0  # the first word ran once: not translated
+    jit.translators[busy].translate(SRAM)  # a region entered: the translators are looked at
+    jit.prepare(chip)
+    assert looks == [busy]
+
+
 def test_auto_makes_no_translator_for_a_chip_that_never_turns_busy_yet_counts_its_run_time() -> None:
     """A run whose tiles never turn busy does without the translating engine (not even imported:
     30-45 ms a process); a tile that turns busy later gets a budget and warm-up counted from the
