@@ -326,6 +326,7 @@ def test_compiled_objects_are_cached_by_code_and_options(tmp_path, monkeypatch) 
     assert len(list((tmp_path / "jit").rglob("*.o"))) == 3
 
 
+@pytest.mark.usefixtures("no_records")
 def test_a_region_translated_once_is_reused_by_the_next_core() -> None:
     words = [A.i("addi", 10, 0, 0), A.i("addi", 10, 10, 1), A.i("addi", 11, 0, 40), A.branch("bne", 10, 11, -8)]
     words += exit_with(10)
@@ -340,6 +341,7 @@ def test_a_region_translated_once_is_reused_by_the_next_core() -> None:
     assert c.translator.stats.regions >= 1
 
 
+@pytest.mark.usefixtures("no_records")
 def test_the_core_benchmark_warms_up_until_a_run_translates_nothing_new(monkeypatch) -> None:
     """``bench core`` times runs only once translation has settled: a run that entered a region,
     handed one to the compiling thread or put one off, or whose engine may not translate yet (auto
@@ -373,6 +375,7 @@ def _fresh_tables(soc: SingleCoreSoC) -> tuple[list[np.ndarray], np.ndarray]:
     return tables, soc.state.dec[0].copy()
 
 
+@pytest.mark.usefixtures("no_records")
 @pytest.mark.parametrize("later", [False, True], ids=["", "a-region-translated-since"])
 @pytest.mark.parametrize("changed", [None, 0, 1, 30], ids=["same", "first-word", "loop-word", "outside-the-region"])
 def test_a_core_copying_the_tables_of_the_last_gets_those_made_afresh(
@@ -419,6 +422,7 @@ def test_a_core_copying_the_tables_of_the_last_gets_those_made_afresh(
 # ---------------------------------------------------------------- region structure and tiers
 
 
+@pytest.mark.usefixtures("no_records")
 def test_many_small_chained_regions_run_as_on_the_interpreter(monkeypatch) -> None:
     """Regions of at most 8 instructions: control crosses regions all the time (tail calls through
     the entry table, returns into other regions, arrivals inside translated blocks after interrupts)."""
@@ -522,9 +526,65 @@ def test_auto_installs_regions_compiled_by_an_earlier_run_at_once(tmp_path, monk
     monkeypatch.setattr(jit_tables, "_TRANSLATED", {})
     monkeypatch.setattr(compiler, "_SHARED", None)
     second = assert_same(words, "auto", 1_000_000, len(words))
-    assert second.translator.stats.regions >= 1
+    # entered from the first run's records: neither found nor written again, objects from the cache
+    assert second.translator.stats.recorded == first.translator.stats.regions
+    assert second.translator.stats.regions == 0
     stats = second.translator.compiler.stats
     assert stats.cache_hits == stats.modules >= 1
+
+
+@pytest.mark.parametrize("engine", ["jit", "auto"])
+def test_a_later_process_enters_the_recorded_regions_without_finding_or_writing_them(
+    engine: str, tmp_path, monkeypatch
+) -> None:
+    """A run records every region it compiled in its program's manifest; a new process (nothing
+    in memory) running the same program enters them all when it makes its tables: no call of
+    ``discover`` or ``emit_region``, nothing compiled, the same results as the interpreter.  A
+    program differing in one word has another manifest."""
+    import robosoc.jit.compiler as compiler
+    import robosoc.jit.emit_ir as emit_ir
+    import robosoc.jit.regions as regions
+
+    monkeypatch.setenv("ROBOSOC_CACHE", str(tmp_path))
+    monkeypatch.setattr(jit_policy, "AUTO_WARMUP_SECONDS", 0.0)
+    monkeypatch.setattr(jit_policy, "AUTO_BACKGROUND", False)
+    monkeypatch.setattr(jit_policy.AutoPolicy, "budget", lambda self: float("inf"))
+    monkeypatch.setattr(jit_policy, "STRETCHES", {"jit": 0, "auto": 50})
+    calls = {"discover": 0, "emit_region": 0}
+
+    def counted(module, name):
+        real = getattr(module, name)
+
+        def call(*args, **kwargs):
+            calls[name] += 1
+            return real(*args, **kwargs)
+
+        monkeypatch.setattr(module, name, call)
+
+    counted(regions, "discover")
+    counted(emit_ir, "emit_region")
+
+    def new_process() -> None:
+        monkeypatch.setattr(jit_tables, "_TRANSLATED", {})
+        monkeypatch.setattr(jit_tables, "_FRESH_TABLES", {})
+        monkeypatch.setattr(compiler, "_SHARED", None)
+
+    words = indirect_calls(2000)
+    new_process()
+    first = assert_same(words, engine, 1_000_000, len(words))
+    made = first.translator.stats.regions
+    assert made >= 1 and calls["discover"] >= made and calls["emit_region"] == made
+    new_process()
+    calls.update(discover=0, emit_region=0)
+    second = assert_same(words, engine, 1_000_000, len(words))
+    assert (second.translator.stats.recorded, second.translator.stats.regions) == (made, 0)
+    assert calls == {"discover": 0, "emit_region": 0}
+    cs = second.translator.compiler.stats
+    assert cs.modules == cs.cache_hits == made
+    # one word changed (the loop's count): another program, its regions found and written afresh
+    new_process()
+    other = assert_same([words[0], A.i("addi", 7, 0, 1999), *words[2:]], engine, 1_000_000, len(words))
+    assert other.translator.stats.recorded == 0 and other.translator.stats.regions >= 1
 
 
 def _run_waiting_for_compiles(soc: SingleCoreSoC, max_cycles: int, chunk: int) -> tuple[object, dict[str, np.ndarray]]:
@@ -709,6 +769,7 @@ def test_the_compiling_thread_drops_what_no_live_core_could_use(tmp_path, monkey
     assert shared.stats.modules == 0
 
 
+@pytest.mark.usefixtures("no_records")
 def test_auto_on_a_fresh_install_interprets_until_compiling_the_dispatch_loop_pays(monkeypatch) -> None:
     """numba has not compiled the dispatch loop yet: auto runs the interpreter (which interp would
     compile as well) and counts the time, and takes the dispatch loop once that time would pay for
@@ -839,3 +900,83 @@ def test_compiled_or_cached_does_not_take_another_checkouts_kernel_for_this_ones
     assert one(21) == 42  # compiled and cached under the first folder's name
     assert compiled_or_cached(one)
     assert not compiled_or_cached(two)  # the second checkout's kernel is not in numba's cache
+
+
+@pytest.mark.usefixtures("no_records")
+def test_a_flush_of_the_entered_regions_counts_as_a_flush_of_every_slot() -> None:
+    """The chip flushes only the slots of the regions entered since the last flush (their mark,
+    slot 0 of each region, set by the region function at every entry): at every stop of a run,
+    the counters come out as from a pass over every slot, a region whose mark is clear counted
+    nothing, and a second flush adds nothing."""
+    from robosoc.kernels.jit_dispatch import flush_counts, flush_entered_counts, run_translated
+
+    words = indirect_calls(300)
+    make_soc(words, engine="jit").run(max_cycles=1_000_000)  # every region translated
+    soc = make_soc(words, engine="jit")
+    tr = soc.translator
+    jt = tr.tables()
+    assert len(jt.slot_mark) >= 2 and jt.slot_mark[0] == 0  # the process's regions, each from its mark
+    assert (jt.slot_ptr[jt.slot_mark] == jt.slot_ptr[jt.slot_mark + 1]).all()  # marks have no histogram
+    starts = [*jt.slot_mark.tolist(), len(jt.slot_next)]  # (bank 0: a single core's)
+    left_out = flushed = 0
+    for until in (40, 333, 1_000, 2_501, 7_777, 1_000_000):
+        run_translated(soc.state.arrays(), tr._tiles, until, jt, 1, 0, False)  # the counts left in the slots
+        entered = jt.cnt[jt.slot_mark] != 0
+        flushed += int(entered.sum())
+        for r in np.flatnonzero(~entered):  # a region not entered since the last flush counted nothing
+            assert not jt.cnt[starts[r] : starts[r + 1]].any()
+            left_out += 1
+        full = (soc.state.opc[0].copy(), soc.state.ctr[0].copy(), jt.cnt.copy())
+        flush_counts(jt._replace(cnt=full[2]), full[0], full[1])
+        flush_entered_counts(jt, soc.state.opc[0], soc.state.ctr[0])
+        assert np.array_equal(soc.state.opc[0], full[0]) and np.array_equal(soc.state.ctr[0], full[1])
+        assert not jt.cnt.any() and not full[2].any()
+        again = soc.state.opc[0].copy()
+        flush_entered_counts(jt, soc.state.opc[0], soc.state.ctr[0])
+        assert np.array_equal(soc.state.opc[0], again)
+    assert left_out > 0 and flushed > 0  # flushes passed over regions, and flushed others
+
+
+@pytest.mark.usefixtures("no_records")
+def test_the_chips_flush_charges_each_tasks_bank_to_that_task() -> None:
+    """On the chip the blocks count into the bank of the tile's running task (``CTX_BANK``), so a
+    TASK_ID store needs no flush: :func:`flush_task_counts` adds every bank to the counters and
+    the banks of the tasks not running to their accounting rows and to the snapshot (the running
+    task's are accounted for at its next TASK_ID store)."""
+    from robosoc.kernels.chip import ACC_SIZE, NTASKS
+    from robosoc.kernels.jit_dispatch import CTX_BANK, flush_counts, flush_task_counts, run_translated
+
+    words = indirect_calls(300)
+    make_soc(words, engine="jit").run(max_cycles=1_000_000)  # every region translated
+    soc = make_soc(words, engine="jit")
+    tr = soc.translator
+    jt = tr.tables()
+    n = len(jt.slot_next)
+    assert len(jt.cnt) == NTASKS * n
+    parts = []  # (task, counts of its stretch)
+    for task, until in ((0, 500), (3, 2_000), (0, 3_000), (5, 4_500)):
+        jt.ctx[CTX_BANK] = task
+        before = jt.cnt.copy()
+        run_translated(soc.state.arrays(), tr._tiles, until, jt, 1, 0, False)
+        parts.append((task, jt.cnt - before))
+    opc, ctr = soc.state.opc[0].copy(), soc.state.ctr[0].copy()
+    acc = np.zeros((NTASKS, ACC_SIZE), dtype=np.int64)
+    snap = np.zeros(ACC_SIZE, dtype=np.int64)
+    running = 5
+    flush_task_counts(jt, soc.state.opc[0], soc.state.ctr[0], acc, snap, running)
+    assert not jt.cnt.any()
+    want_opc, want_ctr = opc.copy(), ctr.copy()
+    want_acc = np.zeros_like(acc)
+    for task, counts in parts:
+        assert not counts[: task * n].any() and not counts[(task + 1) * n :].any()  # its own bank only
+        assert counts.any()
+        o, c = np.zeros_like(opc), np.zeros_like(ctr)
+        flush_counts(jt._replace(cnt=counts.copy()), o, c)
+        want_opc += o
+        want_ctr += c
+        if task != running:
+            want_acc[task, : len(o)] += o
+            want_acc[task, len(o) : len(o) + len(c)] += c
+    assert np.array_equal(soc.state.opc[0], want_opc) and np.array_equal(soc.state.ctr[0], want_ctr)
+    assert np.array_equal(acc, want_acc)
+    assert np.array_equal(snap, want_acc.sum(axis=0))

@@ -106,15 +106,16 @@ def run_core_benchmark(
 
 
 def _settled(soc: SingleCoreSoC) -> bool:
-    """Whether a run's translator (if any) may translate and entered, handed over or put off
-    nothing: the next runs will run what is translated now."""
+    """Whether a run's translator (if any) may translate and entered (found and written, or loaded
+    from an earlier run's record), handed over or put off nothing: the next runs will run what is
+    translated now."""
     from robosoc.jit.policy import NEVER_ASK
 
     translator = soc.translator
     if translator is None:
         return True
     s = translator.stats
-    new = s.regions or s.background or s.deferred or translator.compiling()
+    new = s.regions or s.recorded or s.background or s.deferred or translator.compiling()
     return not new and translator.ask_threshold() != NEVER_ASK
 
 

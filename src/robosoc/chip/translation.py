@@ -30,13 +30,16 @@ if TYPE_CHECKING:
 
 #: auto on the chip: a tile gets its translator once, since the last look, it executed at least
 #: AUTO_BUSY_SHARE instructions per chip cycle and AUTO_MIN_INSTRUCTIONS in all.  A tile that works
-#: in short bursts between sleeps pays a call of the dispatch loop per quantum and per wake-up, which
-#: eats what its translated blocks save: on the 3.6 s test flight the EKF tile of the float build with
-#: the multiplier (0.07 instructions per cycle) flew slower translated than interpreted (0.47 against
-#: 0.36 host seconds in the chip, every region already compiled), while without the multiplier (0.37)
-#: it flew 2.3x faster.  A busy core runs 0.3..1 instruction per cycle.
-AUTO_BUSY_SHARE = 0.25
-AUTO_MIN_INSTRUCTIONS = 200_000
+#: in short bursts between sleeps pays a call of the dispatch loop per quantum and per wake-up, and
+#: the flush of its blocks' counts once per chip-loop call costs about what counting the distinct
+#: instructions it ran costs the interpreter, which eats what its translated blocks save when it
+#: runs little.  Measured on the 10 s lockstep flight (2026-11-28, docs/translation.md), the EKF
+#: tile runs 0.49 instructions per cycle (float, no mul), 0.095 (float + mul), 0.078 (fixed, no
+#: mul) and 0.026 (fixed + mul), the other tile 0.005-0.05; `jit` flew the first three builds
+#: 15-60 % faster than `interp` and the fixed+mul build about 8 % slower.  The sleeping 16x16
+#: chip's tiles run about 0.002.  A busy core runs 0.3..1 instruction per cycle.
+AUTO_BUSY_SHARE = 0.04
+AUTO_MIN_INSTRUCTIONS = 100_000
 #: auto: chip cycles between looks at the tiles that do not translate yet (a long step is cut into
 #: pieces of this length while there are such tiles: stopping the chip loop anywhere is exact)
 AUTO_LOOK_CYCLES = 1 << 20
@@ -62,6 +65,7 @@ class ChipTranslation:
         self._watched: set[int] = set()  # auto: loaded tiles without a translator yet
         self._cached = False  # auto: some translator's code has regions compiled by an earlier run
         self._look = AUTO_LOOK_CYCLES  # auto: chip cycles to the next look
+        self._looked = 0  # auto: the chip cycle of the last look
         #: what :meth:`prepare` last saw (:meth:`_situation`): the same again, it has nothing to do
         self._prepared: tuple[int, int, bytes] | None = None
         self._changes = 0  # tiles whose code was loaded since the chip was made
@@ -77,14 +81,21 @@ class ChipTranslation:
         if not self.engine.translates:
             return
         situation = self._situation(chip)
-        if situation is not None and situation == self._prepared:
-            # nothing new for any tile (a per-tile look cost a sleeping 16x16 chip 1 ms per step):
-            # only auto's threshold moves with the run time
+        due = bool(self._watched) and chip.cycle - self._looked >= self._look  # auto's look at watched tiles
+        busy = self._busy(chip) if self.engine.waits_for_busy_tiles and due else None
+        turned = busy is not None and bool(busy[sorted(self._watched)].any())  # a watched tile turned busy
+        if situation is not None and situation == self._prepared and not turned:
+            # nothing new for any tile (a per-tile look cost a sleeping 16x16 chip 1 ms per step,
+            # and auto's flight 0.2 ms per step while it watched its other tile): only auto's
+            # threshold moves with the run time, and the next look at watched tiles comes later
             first = next((tr for tr in self.translators if tr is not None), None)
             if first is not None:
                 self._set_threshold(first)
+            if busy is not None:
+                self._look = min(2 * self._look, AUTO_LOOK_MAX_CYCLES)
             return
-        busy = self._busy(chip) if self.engine.waits_for_busy_tiles else None
+        if busy is None and self.engine.waits_for_busy_tiles:
+            busy = self._busy(chip)
         new: list[int] = []
         for t in range(len(self.on)):
             if self._stopped[t] or t not in chip.programs or int(chip.cores.st[t, S_CODE_SIZE]) == 0:
@@ -114,9 +125,10 @@ class ChipTranslation:
 
     def _situation(self, chip: MPSoC) -> tuple[int, int, bytes] | None:
         """What decides the tiles' tables: regions entered in the process, code loaded into tiles,
-        the code sizes (None: a look is due anyway, for auto's watched tiles or regions still
-        compiling).  A stopped tile needs no look: :meth:`stop` took its tables away."""
-        if self._watched or any(tr is not None and tr.compiling() for tr in self.translators):
+        the code sizes (None: a look is due anyway, for regions still compiling; auto's watched
+        tiles are looked at by :meth:`prepare`).  A stopped tile needs no look: :meth:`stop` took
+        its tables away."""
+        if any(tr is not None and tr.compiling() for tr in self.translators):
             return None
         entered = 0
         if self.stats is not None:  # a translator was made: the engine is imported
@@ -173,6 +185,7 @@ class ChipTranslation:
         cycles = now - self._seen[:, 1]
         self._seen[:, 0] = done
         self._seen[:, 1] = now
+        self._looked = now
         return (instructions >= AUTO_MIN_INSTRUCTIONS) & (instructions >= AUTO_BUSY_SHARE * cycles)
 
     def _give(self, t: int) -> None:

@@ -232,7 +232,8 @@ class _Writer:
         self.t = target
         self.region = region
         self.name = name
-        self.slots: list[tuple[list[tuple[int, int]], int]] = []
+        #: slot 0 is the region's mark: set at every entry, it has no histogram (see ``function``)
+        self.slots: list[tuple[list[tuple[int, int]], int]] = [([], -1)]
         self.lines: list[str] = []
         self.n = 0
         self.uses_mul = False
@@ -331,7 +332,12 @@ class _Writer:
         return p
 
     def slot(self, hist: list[tuple[int, int]], nxt: int = -1) -> int:
-        self.slots.append((hist, nxt))
+        """A new count slot with histogram ``hist`` (the deltas of one counter merged: a flush's
+        work is a pass over the entries of the slots counted since the last)."""
+        merged: dict[int, int] = {}
+        for kc, delta in hist:
+            merged[kc] = merged.get(kc, 0) + delta
+        self.slots.append((list(merged.items()), nxt))
         return len(self.slots) - 1
 
     # --- leaving a block ----------------------------------------------------------------------
@@ -494,6 +500,9 @@ class _Writer:
         self.emit("store i64 %cyc, i64* %cycp")
         for name, definition in self.pointers.items():
             self.emit(f"{name} = {definition}")
+        # the region's mark (slot 0): a flush passes only over the slots of regions entered since
+        # the last one (flush_entered_counts in kernels/jit_dispatch.py)
+        self.emit("store i64 1, i64* %cnt")
         cases = " ".join(f"i64 {k}, label %blk{k}" for k in range(1, len(self.index)))
         self.emit(f"switch i64 %blk, label %blk0 [ {cases} ]")
         self.lines += [*body, "}"]
@@ -737,6 +746,7 @@ def emit_region(target: Target, region: Region, name: str = NAME_PLACEHOLDER) ->
     """The IR module of ``region``: one function named ``name``, its blocks numbered in address order.
 
     Count slots are numbered from 0: the dispatch loop passes the region's first slot as ``cnt``.
+    Slot 0 is the region's mark, set to 1 at every entry (no histogram).
     """
     w = _Writer(target, region, name)
     w.function()

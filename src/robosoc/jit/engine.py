@@ -24,7 +24,13 @@ from robosoc.jit.manifest import Manifest, manifest_key
 from robosoc.jit.tables import Build, Cores, CoreTables, Translated, TranslationStats, note_translated
 from robosoc.kernels.core import run_cores
 from robosoc.kernels.core_layout import RUN_CHUNK, S_CODE_SIZE, S_CYCLE, S_MEM_BASE, S_MEM_SIZE, S_MUL, S_PC, S_RUN
-from robosoc.kernels.jit_dispatch import CTX_FLUSHES, NEVER_TRANSLATE, RUN_TRANSLATE, flush_counts, run_translated
+from robosoc.kernels.jit_dispatch import (
+    CTX_FLUSHES,
+    NEVER_TRANSLATE,
+    RUN_TRANSLATE,
+    flush_entered_counts,
+    run_translated,
+)
 
 if TYPE_CHECKING:
     from robosoc.jit.emit_ir import EmittedRegion
@@ -37,6 +43,9 @@ __all__ = ["TranslatingCore", "TranslationStats"]
 # Python had to compile their source.
 
 M32 = 0xFFFFFFFF
+
+#: manifest key -> the process's list of regions its records were added to
+_RECORDS_IN: dict[str, list[Translated]] = {}
 
 #: the translators of this process (those of ``auto``: whether a region still compiling is wanted)
 _LIVE: weakref.WeakSet[TranslatingCore] = weakref.WeakSet()
@@ -77,6 +86,8 @@ class TranslatingCore(CoreTables):
         self._compiler = compiler
         self._tiles = np.array([tile], dtype=np.int64)
         self.manifest = Manifest()  # made again for each code loaded
+        self._next_manifest = self.manifest  # read before the tables are made for new code
+        self._records_missing: set[int] = set()  # recorded regions whose object was not in the cache
         self._compiling: list[tuple[Pending, Region, EmittedRegion, np.ndarray, np.ndarray]] = []
         if self.background:
             _LIVE.add(self)
@@ -102,9 +113,44 @@ class TranslatingCore(CoreTables):
         return self._compiler
 
     # --- what goes with the tables --------------------------------------------------------------
+    def _before_install(self) -> None:
+        """Read the code's manifest and add the regions earlier runs recorded for it to the
+        process's (once per program and process): the tables are made with them entered."""
+        key = self._manifest_key()
+        manifest = self._next_manifest = Manifest(key)
+        if manifest.records:
+            self._enter_records(key, manifest)
+        # what is left of the records for the policy to install at once: those whose object was gone
+        manifest.cached = frozenset(manifest.cached & self._records_missing)
+
+    def _enter_records(self, key: str, manifest: Manifest) -> None:
+        """The recorded regions of ``manifest`` whose objects are in the cache, as regions of this
+        process (neither found nor written: :mod:`robosoc.jit.manifest`)."""
+        from robosoc.jit.emit_ir import NAME_PLACEHOLDER
+        from robosoc.jit.tables import _TRANSLATED
+
+        build = self._key()
+        done_list = _TRANSLATED.get(build)
+        self._records_missing = set()
+        if done_list is not None and _RECORDS_IN.get(key) is done_list:
+            return  # entered already (a test may replace the process's list: entered again then)
+        m32 = self.state.m32[self.tile]
+        have = {d.start for d in done_list or [] if np.array_equal(m32[d.pcs], d.words)}
+        for record in manifest.records.values():
+            if record.start in have:
+                continue
+            addresses = self.compiler.add_cached(record.object_key, NAME_PLACEHOLDER, [record.function])
+            if addresses is None:  # its object is gone: translated afresh when it turns hot
+                self._records_missing.add(record.start)
+                continue
+            pcs = record.arrays["pcs"]
+            note_translated(build, Translated.of_record(record, addresses[0], m32[pcs].copy()))
+            self.stats.recorded += 1
+        _RECORDS_IN[key] = _TRANSLATED.get(build, [])
+
     def _new_code(self) -> None:
         self.policy.new_code()
-        self.manifest = Manifest(self._manifest_key() if self.policy.reads_manifest else None)
+        self.manifest = self._next_manifest
 
     def _sibling(self, tile: int) -> TranslatingCore:
         return TranslatingCore(self.state, tile, self.mode, self._compiler, self.stats)
@@ -114,10 +160,10 @@ class TranslatingCore(CoreTables):
         self.manifest = other.manifest.copy()
 
     def _manifest_key(self) -> str:
-        """The loaded code and build options: the key of the list of regions compiled for them
-        before (made once per load of the code: hashing it cost each region 0.1 ms)."""
+        """The loaded code, build options, policy and region cap: the key of the list of regions
+        compiled for them before (made once per load of the code: hashing it cost each region 0.1 ms)."""
         code = self.state.m8[self.tile, : self._code_size].tobytes()
-        return manifest_key(code, f"{self._key()!r} {self.mode}")
+        return manifest_key(code, f"{self._key()!r} {self.mode} cap{self.policy.region_cap()}")
 
     def _view(self) -> CodeView:
         from robosoc.jit.regions import CodeView
@@ -203,9 +249,10 @@ class TranslatingCore(CoreTables):
     ) -> Region:
         """Note a translated region (for every core of this build) and enter it in this core's tables."""
         build = self._key()
-        if region.blocks and self.compiler.cache_dir is not None:
-            self.manifest.note(region.start, self._manifest_key)
         done = Translated.of(region, emitted, address, pcs, words, build[0].base)
+        if region.blocks and self.compiler.cache_dir is not None:
+            record = lambda: done.record(self.compiler.key(emitted.ir), emitted.function)  # noqa: E731
+            self.manifest.note(region.start, self._manifest_key, record)
         self._add(done, note_translated(build, done))
         self.stats.regions += 1
         self.stats.instructions += region.instructions
@@ -238,7 +285,8 @@ class TranslatingCore(CoreTables):
 
     # --- running ------------------------------------------------------------------------------
     def has_cached_regions(self) -> bool:
-        """Whether an earlier run compiled regions of this code (``auto``: installed at once when hot)."""
+        """Whether an earlier run compiled regions of this code that are not entered yet (their
+        records are entered with the tables; ``auto`` installs these at once when hot)."""
         self._tables()
         return bool(self.manifest.cached)
 
@@ -270,7 +318,7 @@ class TranslatingCore(CoreTables):
             run_translated(arrays, self._tiles, stop, jt, threshold, self.stretch, True)
             status = int(st[S_RUN])
             if status == RUN_CHUNK:  # the loop leaves the block counts in jt only then
-                flush_counts(jt, arrays.opc[self.tile], arrays.ctr[self.tile])
+                flush_entered_counts(jt, arrays.opc[self.tile], arrays.ctr[self.tile])
             if not loading:
                 seconds = time.perf_counter() - start
                 self.stats.run_seconds += seconds

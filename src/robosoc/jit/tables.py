@@ -23,10 +23,11 @@ import numpy as np
 from robosoc.isa.table import OP_ENTRY
 from robosoc.jit.target import Target
 from robosoc.kernels.core_layout import ERRATA_RTL, S_CODE_SIZE, S_ERRATA, S_MEM_BASE, S_MEM_SIZE, S_MUL
-from robosoc.kernels.jit_dispatch import CTX_WORDS, NEVER_TRANSLATE, JitArrays, empty_tables
+from robosoc.kernels.jit_dispatch import COUNT_BANKS, CTX_WORDS, NEVER_TRANSLATE, JitArrays, empty_tables
 
 if TYPE_CHECKING:
     from robosoc.jit.emit_ir import EmittedRegion
+    from robosoc.jit.manifest import RegionRecord
     from robosoc.jit.regions import Region
     from robosoc.kernels.core import CoreArrays
 
@@ -60,6 +61,7 @@ class TranslationStats:
     instructions: int = 0  # guest instructions translated
     flushes: int = 0  # times self-modifying code made the core forget its translations
     reused: int = 0  # regions this process had translated already (same words)
+    recorded: int = 0  # regions an earlier run recorded, entered without finding or writing them
     deferred: int = 0  # auto: hot regions left to the interpreter for now (compiling would cost too much yet)
     background: int = 0  # regions handed to the background thread
     run_seconds: float = 0.0  # host time in the dispatch loop
@@ -70,12 +72,13 @@ class TranslationStats:
 class Translated:
     """A region translated in this process, reusable while its words hold the same instructions."""
 
-    region: Region
-    emitted: EmittedRegion
+    start: int
+    instructions: int
     address: int  # of the region function (0: nothing translated)
     pcs: np.ndarray  # word indices of the translated instructions
     words: np.ndarray  # their contents when translated
-    #: its count slots: (operation or counter, delta) rows, rows per slot, next slot (region-relative, -1: none)
+    #: its count slots: (operation or counter, delta) rows, rows per slot, next slot (region-relative,
+    #: -1: none); slot 0 is the region's mark (no histogram)
     slot_rows: np.ndarray
     slot_lens: np.ndarray
     slot_next: np.ndarray
@@ -86,6 +89,8 @@ class Translated:
     #: per word of ``pcs``: the instructions from it to the end of its block (1..255: the dispatch
     #: loop's ``tmap``, which lets the interpreter run the rest of a block entered in the middle)
     rest: np.ndarray
+    #: the region found (None: entered from an earlier run's record, :mod:`robosoc.jit.manifest`)
+    region: Region | None = None
 
     @staticmethod
     def of(
@@ -102,7 +107,35 @@ class Translated:
         sides = np.array([b.next_pc for b in region.blocks.values() if b.end is End.SIDE], dtype=np.int64)
         left = {(i.pc - base) >> 2: len(b.insns) - k for b in region.blocks.values() for k, i in enumerate(b.insns)}
         rest = np.array([min(left.get(int(w), 1), 255) for w in pcs], dtype=np.uint8)
-        return Translated(region, emitted, address, pcs, words, rows, lens, nxt, starts, indices, sides, rest)
+        arrays = (rows, lens, nxt, starts, indices, sides, rest)
+        return Translated(region.start, region.instructions, address, pcs, words, *arrays, region)
+
+    def record(self, object_key: str, function: str) -> RegionRecord:
+        """What a later run of the same program needs to enter this region (:mod:`robosoc.jit.manifest`)."""
+        from robosoc.jit.manifest import RegionRecord
+
+        names = ("pcs", "slot_rows", "slot_lens", "slot_next", "block_starts", "block_indices", "side_exits", "rest")
+        return RegionRecord(self.start, self.instructions, object_key, function, {n: getattr(self, n) for n in names})
+
+    @staticmethod
+    def of_record(record: RegionRecord, address: int, words: np.ndarray) -> Translated:
+        """A region an earlier run recorded, its object loaded at ``address``; ``words``: the
+        program's words at its ``pcs``."""
+        a = record.arrays
+        return Translated(
+            record.start,
+            record.instructions,
+            address,
+            a["pcs"],
+            words,
+            a["slot_rows"],
+            a["slot_lens"],
+            a["slot_next"],
+            a["block_starts"],
+            a["block_indices"],
+            a["side_exits"],
+            a["rest"],
+        )
 
 
 #: build -> regions translated in this process (any core, any run), in order
@@ -150,7 +183,7 @@ def entered_regions() -> int:
 
 def translated_instructions() -> int:
     """Guest instructions in the regions this process translated."""
-    return sum(t.region.instructions for regions in _TRANSLATED.values() for t in regions)
+    return sum(t.instructions for regions in _TRANSLATED.values() for t in regions)
 
 
 def note_translated(build: Build, done: Translated) -> list[Translated]:
@@ -177,6 +210,10 @@ class CoreTables:
         self._key_made: Build  # made at the first call (no fields are b"")
         self._known_seen = 0  # entries of _TRANSLATED[key] this core has looked at
         self._known_starts_in: set[int] = set()  # starts of the regions installed from there or translated here
+
+    def _before_install(self) -> None:
+        """The tables are about to be made for the code the tile holds (a subclass adds the regions
+        earlier runs recorded for it to the process's, :data:`_TRANSLATED`, which are entered then)."""
 
     def _new_code(self) -> None:
         """The tables were made for new code (a subclass resets what depends on it)."""
@@ -217,6 +254,7 @@ class CoreTables:
             self._clear_marks()
             self._code_size = code
             self._flushes_seen = 0
+            self._before_install()
             if not self._install_as_before():
                 self._jt = empty_tables(code // 4 + 1)  # the word after the code: its fetch error is the interpreter's
                 self._slot_hist: list[np.ndarray] = []  # per region: (kc, delta) rows of its slots
@@ -260,7 +298,7 @@ class CoreTables:
         m32 = self.state.m32[self.tile]
         known = []
         for done in done_list[self._known_seen :]:
-            start = done.region.start
+            start = done.start
             if start not in self._known_starts_in and np.array_equal(m32[done.pcs], done.words):
                 known.append(done)
                 self._known_starts_in.add(start)
@@ -280,7 +318,7 @@ class CoreTables:
         self._install(done)
         if self._known_seen == len(done_list) - 1:
             self._known_seen = len(done_list)
-        self._known_starts_in.add(done.region.start)
+        self._known_starts_in.add(done.start)
 
     # --- copies of another core's --------------------------------------------------------------
     def _install_as_before(self) -> bool:
@@ -391,9 +429,8 @@ class CoreTables:
         pcs, words = [jt.tpcs[:n]], [jt.twords[:n]]
         slots_added = False
         for done in dones:
-            region = done.region
-            if not region.blocks:
-                jt.hot[(region.start - base) >> 2] = NEVER_TRANSLATE
+            if done.address == 0:  # nothing translatable there
+                jt.hot[(done.start - base) >> 2] = NEVER_TRANSLATE
                 continue
             slot_base = self._nslots
             self._queue_slots(done, slot_base)
@@ -409,8 +446,8 @@ class CoreTables:
             words.append(done.words)
             sides = (done.side_exits - base) >> 2
             jt.hot[sides[jt.entry_fn[sides] == 0]] = NEVER_TRANSLATE
-            if jt.entry_fn[(region.start - base) >> 2] == 0:
-                jt.hot[(region.start - base) >> 2] = NEVER_TRANSLATE
+            if jt.entry_fn[(done.start - base) >> 2] == 0:
+                jt.hot[(done.start - base) >> 2] = NEVER_TRANSLATE
         if slots_added:
             self._commit_slots()
         jt = self._jt
@@ -425,16 +462,20 @@ class CoreTables:
         self._nslots += len(done.slot_lens)
 
     def _commit_slots(self) -> None:
-        """The count-slot arrays of every queued slot (counts zero: they are flushed between calls)."""
+        """The count-slot arrays of every queued slot (counts zero: they are flushed between calls),
+        with each region's mark (its first slot: the region sets it when entered)."""
         rows = np.concatenate(self._slot_hist)
         ptr = np.zeros(self._nslots + 1, dtype=np.int64)
         np.cumsum(np.concatenate(self._slot_len), out=ptr[1:])
+        marks = np.zeros(len(self._slot_len), dtype=np.int64)  # each region's first slot, its mark
+        np.cumsum([len(lens) for lens in self._slot_len[:-1]], out=marks[1:])
         jt = self._jt
         assert jt is not None
         self._jt = jt._replace(
-            cnt=np.zeros(self._nslots, dtype=np.int64),
+            cnt=np.zeros(self._nslots * COUNT_BANKS, dtype=np.int64),  # a bank per task (flush_task_counts)
             slot_ptr=ptr,
             slot_next=np.concatenate(self._slot_next),
             slot_kc=rows[:, 0].copy(),
             slot_delta=rows[:, 1].copy(),
+            slot_mark=marks,
         )

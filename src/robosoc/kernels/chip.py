@@ -79,7 +79,7 @@ from robosoc.kernels.dev_irq import (
     requests_possible,
 )
 from robosoc.kernels.host_ticks import ticks
-from robosoc.kernels.jit_dispatch import RUN_TRANSLATE, flush_counts, forget_if_changed, run_translated
+from robosoc.kernels.jit_dispatch import CTX_BANK, RUN_TRANSLATE, flush_task_counts, forget_if_changed, run_translated
 
 # tile states
 K_OFF, K_RUN, K_SLEEP, K_EXITED, K_FAULT, K_IO = 0, 1, 2, 3, 4, 5
@@ -632,10 +632,11 @@ def _run_awake(core, tiles, until, jit_tables, jit_on, jit_params, one, rest, gs
         if jit_on[t] != 0 and (st[t, S_RUN] == RUN_ENTRY or mine - st[t, S_CYCLE] >= JIT_MIN_SLICE):
             one[0] = t
             k0 = ticks() if prof else 0
+            jt = item(jit_tables, t)
+            jt.ctx[CTX_BANK] = cst[t, K_TASK]  # its blocks count into the running task's bank
             # flush: np.bool_(False), not the literal False, for which numba would compile the dispatch
             # loop a second time (the single-core engine passes a bool)
-            run_translated(core, one, mine, item(jit_tables, t), jit_params[J_THRESHOLD], jit_params[J_STRETCH],
-                           np.bool_(False))  # fmt: skip
+            run_translated(core, one, mine, jt, jit_params[J_THRESHOLD], jit_params[J_STRETCH], np.bool_(False))
             if prof:
                 gst[G_TK_JIT] += ticks() - k0
                 gst[G_N_JIT] += 1
@@ -898,10 +899,8 @@ def run_chip(core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int, jit
                     lo, hi = rt, rt + 1
                     continue
                 k0 = ticks() if prof else 0
-                if a - ni.NI_BASE == ni.TASK_ID and jit_on[t] != 0:
-                    # the task accounting reads the counters: the translated blocks' counts first (a
-                    # tile that ran on the interpreter in a short quantum has not flushed them)
-                    flush_counts(item(jit_tables, t), row(core.opc, t), row(core.ctr, t))
+                # (a TASK_ID store accounts the counters without the translated blocks' counts since
+                # the last flush: those are in the old task's bank, flush_task_counts charges them)
                 if not ni_access(t, core, book, noc):
                     failed = t
                     break
@@ -995,8 +994,9 @@ def run_chip(core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int, jit
             break
     k0 = ticks() if prof else 0
     for t in range(n):
-        if jit_on[t] != 0:  # the translated blocks' counts of the quanta that ran to their end
-            flush_counts(item(jit_tables, t), row(core.opc, t), row(core.ctr, t))
+        if jit_on[t] != 0:  # the translated blocks' counts, per task (flush_task_counts)
+            jt = item(jit_tables, t)
+            flush_task_counts(jt, row(core.opc, t), row(core.ctr, t), book.acc[t], book.snap[t], cst[t, K_TASK])
     gst[G_TIME] = T
     gst[G_STATUS] = status
     if prof:
