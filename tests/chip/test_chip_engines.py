@@ -49,6 +49,21 @@ def run_traffic(config: ChipConfig, engine: str, rounds: int) -> tuple[tuple, MP
     return outcome(chip, 20_000_000), chip
 
 
+def count_looks(monkeypatch) -> list[int]:
+    """The tiles whose translator installs the known regions (a look at the tile), in order."""
+    from robosoc.jit.engine import TranslatingCore
+
+    looks: list[int] = []
+    install_known = TranslatingCore.install_known
+
+    def counted(self: TranslatingCore) -> None:
+        looks.append(self.tile)
+        install_known(self)
+
+    monkeypatch.setattr(TranslatingCore, "install_known", counted)
+    return looks
+
+
 @pytest.mark.parametrize("engine", ENGINES)
 @pytest.mark.parametrize(
     "config",
@@ -295,7 +310,6 @@ def test_the_chip_looks_at_its_tiles_again_only_when_something_changed(monkeypat
     """Before each run of the chip loop every tile is given what other tiles translated and its
     current tables; when nothing changed since the last look (no region entered anywhere, no tile
     loaded or stopped) the look is skipped, and each of those changes brings it back."""
-    from robosoc.jit.engine import TranslatingCore
 
     def counting(rounds: int) -> Program:
         return program(
@@ -312,14 +326,7 @@ def test_the_chip_looks_at_its_tiles_again_only_when_something_changed(monkeypat
         )
 
     sub = SRAM + 4 * 8
-    looks = []
-    install_known = TranslatingCore.install_known
-
-    def counted(self: TranslatingCore) -> None:
-        looks.append(self.tile)
-        install_known(self)
-
-    monkeypatch.setattr(TranslatingCore, "install_known", counted)
+    looks = count_looks(monkeypatch)
     chip = MPSoC(ChipConfig(), engine="jit")
     a, b = (chip.config.tile_index(xy) for xy in ((1, 0), (0, 1)))
     chip.load((1, 0), counting(50))
@@ -357,19 +364,11 @@ def test_auto_does_not_look_at_its_translators_while_only_an_idle_tile_is_watche
     something changed (before, every step of a flight looked at them: 0.2 ms per step), and the
     next look at the idle tile comes twice as late."""
     from robosoc.chip.translation import AUTO_LOOK_CYCLES
-    from robosoc.jit.engine import TranslatingCore
 
     monkeypatch.setattr("robosoc.jit.policy.AUTO_WARMUP_SECONDS", 0.0)
     monkeypatch.setattr("robosoc.jit.policy.AUTO_BACKGROUND", False)
     monkeypatch.setattr("robosoc.jit.policy.AutoPolicy.budget", lambda self: float("inf"))
-    looks = []
-    install_known = TranslatingCore.install_known
-
-    def counted(self: TranslatingCore) -> None:
-        looks.append(self.tile)
-        install_known(self)
-
-    monkeypatch.setattr(TranslatingCore, "install_known", counted)
+    looks = count_looks(monkeypatch)
 
     def counting(rounds: int) -> Program:
         loop = [A.i("addi", A0, A0, 1), A.i("addi", T1, T1, -1), A.branch("bne", T1, 0, -8)]
