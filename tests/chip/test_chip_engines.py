@@ -274,6 +274,7 @@ def test_auto_leaves_a_tile_that_works_in_short_bursts_on_the_interpreter() -> N
     assert AUTO_BUSY_SHARE / 2 < shares[800] < AUTO_BUSY_SHARE < shares[3200]
 
 
+@pytest.mark.usefixtures("no_records")  # regions recorded by earlier runs would be entered at once
 def test_auto_compiles_in_the_background_and_changes_nothing(monkeypatch) -> None:
     """With a cold object cache auto hands regions to the compiling thread and the tile interprets
     them meanwhile; what the thread compiled is entered at the next step (here: after waiting for
@@ -281,7 +282,11 @@ def test_auto_compiles_in_the_background_and_changes_nothing(monkeypatch) -> Non
     monkeypatch.setattr("robosoc.jit.policy.AUTO_WARMUP_SECONDS", 0.0)  # short runs translate too
     from robosoc.benchmarks.chip import _build
     from robosoc.chip.translation import AUTO_LOOK_CYCLES
+    from robosoc.jit import tables as jit_tables
     from robosoc.jit.compiler import Compiler
+
+    monkeypatch.setattr(jit_tables, "_TRANSLATED", {})  # nothing an earlier test translated in this process
+    monkeypatch.setattr(jit_tables, "_FRESH_TABLES", {})
 
     monkeypatch.setattr(Compiler, "ready", lambda self, ir: False)  # nothing cached
     busy = _build("matrix_bench.c", True, {"BENCH_ITERATIONS": 100000, "BENCH_QUIET": None})
