@@ -121,7 +121,7 @@ def test_the_graph_holds_imports_at_module_level_in_functions_and_for_type_check
     (package / "chip").mkdir(parents=True)
     (package / "chip" / "mpsoc.py").write_text(
         "from typing import TYPE_CHECKING\n"
-        "import robosoc.cli.app\n"
+        "import robosoc.cli.typer_apps\n"
         "from robosoc.chip import elf\n"  # its own package: no edge
         "if TYPE_CHECKING:\n    from robosoc.sweep import plan\n"
         "def f():\n    from robosoc import outputs, records\n"

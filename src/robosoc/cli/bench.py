@@ -6,7 +6,7 @@ from typing import Annotated
 import typer
 
 from robosoc.cli import exit_codes, files, options
-from robosoc.cli.app import bench_app
+from robosoc.cli.typer_apps import bench_app
 from robosoc.cli.console import make_console
 from robosoc.cli.engine_option import check_engine
 from robosoc.config.firmware import ARITH_CHOICES

@@ -8,7 +8,7 @@ from typing import Annotated
 import typer
 
 from robosoc.cli import exit_codes, files, options
-from robosoc.cli.app import app
+from robosoc.cli.typer_apps import app
 from robosoc.cli.errors import CliError
 
 

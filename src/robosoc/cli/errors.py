@@ -1,7 +1,7 @@
 """How every command fails: one exception for errors the user can fix, one format, one exit code each.
 
 A command (or a helper of :mod:`robosoc.cli.options` and :mod:`robosoc.cli.files`) raises
-:class:`CliError`; :func:`run_guarded` (called by the application's group, :mod:`robosoc.cli.app`)
+:class:`CliError`; :func:`run_guarded` (called by the application's group, :mod:`robosoc.cli.typer_apps`)
 turns it and everything else into a message on stderr and an exit code (:mod:`robosoc.cli.exit_codes`):
 
 * ``CliError("--seed: must be ...")``: ``robosoc fly: --seed: must be between 0 and 2**63-1, got -1``, 2;

@@ -15,7 +15,7 @@ from typing import Annotated
 import typer
 
 from robosoc.cli import exit_codes, options
-from robosoc.cli.app import app
+from robosoc.cli.typer_apps import app
 from robosoc.cli.console import make_console, plain
 from robosoc.cli.errors import CliError
 from robosoc.firmware import TEMPLATES_DIR

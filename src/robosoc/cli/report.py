@@ -8,7 +8,7 @@ from typing import Annotated
 import typer
 
 from robosoc.cli import exit_codes, files
-from robosoc.cli.app import app
+from robosoc.cli.typer_apps import app
 from robosoc.cli.console import make_console, plain
 from robosoc.cli.errors import CliError
 

@@ -13,7 +13,7 @@ import typer
 from robosoc import output_files
 from robosoc.chip.engines import INTERP, resolve_engine
 from robosoc.cli import exit_codes, files, options
-from robosoc.cli.app import app
+from robosoc.cli.typer_apps import app
 from robosoc.cli.engine_option import Engine
 from robosoc.cli.errors import CliError
 from robosoc.cli.gdb_option import GDB_HELP, TILE_HELP, check_gdb_options, gdb_session

@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING, Annotated
 import typer
 
 from robosoc.cli import exit_codes
-from robosoc.cli.app import RobosocGroup, app
+from robosoc.cli.typer_apps import RobosocGroup, app
 from robosoc.cli.scenario_flags import Firmware
 
 if TYPE_CHECKING:

@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, Annotated
 import typer
 
 from robosoc.cli import exit_codes, files, link_options, options
-from robosoc.cli.app import RobosocGroup, app
+from robosoc.cli.typer_apps import RobosocGroup, app
 from robosoc.cli.console import make_console, note, plain
 from robosoc.cli.errors import CliError
 from robosoc.cli.link_options import DEFAULT_BIND, Bind, ConnectTimeout, Faults, Hold, Pace, PeerTimeout, Resend

@@ -11,7 +11,7 @@ import typer
 
 from robosoc import output_files
 from robosoc.cli import exit_codes, files, options
-from robosoc.cli.app import app
+from robosoc.cli.typer_apps import app
 from robosoc.cli.console import make_console, note, plain
 from robosoc.cli.errors import CliError
 
