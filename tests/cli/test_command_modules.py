@@ -60,9 +60,7 @@ def _commands_loaded(report: dict) -> set[str]:
 
 
 def _run_in_a_child(args: list[str]) -> tuple[dict, str]:
-    proc = subprocess.run(
-        [sys.executable, "-c", _CHILD, json.dumps(args)], capture_output=True, text=True, timeout=600
-    )
+    proc = subprocess.run([sys.executable, "-c", _CHILD, json.dumps(args)], capture_output=True, text=True, timeout=600)
     return json.loads(proc.stderr.strip().splitlines()[-1]), proc.stdout
 
 

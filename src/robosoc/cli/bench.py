@@ -6,9 +6,9 @@ from typing import Annotated
 import typer
 
 from robosoc.cli import exit_codes, files, options
-from robosoc.cli.typer_apps import bench_app
 from robosoc.cli.console import make_console
 from robosoc.cli.engine_option import check_engine
+from robosoc.cli.typer_apps import bench_app
 from robosoc.config.firmware import ARITH_CHOICES
 from robosoc.config.scenario import MAX_VEHICLES
 

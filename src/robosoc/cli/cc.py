@@ -8,8 +8,8 @@ from typing import Annotated
 import typer
 
 from robosoc.cli import exit_codes, files, options
-from robosoc.cli.typer_apps import app
 from robosoc.cli.errors import CliError
+from robosoc.cli.typer_apps import app
 
 
 def _opt_level(value: str) -> str:

@@ -10,11 +10,11 @@ import typer
 
 from robosoc import output_files
 from robosoc.cli import exit_codes, files, options
-from robosoc.cli.typer_apps import firmware_app
 from robosoc.cli.console import make_console, plain
 from robosoc.cli.errors import CliError
 from robosoc.cli.project_check import check_firmware
 from robosoc.cli.scenario_flags import FIRMWARE, ScenarioFlags, resolve_section, takes_scenario
+from robosoc.cli.typer_apps import firmware_app
 from robosoc.config.firmware import FirmwareConfig
 from robosoc.config.project import IO_PACKETS
 

@@ -14,11 +14,11 @@ from typing import TYPE_CHECKING, Annotated, Any
 import typer
 
 from robosoc.cli import exit_codes, files, link_options, options
-from robosoc.cli.typer_apps import app
 from robosoc.cli.console import make_console, note, plain
 from robosoc.cli.errors import CliError
 from robosoc.cli.project_check import check_project
 from robosoc.cli.scenario_flags import FLY, ResolvedScenario, ScenarioFlags, resolve, takes_scenario
+from robosoc.cli.typer_apps import app
 from robosoc.config.scenario import ScenarioConfig
 
 if TYPE_CHECKING:

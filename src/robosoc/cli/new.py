@@ -15,9 +15,9 @@ from typing import Annotated
 import typer
 
 from robosoc.cli import exit_codes, options
-from robosoc.cli.typer_apps import app
 from robosoc.cli.console import make_console, plain
 from robosoc.cli.errors import CliError
+from robosoc.cli.typer_apps import app
 from robosoc.firmware import TEMPLATES_DIR
 
 TEMPLATES = tuple(sorted(p.name for p in TEMPLATES_DIR.iterdir() if (p / "robosoc.toml").is_file()))

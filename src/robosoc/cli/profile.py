@@ -14,9 +14,9 @@ from typing import TYPE_CHECKING, Annotated, Any
 import typer
 
 from robosoc.cli import exit_codes, files, options
-from robosoc.cli.typer_apps import app
 from robosoc.cli.console import make_console, note, plain
 from robosoc.cli.errors import CliError
+from robosoc.cli.typer_apps import app
 
 if TYPE_CHECKING:
     from rich.console import Console, JustifyMethod

@@ -8,9 +8,9 @@ from typing import Annotated
 import typer
 
 from robosoc.cli import exit_codes, files
-from robosoc.cli.typer_apps import app
 from robosoc.cli.console import make_console, plain
 from robosoc.cli.errors import CliError
+from robosoc.cli.typer_apps import app
 
 RunDir = Annotated[Path, typer.Argument(help="A run folder of robosoc fly (flight.csv, jobs.csv, summary.json ...).")]
 Out = Annotated[Path | None, typer.Option("--out", "-o", help="Write the page here (default: RUN_DIR/report.html).")]

@@ -13,10 +13,10 @@ import typer
 from robosoc import output_files
 from robosoc.chip.engines import INTERP, resolve_engine
 from robosoc.cli import exit_codes, files, options
-from robosoc.cli.typer_apps import app
 from robosoc.cli.engine_option import Engine
 from robosoc.cli.errors import CliError
 from robosoc.cli.gdb_option import GDB_HELP, TILE_HELP, check_gdb_options, gdb_session
+from robosoc.cli.typer_apps import app
 from robosoc.config.chip import DEFAULT_ENGINE
 from robosoc.config.ranges import MAX_CYCLES
 

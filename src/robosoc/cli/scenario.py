@@ -8,8 +8,8 @@ from typing import TYPE_CHECKING, Annotated
 import typer
 
 from robosoc.cli import exit_codes
-from robosoc.cli.typer_apps import RobosocGroup, app
 from robosoc.cli.scenario_flags import Firmware
+from robosoc.cli.typer_apps import RobosocGroup, app
 
 if TYPE_CHECKING:
     from robosoc.config.scenario import ScenarioConfig

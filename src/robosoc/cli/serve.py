@@ -14,7 +14,6 @@ from typing import TYPE_CHECKING, Annotated
 import typer
 
 from robosoc.cli import exit_codes, files, link_options, options
-from robosoc.cli.typer_apps import RobosocGroup, app
 from robosoc.cli.console import make_console, note, plain
 from robosoc.cli.errors import CliError
 from robosoc.cli.link_options import DEFAULT_BIND, Bind, ConnectTimeout, Faults, Hold, Pace, PeerTimeout, Resend
@@ -28,6 +27,7 @@ from robosoc.cli.scenario_flags import (
     resolve,
     takes_scenario,
 )
+from robosoc.cli.typer_apps import RobosocGroup, app
 
 if TYPE_CHECKING:
     from robosoc.config.vehicle import VehicleConfig

@@ -11,9 +11,9 @@ import typer
 
 from robosoc import output_files
 from robosoc.cli import exit_codes, files, options
-from robosoc.cli.typer_apps import app
 from robosoc.cli.console import make_console, note, plain
 from robosoc.cli.errors import CliError
+from robosoc.cli.typer_apps import app
 
 MAX_WORKERS = 256
 

@@ -11,11 +11,11 @@ import typer
 
 from robosoc import output_files
 from robosoc.cli import exit_codes, files, options
-from robosoc.cli.typer_apps import app
 from robosoc.cli.console import make_console, plain
 from robosoc.cli.errors import CliError
 from robosoc.cli.project_check import check_inputs, load_checked
 from robosoc.cli.scenario_flags import TABLE, ScenarioFlags, resolve, takes_scenario
+from robosoc.cli.typer_apps import app
 from robosoc.config.scenario import ScenarioConfig
 
 RELEASES = ("event", "periodic", "both")
