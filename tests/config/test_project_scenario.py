@@ -139,3 +139,15 @@ def test_a_sweep_point_whose_project_is_missing_names_the_sweep_file_and_key(pro
     with pytest.raises(ConfigError) as caught:
         load_sweep(sweep)
     assert str(caught.value).startswith(f"{sweep}: grid.firmware.project[1]: firmware.project: no folder")
+
+
+def test_a_project_read_again_is_the_file_as_it_is_now(project: Path) -> None:
+    # a flight reads its project several times and the checked project is kept by the file's text:
+    # an edit (same folder, same process) is seen, and a source removed since is still an error
+    first = load_project(project)
+    assert load_project(project) is first
+    (project / PROJECT_FILE).write_text(PINGPONG + DEFAULTS.replace("duration_s = 7.0", "duration_s = 8.0"))
+    assert dict(load_project(project).scenario)["duration_s"] == 8.0
+    (project / "tasks.c").unlink()
+    with pytest.raises(ConfigError, match=r"project.sources\[0\].*no such file"):
+        load_project(project)

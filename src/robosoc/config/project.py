@@ -88,6 +88,7 @@ the order of the file.  Errors name the file and the dotted key (``tasks[1].port
 from __future__ import annotations
 
 import dataclasses
+import functools
 import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -99,7 +100,7 @@ from robosoc.config.dotted import flatten
 from robosoc.config.firmware import ARITH_CHOICES
 from robosoc.config.packet_layout import FIELD_BYTES, FIELD_TYPES, MAX_PAYLOAD_FLITS, LayoutError, lay_out
 from robosoc.config.ranges import check_fields
-from robosoc.config.validate import ConfigError, from_mapping, read_toml_mapping
+from robosoc.config.validate import ConfigError, from_mapping, parse_toml_text, read_toml_text
 from robosoc.firmware import LIBRARIES
 
 __all__ = [
@@ -551,19 +552,29 @@ def load_project(folder: str | Path) -> FirmwareProject:
     path = Path(folder)
     if path.is_dir():
         path = path / PROJECT_FILE
-    data = read_toml_mapping(path, "project file")
-    if "folder" in data:
-        raise ConfigError(str(path), "folder", "unknown field (the project's folder is where its file is)")
-    chip = _defaults_table(data.pop("chip", {}), path, "chip")
-    scenario = _defaults_table(data.pop("scenario", {}), path, "scenario")
-    data["folder"] = str(path.parent)
-    project = from_mapping(FirmwareProject, data, str(path))
+    text = read_toml_text(path, "project file")
+    project = _project_of_text(str(path), text)
     for i, source in enumerate(project.project.sources):
         if not project.path(source).is_file():
             raise ConfigError(str(path), f"project.sources[{i}]", f"no such file: {project.path(source)}")
     for i, include in enumerate(project.project.include_dirs):
         if not project.path(include).is_dir():
             raise ConfigError(str(path), f"project.include_dirs[{i}]", f"no such folder: {project.path(include)}")
+    return project
+
+
+@functools.lru_cache(maxsize=32)
+def _project_of_text(file: str, text: str) -> FirmwareProject:
+    """The checked project of the file ``file`` holding ``text``; kept, since one flight reads its
+    project several times (the build, the image, the telemetry, the summary) and the text decides."""
+    path = Path(file)
+    data = parse_toml_text(text, path)
+    if "folder" in data:
+        raise ConfigError(str(path), "folder", "unknown field (the project's folder is where its file is)")
+    chip = _defaults_table(data.pop("chip", {}), path, "chip")
+    scenario = _defaults_table(data.pop("scenario", {}), path, "scenario")
+    data["folder"] = str(path.parent)
+    project = from_mapping(FirmwareProject, data, str(path))
     return dataclasses.replace(project, chip=chip, scenario=scenario)
 
 

@@ -182,9 +182,18 @@ def read_toml_mapping(path: str | Path, kind: str = "TOML file") -> dict[str, An
     Raises:
         ConfigError: the file is missing or unreadable, is not UTF-8 or not valid TOML.
     """
+    return parse_toml_text(read_toml_text(path, kind), path)
+
+
+def read_toml_text(path: str | Path, kind: str = "TOML file") -> str:
+    """The text of a TOML file (:func:`parse_toml_text` parses it).
+
+    Raises:
+        ConfigError: the file is missing or unreadable, or is not UTF-8.
+    """
     path = Path(path)
     try:
-        return tomllib.loads(path.read_text(encoding="utf-8"))
+        return path.read_text(encoding="utf-8")
     except FileNotFoundError as exc:
         raise ConfigError(str(path), "", "file not found") from exc
     except IsADirectoryError as exc:
@@ -193,6 +202,16 @@ def read_toml_mapping(path: str | Path, kind: str = "TOML file") -> dict[str, An
         raise ConfigError(str(path), "", f"cannot read: {exc.strerror or exc}") from exc
     except UnicodeDecodeError as exc:
         raise ConfigError(str(path), "", f"not UTF-8 text (offset {exc.start}): expected a TOML file") from exc
+
+
+def parse_toml_text(text: str, path: str | Path) -> dict[str, Any]:
+    """``text``, read from the file ``path``, as a plain mapping.
+
+    Raises:
+        ConfigError: not valid TOML (the file named).
+    """
+    try:
+        return tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(str(path), "", f"invalid TOML: {exc}") from exc
 
