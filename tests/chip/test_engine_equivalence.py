@@ -940,11 +940,11 @@ def test_a_flush_of_the_entered_regions_counts_as_a_flush_of_every_slot() -> Non
 @pytest.mark.usefixtures("no_records")
 def test_the_chips_flush_charges_each_tasks_bank_to_that_task() -> None:
     """On the chip the blocks count into the bank of the tile's running task (``CTX_BANK``), so a
-    TASK_ID store needs no flush: :func:`flush_task_counts` adds every bank to the counters and
+    TASK_ID store needs no flush: :func:`flush_task_counts` adds every bank counted into to the counters and
     the banks of the tasks not running to their accounting rows and to the snapshot (the running
     task's are accounted for at its next TASK_ID store)."""
     from robosoc.kernels.chip import ACC_SIZE, NTASKS
-    from robosoc.kernels.jit_dispatch import CTX_BANK, flush_counts, flush_task_counts, run_translated
+    from robosoc.kernels.jit_dispatch import count_into_bank, flush_counts, flush_task_counts, run_translated
 
     words = indirect_calls(300)
     make_soc(words, engine="jit").run(max_cycles=1_000_000)  # every region translated
@@ -955,7 +955,7 @@ def test_the_chips_flush_charges_each_tasks_bank_to_that_task() -> None:
     assert len(jt.cnt) == NTASKS * n
     parts = []  # (task, counts of its stretch)
     for task, until in ((0, 500), (3, 2_000), (0, 3_000), (5, 4_500)):
-        jt.ctx[CTX_BANK] = task
+        count_into_bank(jt.ctx, task)
         before = jt.cnt.copy()
         run_translated(soc.state.arrays(), tr._tiles, until, jt, 1, 0, False)
         parts.append((task, jt.cnt - before))

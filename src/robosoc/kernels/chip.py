@@ -79,7 +79,13 @@ from robosoc.kernels.dev_irq import (
     requests_possible,
 )
 from robosoc.kernels.host_ticks import ticks
-from robosoc.kernels.jit_dispatch import CTX_BANK, RUN_TRANSLATE, flush_task_counts, forget_if_changed, run_translated
+from robosoc.kernels.jit_dispatch import (
+    RUN_TRANSLATE,
+    count_into_bank,
+    flush_task_counts,
+    forget_if_changed,
+    run_translated,
+)
 
 # tile states
 K_OFF, K_RUN, K_SLEEP, K_EXITED, K_FAULT, K_IO = 0, 1, 2, 3, 4, 5
@@ -633,7 +639,7 @@ def _run_awake(core, tiles, until, jit_tables, jit_on, jit_params, one, rest, gs
             one[0] = t
             k0 = ticks() if prof else 0
             jt = item(jit_tables, t)
-            jt.ctx[CTX_BANK] = cst[t, K_TASK]  # its blocks count into the running task's bank
+            count_into_bank(jt.ctx, cst[t, K_TASK])  # its blocks count into the running task's bank
             # flush: np.bool_(False), not the literal False, for which numba would compile the dispatch
             # loop a second time (the single-core engine passes a bool)
             run_translated(core, one, mine, jt, jit_params[J_THRESHOLD], jit_params[J_STRETCH], np.bool_(False))

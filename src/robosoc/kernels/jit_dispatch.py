@@ -93,7 +93,11 @@ CTX_MIDBLOCK = 15  # interpreter steps at translated words that start no block (
 CTX_UNMARKED = 16
 #: the bank of count slots the regions count into (the chip: the tile's task, see flush_task_counts)
 CTX_BANK = 17
-CTX_SIZE = 18
+#: the banks counted into since the chip loop's last flush, one bit each (set with CTX_BANK; a flush
+#: looks at those banks only: a look at every bank's region marks cost each translated tile about
+#: 15 µs per chip-loop call, its 16 banks' marks being 16 cache lines apart)
+CTX_BANKS = 18
+CTX_SIZE = 19
 #: banks of count slots of a core's tables: one per task id of the chip (a single core uses bank 0)
 COUNT_BANKS = NTASKS
 
@@ -263,6 +267,14 @@ def flush_entered_counts(jt: JitArrays, opc_t: np.ndarray, ctr_t: np.ndarray) ->
         _flush_bank(jt, b, opc_t, ctr_t, opc_t, opc_t, False)
 
 
+@njit(cache=True, inline="always")
+def count_into_bank(ctx: np.ndarray, bank: int) -> None:
+    """The dispatch loop counts into bank ``bank`` from now on (the chip: the tile's running task),
+    and :func:`flush_task_counts` flushes it."""
+    ctx[CTX_BANK] = bank
+    ctx[CTX_BANKS] |= np.int64(1) << bank
+
+
 @njit(cache=True)
 def flush_task_counts(
     jt: JitArrays, opc_t: np.ndarray, ctr_t: np.ndarray, acc_t: np.ndarray, snap_t: np.ndarray, task: int
@@ -274,9 +286,14 @@ def flush_task_counts(
     (and to ``snap_t``, the counters' values already accounted for); the running task's are
     accounted for at its next TASK_ID store or when the host accounts every tile.  (A flush of
     every slot before each TASK_ID store cost the fixed+mul flight 20 µs per physics step, more
-    than its translated blocks saved; of the entered regions' slots only, 9 µs.)"""
+    than its translated blocks saved; of the entered regions' slots only, 9 µs.)  Only the banks
+    named in ``ctx[CTX_BANKS]`` hold counts: the chip loop sets a bank's bit when it makes it
+    ``ctx[CTX_BANK]``."""
+    used = jt.ctx[CTX_BANKS]
+    jt.ctx[CTX_BANKS] = 0
     for b in range(jt.cnt.shape[0] // max(jt.slot_next.shape[0], 1)):
-        _flush_bank(jt, b, opc_t, ctr_t, acc_t[b], snap_t, b != task)
+        if (used >> b) & 1:
+            _flush_bank(jt, b, opc_t, ctr_t, acc_t[b], snap_t, b != task)
 
 
 @njit(cache=True)
@@ -500,6 +517,7 @@ __all__ = [
     "X_LIMIT",
     "X_SIDE",
     "JitArrays",
+    "count_into_bank",
     "empty_tables",
     "flush_counts",
     "flush_entered_counts",
