@@ -258,3 +258,43 @@ def test_deaf_busy_cores_run_in_long_quanta_with_the_lockstep_results():
     (fast, quanta), (slow, _) = one(False), one(True)
     assert fast == slow
     assert quanta <= 2  # one quantum of kc.SINGLE_QUANTUM cycles at most would do
+
+
+# --- long quanta through interrupt handlers: a core with interrupts off hears no packet -----------
+HANDLERS = Path(__file__).parent / "programs" / "handlers.c"
+
+
+def run_handlers(config: ChipConfig, lockstep: bool, seed: int, long_quanta: bool = True):
+    program = load_elf(build_elf([HANDLERS], mul=True, defines={"ROUNDS": 3, "SEED": seed}))
+    chip = MPSoC(config, lockstep=lockstep)
+    chip.allow_long_quanta(long_quanta)
+    chip.load_all(program)
+    result = chip.run(max_cycles=20_000_000)
+    tiles = {xy: chip.counters(xy) for xy in chip.core_tiles()}
+    tasks = {xy: chip.task_counters(xy) for xy in chip.core_tiles()}
+    return (result.output, result.cycles, tiles, tasks, chip.noc_counters()), int(chip.gst[kc.G_QUANTA])
+
+
+@pytest.mark.parametrize(
+    "config,seed",
+    [(ChipConfig(), 1), (ChipConfig(), 2), (ChipConfig(width=3, height=2), 3), (ChipConfig(width=3, height=3), 4)],
+    ids=["2x2", "2x2-seed2", "3x2", "3x3"],
+)
+def test_handlers_run_in_long_quanta_with_the_lockstep_results(config: ChipConfig, seed: int):
+    # ticks whose handlers work for hundreds of cycles with interrupts off while packets arrive,
+    # returns that turn the packet line back on, sleeps with interrupts off that a packet ends: the
+    # handlers run in long quanta (fewer quanta than with short ones only: a third fewer on the 3x3 mesh, whose
+    # main loops often listen), and every cycle,
+    # counter and output is the lockstep one
+    (fast, quanta) = run_handlers(config, False, seed)
+    (short, short_quanta) = run_handlers(config, False, seed, long_quanta=False)
+    (slow, _) = run_handlers(config, True, seed)
+    output, _, tiles, _, _ = fast
+    n_cores = len(tiles)
+    for xy, text in output.items():
+        line = text.decode()
+        assert f" got {3 * (n_cores - 1)} " in line, (xy, line)
+        assert int(line.split(" ticks ")[1].split()[0]) >= 3, (xy, line)  # handlers did run
+    assert fast == slow
+    assert short == slow
+    assert quanta < 0.8 * short_quanta

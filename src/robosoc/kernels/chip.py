@@ -70,10 +70,12 @@ from robosoc.kernels.dev_irq import (
     CAUSE_PACKET,
     ENTRY_DELAY,
     IRQ_MASK,
+    IRQ_STATUS,
     cause_enabled,
     earliest_entry,
     first_cause,
     first_request,
+    hears_packets,
     irq_external_rise,
     irq_scan,
     requests_possible,
@@ -194,6 +196,7 @@ ACC_SIZE = A_CYCLES + 4
 
 IO_COLS = 3 + nk.MEM_FLITS  # io_out rows: cycle, length, first-flit cycle, flits
 SINGLE_QUANTUM = 1 << 20  # default G_LOOK_SINGLE (bounds the output of one quantum)
+SLEEP_ADDRESS = ni.NI_BASE + ni.SLEEP  # the NI register a core stores to to sleep
 
 
 @njit("int64(int64, int64)", cache=True, inline="always")
@@ -738,7 +741,7 @@ def run_chip(core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int, jit
                 state = cst[t, K_STATE]
                 if state == K_RUN:
                     nrun += 1
-                    if (st[t, S_IRQ_MASK] & CAUSE_PACKET) != 0:
+                    if hears_packets(row(st, t)):
                         long_ok = False
                 elif state == K_SLEEP:
                     nsleep += 1
@@ -746,7 +749,7 @@ def run_chip(core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int, jit
                     wake = min(wake, w)
                     if w > T:
                         wake_later = min(wake_later, w)
-                    elif (st[t, S_IRQ_MASK] & CAUSE_PACKET) != 0:
+                    elif hears_packets(row(st, t)):
                         long_ok = False
             # the NoC's next activity; a quiet NoC stays quiet until a core sends or receives
             nxt = NEVER if quiet else _noc_next(noc, cst)
@@ -893,8 +896,9 @@ def run_chip(core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int, jit
                 a = _stop_address(t, core)
                 if a < ni.NI_BASE or a >= ni.NI_END:
                     # not an NI register: the packet line (long quanta, see S_EXT_FINAL and S_MASK_LOCK)
-                    if a == IRQ_MASK:
-                        # setting bit 1 would let packets that cores already past s0 may still send
+                    if a == IRQ_MASK or a == IRQ_STATUS:
+                        # setting IRQ_MASK bit 1, or IRQ_STATUS bit 0 with it set (the return from a
+                        # handler), would let packets that cores already past s0 may still send
                         # change t: end the quantum before the store, the next one is not long
                         H = s0
                         gst[G_NO_LONG] = 1
@@ -903,6 +907,12 @@ def run_chip(core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int, jit
                     # s0 + look_idle (and t does not run past H)
                     st[t, S_EXT_FINAL] = core_until(s0 + look_idle, cst[t, K_DIV])
                     lo, hi = rt, rt + 1
+                    continue
+                if long_q and a == SLEEP_ADDRESS and (st[t, S_IRQ_MASK] & CAUSE_PACKET) != 0:
+                    # a sleep wakes on an enabled cause whatever IRQ_STATUS says: a packet that a core
+                    # already past s0 may still send could wake t, so the quantum ends before it
+                    H = s0
+                    gst[G_NO_LONG] = 1
                     continue
                 k0 = ticks() if prof else 0
                 # (a TASK_ID store accounts the counters without the translated blocks' counts since

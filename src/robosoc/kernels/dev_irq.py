@@ -133,6 +133,17 @@ def requests_possible(st: np.ndarray) -> bool:
 
 
 @njit(**UNCOUNTED)
+def hears_packets(st: np.ndarray) -> bool:
+    """Whether a packet arriving now could start a request without a store first: IRQ_MASK bit 1
+    set, the controller enabled and idle, and no request latched yet.  A core inside its handler
+    (done until software sets IRQ_STATUS bit 0), with interrupts off, or with a request already on
+    its way does not: the packet line reaches it only through an IRQ_CAUSE read, or after a store
+    to IRQ_MASK or IRQ_STATUS, or a sleep (WFI-like wake-up); the chip loop's long quanta stop it
+    before each of those (kernels/chip.py)."""
+    return (st[S_IRQ_MASK] & CAUSE_PACKET) != 0 and st[S_IRQ_RISE] < 0 and requests_possible(st)
+
+
+@njit(**UNCOUNTED)
 def next_cause_change(st: np.ndarray, x: int) -> int:
     """Earliest device cycle > x at which ``irq_pending`` may change (NEVER if it cannot)."""
     if (st[S_IRQ_STATUS] & 1) == 0:
@@ -362,6 +373,7 @@ __all__ = [
     "earliest_entry",
     "first_cause",
     "first_request",
+    "hears_packets",
     "irq_event",
     "irq_external_rise",
     "irq_input_changed",

@@ -30,6 +30,7 @@ from robosoc.kernels.dev_irq import (
     CAUSE_PACKET,
     IRQ_CAUSE,
     IRQ_MASK,
+    IRQ_STATUS,
     irq_input_changed,
     irq_load,
     irq_scan,
@@ -76,14 +77,18 @@ def mmio_store(st: np.ndarray, out: np.ndarray, addr: int, value: int, s: int) -
     """Write a device register with a store starting in instruction cycle ``s``.  A DEV_* code.
 
     DEV_NI: a network-interface register, or on an MPSoC tile under ``S_MASK_LOCK`` a store that
-    would set IRQ_MASK bit 1 (the packet line): the core stops before it (see kernels/chip.py).
+    would let the packet line reach the controller (IRQ_MASK bit 1 set, or IRQ_STATUS bit 0 set
+    with IRQ_MASK bit 1 set): the core stops before it (see kernels/chip.py).
     """
     a = addr & 0xFFFFFFFC
     v = value & 0xFFFFFFFF
     if NI_BASE <= a < NI_END:
         return DEV_NI if st[S_NI] != 0 else DEV_UNMAPPED
-    if a == IRQ_MASK and st[S_MASK_LOCK] != 0 and (v & ~st[S_IRQ_MASK] & CAUSE_PACKET) != 0:
-        return DEV_NI
+    if st[S_MASK_LOCK] != 0:
+        if a == IRQ_MASK and (v & ~st[S_IRQ_MASK] & CAUSE_PACKET) != 0:
+            return DEV_NI
+        if a == IRQ_STATUS and (v & 1) != 0 and (st[S_IRQ_MASK] & CAUSE_PACKET) != 0:
+            return DEV_NI
     if TIMER_BLOCK <= a < TIMER_BLOCK_END:
         irq_scan(st, s)  # every writable timer register can move the timer line
         r = timer_store(st, a, v, s)
