@@ -289,7 +289,8 @@ def parse_packet(flits: Sequence[int]) -> Packet:
     """A whole packet (wire flits included, as :meth:`MPSoC.received` gives them)."""
     if len(flits) < HEADER_FLITS:
         raise ValueError(f"a kernel packet has at least {HEADER_FLITS} flits, got {len(flits)}")
-    body = b"".join(struct.pack("<H", v & 0xFFFF) for v in flits[HEADER_FLITS:])
+    tail = flits[HEADER_FLITS:]
+    body = struct.pack(f"<{len(tail)}H", *[v & 0xFFFF for v in tail])  # one pack: a third of a pack per flit
     return Packet(
         dest=flits[0], size=flits[1], src_tile=flits[2] >> 8, src_port=flits[2] & 0xFF, port=flits[3] >> 8,
         frag=flits[3] & 0xFF, length=flits[4], seq=flits[5], data=body,
