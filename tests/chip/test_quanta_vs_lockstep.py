@@ -17,6 +17,7 @@ import pytest
 from robosoc.chip.mpsoc import MPSoC
 from robosoc.config.chip import ChipConfig, NocConfig
 from robosoc.kernels import chip as kc
+from robosoc.kernels.core_layout import NEVER, S_IRQ_IDLE
 from robosoc.program.elf import load_elf
 from robosoc.toolchain import build_elf
 
@@ -298,3 +299,59 @@ def test_handlers_run_in_long_quanta_with_the_lockstep_results(config: ChipConfi
     assert fast == slow
     assert short == slow
     assert quanta < 0.8 * short_quanta
+
+
+# --- long quanta inside interrupt handlers: a done controller hears no packet ------------------
+BUSY_HANDLERS = Path(__file__).parent / "programs" / "busy_handlers.c"
+BUSY_TICKS, BUSY_WORK, BUSY_PERIOD = 8, 200, 5000
+
+
+def run_busy_handlers(config: ChipConfig, lockstep: bool, steps: Sequence[int] = ()):
+    """busy_handlers.c; ``steps``: advance in these calls first, noting after each the quanta so far
+    and whether every core is inside its handler (its controller done)."""
+    defines = {"TICKS": BUSY_TICKS, "WORK": BUSY_WORK, "PERIOD": BUSY_PERIOD}
+    program = load_elf(build_elf([BUSY_HANDLERS], mul=True, defines=defines))
+    chip = MPSoC(config, lockstep=lockstep)
+    chip.load_all(program)
+    seen = []
+    for c in steps:
+        chip.step(c)
+        inside = all(chip.cores.st[config.tile_index(xy), S_IRQ_IDLE] >= NEVER for xy in chip.core_tiles())
+        seen.append((int(chip.gst[kc.G_QUANTA]), inside))
+    result = chip.run(max_cycles=20_000_000)
+    tiles = {xy: chip.counters(xy) for xy in chip.core_tiles()}
+    tasks = {xy: chip.task_counters(xy) for xy in chip.core_tiles()}
+    return (result.output, result.cycles, tiles, tasks, chip.noc_counters()), seen, int(chip.gst[kc.G_LOOK_IDLE])
+
+
+@pytest.mark.parametrize(
+    "config", [ChipConfig(), ChipConfig(width=3, height=2, noc=PER_OUTPUT)], ids=["hermes-2x2", "per-output-3x2"]
+)
+def test_cores_inside_their_handlers_run_in_long_quanta_with_the_lockstep_results(config: ChipConfig):
+    # Every core takes the same tick and computes in its handler with IRQ_MASK's packet bit set; a
+    # quarter of the way in it sends a packet, three quarters in it reads IRQ_CAUSE, and packets that
+    # arrive after that read are let in by the re-enabling store.  The first tick (TIMER1 counts every
+    # cycle from reset, clears at PERIOD) is entered a few cycles after cycle PERIOD; a handler runs at
+    # least WORK iterations of a multiply (>= 5 cycles each), so every core is inside its handler
+    # over [PERIOD + 100, PERIOD + 900].  Short quanta there would be G_LOOK_IDLE cycles each (47 of
+    # them); inside a handler the controller is done, so the chip runs long quanta, cut by the sends.
+    a, b = BUSY_PERIOD + 100, BUSY_PERIOD + 900
+    fast, seen, look_idle = run_busy_handlers(config, False, steps=[a, b])
+    slow, _, _ = run_busy_handlers(config, True)
+    assert fast == slow
+    output = fast[0]
+    assert len(output) == config.width * config.height - 1  # every tile but the I/O tile
+    got = seen_in_handler = late = 0
+    for text in output.values():
+        words = text.decode().split()
+        assert int(words[3]) >= BUSY_TICKS, text
+        got += int(words[5])
+        seen_in_handler += int(words[7])
+        late += int(words[9])
+    # every packet sent (one per tick but the last two) arrived, some seen by the IRQ_CAUSE read in the
+    # handler, the others let in by the re-enabling store
+    assert got == len(output) * (BUSY_TICKS - 2) == seen_in_handler + late
+    assert seen_in_handler > 0 and late > 0
+    (q_a, inside_a), (q_b, inside_b) = seen
+    assert inside_a and inside_b
+    assert q_b - q_a < (b - a) // look_idle // 4
