@@ -28,3 +28,23 @@ def test_all_periods_energies_at_once_equal_total_pj_row_by_row():
             assert energy[p, r] == expected  # exactly: the same products summed in the same order
             nonzero += expected > 0
     assert nonzero > len(periods)  # the tasks, kernel and idle did spend energy
+
+
+def test_all_periods_counters_at_once_are_each_rows_named_counters():
+    # the flight keeps each period's accounting-row differences and takes the counters of all
+    # periods in one product at its end: each equals account_counters of that row difference
+    from robosoc.chip.mpsoc import account_counter_map, account_counters
+
+    scenario = dataclasses.replace(ScenarioConfig(), duration_s=0.2)
+    vehicle = vehicle_preset(scenario.vehicle)
+    controller = ChipController(scenario, vehicle)
+    fly_lockstep(scenario, vehicle, controller)
+    run = controller.run
+    assert run is not None
+    names = account_counter_map()[0]
+    values = _period_values(run._periods, len(run._keys))
+    assert values.shape == (len(run._periods), len(run._keys), len(names))
+    for p, period in enumerate(run._periods):
+        for r in range(len(run._keys)):
+            assert dict(zip(names, values[p, r].tolist(), strict=True)) == account_counters(period.deltas[r])
+    assert values[:, :, names.index("instructions")].sum() > 0
