@@ -35,9 +35,9 @@ from numba import njit, types
 from numba.extending import intrinsic
 from numba.typed import List
 
-from robosoc.isa.table import OP_ENTRY
+from robosoc.isa.table import OP_BREAK, OP_ENTRY
 from robosoc.kernels.borrowed import UNCOUNTED, row
-from robosoc.kernels.core import CoreArrays, fetch_error, run_cores
+from robosoc.kernels.core import CoreArrays, device_step, fetch_error, run_cores
 from robosoc.kernels.core_layout import (
     ERR_FETCH_DATA,
     OPC_SIZE,
@@ -60,6 +60,7 @@ from robosoc.kernels.core_layout import (
     S_MEM_SIZE,
     S_OUT_LEN,
     S_PC,
+    S_PROF_STRIDE,
     S_RUN,
 )
 from robosoc.kernels.dev_irq import irq_event
@@ -93,7 +94,8 @@ CTX_MIDBLOCK = 15  # interpreter steps at translated words that start no block (
 CTX_UNMARKED = 16
 #: the bank of count slots the regions count into (the chip: the tile's task, see flush_task_counts)
 CTX_BANK = 17
-CTX_SIZE = 18
+CTX_DEVICE = 18  # device-register loads and stores the loop made itself, of the CTX_STEPS (statistics)
+CTX_SIZE = 19
 #: banks of count slots of a core's tables: one per task id of the chip (a single core uses bank 0)
 COUNT_BANKS = NTASKS
 
@@ -254,7 +256,7 @@ def _flush_bank(
         end = m
 
 
-@njit(cache=True)
+@njit(**UNCOUNTED)
 def flush_entered_counts(jt: JitArrays, opc_t: np.ndarray, ctr_t: np.ndarray) -> None:
     """:func:`flush_counts` over the slots of the regions entered since the last flush only (their
     mark set): a slot counts only in a call of its region, which sets the region's mark, so the
@@ -263,7 +265,7 @@ def flush_entered_counts(jt: JitArrays, opc_t: np.ndarray, ctr_t: np.ndarray) ->
         _flush_bank(jt, b, opc_t, ctr_t, opc_t, opc_t, False)
 
 
-@njit(cache=True)
+@njit(**UNCOUNTED)
 def flush_task_counts(
     jt: JitArrays, opc_t: np.ndarray, ctr_t: np.ndarray, acc_t: np.ndarray, snap_t: np.ndarray, task: int
 ) -> None:
@@ -276,7 +278,7 @@ def flush_task_counts(
     every slot before each TASK_ID store cost the fixed+mul flight 20 µs per physics step, more
     than its translated blocks saved; of the entered regions' slots only, 9 µs.)"""
     for b in range(jt.cnt.shape[0] // max(jt.slot_next.shape[0], 1)):
-        _flush_bank(jt, b, opc_t, ctr_t, acc_t[b], snap_t, b != task)
+        _flush_bank(jt, b, opc_t, ctr_t, row(acc_t, b), snap_t, b != task)
 
 
 @njit(cache=True)
@@ -337,7 +339,7 @@ def run_translated(
     it returns, and a flush at every stop (each SLEEP store, a pass over every slot of the core)
     cost a translated tile more than its blocks saved.
     """
-    st, ctr, opc, regs, m8, _m16, m32, dec, _out = core
+    st, ctr, opc, regs, m8, _m16, m32, dec, out = core
     t = tiles[0]
     st_t = row(st, t)
     dec_t = row(dec, t)
@@ -434,6 +436,31 @@ def run_translated(
             # one instruction by the interpreter (two for a trap: its shadow runs before the vector)
             i = (pc - base) >> 2
             word = np.int64(m32[t, i]) & M32 if (pc - base) < code else 0
+            if (
+                0 <= pc - base < code
+                and cyc < st_t[S_IRQ_CHECK]
+                and st_t[S_PROF_STRIDE] == 0
+                and dec_t[2 * i] != OP_BREAK
+            ):
+                # a device register's load or store: made here as the interpreter makes it (one
+                # instruction, no event due before it; the events after it are this loop's next turn),
+                # without an interpreter call (a sleeping chip's tick makes about eight)
+                done, dstatus, derr, daddr, npc, ncyc = device_step(
+                    st_t, ctr_t, row(out, t), opc_t, regs_t, word, i, pc, cyc, base, size
+                )
+                if done:
+                    ctx[CTX_STEPS] += 1
+                    ctx[CTX_DEVICE] += 1
+                    pc = npc
+                    cyc = ncyc
+                    if derr != 0:
+                        err = derr
+                        err_addr = daddr
+                        break
+                    if dstatus != RUN_CHUNK:
+                        status = dstatus  # an exit store
+                        break
+                    continue
             step_to = cyc + 1
             if (word & 0xFFF) == _JAL_X0_OPCODE and (
                 (word >> 12) == 0 or (word == 0xFFDFF06F and i > 0 and (np.int64(m32[t, i - 1]) & M32) == _NOP)
@@ -490,6 +517,7 @@ def run_translated(
 
 __all__ = [
     "CTX_CYC",
+    "CTX_DEVICE",
     "CTX_FLUSHES",
     "CTX_PC",
     "CTX_SIZE",
