@@ -333,7 +333,8 @@ def device_step(
     of a call (the caller has made sure that no interrupt event is due in ``cyc`` and that the
     core is not profiled): (done, status, err, err_addr, pc, cyc) after it.  ``done`` False, with
     nothing changed, for any other word and for an access the interpreter does not perform itself
-    (SRAM, misaligned, a network-interface register: ``run_cores`` stops before it, RUN_NI).
+    (SRAM, misaligned: status RUN_CHUNK; a network-interface register, which the chip loop
+    performs: status RUN_NI, ``run_cores`` stops before it).
     The dispatch loop (:mod:`robosoc.kernels.jit_dispatch`) makes a translated core's device
     accesses here, without an interpreter call; the word need not be predecoded."""
     w = word & M32
@@ -350,7 +351,7 @@ def device_step(
         opc_t[kc] += 1
         v, status, err = load_device(st_t, ctr_t, opc_t, kc, addr, cyc)
         if status == RUN_NI:  # (load_device took the count back)
-            return False, RUN_CHUNK, 0, 0, pc, cyc
+            return False, RUN_NI, 0, 0, pc, cyc
         if status != RUN_CHUNK:
             return True, status, err, addr, pc, cyc
         rd = (w >> 7) & 31
@@ -362,7 +363,7 @@ def device_step(
         st_t, ctr_t, out_t, opc_t, kc, addr, np.int64(regs_t[(w >> 20) & 31]), pc, cyc
     )  # int64 like run_cores' store: one compiled mmio_store
     if status == RUN_NI:  # (store_device took the count back)
-        return False, RUN_CHUNK, 0, 0, pc, cyc
+        return False, RUN_NI, 0, 0, pc, cyc
     return True, status, err, addr if err != 0 else 0, pc, cyc
 
 

@@ -37,7 +37,7 @@ from numba.typed import List
 
 from robosoc.isa.table import OP_BREAK, OP_ENTRY
 from robosoc.kernels.borrowed import UNCOUNTED, row
-from robosoc.kernels.core import CoreArrays, device_step, fetch_error, run_cores
+from robosoc.kernels.core import CoreArrays, decode_word, device_step, fetch_error, run_cores
 from robosoc.kernels.core_layout import (
     ERR_FETCH_DATA,
     OPC_SIZE,
@@ -46,6 +46,7 @@ from robosoc.kernels.core_layout import (
     RUN_ENTRY,
     RUN_ERROR,
     RUN_MAX_CYCLES,
+    RUN_NI,
     RUN_OUTPUT,
     S_CODE_SIZE,
     S_CODE_STORES,
@@ -395,6 +396,7 @@ def run_translated(
         i = (pc - base) >> 2
         fn = jt.entry_fn[i]
         step_to = -1  # where the interpreter runs to next (-1: one instruction, below)
+        limited = False  # a region stopped short of the next event: the interpreter runs up to it
         if fn != 0:
             x = call_region(fn, p_ctx, p_regs, p_mem, p_cnt + 8 * jt.entry_slot[i], cyc, next_event, jt.entry_blk[i])
             ctx[CTX_CALLS] += 1
@@ -407,6 +409,7 @@ def run_translated(
                 # the end of every quantum)
                 ctx[CTX_LIMITS] += 1
                 step_to = next_event
+                limited = True
         else:
             left = jt.tmap[i]
             h = jt.hot[i]
@@ -432,35 +435,45 @@ def run_translated(
                 if stretch > 0:  # auto: stretch cycles at the interpreter's speed
                     step_to = min(stop, cyc + stretch)
         ahead = -1  # the word after a load or store the interpreter runs on from (see below)
+        i = (pc - base) >> 2
+        word = np.int64(m32[t, i]) & M32 if 0 <= pc - base < code else 0
+        if (step_to < 0 or limited) and (
+            0 <= pc - base < code and cyc < st_t[S_IRQ_CHECK] and st_t[S_PROF_STRIDE] == 0 and dec_t[2 * i] != OP_BREAK
+        ):
+            # a device register's load or store, the first instruction the interpreter would run:
+            # made here as the interpreter makes it (no event is due before it; the events after
+            # it are this loop's next turn), without an interpreter call (a sleeping chip's tick
+            # makes about eight)
+            done, dstatus, derr, daddr, npc, ncyc = device_step(
+                st_t, ctr_t, row(out, t), opc_t, regs_t, word, i, pc, cyc, base, size
+            )
+            if done:
+                ctx[CTX_STEPS] += 1
+                ctx[CTX_DEVICE] += 1
+                pc = npc
+                cyc = ncyc
+                if derr != 0:
+                    err = derr
+                    err_addr = daddr
+                    break
+                if dstatus != RUN_CHUNK:
+                    status = dstatus  # an exit store
+                    break
+                continue
+            if dstatus == RUN_NI:
+                # the chip loop performs it: stop before it as the interpreter does, with the word's
+                # predecoded row for the chip loop to read (the mark goes back when the core has left)
+                ctx[CTX_STEPS] += 1
+                ctx[CTX_DEVICE] += 1
+                if dec_t[2 * i] == OP_ENTRY:
+                    dec_t[2 * i] = 0
+                    ctx[CTX_UNMARKED] = i + 1
+                if dec_t[2 * i] == 0:
+                    decode_word(word, dec_t, i)
+                status = RUN_NI
+                break
         if step_to < 0:
             # one instruction by the interpreter (two for a trap: its shadow runs before the vector)
-            i = (pc - base) >> 2
-            word = np.int64(m32[t, i]) & M32 if (pc - base) < code else 0
-            if (
-                0 <= pc - base < code
-                and cyc < st_t[S_IRQ_CHECK]
-                and st_t[S_PROF_STRIDE] == 0
-                and dec_t[2 * i] != OP_BREAK
-            ):
-                # a device register's load or store: made here as the interpreter makes it (one
-                # instruction, no event due before it; the events after it are this loop's next turn),
-                # without an interpreter call (a sleeping chip's tick makes about eight)
-                done, dstatus, derr, daddr, npc, ncyc = device_step(
-                    st_t, ctr_t, row(out, t), opc_t, regs_t, word, i, pc, cyc, base, size
-                )
-                if done:
-                    ctx[CTX_STEPS] += 1
-                    ctx[CTX_DEVICE] += 1
-                    pc = npc
-                    cyc = ncyc
-                    if derr != 0:
-                        err = derr
-                        err_addr = daddr
-                        break
-                    if dstatus != RUN_CHUNK:
-                        status = dstatus  # an exit store
-                        break
-                    continue
             step_to = cyc + 1
             if (word & 0xFFF) == _JAL_X0_OPCODE and (
                 (word >> 12) == 0 or (word == 0xFFDFF06F and i > 0 and (np.int64(m32[t, i - 1]) & M32) == _NOP)
