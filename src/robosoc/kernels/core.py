@@ -143,7 +143,7 @@ def _sext(v: int, bits: int) -> int:
 
 
 @njit(cache=True)
-def decode_word(w: int, dec: np.ndarray, i: int) -> None:
+def decode_word(w: int | np.int64, dec: np.ndarray, i: int) -> None:
     """Fill row ``i`` of ``dec`` for instruction word ``w``.
 
     A row is two int32: ``op | rd << 8 | rs1 << 16 | rs2 << 24`` and the immediate.  Encodings
@@ -325,7 +325,7 @@ SW_MASK, SW_MATCH = int(_MASK[SW - 1]), int(_MATCH[SW - 1])
 
 @njit(cache=True, inline="always")
 def device_step(
-    st_t: np.ndarray, ctr_t: np.ndarray, out_t: np.ndarray, opc_t: np.ndarray, regs_t: np.ndarray, word: int,
+    st_t: np.ndarray, ctr_t: np.ndarray, out_t: np.ndarray, opc_t: np.ndarray, regs_t: np.ndarray, word: int | np.int64,
     i: int, pc: int, cyc: int, base: int, size: int,
 ) -> tuple[bool, int, int, int, int, int]:  # fmt: skip
     """Instruction ``word`` (word ``i`` of the code, at ``pc``, in cycle ``cyc``) if it is an LW or
