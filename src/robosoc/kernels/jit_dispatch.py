@@ -469,7 +469,8 @@ def run_translated(
                     dec_t[2 * i] = 0
                     ctx[CTX_UNMARKED] = i + 1
                 if dec_t[2 * i] == 0:
-                    decode_word(word, dec_t, i)
+                    iu = np.uint64(i)
+                    decode_word(m32[t, iu], dec_t, iu)  # (as run_cores calls it: one compiled decode_word)
                 status = RUN_NI
                 break
         if step_to < 0:
