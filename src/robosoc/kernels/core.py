@@ -143,7 +143,7 @@ def _sext(v: int, bits: int) -> int:
 
 
 @njit(cache=True)
-def decode_word(w: int | np.int64, dec: np.ndarray, i: int) -> None:
+def decode_word(w: int | np.integer, dec: np.ndarray, i: int | np.integer) -> None:
     """Fill row ``i`` of ``dec`` for instruction word ``w``.
 
     A row is two int32: ``op | rd << 8 | rs1 << 16 | rs2 << 24`` and the immediate.  Encodings
