@@ -1012,7 +1012,7 @@ def run_chip(core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int, jit
     for t in range(n):
         if jit_on[t] != 0:  # the translated blocks' counts, per task (flush_task_counts)
             jt = item(jit_tables, t)
-            flush_task_counts(jt, row(core.opc, t), row(core.ctr, t), book.acc[t], book.snap[t], cst[t, K_TASK])
+            flush_task_counts(jt, row(core.opc, t), row(core.ctr, t), book.acc[t], row(book.snap, t), cst[t, K_TASK])
     gst[G_TIME] = T
     gst[G_STATUS] = status
     if prof:

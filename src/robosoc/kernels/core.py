@@ -143,7 +143,7 @@ def _sext(v: int, bits: int) -> int:
 
 
 @njit(cache=True)
-def decode_word(w: int, dec: np.ndarray, i: int) -> None:
+def decode_word(w: int | np.integer, dec: np.ndarray, i: int | np.integer) -> None:
     """Fill row ``i`` of ``dec`` for instruction word ``w``.
 
     A row is two int32: ``op | rd << 8 | rs1 << 16 | rs2 << 24`` and the immediate.  Encodings
@@ -316,6 +316,57 @@ def store_device(
     if r < 0:
         return RUN_ERROR, ERR_STORE_READONLY if r == DEV_READONLY else ERR_STORE_UNMAPPED, pc, cyc
     return RUN_CHUNK, 0, pc + 4, cyc + MEMORY_CYCLES
+
+
+#: the encodings of LW and SW (their rows of the table: the first that match them, as decode_word finds)
+LW_MASK, LW_MATCH = int(_MASK[LW - 1]), int(_MATCH[LW - 1])
+SW_MASK, SW_MATCH = int(_MASK[SW - 1]), int(_MATCH[SW - 1])
+
+
+@njit(cache=True, inline="always")
+def device_step(
+    st_t: np.ndarray, ctr_t: np.ndarray, out_t: np.ndarray, opc_t: np.ndarray, regs_t: np.ndarray, word: int | np.int64,
+    i: int, pc: int, cyc: int, base: int, size: int,
+) -> tuple[bool, int, int, int, int, int]:  # fmt: skip
+    """Instruction ``word`` (word ``i`` of the code, at ``pc``, in cycle ``cyc``) if it is an LW or
+    SW of a device register, executed as ``run_cores`` executes it when it is the only instruction
+    of a call (the caller has made sure that no interrupt event is due in ``cyc`` and that the
+    core is not profiled): (done, status, err, err_addr, pc, cyc) after it.  ``done`` False, with
+    nothing changed, for any other word and for an access the interpreter does not perform itself
+    (SRAM, misaligned: status RUN_CHUNK; a network-interface register, which the chip loop
+    performs: status RUN_NI, ``run_cores`` stops before it).
+    The dispatch loop (:mod:`robosoc.kernels.jit_dispatch`) makes a translated core's device
+    accesses here, without an interpreter call; the word need not be predecoded.  Inlined: called,
+    it cost a sleeping 16x16 chip's translated tick about 0.25 µs more (eleven calls, each
+    passing five arrays); its copy costs the cold start no measurable time."""
+    w = word & M32
+    load = (w & LW_MASK) == LW_MATCH
+    if not load and (w & SW_MASK) != SW_MATCH:
+        return False, RUN_CHUNK, 0, 0, pc, cyc
+    imm = _sext(w >> 20, 12) if load else _sext(((w >> 25) << 5) | ((w >> 7) & 31), 12)
+    addr = (regs_t[(w >> 15) & 31] + imm) & M32
+    off = addr - base
+    if (off & 3) != 0 or (off & M32) < size:
+        return False, RUN_CHUNK, 0, 0, pc, cyc
+    if load:
+        kc = (np.uint64(LW) << U1) | (np.uint64(i) & U1)
+        opc_t[kc] += 1
+        v, status, err = load_device(st_t, ctr_t, opc_t, kc, addr, cyc)
+        if status == RUN_NI:  # (load_device took the count back)
+            return False, RUN_NI, 0, 0, pc, cyc
+        if status != RUN_CHUNK:
+            return True, status, err, addr, pc, cyc
+        rd = (w >> 7) & 31
+        regs_t[rd if rd != 0 else SINK] = v
+        return True, RUN_CHUNK, 0, 0, pc + 4, cyc + MEMORY_CYCLES
+    kc = (np.uint64(SW) << U1) | (np.uint64(i) & U1)
+    opc_t[kc] += 1
+    status, err, pc, cyc = store_device(
+        st_t, ctr_t, out_t, opc_t, kc, addr, np.int64(regs_t[(w >> 20) & 31]), pc, cyc
+    )  # int64 like run_cores' store: one compiled mmio_store
+    if status == RUN_NI:  # (store_device took the count back)
+        return False, RUN_NI, 0, 0, pc, cyc
+    return True, status, err, addr if err != 0 else 0, pc, cyc
 
 
 class CoreArrays(NamedTuple):

@@ -35,9 +35,9 @@ from numba import njit, types
 from numba.extending import intrinsic
 from numba.typed import List
 
-from robosoc.isa.table import OP_ENTRY
+from robosoc.isa.table import OP_BREAK, OP_ENTRY
 from robosoc.kernels.borrowed import UNCOUNTED, row
-from robosoc.kernels.core import CoreArrays, fetch_error, run_cores
+from robosoc.kernels.core import CoreArrays, decode_word, device_step, fetch_error, run_cores
 from robosoc.kernels.core_layout import (
     ERR_FETCH_DATA,
     OPC_SIZE,
@@ -46,6 +46,7 @@ from robosoc.kernels.core_layout import (
     RUN_ENTRY,
     RUN_ERROR,
     RUN_MAX_CYCLES,
+    RUN_NI,
     RUN_OUTPUT,
     S_CODE_SIZE,
     S_CODE_STORES,
@@ -60,6 +61,7 @@ from robosoc.kernels.core_layout import (
     S_MEM_SIZE,
     S_OUT_LEN,
     S_PC,
+    S_PROF_STRIDE,
     S_RUN,
 )
 from robosoc.kernels.dev_irq import irq_event
@@ -97,7 +99,8 @@ CTX_BANK = 17
 #: looks at those banks only: a look at every bank's region marks cost each translated tile about
 #: 15 µs per chip-loop call, its 16 banks' marks being 16 cache lines apart)
 CTX_BANKS = 18
-CTX_SIZE = 19
+CTX_DEVICE = 19  # device-register loads and stores the loop made itself, of the CTX_STEPS (statistics)
+CTX_SIZE = 20
 #: banks of count slots of a core's tables: one per task id of the chip (a single core uses bank 0)
 COUNT_BANKS = NTASKS
 
@@ -258,7 +261,7 @@ def _flush_bank(
         end = m
 
 
-@njit(cache=True)
+@njit(**UNCOUNTED)
 def flush_entered_counts(jt: JitArrays, opc_t: np.ndarray, ctr_t: np.ndarray) -> None:
     """:func:`flush_counts` over the slots of the regions entered since the last flush only (their
     mark set): a slot counts only in a call of its region, which sets the region's mark, so the
@@ -275,7 +278,7 @@ def count_into_bank(ctx: np.ndarray, bank: int) -> None:
     ctx[CTX_BANKS] |= np.int64(1) << bank
 
 
-@njit(cache=True)
+@njit(**UNCOUNTED)
 def flush_task_counts(
     jt: JitArrays, opc_t: np.ndarray, ctr_t: np.ndarray, acc_t: np.ndarray, snap_t: np.ndarray, task: int
 ) -> None:
@@ -293,7 +296,7 @@ def flush_task_counts(
     jt.ctx[CTX_BANKS] = 0
     for b in range(jt.cnt.shape[0] // max(jt.slot_next.shape[0], 1)):
         if (used >> b) & 1:
-            _flush_bank(jt, b, opc_t, ctr_t, acc_t[b], snap_t, b != task)
+            _flush_bank(jt, b, opc_t, ctr_t, row(acc_t, b), snap_t, b != task)
 
 
 @njit(cache=True)
@@ -354,7 +357,7 @@ def run_translated(
     it returns, and a flush at every stop (each SLEEP store, a pass over every slot of the core)
     cost a translated tile more than its blocks saved.
     """
-    st, ctr, opc, regs, m8, _m16, m32, dec, _out = core
+    st, ctr, opc, regs, m8, _m16, m32, dec, out = core
     t = tiles[0]
     st_t = row(st, t)
     dec_t = row(dec, t)
@@ -410,6 +413,7 @@ def run_translated(
         i = (pc - base) >> 2
         fn = jt.entry_fn[i]
         step_to = -1  # where the interpreter runs to next (-1: one instruction, below)
+        limited = False  # a region stopped short of the next event: the interpreter runs up to it
         if fn != 0:
             x = call_region(fn, p_ctx, p_regs, p_mem, p_cnt + 8 * jt.entry_slot[i], cyc, next_event, jt.entry_blk[i])
             ctx[CTX_CALLS] += 1
@@ -422,6 +426,7 @@ def run_translated(
                 # the end of every quantum)
                 ctx[CTX_LIMITS] += 1
                 step_to = next_event
+                limited = True
         else:
             left = jt.tmap[i]
             h = jt.hot[i]
@@ -447,10 +452,46 @@ def run_translated(
                 if stretch > 0:  # auto: stretch cycles at the interpreter's speed
                     step_to = min(stop, cyc + stretch)
         ahead = -1  # the word after a load or store the interpreter runs on from (see below)
+        i = (pc - base) >> 2
+        word = np.int64(m32[t, i]) & M32 if 0 <= pc - base < code else 0
+        if (step_to < 0 or limited) and (
+            0 <= pc - base < code and cyc < st_t[S_IRQ_CHECK] and st_t[S_PROF_STRIDE] == 0 and dec_t[2 * i] != OP_BREAK
+        ):
+            # a device register's load or store, the first instruction the interpreter would run:
+            # made here as the interpreter makes it (no event is due before it; the events after
+            # it are this loop's next turn), without an interpreter call (a sleeping chip's tick
+            # makes about eight)
+            done, dstatus, derr, daddr, npc, ncyc = device_step(
+                st_t, ctr_t, row(out, t), opc_t, regs_t, word, i, pc, cyc, base, size
+            )
+            if done:
+                ctx[CTX_STEPS] += 1
+                ctx[CTX_DEVICE] += 1
+                pc = npc
+                cyc = ncyc
+                if derr != 0:
+                    err = derr
+                    err_addr = daddr
+                    break
+                if dstatus != RUN_CHUNK:
+                    status = dstatus  # an exit store
+                    break
+                continue
+            if dstatus == RUN_NI:
+                # the chip loop performs it: stop before it as the interpreter does, with the word's
+                # predecoded row for the chip loop to read (the mark goes back when the core has left)
+                ctx[CTX_STEPS] += 1
+                ctx[CTX_DEVICE] += 1
+                if dec_t[2 * i] == OP_ENTRY:
+                    dec_t[2 * i] = 0
+                    ctx[CTX_UNMARKED] = i + 1
+                if dec_t[2 * i] == 0:
+                    iu = np.uint64(i)
+                    decode_word(m32[t, iu], dec_t, iu)  # (as run_cores calls it: one compiled decode_word)
+                status = RUN_NI
+                break
         if step_to < 0:
             # one instruction by the interpreter (two for a trap: its shadow runs before the vector)
-            i = (pc - base) >> 2
-            word = np.int64(m32[t, i]) & M32 if (pc - base) < code else 0
             step_to = cyc + 1
             if (word & 0xFFF) == _JAL_X0_OPCODE and (
                 (word >> 12) == 0 or (word == 0xFFDFF06F and i > 0 and (np.int64(m32[t, i - 1]) & M32) == _NOP)
@@ -507,6 +548,7 @@ def run_translated(
 
 __all__ = [
     "CTX_CYC",
+    "CTX_DEVICE",
     "CTX_FLUSHES",
     "CTX_PC",
     "CTX_SIZE",
