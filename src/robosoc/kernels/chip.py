@@ -615,8 +615,9 @@ def _take_deliveries(st, book, noc):
         line = core_until(rise, div)  # the core's first cycle that sees the line up
         if (st[d, S_IRQ_MASK] & CAUSE_PACKET) != 0:
             # (a core that runs ahead of the rise in a long quantum with the bit set does not hear
-            # packets, hears_packets: its controller is done or disabled, so scanning from the rise
-            # finds no request before the store that enables it again, which a long quantum stops)
+            # packets, hears_packets: its controller is done, disabled or already holds its request, so
+            # scanning from the rise finds no new request before the store that enables it again, which
+            # a long quantum stops)
             irq_external_rise(row(st, d), line)
         else:
             # the line feeds the controller only through IRQ_MASK bit 1: with it clear only IRQ_CAUSE
