@@ -76,6 +76,18 @@ def stop(process: subprocess.Popen, sig: int = signal.SIGINT, timeout: float = 2
     return int(process.returncode)
 
 
+def stop_recorder(process: subprocess.Popen, bag: Path, timeout: float = 30) -> int:
+    """End a ``rosbag record -O bag`` and wait until its bag is closed: the ``rosbag`` script exits
+    on SIGINT while its ``record`` child is still writing ``bag.active``, and renames it to ``bag``
+    only when done (a reader started at once found no bag now and then)."""
+    code = stop(process)
+    active = bag.with_name(bag.name + ".active")
+    deadline = time.monotonic() + timeout
+    while (active.exists() or not bag.exists()) and time.monotonic() < deadline:
+        time.sleep(0.1)
+    return code
+
+
 def wait_all(processes: Sequence[subprocess.Popen], timeout: float) -> list[int | None]:
     deadline = time.monotonic() + timeout
     for p in processes:

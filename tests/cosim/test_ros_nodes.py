@@ -35,7 +35,7 @@ from robosoc.cosim.replay import replay
 from robosoc.cosim.ros_topics import MSG_TEXT, TOPICS
 from robosoc.outputs.flight_session import fleet_vehicles
 from robosoc.physics.clock import START_NS
-from ros_master import SYSTEM_PYTHON, Master, running_master, stop, wait_all
+from ros_master import SYSTEM_PYTHON, Master, running_master, stop, stop_recorder, wait_all
 from telemetry_project import counting_project
 
 SCENARIO_TOML = "duration_s = {duration}\nvehicles = {vehicles}\n[flight]\ntakeoff_s = 0.3\nsteps = []\n"
@@ -163,7 +163,7 @@ def test_two_nodes_fly_the_lockstep_flight(master: Master, tmp_path: Path) -> No
     chip = master.robosoc(["serve", "chip", str(toml), "--ros", "--out", str(tmp_path / "c")], tmp_path / "chip.log")
     codes = wait_all([physics, chip], timeout=300)
     time.sleep(1.0)
-    stop(recorder)
+    stop_recorder(recorder, bag)
     assert codes == [0, 0], (tmp_path / "physics.log").read_text() + (tmp_path / "chip.log").read_text()
     rows = read_flight_log(tmp_path / "p" / "flight.csv")
     lockstep = fly_chip(config, vehicle_preset(config.vehicle))
@@ -232,7 +232,7 @@ def test_the_project_telemetry_is_published_logged_and_recorded(master: Master, 
     chip = master.robosoc(["serve", "chip", str(toml), "--ros", "--out", str(tmp_path / "c")], tmp_path / "chip.log")
     codes = wait_all([physics, chip], timeout=300)
     time.sleep(1.0)
-    stop(recorder)
+    stop_recorder(recorder, bag)
     assert codes == [0, 0], (tmp_path / "physics.log").read_text() + (tmp_path / "chip.log").read_text()
     told: dict[str, np.ndarray] = {}
     rows = read_flight_log(tmp_path / "p" / "flight.csv", telemetry=told)
