@@ -147,6 +147,10 @@ class _Aux:
         return best
 
 
+#: the most a chip node waits, after its flight, for its last messages to leave (RosChipLink.close)
+LINGER_S = 1.0
+
+
 class RosChipLink:
     """The chip side's link to the physics through ROS 1 topics (a
     :class:`robosoc.cosim.link.ChipTransport`); see the module docstring."""
@@ -402,4 +406,14 @@ class RosChipLink:
         }
 
     def close(self) -> None:
+        """Close the node's topics; after a flight that ended normally, first wait (at most
+        :data:`LINGER_S`) until nothing subscribes to ``chip/status`` any more.  rospy publishes from
+        a thread per connection, and closing at once could drop the last status, which the physics
+        node waits for: it then ended, the flight all but done, with "nothing from the chip" after
+        ``--peer-timeout`` (once in a CI run of two vehicles).  The physics node closes its
+        subscription when it has all it needs; a recorder or a viewer may stay subscribed, hence
+        the bound."""
+        deadline = time.monotonic() + LINGER_S
+        while self.said_bye and self.status_pub.get_num_connections() > 0 and time.monotonic() < deadline:
+            time.sleep(0.02)
         self.node.close()
