@@ -898,25 +898,23 @@ def run_chip(core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int, jit
                     if prof:
                         gst[G_TK_NOC] += ticks() - k0
                 a = _stop_address(t, core)
-                if a < ni.NI_BASE or a >= ni.NI_END:
-                    # not an NI register: the packet line (long quanta, see S_EXT_FINAL and S_MASK_LOCK)
-                    if a == IRQ_MASK or a == IRQ_STATUS:
-                        # setting IRQ_MASK bit 1, or IRQ_STATUS bit 0 with it set (the return from a
-                        # handler), would let packets that cores already past s0 may still send
-                        # change t: end the quantum before the store, the next one is not long
-                        H = s0
-                        gst[G_NO_LONG] = 1
-                        continue
-                    # an IRQ_CAUSE read: every stop before s0 is done, so no packet reaches t before
-                    # s0 + look_idle (and t does not run past H)
-                    st[t, S_EXT_FINAL] = core_until(s0 + look_idle, cst[t, K_DIV])
-                    lo, hi = rt, rt + 1
-                    continue
-                if long_q and a == SLEEP_ADDRESS and (st[t, S_IRQ_MASK] & CAUSE_PACKET) != 0:
-                    # a sleep wakes on an enabled cause whatever IRQ_STATUS says: a packet that a core
-                    # already past s0 may still send could wake t, so the quantum ends before it
+                if (
+                    a == IRQ_MASK
+                    or a == IRQ_STATUS
+                    or (long_q and a == SLEEP_ADDRESS and (st[t, S_IRQ_MASK] & CAUSE_PACKET) != 0)
+                ):
+                    # the store would let packets that cores already past s0 may still send change
+                    # t: setting IRQ_MASK bit 1, or IRQ_STATUS bit 0 with it set (a handler's return),
+                    # or a sleep with it set (it wakes on an enabled cause whatever IRQ_STATUS says).
+                    # End the quantum before the store; the next one is not long
                     H = s0
                     gst[G_NO_LONG] = 1
+                    continue
+                if a < ni.NI_BASE or a >= ni.NI_END:
+                    # an IRQ_CAUSE read (long quanta, see S_EXT_FINAL): every stop before s0 is done,
+                    # so no packet reaches t before s0 + look_idle (and t does not run past H)
+                    st[t, S_EXT_FINAL] = core_until(s0 + look_idle, cst[t, K_DIV])
+                    lo, hi = rt, rt + 1
                     continue
                 k0 = ticks() if prof else 0
                 # (a TASK_ID store accounts the counters without the translated blocks' counts since
