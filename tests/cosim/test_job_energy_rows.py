@@ -4,6 +4,7 @@ computation), to the bit."""
 
 import dataclasses
 
+import numpy as np
 import pytest
 
 from robosoc.config.scenario import ScenarioConfig
@@ -15,12 +16,24 @@ from robosoc.kernels.chip import NTASKS
 
 @pytest.fixture(scope="module")
 def run() -> FirmwareRun:
-    """The firmware run of a 0.3 s lockstep flight of the default scenario."""
+    """The firmware run of a 0.3 s lockstep flight of the default scenario, with the accounting rows
+    jobs are charged to as they were after each period's close (``run.rows_after``: the test's own
+    gather of ``chip.acc``, beside the run's)."""
     scenario = dataclasses.replace(ScenarioConfig(), duration_s=0.3)
     vehicle = vehicle_preset(scenario.vehicle)
     controller = ChipController(scenario, vehicle)
-    fly_lockstep(scenario, vehicle, controller)
+    rows_after: list[np.ndarray] = []
+    close = FirmwareRun.close_period
+
+    def close_and_keep(self: FirmwareRun) -> None:
+        close(self)
+        rows_after.append(self.chip.acc[self._acc_tiles, self._acc_tasks].copy())
+
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(FirmwareRun, "close_period", close_and_keep)
+        fly_lockstep(scenario, vehicle, controller)
     assert controller.run is not None
+    controller.run.rows_after = rows_after  # type: ignore[attr-defined]
     return controller.run
 
 
@@ -38,15 +51,19 @@ def test_all_periods_energies_at_once_equal_total_pj_row_by_row(run: FirmwareRun
     assert nonzero > len(periods)  # the tasks, kernel and idle did spend energy
 
 
-def test_all_periods_counters_at_once_are_each_rows_named_counters(run: FirmwareRun):
-    # the flight keeps each period's accounting-row differences and takes the counters of all
-    # periods in one product at its end: each equals account_counters of that row difference
+def test_each_periods_counters_are_the_named_counters_of_its_rows_difference(run: FirmwareRun):
+    # each period's close takes the counters of the accounting rows' differences in one call (a
+    # sparse integer product): each equals account_counters of the difference of the rows as they
+    # were after the two closes (the first period's from the rows at the run's start, before boot)
     from robosoc.chip.mpsoc import account_counter_map, account_counters
 
     names = account_counter_map()[0]
     values = _period_values(run._periods, len(run._keys))
-    assert values.shape == (len(run._periods), len(run._keys), len(names))
-    for p, period in enumerate(run._periods):
+    after = run.rows_after  # type: ignore[attr-defined]
+    assert values.shape == (len(run._periods), len(run._keys), len(names)) and len(after) == len(run._periods)
+    for p in range(1, len(run._periods)):
         for r in range(len(run._keys)):
-            assert dict(zip(names, values[p, r].tolist(), strict=True)) == account_counters(period.deltas[r])
+            expected = account_counters(after[p][r] - after[p - 1][r])
+            assert dict(zip(names, values[p, r].tolist(), strict=True)) == expected
     assert values[:, :, names.index("instructions")].sum() > 0
+    assert values[1:, :, names.index("cycles")].min() > 0  # every row's task, kernel or idle ran each period

@@ -51,6 +51,7 @@ from robosoc.kernels.core_layout import (
     S_PROF_BASE,
     S_RUN,
 )
+from robosoc.kernels.period_accounts import close_accounts, sparse_rows
 from robosoc.program.elf import Program, Region
 
 XOUT_CAPACITY = 1 << 20
@@ -120,6 +121,12 @@ def account_counter_map() -> tuple[tuple[str, ...], np.ndarray]:
     return names, np.array([[c[name] for c in columns] for name in names], dtype=np.int64)
 
 
+@functools.cache
+def _account_counter_rows() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`account_counter_map`'s matrix as the period close takes it (sparse, row by row)."""
+    return sparse_rows(account_counter_map()[1])
+
+
 class MPSoC:
     """A mesh of tiles built from a :class:`ChipConfig`."""
 
@@ -138,6 +145,10 @@ class MPSoC:
         """
         self.engine = resolve_engine(config.engine if engine is None else engine)
         self.config = config
+        #: per tile, 1 if its router is switched off (:meth:`ChipConfig.routers_off`), else 0
+        self._routers_off = np.zeros(config.n_tiles, np.int64)
+        for xy in config.routers_off():
+            self._routers_off[config.tile_index(xy)] = 1
         #: the chip's clock, the NoC's and every cycle count's unit; a tile's core may run at a whole
         #: fraction of it (ChipConfig.tile_divider, docs/power.md "Per-tile clock")
         self.clock_ns = config.tile.clock_period_ns
@@ -530,6 +541,12 @@ class MPSoC:
         """Attribute everything not yet attributed to the tasks running now."""
         kc.account_all(self.cores.arrays(), self.book())
 
+    def close_accounts(self, tiles: np.ndarray, tasks: np.ndarray, previous: np.ndarray, out: np.ndarray) -> None:
+        """:meth:`finish_accounting`, then the named counters (:func:`account_counter_map`'s order) of
+        accounting rows ``acc[tiles[r], tasks[r]]`` since the rows ``previous[r]`` into ``out[r]``,
+        and the rows into ``previous`` (one call: :mod:`robosoc.kernels.period_accounts`)."""
+        close_accounts(self.cores.arrays(), self.book(), tiles, tasks, previous, *_account_counter_rows(), out)
+
     def task_counters(self, xy: tuple[int, int]) -> dict[int, dict[str, int]]:
         """Counters per task id of one tile (task 0 is the kernel/idle), for tasks that ran."""
         t = self.config.tile_index(xy)
@@ -548,22 +565,21 @@ class MPSoC:
         """Router activity for the energy model (buffer-active and idle port cycles, flit hops) and
         ``rtl_lost_headers``: headers that found no room downstream in their crossing cycle, which
         robosoc lets wait but the Hermes RTL would have lost (docs/noc.md)."""
-        port = self.noc.port
         glob = self.noc.glob
         cycles = int(glob[nk.G_CYCLE]) - int(glob[nk.G_CYCLE0])
         n = self.config.n_tiles
-        busy_ports = int(port[:, :, nk.P_BUSY].sum())
-        gated = nk.gated_cycles(self.noc.cfg, glob, self.noc.tile)
-        off = [self.config.tile_index(xy) for xy in self.config.routers_off()]
+        off = self._routers_off
+        busy_ports, busy, gated, wakeups = nk.router_activity(
+            self.noc.cfg, glob, self.noc.tile, self.noc.port, off
+        ).tolist()
         extra: dict[str, int] = {}
-        if off:  # switched off (noc.power_off_unused_routers): never busy, never counted as gated
-            gated[off] = 0
-            extra["router_off_cycles"] = cycles * len(off)
+        if off.any():  # switched off (noc.power_off_unused_routers): never busy, never counted as gated
+            extra["router_off_cycles"] = cycles * int(off.sum())
         return {
             "router_cycles": cycles * n,
-            "router_busy_cycles": int(self.noc.tile[:, nk.T_BUSY].sum()),
-            "router_gated_cycles": int(gated.sum()),
-            "router_wakeups": int(self.noc.tile[:, nk.T_WAKES].sum()),
+            "router_busy_cycles": busy,
+            "router_gated_cycles": gated,
+            "router_wakeups": wakeups,
             "port_busy_cycles": busy_ports,
             "port_idle_cycles": cycles * n * nk.NPORTS - busy_ports,
             "flit_hops": int(glob[nk.G_HOPS]),

@@ -169,7 +169,8 @@ def _start_child(chip: ChipConfig, err: IO[bytes]) -> subprocess.Popen[bytes]:
 
 def compile_kernels(chip: ChipConfig) -> None:
     """Run a throwaway ``chip`` whose first core spins, so that numba compiles (and caches) the chip's
-    kernels: the main loop with the cores, devices and NoC it calls, and the accounting.  Half of
+    kernels: the main loop with the cores, devices and NoC it calls, the accounting and the
+    period's close.  Half of
     the main loop's callees are compiled in a child process meanwhile.
 
     Raises:
@@ -186,9 +187,18 @@ def compile_kernels(chip: ChipConfig) -> None:
             raise RuntimeError(
                 f"compiling the chip kernels in a child process failed:\n{err.read().decode(errors='replace')}"
             )
+    import numpy as np
+
+    from robosoc.chip.mpsoc import account_counter_map
+
     mpsoc = throwaway_chip(chip)
     mpsoc.step(10_000)
     mpsoc.finish_accounting()
+    # and what a flight's period close calls: the accounting rows' counters, the routers' activity
+    rows = np.zeros(1, dtype=np.int64)
+    previous = np.zeros((1, mpsoc.acc.shape[-1]), dtype=np.int64)
+    mpsoc.close_accounts(rows, rows, previous, np.zeros((1, len(account_counter_map()[0])), dtype=np.int64))
+    mpsoc.noc_counters()
 
 
 def prepare_chip(chip: ChipConfig, build: Callable[[], T], on_status: Callable[[str], None]) -> T:

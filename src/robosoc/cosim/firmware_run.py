@@ -29,7 +29,6 @@ release period's counters, and the record says so (``spans_periods``).
 from __future__ import annotations
 
 import bisect
-import functools
 import time
 from collections import Counter
 from collections.abc import Sequence
@@ -156,8 +155,10 @@ class FirmwareRun:
         self._keys = np.array([i * NTASKS + task for i, task in charged], dtype=np.int64)
         self._acc_tiles = np.array([self.chip.config.tile_index(self.tiles[i]) for i, _ in charged], dtype=np.int64)
         self._acc_tasks = np.array([task for _, task in charged], dtype=np.int64)
-        self._periods: list[_Period] = []  # per sample period: counter deltas per (tile, task) and NoC energy
-        self._previous = self._accounts()
+        self._periods: list[_Period] = []  # per sample period: counters per (tile, task) and NoC energy
+        # the accounting rows at the last close (close_accounts keeps them), and the NoC's traffic energy
+        self._previous = np.zeros((len(self._keys), self.chip.acc.shape[-1]), dtype=np.int64)
+        self._previous_noc = self._accounts(np.empty((len(self._keys), len(account_counter_map()[0])), np.int64))
         self._seen = dict.fromkeys(self.tiles, 0)
         # (tile, record as logged: 32-bit stamps, period, chip cycle when read: see _full_cycle)
         self._logged: list[tuple[tuple[int, int], images.JobRecord, int, int]] = []
@@ -277,14 +278,15 @@ class FirmwareRun:
             problem = self.image.missing_tasks({xy: t.created(self.chip, xy) for xy, t in tables.items() if t})
             if problem:
                 raise ChipError(problem, None)
-        current = self._accounts()
+        counters = np.empty((len(self._keys), len(account_counter_map()[0])), np.int64)
+        noc = self._accounts(counters)
         if self.image.telemetry:
             values = read_telemetry(self.chip, self.image.telemetry)
             if values:
                 self.telemetry.append(TelemetryRead(len(self.samples) - 1, values))
                 self.latest.update(values)
-        self._periods.append(_Period.between(self._keys, self._previous, current))
-        self._previous = current
+        self._periods.append(_Period(self._keys, counters, noc - self._previous_noc))
+        self._previous_noc = noc
         now = self.chip.cycle
         for xy in self.tiles:
             try:
@@ -321,10 +323,11 @@ class FirmwareRun:
             out.append((name, self._chip_cycle(xy, r.release, now), self._chip_cycle(xy, r.completion, now)))
         return out
 
-    def _accounts(self) -> tuple[np.ndarray, float]:
-        """The accounting rows jobs are charged to (one per key, A_* columns) now, and the NoC's traffic energy."""
-        self.chip.finish_accounting()
-        return self.chip.acc[self._acc_tiles, self._acc_tasks], noc_traffic_pj(self.model, self.chip.noc_counters())
+    def _accounts(self, values: np.ndarray) -> float:
+        """Into ``values``, the counters of the accounting rows jobs are charged to (one per key) since
+        the last call; the NoC's traffic energy now."""
+        self.chip.close_accounts(self._acc_tiles, self._acc_tasks, self._previous, values)
+        return noc_traffic_pj(self.model, self.chip.noc_counters())
 
     def function_profile(self) -> FunctionProfile:
         """The exact profile so far: cycles, instructions and energy per function, tile and task.
@@ -418,13 +421,10 @@ def _pj(model: EnergyModel, counters: dict[str, int]) -> float:
 
 
 def _period_values(periods: Sequence[_Period], rows: int) -> np.ndarray:
-    """The periods' counter differences as one array: [period, accounting row, counter] (one
-    matrix product for all periods: per period it was 10-19 µs of every sample's close)."""
-    width = len(account_counter_map()[0])
+    """The periods' counters as one array: [period, accounting row, counter]."""
     if not periods:
-        return np.zeros((0, rows, width), dtype=np.int64)
-    deltas = np.stack([p.deltas for p in periods])
-    return _counter_values(deltas.reshape(-1, deltas.shape[-1])).reshape(len(periods), rows, width)
+        return np.zeros((0, rows, len(account_counter_map()[0])), dtype=np.int64)
+    return np.stack([p.values for p in periods])
 
 
 def _rows_pj(values: np.ndarray, models: Sequence[EnergyModel]) -> np.ndarray:
@@ -453,47 +453,21 @@ def noc_traffic_pj(model: EnergyModel, noc: dict[str, int]) -> float:
     return sum(model.noc_pj(noc).values()) - sum(model.noc_pj(idle).values())
 
 
-def _counter_values(rows: np.ndarray) -> np.ndarray:
-    """``rows @ M.T`` for the matrix of :func:`account_counter_map`, exactly: in float64 (BLAS, some
-    ten times faster than numpy's integer product) when no partial sum can reach 2**53, where
-    every sum of whole numbers is exact, else in integers."""
-    _, matrix = account_counter_map()
-    weights = _float_weights()
-    if rows.size and int(np.abs(rows).max()) * weights[1] >= 2**53:
-        return rows @ matrix.T
-    return (rows.astype(np.float64) @ weights[0]).astype(np.int64)
-
-
-@functools.cache
-def _float_weights() -> tuple[np.ndarray, int]:
-    """M.T in float64, and the largest sum of absolute weights of one counter (the bound above)."""
-    _, matrix = account_counter_map()
-    return np.ascontiguousarray(matrix.T, dtype=np.float64), int(np.abs(matrix).sum(axis=1).max())
-
-
 @dataclass(frozen=True)
 class _Period:
     """What one sample period spent: per (tile, task) that jobs are charged to (the named tasks, the
-    kernel, idle), the difference of its named counters (:func:`robosoc.chip.mpsoc.account_counters`)
-    over the period; the NoC's traffic energy.  Kept as the accounting rows' differences, whose
-    counters are one matrix product for all periods at the flight's end (:func:`_period_values`;
-    building dicts for every tile and task at every sample was a fifth of the default flight's
-    host time)."""
+    kernel, idle), its named counters (:func:`robosoc.chip.mpsoc.account_counters`) over the period,
+    taken with the period's close in one call (:meth:`robosoc.chip.mpsoc.MPSoC.close_accounts`);
+    the NoC's traffic energy."""
 
     keys: np.ndarray  # tile position * NTASKS + task, sorted
-    deltas: np.ndarray  # their accounting rows' differences, one row each (A_* columns)
+    values: np.ndarray  # their counters over the period, one row each (account_counter_map()'s order)
     noc_pj: float
 
-    @classmethod
-    def between(cls, keys: np.ndarray, before: tuple[np.ndarray, float], after: tuple[np.ndarray, float]) -> _Period:
-        """The period from the accounting rows ``before`` to ``after`` (one row per key)."""
-        return cls(keys, after[0] - before[0], after[1] - before[1])
-
     def counters(self, tile: int, task: int) -> dict[str, int]:
-        """Named counter differences of ``task`` on the tile at position ``tile`` ({}: not a task jobs
-        are charged to).  A task that has not run has zeros, which charge what nothing would."""
+        """Named counters of ``task`` on the tile at position ``tile`` over the period ({}: not a task
+        jobs are charged to).  A task that has not run has zeros, which charge what nothing would."""
         k = int(self.keys.searchsorted(tile * NTASKS + task))
         if k == len(self.keys) or self.keys[k] != tile * NTASKS + task:
             return {}
-        values = _counter_values(self.deltas[k : k + 1])[0]
-        return dict(zip(account_counter_map()[0], values.tolist(), strict=True))
+        return dict(zip(account_counter_map()[0], self.values[k].tolist(), strict=True))

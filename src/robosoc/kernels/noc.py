@@ -549,6 +549,25 @@ def gated_cycles(cfg: np.ndarray, glob: np.ndarray, tile: np.ndarray) -> np.ndar
     return tile[:, T_GATED] + pending
 
 
+@njit(cache=True)
+def router_activity(
+    cfg: np.ndarray, glob: np.ndarray, tile: np.ndarray, port: np.ndarray, off: np.ndarray
+) -> np.ndarray:
+    """The routers' activity summed over the mesh, for the energy model: [input-buffer cycles with a
+    flit, router cycles with a flit, stopped-clock cycles (:func:`gated_cycles`) of the routers not
+    switched off (``off[t]`` zero), wake-ups] (one call: the numpy sums cost a period's close 20 µs)."""
+    gate = cfg[C_GATE]
+    out = np.zeros(4, np.int64)
+    for t in range(tile.shape[0]):
+        for p in range(port.shape[1]):
+            out[0] += port[t, p, P_BUSY]
+        out[1] += tile[t, T_BUSY]
+        if gate != NONE and off[t] == 0:
+            out[2] += tile[t, T_GATED] + max(0, glob[G_CYCLE] - 1 - tile[t, T_LAST_FLIT] - gate)
+        out[3] += tile[t, T_WAKES]
+    return out
+
+
 @njit(**UNCOUNTED)
 def noc_step(cfg, glob, buf, port, tile, mem, ev, queue, cycle):
     """Simulate one NoC cycle ``cycle``: decide everything from the cycle-start state, then commit.
