@@ -5,7 +5,9 @@ This is the data half of a core; the behaviour is :func:`robosoc.kernels.core.ru
 
 from __future__ import annotations
 
+import struct
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -249,6 +251,14 @@ class CoreState:
         if off < 0 or off + length > int(self.st[tile, S_MEM_SIZE]):
             raise ValueError(f"address 0x{addr:08x}+{length} is outside SRAM")
         return self.m8[tile, off : off + length].tobytes()
+
+    def unpack(self, layout: struct.Struct, addr: int, tile: int = 0) -> tuple[Any, ...]:
+        """``layout.unpack`` of the bytes at ``addr`` of a tile's SRAM, read in place (the host's
+        reads of every sample period: job records, telemetry)."""
+        off = addr - self.base
+        if off < 0 or off + layout.size > int(self.st[tile, S_MEM_SIZE]):
+            raise ValueError(f"address 0x{addr:08x}+{layout.size} is outside SRAM")
+        return layout.unpack_from(self.m8[tile], off)
 
     def word(self, addr: int, tile: int = 0) -> int:
         return int.from_bytes(self.read(addr, 4, tile), "little")

@@ -541,11 +541,18 @@ class MPSoC:
         """Attribute everything not yet attributed to the tasks running now."""
         kc.account_all(self.cores.arrays(), self.book())
 
-    def close_accounts(self, tiles: np.ndarray, tasks: np.ndarray, previous: np.ndarray, out: np.ndarray) -> None:
+    def close_accounts(
+        self, tiles: np.ndarray, tasks: np.ndarray, previous: np.ndarray, out: np.ndarray, routers: np.ndarray
+    ) -> None:
         """:meth:`finish_accounting`, then the named counters (:func:`account_counter_map`'s order) of
         accounting rows ``acc[tiles[r], tasks[r]]`` since the rows ``previous[r]`` into ``out[r]``,
-        and the rows into ``previous`` (one call: :mod:`robosoc.kernels.period_accounts`)."""
-        close_accounts(self.cores.arrays(), self.book(), tiles, tasks, previous, *_account_counter_rows(), out)
+        the rows into ``previous``, and the routers' counters now into ``routers`` (for
+        :meth:`noc_counters_of`): one call (:mod:`robosoc.kernels.period_accounts`)."""
+        noc = self.noc
+        close_accounts(
+            self.cores.arrays(), self.book(), tiles, tasks, previous, *_account_counter_rows(), out,
+            noc.cfg, noc.glob, noc.tile, noc.port, self._routers_off, routers,
+        )  # fmt: skip
 
     def task_counters(self, xy: tuple[int, int]) -> dict[int, dict[str, int]]:
         """Counters per task id of one tile (task 0 is the kernel/idle), for tasks that ran."""
@@ -565,16 +572,17 @@ class MPSoC:
         """Router activity for the energy model (buffer-active and idle port cycles, flit hops) and
         ``rtl_lost_headers``: headers that found no room downstream in their crossing cycle, which
         robosoc lets wait but the Hermes RTL would have lost (docs/noc.md)."""
-        glob = self.noc.glob
-        cycles = int(glob[nk.G_CYCLE]) - int(glob[nk.G_CYCLE0])
+        counts = np.empty(len(nk.ROUTER_COUNTS), np.int64)
+        nk.router_counts(self.noc.cfg, self.noc.glob, self.noc.tile, self.noc.port, self._routers_off, counts)
+        return self.noc_counters_of(counts)
+
+    def noc_counters_of(self, counts: np.ndarray) -> dict[str, int]:
+        """:meth:`noc_counters` from the routers' counters as :func:`robosoc.kernels.noc.router_counts`
+        gave them (at any moment of this chip's run)."""
+        cycles, busy_ports, busy, gated, wakeups, hops, injected, delivered, lost = counts.tolist()
         n = self.config.n_tiles
-        off = self._routers_off
-        busy_ports, busy, gated, wakeups = nk.router_activity(
-            self.noc.cfg, glob, self.noc.tile, self.noc.port, off
-        ).tolist()
-        extra: dict[str, int] = {}
-        if off.any():  # switched off (noc.power_off_unused_routers): never busy, never counted as gated
-            extra["router_off_cycles"] = cycles * int(off.sum())
+        off = int(self._routers_off.sum())
+        extra = {"router_off_cycles": cycles * off} if off else {}  # never busy, never counted as gated
         return {
             "router_cycles": cycles * n,
             "router_busy_cycles": busy,
@@ -582,10 +590,10 @@ class MPSoC:
             "router_wakeups": wakeups,
             "port_busy_cycles": busy_ports,
             "port_idle_cycles": cycles * n * nk.NPORTS - busy_ports,
-            "flit_hops": int(glob[nk.G_HOPS]),
-            "flits_injected": int(glob[nk.G_INJECTED]),
-            "packets_delivered": int(glob[nk.G_DELIVERED]),
-            "rtl_lost_headers": int(glob[nk.G_RTL_LOST]),
+            "flit_hops": hops,
+            "flits_injected": injected,
+            "packets_delivered": delivered,
+            "rtl_lost_headers": lost,
             **extra,
         }
 

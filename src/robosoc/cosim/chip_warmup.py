@@ -190,6 +190,7 @@ def compile_kernels(chip: ChipConfig) -> None:
     import numpy as np
 
     from robosoc.chip.mpsoc import account_counter_map
+    from robosoc.kernels.noc import ROUTER_COUNTS
 
     mpsoc = throwaway_chip(chip)
     mpsoc.step(10_000)
@@ -197,7 +198,8 @@ def compile_kernels(chip: ChipConfig) -> None:
     # and what a flight's period close calls: the accounting rows' counters, the routers' activity
     rows = np.zeros(1, dtype=np.int64)
     previous = np.zeros((1, mpsoc.acc.shape[-1]), dtype=np.int64)
-    mpsoc.close_accounts(rows, rows, previous, np.zeros((1, len(account_counter_map()[0])), dtype=np.int64))
+    counters = np.zeros((1, len(account_counter_map()[0])), dtype=np.int64)
+    mpsoc.close_accounts(rows, rows, previous, counters, np.zeros(len(ROUTER_COUNTS), dtype=np.int64))
     mpsoc.noc_counters()
 
 

@@ -29,6 +29,7 @@ release period's counters, and the record says so (``spans_periods``).
 from __future__ import annotations
 
 import bisect
+import itertools
 import time
 from collections import Counter
 from collections.abc import Sequence
@@ -47,7 +48,8 @@ from robosoc.config.firmware import FirmwareConfig
 from robosoc.host import images, packets
 from robosoc.host.firmware_image import FIRST_SAMPLE_CYCLE, FirmwareImage
 from robosoc.host.telemetry import read_telemetry
-from robosoc.kernels.chip import K_TASK, NTASKS
+from robosoc.kernels.chip import K_EXITED, K_STATE, K_TASK, NTASKS
+from robosoc.kernels.noc import ROUTER_COUNTS
 from robosoc.program.elf import Program, load_elf
 from robosoc.records import JobRecord, PwmCommand, SampleInput
 
@@ -153,12 +155,13 @@ class FirmwareRun:
             | {(i, task) for i in range(len(self.tiles)) for task in (images.KERNEL_TASK_ID, images.IDLE_TASK_ID)}
         )
         self._keys = np.array([i * NTASKS + task for i, task in charged], dtype=np.int64)
+        self._tile_rows = np.array([self.chip.config.tile_index(xy) for xy in self.tiles], dtype=np.int64)
         self._acc_tiles = np.array([self.chip.config.tile_index(self.tiles[i]) for i, _ in charged], dtype=np.int64)
         self._acc_tasks = np.array([task for _, task in charged], dtype=np.int64)
         self._periods: list[_Period] = []  # per sample period: counters per (tile, task) and NoC energy
         # the accounting rows at the last close (close_accounts keeps them), and the NoC's traffic energy
         self._previous = np.zeros((len(self._keys), self.chip.acc.shape[-1]), dtype=np.int64)
-        self._previous_noc = self._accounts(np.empty((len(self._keys), len(account_counter_map()[0])), np.int64))
+        self._routers_at_start = self._accounts(np.empty((len(self._keys), len(account_counter_map()[0])), np.int64))
         self._seen = dict.fromkeys(self.tiles, 0)
         # (tile, record as logged: 32-bit stamps, period, chip cycle when read: see _full_cycle)
         self._logged: list[tuple[tuple[int, int], images.JobRecord, int, int]] = []
@@ -223,9 +226,10 @@ class FirmwareRun:
         except (ChipError, CoreError) as exc:
             exc.args = (f"{exc.args[0]}{self._running_task(exc)}", *exc.args[1:])  # the task, by its name
             raise
-        for xy in self.tiles:
-            if self.chip.state(xy) == "exited":  # main returned, or refused a task: no task runs there
-                raise ChipError(f"tile {xy}: {self.image.exit_reason(self.chip.exit_code(xy))}", xy)
+        if (self.chip.cst[self._tile_rows, K_STATE] == K_EXITED).any():
+            for xy in self.tiles:
+                if self.chip.state(xy) == "exited":  # main returned, or refused a task: no task runs there
+                    raise ChipError(f"tile {xy}: {self.image.exit_reason(self.chip.exit_code(xy))}", xy)
         fresh = []
         # a PWM message fits one NoC packet, so no message straddles two calls
         for message in images.reassemble(self.chip.received()):
@@ -279,14 +283,13 @@ class FirmwareRun:
             if problem:
                 raise ChipError(problem, None)
         counters = np.empty((len(self._keys), len(account_counter_map()[0])), np.int64)
-        noc = self._accounts(counters)
+        routers = self._accounts(counters)
         if self.image.telemetry:
             values = read_telemetry(self.chip, self.image.telemetry)
             if values:
                 self.telemetry.append(TelemetryRead(len(self.samples) - 1, values))
                 self.latest.update(values)
-        self._periods.append(_Period(self._keys, counters, noc - self._previous_noc))
-        self._previous_noc = noc
+        self._periods.append(_Period(self._keys, counters, routers))
         now = self.chip.cycle
         for xy in self.tiles:
             try:
@@ -323,11 +326,21 @@ class FirmwareRun:
             out.append((name, self._chip_cycle(xy, r.release, now), self._chip_cycle(xy, r.completion, now)))
         return out
 
-    def _accounts(self, values: np.ndarray) -> float:
+    def _accounts(self, values: np.ndarray) -> np.ndarray:
         """Into ``values``, the counters of the accounting rows jobs are charged to (one per key) since
-        the last call; the NoC's traffic energy now."""
-        self.chip.close_accounts(self._acc_tiles, self._acc_tasks, self._previous, values)
-        return noc_traffic_pj(self.model, self.chip.noc_counters())
+        the last call; the routers' counters now (:meth:`robosoc.chip.mpsoc.MPSoC.noc_counters_of`)."""
+        routers = np.empty(len(ROUTER_COUNTS), np.int64)
+        self.chip.close_accounts(self._acc_tiles, self._acc_tasks, self._previous, values, routers)
+        return routers
+
+    def _periods_noc_pj(self) -> list[float]:
+        """Each period's NoC traffic energy: the traffic energy at its close less that at the
+        previous close (or the run's start)."""
+        traffic = [
+            noc_traffic_pj(self.model, self.chip.noc_counters_of(routers))
+            for routers in (self._routers_at_start, *(p.routers for p in self._periods))
+        ]
+        return [after - before for before, after in itertools.pairwise(traffic)]
 
     def function_profile(self) -> FunctionProfile:
         """The exact profile so far: cycles, instructions and energy per function, tile and task.
@@ -356,6 +369,7 @@ class FirmwareRun:
         energy = _rows_pj(values, [self.tile_models[self.tiles[i]] for i in self._keys // NTASKS])
         instructions = values[:, :, account_counter_map()[0].index("instructions")].tolist()
         energy_of = energy.tolist()  # [period][accounting row] in pJ, Python floats
+        noc_pj = self._periods_noc_pj()
         row_of = {int(key): r for r, key in enumerate(self._keys)}
 
         def stamp(xy: tuple[int, int], value: int, now: int) -> int:  # _chip_cycle, the divider known
@@ -378,7 +392,7 @@ class FirmwareRun:
                 "task": period_pj[own] / alike,
                 "kernel": period_pj[row_of[i * NTASKS + images.KERNEL_TASK_ID]] / shared,
                 "idle": period_pj[row_of[i * NTASKS + images.IDLE_TASK_ID]] / shared,
-                "noc": self._periods[p].noc_pj / per_period[p],
+                "noc": noc_pj[p] / per_period[p],
             }
             completion = stamp(xy, r.completion, now)
             jobs.append(
@@ -458,11 +472,12 @@ class _Period:
     """What one sample period spent: per (tile, task) that jobs are charged to (the named tasks, the
     kernel, idle), its named counters (:func:`robosoc.chip.mpsoc.account_counters`) over the period,
     taken with the period's close in one call (:meth:`robosoc.chip.mpsoc.MPSoC.close_accounts`);
-    the NoC's traffic energy."""
+    the routers' counters at its close, whose traffic energies the flight's end takes (a float
+    sum and difference per period, as they were taken at each close before)."""
 
     keys: np.ndarray  # tile position * NTASKS + task, sorted
     values: np.ndarray  # their counters over the period, one row each (account_counter_map()'s order)
-    noc_pj: float
+    routers: np.ndarray  # the routers' counters at the period's close (robosoc.kernels.noc.ROUTER_COUNTS)
 
     def counters(self, tile: int, task: int) -> dict[str, int]:
         """Named counters of ``task`` on the tile at position ``tile`` over the period ({}: not a task

@@ -117,14 +117,22 @@ class JobLog:
 
 def _memory(chip: MPSoC, xy: tuple[int, int], symbol: str, size: int) -> bytes:
     t = chip.config.tile_index(xy)
+    return chip.cores.read(_address(chip, xy, t, symbol), size, tile=t)
+
+
+def _address(chip: MPSoC, xy: tuple[int, int], t: int, symbol: str) -> int:
+    """The address of ``symbol`` in the program of tile ``xy`` (index ``t``).
+
+    Raises:
+        ValueError: the tile has no program, or its program no such symbol.
+    """
     program = chip.programs.get(t)
     if program is None:
         raise ValueError(f"tile {xy} has no program loaded")
     try:
-        addr = program.address_of(symbol)
+        return program.address_of(symbol)
     except ValueError as exc:
         raise ValueError(f"tile {xy}: {program.path} has no symbol {symbol} (not a kernel image?)") from exc
-    return chip.cores.read(addr, size, tile=t)
 
 
 def read_job_log(chip: MPSoC, xy: tuple[int, int], since: int = 0) -> JobLog:
@@ -154,17 +162,19 @@ def read_new_jobs(chip: MPSoC, xy: tuple[int, int], seen: int) -> tuple[list[Job
     Raises:
         ValueError: the log is not initialised, or the ring overwrote records after ``seen`` unread.
     """
-    magic, capacity, count, _ = _LOG_HEADER.unpack(_memory(chip, xy, JOB_LOG_SYMBOL, _LOG_HEADER.size))
+    t = chip.config.tile_index(xy)
+    address = _address(chip, xy, t, JOB_LOG_SYMBOL)
+    magic, capacity, count, _ = chip.cores.unpack(_LOG_HEADER, address, t)
     if magic != JOBLOG_MAGIC:
         raise ValueError(f"tile {xy}: the job log is not initialised (os_start has not run)")
     if count - seen > capacity:
         raise ValueError(f"tile {xy}: the job log overflowed: {count - seen} new records, the ring keeps {capacity}")
-    t = chip.config.tile_index(xy)
-    base = chip.programs[t].address_of(JOB_LOG_SYMBOL) + _LOG_HEADER.size
+    base = address + _LOG_HEADER.size
     records = []
     for i in range(seen, count):
-        raw = chip.cores.read(base + (i % capacity) * _RECORD.size, _RECORD.size, tile=t)
-        task, flags, job, release, deadline, start, completion, exec_cycles = _RECORD.unpack(raw)
+        task, flags, job, release, deadline, start, completion, exec_cycles = chip.cores.unpack(
+            _RECORD, base + (i % capacity) * _RECORD.size, t
+        )
         records.append(
             JobRecord(task, job, release, deadline, start, completion, exec_cycles,
                       bool(flags & JOB_MET), bool(flags & JOB_EVENT), bool(flags & JOB_DEPLETED))

@@ -73,6 +73,7 @@ _Q16 = 1.0 / 65536.0
 _DECODE: dict[str, tuple[str, float]] = {
     "f32": ("<f", 1.0), "q16": ("<i", _Q16), "i32": ("<i", 1.0), "u32": ("<I", 1.0)
 }  # fmt: skip
+_LAYOUT = {code: struct.Struct(code) for code, _ in _DECODE.values()}
 
 
 class TelemetryError(ToolchainError):
@@ -96,8 +97,9 @@ class TelemetryProbe:
     task_id: int
     table: TaskTable
 
-    def decode(self, word: bytes) -> float:
-        (value,) = struct.unpack(self.code, word)
+    def read(self, chip: MPSoC, tile: int) -> float:
+        """The value now on the chip (a host read, no cycle), ``tile`` the index of :attr:`tile`."""
+        (value,) = chip.cores.unpack(_LAYOUT[self.code], self.address, tile)
         return float(value) * self.scale
 
 
@@ -162,7 +164,7 @@ def read_telemetry(chip: MPSoC, probes: Sequence[TelemetryProbe]) -> dict[str, f
             t = index.get(probe.tile)
             if t is None:
                 t = index[probe.tile] = chip.config.tile_index(probe.tile)
-            values[probe.name] = probe.decode(chip.cores.read(probe.address, VALUE_BYTES, tile=t))
+            values[probe.name] = probe.read(chip, t)
     return values
 
 

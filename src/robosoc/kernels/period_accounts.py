@@ -1,5 +1,6 @@
-"""A sample period's close in one call: the chip's accounting brought up to date and the named
-counters of the accounting rows that jobs are charged to, as differences since the last close.
+"""A sample period's close in one call: the chip's accounting brought up to date, the named
+counters of the accounting rows that jobs are charged to, as differences since the last close, and
+the routers' counters.
 
 A flight closes a period at every sensor sample (100 Hz); done in Python (numba's accounting call,
 numpy's gather of the rows, their difference, and the counters' matrix product at the flight's
@@ -14,15 +15,20 @@ import numpy as np
 from numba import njit
 
 from robosoc.kernels.chip import account_all
+from robosoc.kernels.noc import router_counts
 
 
 @njit(cache=True)
-def close_accounts(core, book, tiles, tasks, previous, ptr, cols, weights, out) -> None:
+def close_accounts(
+    core, book, tiles, tasks, previous, ptr, cols, weights, out, noc_cfg, noc_glob, noc_tile, noc_port, off, routers
+) -> None:
     """Attribute everything up to now (:func:`robosoc.kernels.chip.account_all`); then for each
     accounting row r, ``book.acc[tiles[r], tasks[r]]``: its counters' differences since
     ``previous[r]`` into ``out[r]`` (counter c is the sum of ``weights[j] * difference[cols[j]]``
-    for j in ``ptr[c]:ptr[c + 1]``), and the row into ``previous[r]``."""
+    for j in ``ptr[c]:ptr[c + 1]``), and the row into ``previous[r]``; and the routers' counters
+    into ``routers`` (:func:`robosoc.kernels.noc.router_counts`)."""
     account_all(core, book)
+    router_counts(noc_cfg, noc_glob, noc_tile, noc_port, off, routers)
     acc = book.acc
     for r in range(tiles.shape[0]):
         row = acc[tiles[r], tasks[r]]
