@@ -201,7 +201,7 @@ class MPSoC:
         self._queue_next = 0
         self._io_received: list[tuple[int, list[int]]] = []
         self.rec = np.zeros((0, kc.REC_COLS), dtype=np.int64)
-        self._timeline: list[np.ndarray] = []
+        self._timeline: list[np.ndarray | tuple[int, ...]] = []  # rows of events, or one event (the I/O tile's)
         self._timeline_room = 0
         self._timeline_dropped = 0
         # translated code (engine jit or auto): per tile its translator, created at the first step
@@ -221,7 +221,8 @@ class MPSoC:
 
     def timeline(self) -> tuple[np.ndarray, int]:
         """The events recorded so far (rows of kc.REC_COLS, in the order recorded) and how many were lost."""
-        rows = np.concatenate(self._timeline) if self._timeline else np.zeros((0, kc.REC_COLS), dtype=np.int64)
+        parts = [np.array([part], dtype=np.int64) if isinstance(part, tuple) else part for part in self._timeline]
+        rows = np.concatenate(parts) if parts else np.zeros((0, kc.REC_COLS), dtype=np.int64)
         return rows, int(self.gst[kc.G_REC_LOST]) + self._timeline_dropped
 
     def _keep(self, rows: np.ndarray) -> None:
@@ -230,6 +231,15 @@ class MPSoC:
             self._timeline.append(kept.copy())
         self._timeline_room -= len(kept)
         self._timeline_dropped += len(rows) - len(kept)
+
+    def _keep_event(self, event: tuple[int, ...]) -> None:
+        """:meth:`_keep` of one event (kept as a tuple until :meth:`timeline`: an array per event
+        cost a flight's step some microseconds)."""
+        if self._timeline_room > 0:
+            self._timeline.append(event)
+            self._timeline_room -= 1
+        else:
+            self._timeline_dropped += 1
 
     def _drain_rec(self) -> None:
         n = int(self.gst[kc.G_REC_COUNT])
@@ -316,7 +326,7 @@ class MPSoC:
         self._queue_next += 1
         if self.recording:
             head = [flits[k] if k < len(flits) else 0 for k in (2, 3, 5)]
-            self._keep(np.array([[kc.R_SEND, self.io, at_cycle, flits[0], len(flits), *head]], dtype=np.int64))
+            self._keep_event((kc.R_SEND, self.io, at_cycle, flits[0], len(flits), *head))
 
     def received(self) -> list[tuple[int, list[int]]]:
         """Packets that reached the I/O tile since the last call: (cycle of the last flit, flits)."""
@@ -325,14 +335,13 @@ class MPSoC:
 
     def _drain_io(self) -> None:
         n = int(self.gst[kc.G_IO_COUNT])
-        for row in self.io_out[:n]:
-            last, length, first = row[:3].tolist()  # Python ints, a conversion per slice, not per value
-            flits = row[3 : 3 + length].tolist()
+        for row in self.io_out[:n].tolist():  # Python ints, one conversion for the rows
+            last, length, first = row[:3]
+            flits = row[3 : 3 + length]
             self._io_received.append((last, flits))
             if self.recording:  # visible from the cycle after the last flit, as on a core tile
-                head = [int(row[3 + k]) for k in (2, 3, 5)]  # (a short packet: what the row holds there)
-                event = [kc.R_DELIVER, self.io, last + 1, first, length, *head]
-                self._keep(np.array([event], dtype=np.int64))
+                head = [row[3 + k] for k in (2, 3, 5)]  # (a short packet: what the row holds there)
+                self._keep_event((kc.R_DELIVER, self.io, last + 1, first, length, *head))
         self.gst[kc.G_IO_COUNT] = 0
 
     # --- running ---------------------------------------------------------------------------

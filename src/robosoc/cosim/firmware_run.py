@@ -155,7 +155,7 @@ class FirmwareRun:
             | {(i, task) for i in range(len(self.tiles)) for task in (images.KERNEL_TASK_ID, images.IDLE_TASK_ID)}
         )
         self._keys = np.array([i * NTASKS + task for i, task in charged], dtype=np.int64)
-        self._tile_rows = np.array([self.chip.config.tile_index(xy) for xy in self.tiles], dtype=np.int64)
+        self._tile_rows = [self.chip.config.tile_index(xy) for xy in self.tiles]
         self._acc_tiles = np.array([self.chip.config.tile_index(self.tiles[i]) for i, _ in charged], dtype=np.int64)
         self._acc_tasks = np.array([task for _, task in charged], dtype=np.int64)
         self._periods: list[_Period] = []  # per sample period: counters per (tile, task) and NoC energy
@@ -226,7 +226,8 @@ class FirmwareRun:
         except (ChipError, CoreError) as exc:
             exc.args = (f"{exc.args[0]}{self._running_task(exc)}", *exc.args[1:])  # the task, by its name
             raise
-        if (self.chip.cst[self._tile_rows, K_STATE] == K_EXITED).any():
+        cst = self.chip.cst
+        if any(cst[t, K_STATE] == K_EXITED for t in self._tile_rows):
             for xy in self.tiles:
                 if self.chip.state(xy) == "exited":  # main returned, or refused a task: no task runs there
                     raise ChipError(f"tile {xy}: {self.image.exit_reason(self.chip.exit_code(xy))}", xy)

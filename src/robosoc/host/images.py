@@ -286,7 +286,7 @@ def message_packets(
     while True:
         chunk = data[offset : offset + per_packet]
         padded = chunk + b"\0" * (len(chunk) & 1)
-        flits = [v for (v,) in struct.iter_unpack("<H", padded)]
+        flits = list(struct.unpack(f"<{len(padded) // 2}H", padded))
         header = [(src_tile << 8) | src_port, (port << 8) | (frag & 0xFF), len(data), seq & 0xFFFF]
         out.append(header + flits)
         offset += len(chunk)
