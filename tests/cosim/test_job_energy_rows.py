@@ -3,6 +3,7 @@ are each row's named counters and the energy model's ``total_pj`` of them (the p
 computation), to the bit."""
 
 import dataclasses
+import itertools
 
 import numpy as np
 import pytest
@@ -67,3 +68,17 @@ def test_each_periods_counters_are_the_named_counters_of_its_rows_difference(run
             assert dict(zip(names, values[p, r].tolist(), strict=True)) == expected
     assert values[:, :, names.index("instructions")].sum() > 0
     assert values[1:, :, names.index("cycles")].min() > 0  # every row's task, kernel or idle ran each period
+
+
+def test_each_periods_noc_energy_is_the_difference_of_the_traffic_energy_at_its_two_closes(run: FirmwareRun):
+    # all periods' NoC traffic energies are taken at once from the routers' counters kept at each
+    # close: each is, to the bit, the scalar traffic energy at its close less that at the one before
+    from robosoc.cosim.firmware_run import noc_traffic_pj
+
+    at_closes = [run._routers_at_start, *(p.routers for p in run._periods)]
+    scalar = [noc_traffic_pj(run.model, run.chip.noc_counters_of(r)) for r in at_closes]
+    assert all(type(v) is float for v in scalar)
+    assert run._periods_noc_pj() == [after - before for before, after in itertools.pairwise(scalar)]
+    assert sum(run._periods_noc_pj()) > 0  # the sensor packets and the tasks' messages crossed the mesh
+    # the counters kept at the last close are the chip's own (nothing ran after it)
+    assert run.chip.noc_counters_of(at_closes[-1]) == run.chip.noc_counters()

@@ -15,6 +15,7 @@ import time
 import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -585,10 +586,12 @@ class MPSoC:
         nk.router_counts(self.noc.cfg, self.noc.glob, self.noc.tile, self.noc.port, self._routers_off, counts)
         return self.noc_counters_of(counts)
 
-    def noc_counters_of(self, counts: np.ndarray) -> dict[str, int]:
+    def noc_counters_of(self, counts: np.ndarray) -> dict[str, Any]:
         """:meth:`noc_counters` from the routers' counters as :func:`robosoc.kernels.noc.router_counts`
-        gave them (at any moment of this chip's run)."""
-        cycles, busy_ports, busy, gated, wakeups, hops, injected, delivered, lost = counts.tolist()
+        gave them (at any moment of this chip's run): Python ints, or for a stack of such rows an
+        array of each counter (row by row the same integers)."""
+        columns = counts.T if counts.ndim == 2 else counts.tolist()
+        cycles, busy_ports, busy, gated, wakeups, hops, injected, delivered, lost = columns
         n = self.config.n_tiles
         off = int(self._routers_off.sum())
         extra = {"router_off_cycles": cycles * off} if off else {}  # never busy, never counted as gated

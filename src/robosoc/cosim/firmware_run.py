@@ -29,12 +29,12 @@ release period's counters, and the record says so (``spans_periods``).
 from __future__ import annotations
 
 import bisect
-import itertools
 import time
 from collections import Counter
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -336,12 +336,11 @@ class FirmwareRun:
 
     def _periods_noc_pj(self) -> list[float]:
         """Each period's NoC traffic energy: the traffic energy at its close less that at the
-        previous close (or the run's start)."""
-        traffic = [
-            noc_traffic_pj(self.model, self.chip.noc_counters_of(routers))
-            for routers in (self._routers_at_start, *(p.routers for p in self._periods))
-        ]
-        return [after - before for before, after in itertools.pairwise(traffic)]
+        previous close (or the run's start), for all periods at once (numpy's products and sums,
+        element by element those of :func:`noc_traffic_pj` of each close's counters)."""
+        routers = np.stack([self._routers_at_start, *(p.routers for p in self._periods)])
+        traffic = noc_traffic_pj(self.model, self.chip.noc_counters_of(routers))
+        return np.diff(traffic).tolist()
 
     def function_profile(self) -> FunctionProfile:
         """The exact profile so far: cycles, instructions and energy per function, tile and task.
@@ -459,8 +458,9 @@ def _rows_pj(values: np.ndarray, models: Sequence[EnergyModel]) -> np.ndarray:
     return out
 
 
-def noc_traffic_pj(model: EnergyModel, noc: dict[str, int]) -> float:
-    """Router energy of ``noc`` counters beyond what the same routers spend idle for as long."""
+def noc_traffic_pj(model: EnergyModel, noc: dict[str, Any]) -> Any:
+    """Router energy of ``noc`` counters beyond what the same routers spend idle for as long (an
+    array of them for counters that are arrays)."""
     idle = dict(noc)
     idle["port_idle_cycles"] = noc["port_idle_cycles"] + noc["port_busy_cycles"]
     idle["port_busy_cycles"] = 0
