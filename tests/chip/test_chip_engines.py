@@ -458,7 +458,8 @@ def test_the_tiles_holding_one_program_get_copies_of_the_first_tiles_tables(monk
         loop = [A.i("addi", A0, 0, 0), A.i("addi", T1, 0, rounds), A.i("addi", A0, A0, 1)]
         return program([*loop, A.i("addi", T1, T1, -1), A.branch("bne", T1, 0, -8), *exit_with(A0)])
 
-    loads = {(1, 0): counting(50), (2, 0): counting(70), (0, 1): counting(50), (1, 1): counting(70)}
+    fifty, seventy = counting(50), counting(70)
+    loads = {(1, 0): fifty, (2, 0): seventy, (0, 1): fifty, (1, 1): seventy, (2, 1): fifty}
 
     def chip_with(engine_name: str) -> MPSoC:
         chip = MPSoC(ChipConfig(width=3, height=2), engine=engine_name)
@@ -469,20 +470,30 @@ def test_the_tiles_holding_one_program_get_copies_of_the_first_tiles_tables(monk
     chip_with("jit").run(max_cycles=100_000)  # every region translated once in this process
     adopted = []
     adopt = TranslatingCore._adopt
-    monkeypatch.setattr(TranslatingCore, "_adopt", lambda self, other: (adopted.append(self.tile), adopt(self, other)))
+    monkeypatch.setattr(
+        TranslatingCore, "_adopt", lambda self, other, copy: (adopted.append(self.tile), adopt(self, other, copy))
+    )
     chip = chip_with("jit")
     chip._jit.prepare(chip)
     tiles = {xy: chip.config.tile_index(xy) for xy in loads}
-    # (1, 0) is made and (0, 1) copies it; then (2, 0), the first tile left, and (1, 1) copies it
-    assert adopted == [tiles[(0, 1)], tiles[(1, 1)]]
+    # (1, 0) is made and (0, 1) and (2, 1) copy it; then (2, 0), the first tile left, and (1, 1) copies it
+    assert adopted == [tiles[(0, 1)], tiles[(2, 1)], tiles[(1, 1)]]
     assert all(chip._jit.translators[t] is not None and chip._jit.on[t] for t in tiles.values())
     got = {t: [a.copy() for a in chip._jit.translators[t].tables()] for t in tiles.values()}
     translators = {t: chip._jit.translators[t] for t in tiles.values()}
     known = {t: (tr._known_seen, set(tr._known_starts_in), tr._nslots) for t, tr in translators.items() if tr}
     marks = {t: chip.cores.dec[t] == OP_ENTRY for t in tiles.values()}
     first, copy = (chip._jit.translators[tiles[xy]].tables() for xy in ((1, 0), (0, 1)))
+    other = chip._jit.translators[tiles[(2, 1)]].tables()  # copied in the same round as (0, 1)
     for name in ("entry_fn", "entry_slot", "entry_blk", "hot", "tmap", "cnt", "ctx"):
         assert not np.shares_memory(getattr(first, name), getattr(copy, name)), name
+        assert not np.shares_memory(getattr(copy, name), getattr(other, name)), name
+    # what the chip loop reads for each tile is what its translator holds (one call set them all)
+    for t in tiles.values():
+        given = chip._jit._tables[t]
+        held = chip._jit.translators[t].tables()
+        for name, a, b in zip(held._fields, given, held, strict=True):
+            assert a.ctypes.data == b.ctypes.data and a.shape == b.shape, (t, name)
     monkeypatch.setattr(jit_tables, "_FRESH_TABLES", {})
     for t in tiles.values():
         afresh = TranslatingCore(chip.cores, tile=t, mode="jit")
@@ -494,4 +505,4 @@ def test_the_tiles_holding_one_program_get_copies_of_the_first_tiles_tables(monk
         assert marks[t].any()
     ran = outcome(chip_with("jit"), 100_000)
     assert ran == outcome(chip_with("interp"), 100_000)
-    assert ran[0][2] == {(1, 0): 50, (2, 0): 70, (0, 1): 50, (1, 1): 70}
+    assert ran[0][2] == {(1, 0): 50, (2, 0): 70, (0, 1): 50, (1, 1): 70, (2, 1): 50}

@@ -19,7 +19,7 @@ from numba.typed import List
 
 from robosoc.kernels import chip as kc
 from robosoc.kernels.core_layout import RUN_CHUNK, S_CODE_SIZE, S_PC, S_RUN
-from robosoc.kernels.jit_dispatch import JitArrays, empty_tables, set_tables, tables_list
+from robosoc.kernels.jit_dispatch import JitArrays, empty_tables, set_table_copies, set_tables, tables_list
 
 if TYPE_CHECKING:
     from robosoc.chip.engines import Engine
@@ -144,11 +144,16 @@ class ChipTranslation:
         left = tiles
         while left:
             first = self._translator(chip, left[0])
-            made = {left[0]: first, **first.clones(left[1:])}
+            clones = first.clones(left[1:])
+            made = {left[0]: first, **clones.translators}
             for t, translator in made.items():
                 self.translators[t] = translator
                 self.on[t] = 1
-                self._give(t)
+            self._give(left[0])
+            if len(clones.tiles):  # the copies' tables to the loop, in one call
+                set_table_copies(self._tables, clones.tiles, clones.rows)
+                for t, translator in clones.translators.items():
+                    self._given[t] = translator.tables()
             left = [t for t in left if t not in made]
 
     def _translator(self, chip: MPSoC, t: int) -> TranslatingCore:

@@ -28,6 +28,7 @@ from robosoc.kernels.jit_dispatch import (
     CTX_FLUSHES,
     NEVER_TRANSLATE,
     RUN_TRANSLATE,
+    JitArrays,
     flush_entered_counts,
     run_translated,
 )
@@ -155,8 +156,8 @@ class TranslatingCore(CoreTables):
     def _sibling(self, tile: int) -> TranslatingCore:
         return TranslatingCore(self.state, tile, self.mode, self._compiler, self.stats)
 
-    def _adopt(self, other: TranslatingCore) -> None:
-        super()._adopt(other)
+    def _adopt(self, other: TranslatingCore, copy: JitArrays) -> None:
+        super()._adopt(other, copy)
         self.manifest = other.manifest.copy()
 
     def _manifest_key(self) -> str:

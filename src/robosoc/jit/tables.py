@@ -16,7 +16,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Protocol, Self
+from typing import TYPE_CHECKING, Generic, NamedTuple, Protocol, Self, TypeVar
 
 import numpy as np
 
@@ -49,6 +49,8 @@ class Cores(Protocol):
         """The arrays as the numba kernels take them."""
         ...
 
+
+_T = TypeVar("_T")
 
 #: A build: the target a core's code is translated for, and whether the core multiplies.
 Build = tuple[Target, bool]
@@ -172,6 +174,19 @@ def _own_copy(jt: JitArrays) -> JitArrays:
     return jt._replace(**{name: getattr(jt, name).copy() for name in _WRITTEN_IN_PLACE})
 
 
+def stacked_copies(jt: JitArrays, n: int) -> dict[str, np.ndarray]:
+    """``n`` copies of each array of ``jt`` written in place, as the rows of one array per name
+    (row ``k`` of each: the ``k``-th copy; a row of a C-contiguous array is one, as the dispatch
+    loop takes it)."""
+    rows = {name: np.repeat(getattr(jt, name)[None, :], n, axis=0) for name in _WRITTEN_IN_PLACE if name != "cnt"}
+    if jt.cnt.any():
+        rows["cnt"] = np.repeat(jt.cnt[None, :], n, axis=0)
+    else:  # (zeros the system maps at a first write: a 16x16 chip's copied counts, 16 banks each, are
+        # 3 MB, and writing them cost 1.5 ms at each run's start; a sleeping tile writes one bank)
+        rows["cnt"] = np.zeros((n, len(jt.cnt)), dtype=jt.cnt.dtype)
+    return rows
+
+
 _ENTERED = 0  # regions entered as translated in this process (any core): see entered_regions()
 
 
@@ -193,6 +208,17 @@ def note_translated(build: Build, done: Translated) -> list[Translated]:
     done_list = _TRANSLATED.setdefault(build, [])
     done_list.append(done)
     return done_list
+
+
+class Clones(NamedTuple, Generic[_T]):
+    """What :meth:`CoreTables.clones` made: the translators by tile; the tiles in that order; their
+    tables, the arrays a core writes in place as one array per name whose row ``k`` is the ``k``-th
+    tile's (``translators[tiles[k]].tables()`` holds views of them), the others shared (a chip
+    hands every copy to its loop in one call, :func:`robosoc.kernels.jit_dispatch.set_table_copies`)."""
+
+    translators: dict[int, _T]
+    tiles: np.ndarray
+    rows: JitArrays
 
 
 class CoreTables:
@@ -338,7 +364,7 @@ class CoreTables:
             self._install_new_known()  # translated since
         return True
 
-    def clones(self, tiles: list[int]) -> dict[int, Self]:
+    def clones(self, tiles: list[int]) -> Clones[Self]:
         """Translators for other tiles of this core's state holding its code and build, their
         tables copies of this core's (which must not have run yet: made in the same look), keyed
         by tile; tiles with other code or another build are left out.  The tiles of a chip load
@@ -354,24 +380,25 @@ class CoreTables:
         same &= (m32[idx, :words] == m32[self.tile, :words]).all(axis=1)
         idx = idx[same]
         if not len(idx):
-            return {}
+            return Clones({}, idx, jt)
         rows = dec[idx, 0 : 2 * words : 2]  # a copy: the predecode marks of every tile at once
         rows[rows == OP_ENTRY] = 0  # as _clear_marks()
         rows[:, np.flatnonzero(jt.entry_fn[:words])] = OP_ENTRY  # as _mark()
         dec[idx, 0 : 2 * words : 2] = rows
+        # the copies of the arrays a core writes in place, one block per array for all the tiles (a
+        # copy per tile and array cost a 16x16 chip 2 ms at each run's start): each tile's row
+        rows_of = stacked_copies(jt, len(idx))
         made = {}
-        for t in idx.tolist():
+        for k, t in enumerate(idx.tolist()):
             translator = self._sibling(t)
-            translator._adopt(self)
+            translator._adopt(self, jt._replace(**{name: a[k] for name, a in rows_of.items()}))
             made[t] = translator
-        return made
+        return Clones(made, idx, jt._replace(**rows_of))
 
-    def _adopt(self, other: Self) -> None:
-        """Take a copy of ``other``'s tables and what goes with them (:meth:`clones`)."""
-        jt = other._jt
-        assert jt is not None
+    def _adopt(self, other: Self, copy: JitArrays) -> None:
+        """Take ``copy``, a copy of ``other``'s tables, and what goes with them (:meth:`clones`)."""
         slots = (other._slot_hist, other._slot_len, other._slot_next, other._nslots)
-        self._take(jt, *slots, other._known_seen, other._known_starts_in)
+        self._take(copy, *slots, other._known_seen, other._known_starts_in, copied=True)
         self._code_size = other._code_size
         self._flushes_seen = 0
         self._key_raw, self._key_made = other._key_raw, other._key_made
@@ -385,9 +412,11 @@ class CoreTables:
         nslots: int,
         seen: int,
         starts_in: Iterable[int],
+        copied: bool = False,
     ) -> None:
-        """Tables made by another core (or kept for the build) and their bookkeeping, as this core's."""
-        self._jt = _own_copy(jt)
+        """Tables made by another core (or kept for the build) and their bookkeeping, as this core's
+        (``copied``: ``jt`` is a copy already, its arrays written in place this core's own)."""
+        self._jt = jt if copied else _own_copy(jt)
         self._slot_hist, self._slot_len, self._slot_next = list(slot_hist), list(slot_len), list(slot_next)
         self._nslots = nslots
         self._known_seen = seen
