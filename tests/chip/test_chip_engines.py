@@ -512,6 +512,7 @@ def test_the_tiles_holding_one_program_get_copies_of_the_first_tiles_tables(monk
     assert ran[0][2] == {(1, 0): 50, (2, 0): 70, (0, 1): 50, (1, 1): 70, (2, 1): 50}
 
 
+@pytest.mark.usefixtures("no_records")
 def test_a_copys_translator_made_late_holds_the_tables_of_the_first_when_copied(monkeypatch) -> None:
     """A tile whose tables are a copy of the first tile's gets its translator only when asked for;
     made after the first tile translated another region, it holds its copy as made (the first's

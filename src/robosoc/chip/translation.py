@@ -144,15 +144,18 @@ class ChipTranslation:
         if busy is None and self.engine.waits_for_busy_tiles:
             busy = self._busy(chip)
         new: list[int] = []
-        for t in range(len(self.on)):
-            if self._stopped[t] or t not in chip.programs or int(chip.cores.st[t, S_CODE_SIZE]) == 0:
-                continue
+        # the loaded core tiles that may translate, in tile order (looked at together: a Python
+        # look per tile cost a sleeping 16x16 chip on auto 0.5 ms at each run's start)
+        tiles = np.array(sorted(chip.programs), dtype=np.int64)
+        tiles = tiles[~self._stopped[tiles] & (chip.cores.st[tiles, S_CODE_SIZE] != 0)]
+        if busy is not None:
+            idle = (self.on[tiles] == 0) & ~busy[tiles]  # (a tile has a translator while on)
+            self._watched.update(tiles[idle].tolist())  # auto: no translator until it turns busy
+            tiles = tiles[~idle]
+        for t in tiles.tolist():
             if not self.translators.has(t):
-                if busy is not None and not busy[t]:
-                    self._watched.add(t)
-                else:
-                    self._watched.discard(t)
-                    new.append(t)  # made below, all at once
+                self._watched.discard(t)
+                new.append(t)  # made below, all at once
                 continue
             self._watched.discard(t)
             translator = self.translators[t]
