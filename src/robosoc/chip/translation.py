@@ -135,9 +135,9 @@ class ChipTranslation:
             # nothing new for any tile (a per-tile look cost a sleeping 16x16 chip 1 ms per step,
             # and auto's flight 0.2 ms per step while it watched its other tile): only auto's
             # threshold moves with the run time, and the next look at watched tiles comes later
-            made = self.translators.made()
-            if made:
-                self._set_threshold(made[0])
+            live = self.translators.made()
+            if live:
+                self._set_threshold(live[0])
             if busy is not None:
                 self._look = min(2 * self._look, AUTO_LOOK_MAX_CYCLES)
             return

@@ -26,7 +26,7 @@ _U1 = np.uint64(1)
 @njit(cache=True, inline="always")
 def _before(cyc: np.ndarray, a: np.uint64, b: np.uint64) -> bool:
     """Entry a goes before entry b: earlier cycle, then lower index."""
-    return cyc[a] < cyc[b] or (cyc[a] == cyc[b] and a < b)
+    return bool(cyc[a] < cyc[b] or (cyc[a] == cyc[b] and a < b))
 
 
 @njit(**UNCOUNTED)
