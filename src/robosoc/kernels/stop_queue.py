@@ -81,7 +81,7 @@ def push(heap: np.ndarray, run: np.ndarray, cyc: np.ndarray, state: np.ndarray, 
 
 
 @njit(**UNCOUNTED)
-def pop(heap: np.ndarray, run: np.ndarray, cyc: np.ndarray, state: np.ndarray) -> int:
+def pop(heap: np.ndarray, run: np.ndarray, cyc: np.ndarray, state: np.ndarray) -> np.int64:
     """Remove and return the first entry (the queue must not be empty): the run's first or the
     heap's top, whichever goes first."""
     head = state[Q_HEAD]
