@@ -851,8 +851,7 @@ def run_chip(core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int, jit
         # within the quantum, but it can hold up the sender's own injection, which NI_STATUS shows).
         failed = -1
         suspended = False
-        # the stopped cores waiting in the queue (kernels/stop_queue.py), as indices into run (not the
-        # literal 0: numba would compile push for it too)
+        # the stopped cores waiting in the queue (kernels/stop_queue.py), as indices into run
         stop_queue.clear(queue_state)
         fill = True  # the queue starts with every awake core, once they have run to their first stop
         while True:
