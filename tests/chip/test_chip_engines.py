@@ -458,7 +458,8 @@ def test_the_tiles_holding_one_program_get_copies_of_the_first_tiles_tables(monk
         loop = [A.i("addi", A0, 0, 0), A.i("addi", T1, 0, rounds), A.i("addi", A0, A0, 1)]
         return program([*loop, A.i("addi", T1, T1, -1), A.branch("bne", T1, 0, -8), *exit_with(A0)])
 
-    loads = {(1, 0): counting(50), (2, 0): counting(70), (0, 1): counting(50), (1, 1): counting(70)}
+    fifty, seventy = counting(50), counting(70)
+    loads = {(1, 0): fifty, (2, 0): seventy, (0, 1): fifty, (1, 1): seventy, (2, 1): fifty}
 
     def chip_with(engine_name: str) -> MPSoC:
         chip = MPSoC(ChipConfig(width=3, height=2), engine=engine_name)
@@ -469,20 +470,34 @@ def test_the_tiles_holding_one_program_get_copies_of_the_first_tiles_tables(monk
     chip_with("jit").run(max_cycles=100_000)  # every region translated once in this process
     adopted = []
     adopt = TranslatingCore._adopt
-    monkeypatch.setattr(TranslatingCore, "_adopt", lambda self, other: (adopted.append(self.tile), adopt(self, other)))
+    monkeypatch.setattr(
+        TranslatingCore, "_adopt", lambda self, adoption, copy: (adopted.append(self.tile), adopt(self, adoption, copy))
+    )
     chip = chip_with("jit")
     chip._jit.prepare(chip)
     tiles = {xy: chip.config.tile_index(xy) for xy in loads}
-    # (1, 0) is made and (0, 1) copies it; then (2, 0), the first tile left, and (1, 1) copies it
-    assert adopted == [tiles[(0, 1)], tiles[(1, 1)]]
-    assert all(chip._jit.translators[t] is not None and chip._jit.on[t] for t in tiles.values())
+    # (1, 0) is made and (0, 1) and (2, 1) copy its tables; then (2, 0), the first tile left, and
+    # (1, 1) copies its; a copy's translator is made when asked for
+    assert adopted == []
+    assert all(chip._jit.on[t] for t in tiles.values())
+    assert [t for t, _ in chip._jit.translators.made_items()] == [tiles[(1, 0)], tiles[(2, 0)]]
+    assert all(chip._jit.translators[t] is not None for t in tiles.values())
+    assert adopted == [tiles[(0, 1)], tiles[(1, 1)], tiles[(2, 1)]]
     got = {t: [a.copy() for a in chip._jit.translators[t].tables()] for t in tiles.values()}
     translators = {t: chip._jit.translators[t] for t in tiles.values()}
     known = {t: (tr._known_seen, set(tr._known_starts_in), tr._nslots) for t, tr in translators.items() if tr}
     marks = {t: chip.cores.dec[t] == OP_ENTRY for t in tiles.values()}
     first, copy = (chip._jit.translators[tiles[xy]].tables() for xy in ((1, 0), (0, 1)))
+    other = chip._jit.translators[tiles[(2, 1)]].tables()  # copied in the same round as (0, 1)
     for name in ("entry_fn", "entry_slot", "entry_blk", "hot", "tmap", "cnt", "ctx"):
         assert not np.shares_memory(getattr(first, name), getattr(copy, name)), name
+        assert not np.shares_memory(getattr(copy, name), getattr(other, name)), name
+    # what the chip loop reads for each tile is what its translator holds (one call set them all)
+    for t in tiles.values():
+        given = chip._jit._tables[t]
+        held = chip._jit.translators[t].tables()
+        for name, a, b in zip(held._fields, given, held, strict=True):
+            assert a.ctypes.data == b.ctypes.data and a.shape == b.shape, (t, name)
     monkeypatch.setattr(jit_tables, "_FRESH_TABLES", {})
     for t in tiles.values():
         afresh = TranslatingCore(chip.cores, tile=t, mode="jit")
@@ -494,4 +509,72 @@ def test_the_tiles_holding_one_program_get_copies_of_the_first_tiles_tables(monk
         assert marks[t].any()
     ran = outcome(chip_with("jit"), 100_000)
     assert ran == outcome(chip_with("interp"), 100_000)
-    assert ran[0][2] == {(1, 0): 50, (2, 0): 70, (0, 1): 50, (1, 1): 70}
+    assert ran[0][2] == {(1, 0): 50, (2, 0): 70, (0, 1): 50, (1, 1): 70, (2, 1): 50}
+
+
+@pytest.mark.usefixtures("no_records")
+def test_a_copys_translator_made_late_holds_the_tables_of_the_first_when_copied(monkeypatch) -> None:
+    """A tile whose tables are a copy of the first tile's gets its translator only when asked for;
+    made after the first tile translated another region, it holds its copy as made (the first's
+    bookkeeping then, not now), is given the new region at the next look, and its tables equal
+    those it makes afresh; the chip's counts of reused regions are those of translators made at once."""
+    import numpy as np
+
+    monkeypatch.setattr(jit_tables, "_TRANSLATED", {})
+    monkeypatch.setattr(jit_tables, "_FRESH_TABLES", {})
+    from robosoc.jit.engine import TranslatingCore
+
+    words = [
+        A.i("addi", A0, 0, 0),
+        A.i("addi", T1, 0, 40),
+        A.i("addi", A0, A0, 1),  # 2: loop
+        A.i("addi", T1, T1, -1),
+        A.branch("bne", T1, 0, -8),
+        *exit_with(A0),  # 5, 6, 7
+        A.jal(0, 0),  # 8: (a region's blocks go on after the exit store)
+        A.i("addi", A0, A0, 2),  # 9: a subroutine nobody calls
+        A.jalr(0, RA, 0),
+    ]
+    prog = program(words)
+    xys = [(1, 0), (0, 1), (1, 1)]
+
+    def loaded() -> MPSoC:
+        chip = MPSoC(ChipConfig(), engine="jit")
+        for xy in xys:
+            chip.load(xy, prog)
+        return chip
+
+    loaded().run(max_cycles=100_000)  # the loop's regions translated in this process
+    chip = loaded()
+    jit = chip._jit
+    first, b, c = (chip.config.tile_index(xy) for xy in xys)
+    jit.prepare(chip)
+    assert [t for t, _ in jit.translators.made_items()] == [first]
+    reused = jit.stats.reused
+    made_first = jit.translators[first]
+    assert made_first.tables().entry_fn[9] == 0
+    made_first.translate(SRAM + 4 * 9)  # a region only the first tile holds so far
+    jit.prepare(chip)  # the others are given it (their translators made now, from their copies)
+    assert jit.stats.reused == reused + 2  # each copy entered the new region
+    for t in (b, c):
+        tr = jit.translators[t]
+        assert tr is not None and tr.tables().entry_fn[9] != 0
+        given = jit._tables[t]
+        assert all(x.ctypes.data == y.ctypes.data for x, y in zip(given, tr.tables(), strict=True))
+    got = {t: [a.copy() for a in jit.translators[t].tables()] for t in (b, c)}
+    monkeypatch.setattr(jit_tables, "_FRESH_TABLES", {})
+    for t in (b, c):
+        want = TranslatingCore(chip.cores, tile=t, mode="jit").tables()  # made afresh
+        for name, x, y in zip(want._fields, got[t], want, strict=True):
+            if name not in ("cnt", "ctx"):  # (slots are ordered as entered: compared through the run below)
+                assert np.array_equal(x, y), (t, name)
+    ran = outcome(chip, 100_000)
+    assert ran == outcome(loaded_interp(prog, xys), 100_000)
+    assert ran[0][2] == dict.fromkeys(xys, 40)
+
+
+def loaded_interp(prog: Program, xys: list[tuple[int, int]]) -> MPSoC:
+    chip = MPSoC(ChipConfig(), engine="interp")
+    for xy in xys:
+        chip.load(xy, prog)
+    return chip

@@ -32,7 +32,7 @@ from robosoc.kernels.core_layout import (
     S_RUN,
 )
 from robosoc.kernels.dev_irq import irq_event
-from robosoc.kernels.jit_dispatch import CTX_DEVICE
+from robosoc.kernels.jit_dispatch import CTX_DEVICE, CTX_NOPS
 from robosoc.program.elf import load_elf
 from robosoc.toolchain import build_elf
 
@@ -169,3 +169,16 @@ def test_a_sleeping_chip_on_translated_code_is_the_interpreted_one() -> None:
         if translator is not None:
             # the ticks' timer acknowledgements (a load and a store each) made by the dispatch loop
             assert translator.tables().ctx[CTX_DEVICE] >= 2 * TICKS, t
+
+
+def test_the_vectors_replayed_nop_run_by_the_dispatch_loop_is_the_interpreters() -> None:
+    """Every interrupt entry has the controller look again one cycle later, inside the vector's
+    first instruction (a `nop` the RTL replays): the region there stops before it and the dispatch
+    loop executes the `nop` itself.  The whole state of every core (registers with the sink, the
+    per-operation counters in both banks, cycles and the core state row) is the interpreter's."""
+    _, reference = _sleeping("interp")
+    _, chip = _sleeping("jit")
+    for name in ("st", "ctr", "opc", "regs", "m8"):
+        assert np.array_equal(getattr(chip.cores, name), getattr(reference.cores, name)), name
+    nops = [translator.tables().ctx[CTX_NOPS] for translator in chip._jit.translators if translator is not None]
+    assert nops and all(n >= TICKS for n in nops), nops  # one per tick's entry, at least

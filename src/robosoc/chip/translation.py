@@ -19,13 +19,15 @@ from numba.typed import List
 
 from robosoc.kernels import chip as kc
 from robosoc.kernels.core_layout import RUN_CHUNK, S_CODE_SIZE, S_PC, S_RUN
-from robosoc.kernels.jit_dispatch import JitArrays, empty_tables, set_tables, tables_list
+from robosoc.kernels.jit_dispatch import JitArrays, empty_tables, set_table_copies, set_tables, tables_list
 
 if TYPE_CHECKING:
+    from collections.abc import Iterator
+
     from robosoc.chip.engines import Engine
     from robosoc.chip.mpsoc import MPSoC
     from robosoc.jit.engine import TranslatingCore
-    from robosoc.jit.tables import TranslationStats
+    from robosoc.jit.tables import Clones, TranslationStats
 
 
 #: auto on the chip: a tile gets its translator once, since the last look, it executed at least
@@ -48,6 +50,51 @@ AUTO_LOOK_CYCLES = 1 << 20
 AUTO_LOOK_MAX_CYCLES = 1 << 24
 
 
+class TileTranslators:
+    """Per tile its translator (None: it interprets), as a list; a tile whose tables are a copy of
+    another's (:meth:`robosoc.jit.tables.CoreTables.clones`) gets its translator when first asked
+    for (:meth:`made` lists only those made)."""
+
+    def __init__(self, tiles: int) -> None:
+        self._made: list[TranslatingCore | None] = [None] * tiles
+        self._lazy: dict[int, Clones[TranslatingCore]] = {}
+
+    def __len__(self) -> int:
+        return len(self._made)
+
+    def __getitem__(self, t: int) -> TranslatingCore | None:
+        clones = self._lazy.pop(t, None)
+        if clones is not None:
+            self._made[t] = clones.translator(t)
+        return self._made[t]
+
+    def __setitem__(self, t: int, translator: TranslatingCore | None) -> None:
+        self._lazy.pop(t, None)
+        self._made[t] = translator
+
+    def __iter__(self) -> Iterator[TranslatingCore | None]:
+        return (self[t] for t in range(len(self._made)))
+
+    def add(self, clones: Clones[TranslatingCore]) -> None:
+        """The translators of ``clones``' tiles, made when asked for."""
+        for t in clones.tiles.tolist():
+            self._made[t] = None
+            self._lazy[t] = clones
+
+    def has(self, t: int) -> bool:
+        """Whether tile ``t`` has a translator (made or not yet)."""
+        return t in self._lazy or self._made[t] is not None
+
+    def made_items(self) -> list[tuple[int, TranslatingCore]]:
+        """(tile, translator) of the translators made so far."""
+        return [(t, tr) for t, tr in enumerate(self._made) if tr is not None]
+
+    def made(self) -> list[TranslatingCore]:
+        """The translators made so far (a copy's, once asked for; the first of a program's tiles
+        always: the others' are copies of its tables)."""
+        return [tr for tr in self._made if tr is not None]
+
+
 class ChipTranslation:
     """Per tile: whether it runs translated code, its translator and its tables (see the module doc)."""
 
@@ -58,7 +105,7 @@ class ChipTranslation:
         self._empty = empty_tables()
         self._tables = tables_list(self._empty, tiles)
         self._given: list[JitArrays | None] = [None] * tiles  # what _tables holds per tile, if translated
-        self.translators: list[TranslatingCore | None] = [None] * tiles
+        self.translators = TileTranslators(tiles)
         self._stopped = np.zeros(tiles, dtype=bool)  # tiles that interpret from now on
         self.stats: TranslationStats | None = None
         self._seen = np.zeros((tiles, 2), dtype=np.int64)  # auto: (instructions, chip cycle) at the last look
@@ -88,26 +135,31 @@ class ChipTranslation:
             # nothing new for any tile (a per-tile look cost a sleeping 16x16 chip 1 ms per step,
             # and auto's flight 0.2 ms per step while it watched its other tile): only auto's
             # threshold moves with the run time, and the next look at watched tiles comes later
-            first = next((tr for tr in self.translators if tr is not None), None)
-            if first is not None:
-                self._set_threshold(first)
+            live = self.translators.made()
+            if live:
+                self._set_threshold(live[0])
             if busy is not None:
                 self._look = min(2 * self._look, AUTO_LOOK_MAX_CYCLES)
             return
         if busy is None and self.engine.waits_for_busy_tiles:
             busy = self._busy(chip)
         new: list[int] = []
-        for t in range(len(self.on)):
-            if self._stopped[t] or t not in chip.programs or int(chip.cores.st[t, S_CODE_SIZE]) == 0:
-                continue
-            translator = self.translators[t]
-            if translator is None and busy is not None and not busy[t]:
-                self._watched.add(t)
-                continue
-            self._watched.discard(t)
-            if translator is None:
+        # the loaded core tiles that may translate, in tile order (looked at together: a Python
+        # look per tile cost a sleeping 16x16 chip on auto 0.5 ms at each run's start)
+        tiles = np.array(sorted(chip.programs), dtype=np.int64)
+        tiles = tiles[~self._stopped[tiles] & (chip.cores.st[tiles, S_CODE_SIZE] != 0)]
+        if busy is not None:
+            idle = (self.on[tiles] == 0) & ~busy[tiles]  # (a tile has a translator while on)
+            self._watched.update(tiles[idle].tolist())  # auto: no translator until it turns busy
+            tiles = tiles[~idle]
+        for t in tiles.tolist():
+            if not self.translators.has(t):
+                self._watched.discard(t)
                 new.append(t)  # made below, all at once
                 continue
+            self._watched.discard(t)
+            translator = self.translators[t]
+            assert translator is not None
             translator.finish_compiles()
             translator.install_known()  # what the other tiles' compiles gave
             self._give(t)
@@ -116,7 +168,7 @@ class ChipTranslation:
         made = bool(new)
         if busy is not None:
             self._look = AUTO_LOOK_CYCLES if made else min(2 * self._look, AUTO_LOOK_MAX_CYCLES)
-        live = [tr for tr in self.translators if tr is not None]
+        live = self.translators.made()  # (a copy's translator has its first's cached regions)
         # (only a policy that reads its code's manifest has cached regions: auto)
         self._cached = bool(live) and live[0].policy.reads_manifest and any(tr.has_cached_regions() for tr in live)
         if live:
@@ -128,7 +180,7 @@ class ChipTranslation:
         the code sizes (None: a look is due anyway, for regions still compiling; auto's watched
         tiles are looked at by :meth:`prepare`).  A stopped tile needs no look: :meth:`stop` took
         its tables away."""
-        if any(tr is not None and tr.compiling() for tr in self.translators):
+        if any(tr.compiling() for tr in self.translators.made()):  # (a copy not made compiles nothing)
             return None
         entered = 0
         if self.stats is not None:  # a translator was made: the engine is imported
@@ -144,12 +196,17 @@ class ChipTranslation:
         left = tiles
         while left:
             first = self._translator(chip, left[0])
-            made = {left[0]: first, **first.clones(left[1:])}
-            for t, translator in made.items():
-                self.translators[t] = translator
-                self.on[t] = 1
-                self._give(t)
-            left = [t for t in left if t not in made]
+            clones = first.clones(left[1:])
+            self.translators[left[0]] = first
+            self.on[left[0]] = 1
+            self._give(left[0])
+            if len(clones):  # the copies' tables to the loop, in one call
+                self.translators.add(clones)
+                self.on[clones.tiles] = 1
+                set_table_copies(self._tables, clones.tiles, clones.rows)
+                for t in clones.tiles.tolist():
+                    self._given[t] = None  # (its translator's tables, once made, are given again: the same arrays)
+            left = [t for t in left[1:] if t not in clones]
 
     def _translator(self, chip: MPSoC, t: int) -> TranslatingCore:
         """A translator for tile ``t`` (the translating engine is imported only now: a short run of
@@ -235,8 +292,8 @@ class ChipTranslation:
 
     def finish_compiles(self, wait: bool = False) -> None:
         """Enter what the background thread compiled (all of it, waiting, with ``wait``)."""
-        for t, translator in enumerate(self.translators):
-            if translator is not None and translator.compiling():
+        for t, translator in self.translators.made_items():  # (a copy not made compiles nothing)
+            if translator.compiling():
                 translator.finish_compiles(wait)
                 self._give(t)
 

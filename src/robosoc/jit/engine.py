@@ -11,6 +11,7 @@ Counts, cycles, outputs and errors are those of the interpreter (docs/translatio
 
 from __future__ import annotations
 
+import dataclasses
 import time
 import weakref
 from collections.abc import Callable
@@ -21,13 +22,14 @@ import numpy as np
 from robosoc.jit import policy as policies
 from robosoc.jit.compiler import Compiler, Pending, shared_compiler
 from robosoc.jit.manifest import Manifest, manifest_key
-from robosoc.jit.tables import Build, Cores, CoreTables, Translated, TranslationStats, note_translated
+from robosoc.jit.tables import Adoption, Build, Cores, CoreTables, Translated, TranslationStats, note_translated
 from robosoc.kernels.core import run_cores
 from robosoc.kernels.core_layout import RUN_CHUNK, S_CODE_SIZE, S_CYCLE, S_MEM_BASE, S_MEM_SIZE, S_MUL, S_PC, S_RUN
 from robosoc.kernels.jit_dispatch import (
     CTX_FLUSHES,
     NEVER_TRANSLATE,
     RUN_TRANSLATE,
+    JitArrays,
     flush_entered_counts,
     run_translated,
 )
@@ -155,9 +157,13 @@ class TranslatingCore(CoreTables):
     def _sibling(self, tile: int) -> TranslatingCore:
         return TranslatingCore(self.state, tile, self.mode, self._compiler, self.stats)
 
-    def _adopt(self, other: TranslatingCore) -> None:
-        super()._adopt(other)
-        self.manifest = other.manifest.copy()
+    def _adoption(self) -> Adoption:
+        return dataclasses.replace(super()._adoption(), extra=self.manifest.copy())
+
+    def _adopt(self, adoption: Adoption, copy: JitArrays) -> None:
+        super()._adopt(adoption, copy)
+        assert isinstance(adoption.extra, Manifest)
+        self.manifest = adoption.extra.copy()
 
     def _manifest_key(self) -> str:
         """The loaded code, build options, policy and region cap: the key of the list of regions

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Protocol, Self
+from typing import TYPE_CHECKING, Generic, Protocol, Self, TypeVar
 
 import numpy as np
 
@@ -49,6 +49,8 @@ class Cores(Protocol):
         """The arrays as the numba kernels take them."""
         ...
 
+
+_T = TypeVar("_T")
 
 #: A build: the target a core's code is translated for, and whether the core multiplies.
 Build = tuple[Target, bool]
@@ -172,6 +174,19 @@ def _own_copy(jt: JitArrays) -> JitArrays:
     return jt._replace(**{name: getattr(jt, name).copy() for name in _WRITTEN_IN_PLACE})
 
 
+def stacked_copies(jt: JitArrays, n: int) -> dict[str, np.ndarray]:
+    """``n`` copies of each array of ``jt`` written in place, as the rows of one array per name
+    (row ``k`` of each: the ``k``-th copy; a row of a C-contiguous array is one, as the dispatch
+    loop takes it)."""
+    rows = {name: np.repeat(getattr(jt, name)[None, :], n, axis=0) for name in _WRITTEN_IN_PLACE if name != "cnt"}
+    if jt.cnt.any():
+        rows["cnt"] = np.repeat(jt.cnt[None, :], n, axis=0)
+    else:  # (zeros the system maps at a first write: a 16x16 chip's copied counts, 16 banks each, are
+        # 3 MB, and writing them cost 1.5 ms at each run's start; a sleeping tile writes one bank)
+        rows["cnt"] = np.zeros((n, len(jt.cnt)), dtype=jt.cnt.dtype)
+    return rows
+
+
 _ENTERED = 0  # regions entered as translated in this process (any core): see entered_regions()
 
 
@@ -193,6 +208,59 @@ def note_translated(build: Build, done: Translated) -> list[Translated]:
     done_list = _TRANSLATED.setdefault(build, [])
     done_list.append(done)
     return done_list
+
+
+@dataclass(frozen=True)
+class Adoption:
+    """What a copy of a core's tables goes with, as it was when copied (:meth:`CoreTables.clones`)."""
+
+    slot_hist: tuple[np.ndarray, ...]
+    slot_len: tuple[np.ndarray, ...]
+    slot_next: tuple[np.ndarray, ...]
+    nslots: int
+    seen: int
+    starts_in: frozenset[int]
+    code_size: int
+    key_raw: bytes
+    key_made: Build
+    extra: object = None  # what a subclass keeps besides (a translator: its manifest)
+
+
+class Clones(Generic[_T]):
+    """Copies of one core's tables for other tiles holding its code and build
+    (:meth:`CoreTables.clones`): ``tiles`` in order, ``rows`` their tables (the arrays a core writes
+    in place as one array per name whose row ``k`` is ``tiles[k]``'s, the others shared: a chip
+    hands them to its loop in one call, :func:`robosoc.kernels.jit_dispatch.set_table_copies`).
+    A tile's translator is made only when asked for (:meth:`translator`): a 16x16 chip's run
+    otherwise made 254 of them at its start, 2-4 ms, though a run that translates nothing new never
+    needs one."""
+
+    def __init__(self, maker: CoreTables, tiles: np.ndarray, rows: JitArrays, adoption: Adoption | None) -> None:
+        self._maker = maker
+        self.tiles = tiles
+        self.rows = rows
+        self._adoption = adoption
+        self._index = {t: k for k, t in enumerate(tiles.tolist())}
+
+    def __len__(self) -> int:
+        return len(self.tiles)
+
+    def __contains__(self, tile: int) -> bool:
+        return tile in self._index
+
+    def tables(self, tile: int) -> JitArrays:
+        """Tile ``tile``'s copy (views of ``rows``)."""
+        k = self._index[tile]
+        rows = self.rows
+        written = set(_WRITTEN_IN_PLACE)
+        return JitArrays(*(getattr(rows, n)[k] if n in written else getattr(rows, n) for n in rows._fields))
+
+    def translator(self, tile: int) -> _T:
+        """Tile ``tile``'s translator, holding its copy (made now)."""
+        assert self._adoption is not None
+        made = self._maker._sibling(tile)
+        made._adopt(self._adoption, self.tables(tile))
+        return made  # type: ignore[return-value]  # the maker's class: _sibling makes one like it
 
 
 class CoreTables:
@@ -338,13 +406,13 @@ class CoreTables:
             self._install_new_known()  # translated since
         return True
 
-    def clones(self, tiles: list[int]) -> dict[int, Self]:
-        """Translators for other tiles of this core's state holding its code and build, their
-        tables copies of this core's (which must not have run yet: made in the same look), keyed
-        by tile; tiles with other code or another build are left out.  The tiles of a chip load
-        one program: made one by one, a translator and its tables cost about 35 µs in Python, 9-13
-        ms for a 16x16 chip at the start of every run; copied here, the checks and the predecode
-        marks are done once for all."""
+    def clones(self, tiles: list[int]) -> Clones[Self]:
+        """Copies of this core's tables (which must not have run yet: made in the same look) for
+        other tiles of its state holding its code and build, made one for all; tiles with other
+        code or another build are left out.  The tiles of a chip load one program: made one by one,
+        a translator and its tables cost about 35 µs in Python, 9-13 ms for a 16x16 chip at the
+        start of every run; copied here, the checks, the predecode marks and the copies are made
+        once for all, and a tile's translator when it is asked for."""
         jt = self._tables()
         assert not jt.cnt.any(), "copying the tables of a core that has run would copy its counts"
         st, m32, dec = self.state.st, self.state.m32, self.state.dec
@@ -354,27 +422,38 @@ class CoreTables:
         same &= (m32[idx, :words] == m32[self.tile, :words]).all(axis=1)
         idx = idx[same]
         if not len(idx):
-            return {}
+            return Clones(self, idx, jt, None)
         rows = dec[idx, 0 : 2 * words : 2]  # a copy: the predecode marks of every tile at once
         rows[rows == OP_ENTRY] = 0  # as _clear_marks()
         rows[:, np.flatnonzero(jt.entry_fn[:words])] = OP_ENTRY  # as _mark()
         dec[idx, 0 : 2 * words : 2] = rows
-        made = {}
-        for t in idx.tolist():
-            translator = self._sibling(t)
-            translator._adopt(self)
-            made[t] = translator
-        return made
+        # the copies of the arrays a core writes in place, one block per array for all the tiles (a
+        # copy per tile and array cost a 16x16 chip 2 ms at each run's start): each tile's row
+        rows_of = stacked_copies(jt, len(idx))
+        self.stats.reused += len(idx) * len(self._known_starts_in)  # (as _take() would count them)
+        return Clones(self, idx, jt._replace(**rows_of), self._adoption())
 
-    def _adopt(self, other: Self) -> None:
-        """Take a copy of ``other``'s tables and what goes with them (:meth:`clones`)."""
-        jt = other._jt
-        assert jt is not None
-        slots = (other._slot_hist, other._slot_len, other._slot_next, other._nslots)
-        self._take(jt, *slots, other._known_seen, other._known_starts_in)
-        self._code_size = other._code_size
+    def _adoption(self) -> Adoption:
+        """What a copy of this core's tables goes with, as it is now (:meth:`clones`)."""
+        return Adoption(
+            tuple(self._slot_hist),
+            tuple(self._slot_len),
+            tuple(self._slot_next),
+            self._nslots,
+            self._known_seen,
+            frozenset(self._known_starts_in),
+            self._code_size,
+            self._key_raw,
+            self._key_made,
+        )
+
+    def _adopt(self, adoption: Adoption, copy: JitArrays) -> None:
+        """Take ``copy``, a copy of another core's tables, and what goes with them (:meth:`clones`)."""
+        a = adoption
+        self._take(copy, a.slot_hist, a.slot_len, a.slot_next, a.nslots, a.seen, a.starts_in, copied=True)
+        self._code_size = a.code_size
         self._flushes_seen = 0
-        self._key_raw, self._key_made = other._key_raw, other._key_made
+        self._key_raw, self._key_made = a.key_raw, a.key_made
 
     def _take(
         self,
@@ -385,14 +464,18 @@ class CoreTables:
         nslots: int,
         seen: int,
         starts_in: Iterable[int],
+        copied: bool = False,
     ) -> None:
-        """Tables made by another core (or kept for the build) and their bookkeeping, as this core's."""
-        self._jt = _own_copy(jt)
+        """Tables made by another core (or kept for the build) and their bookkeeping, as this core's
+        (``copied``: ``jt`` is a copy already, its arrays written in place this core's own, and
+        its regions counted as reused by :meth:`clones`)."""
+        self._jt = jt if copied else _own_copy(jt)
         self._slot_hist, self._slot_len, self._slot_next = list(slot_hist), list(slot_len), list(slot_next)
         self._nslots = nslots
         self._known_seen = seen
         self._known_starts_in = set(starts_in)
-        self.stats.reused += len(self._known_starts_in)
+        if not copied:
+            self.stats.reused += len(self._known_starts_in)
 
     def _remember_install(self) -> None:
         """Keep the fresh tables just made, for the next core of the same build (:meth:`_install_as_before`)."""

@@ -233,7 +233,7 @@ class ChipBook(NamedTuple):
     work: np.ndarray
 
 
-WORK_ROWS = 6
+WORK_ROWS = 8
 
 
 # Explicit signatures on the small helpers called with constants: numba would otherwise compile
@@ -707,7 +707,9 @@ def run_chip(core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int, jit
     look_active = gst[G_LOOK_ACTIVE]
     run = row(book.work, 0)  # the awake cores, in tile order (the order of equal-cycle stops)
     runx = row(book.work, 1)  # those of them that run (not those waiting to report an error)
-    queue = row(book.work, 2)  # the stopped ones in handling order (kernels/stop_queue.py)
+    queue = row(book.work, 2)  # the stopped ones in handling order (kernels/stop_queue.py: heap, run, state)
+    queue_run = row(book.work, 6)
+    queue_state = row(book.work, 7)[: stop_queue.Q_STATE]
     qcyc = row(book.work, 3)
     one = row(book.work, 4)[:1]  # a translating tile (run alone)
     rest = row(book.work, 5)  # the interpreted tiles of a run
@@ -849,9 +851,8 @@ def run_chip(core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int, jit
         # within the quantum, but it can hold up the sender's own injection, which NI_STATUS shows).
         failed = -1
         suspended = False
-        # the stopped cores waiting in the queue (kernels/stop_queue.py), as indices into run (not the
-        # literal 0: numba would compile push for it too)
-        nq = np.int64(0)
+        # the stopped cores waiting in the queue (kernels/stop_queue.py), as indices into run
+        stop_queue.clear(queue_state)
         fill = True  # the queue starts with every awake core, once they have run to their first stop
         while True:
             if hi > lo:
@@ -859,18 +860,19 @@ def run_chip(core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int, jit
                 _run_awake(core, runx[lo:hi] if bulk else run[lo:hi], H, jit_tables, jit_on, jit_params, one, rest,
                            gst, prof, cst)  # fmt: skip
                 if not fill:  # the one core handled last, at its next stop
-                    nq = stop_queue.push(queue, qcyc, nq, lo, chip_cycle(st[run[lo], S_CYCLE], cst[run[lo], K_DIV]))
+                    stop_queue.push(queue, queue_run, qcyc, queue_state, lo,
+                                    chip_cycle(st[run[lo], S_CYCLE], cst[run[lo], K_DIV]))  # fmt: skip
                 hi = lo
                 bulk = False
             if fill:
                 for r in range(k):
-                    nq = stop_queue.push(queue, qcyc, nq, r, chip_cycle(st[run[r], S_CYCLE], cst[run[r], K_DIV]))
+                    stop_queue.push(queue, queue_run, qcyc, queue_state, r,
+                                    chip_cycle(st[run[r], S_CYCLE], cst[run[r], K_DIV]))  # fmt: skip
                 fill = False
             t = np.int64(-1)  # not the literal -1: numba would compile ni_access and its callees for it too
             rt = 0  # t is run[rt]
-            while nq > 0:
-                r = queue[0]
-                nq = stop_queue.pop(queue, qcyc, nq)
+            while stop_queue.size(queue_state) > 0:
+                r = stop_queue.pop(queue, queue_run, qcyc, queue_state)
                 u = run[r]
                 # a stop at or after H waits for a later quantum (a long quantum cut short leaves cores
                 # ahead of H; H only shrinks, so it stays out); only an exit is taken at once (the core

@@ -35,9 +35,9 @@ from numba import njit, types
 from numba.extending import intrinsic
 from numba.typed import List
 
-from robosoc.isa.table import OP_BREAK, OP_ENTRY
+from robosoc.isa.table import OP_BREAK, OP_ENTRY, SINGLE_CYCLES
 from robosoc.kernels.borrowed import UNCOUNTED, row
-from robosoc.kernels.core import CoreArrays, decode_word, device_step, fetch_error, run_cores
+from robosoc.kernels.core import ADDI, SINK, CoreArrays, decode_word, device_step, fetch_error, run_cores
 from robosoc.kernels.core_layout import (
     ERR_FETCH_DATA,
     OPC_SIZE,
@@ -100,7 +100,8 @@ CTX_BANK = 17
 #: 15 µs per chip-loop call, its 16 banks' marks being 16 cache lines apart)
 CTX_BANKS = 18
 CTX_DEVICE = 19  # device-register loads and stores the loop made itself, of the CTX_STEPS (statistics)
-CTX_SIZE = 20
+CTX_NOPS = 20  # `nop`s the loop executed itself after a region's limit exit, of the CTX_STEPS (statistics)
+CTX_SIZE = 21
 #: banks of count slots of a core's tables: one per task id of the chip (a single core uses bank 0)
 COUNT_BANKS = NTASKS
 
@@ -113,7 +114,7 @@ MIDBLOCK_FACTOR = 8  # hot counter of a word no region can start at
 
 _JAL_X0_OPCODE = 0x6F  # jal with rd = x0 (low 12 bits)
 _LOAD_STORE_OPCODE = 0x03  # the major opcode of loads (0x03) and stores (0x23) without bit 5
-_NOP = 0x13
+_NOP = 0x13  # addi x0, x0, 0
 M32 = 0xFFFFFFFF
 
 
@@ -317,6 +318,31 @@ def set_tables(tables, t: int, jt: JitArrays) -> None:
 
 
 @njit(cache=True)
+def set_table_copies(tables, tiles: np.ndarray, rows: JitArrays) -> None:
+    """``tables[tiles[k]]`` = the ``k``-th copy of ``rows`` for every k: the arrays a core writes in
+    place are its row ``k`` of ``rows``' (two-dimensional) ones, the others are shared
+    (:meth:`robosoc.jit.tables.CoreTables.clones`; a call of :func:`set_tables` per tile cost a
+    16x16 chip 1.5 ms at each run's start)."""
+    for k in range(tiles.shape[0]):
+        tables[tiles[k]] = JitArrays(
+            rows.entry_fn[k],
+            rows.entry_slot[k],
+            rows.entry_blk[k],
+            rows.hot[k],
+            rows.tmap[k],
+            rows.tpcs,
+            rows.twords,
+            rows.cnt[k],
+            rows.slot_ptr,
+            rows.slot_next,
+            rows.slot_kc,
+            rows.slot_delta,
+            rows.slot_mark,
+            rows.ctx[k],
+        )
+
+
+@njit(cache=True)
 def forget_translations(jt: JitArrays, dec_t: np.ndarray) -> None:
     """Drop every translation of the core whose predecode rows are ``dec_t`` (and the interpreter's
     stops before their blocks)."""
@@ -454,6 +480,26 @@ def run_translated(
         ahead = -1  # the word after a load or store the interpreter runs on from (see below)
         i = (pc - base) >> 2
         word = np.int64(m32[t, i]) & M32 if 0 <= pc - base < code else 0
+        if (
+            limited
+            and word == _NOP
+            and 0 <= pc - base < code
+            and cyc < st_t[S_IRQ_CHECK]
+            and st_t[S_PROF_STRIDE] == 0
+            and dec_t[2 * i] != OP_BREAK
+        ):
+            # a `nop` before the next event, executed as the interpreter executes it (counted as an
+            # ADDI in its word's bank, the sink register written, one cycle) without an interpreter
+            # call: an interrupt entry has the controller look again one cycle later, inside the
+            # vector's first instruction (a `nop`, which the RTL replays), so every entry leaves
+            # the vector's region before it (a sleeping chip's tick makes one)
+            opc_t[(np.uint64(ADDI) << np.uint64(1)) | (np.uint64(i) & np.uint64(1))] += 1
+            regs_t[SINK] = regs_t[0]
+            pc += 4
+            cyc += SINGLE_CYCLES
+            ctx[CTX_STEPS] += 1
+            ctx[CTX_NOPS] += 1
+            continue
         if (step_to < 0 or limited) and (
             0 <= pc - base < code and cyc < st_t[S_IRQ_CHECK] and st_t[S_PROF_STRIDE] == 0 and dec_t[2 * i] != OP_BREAK
         ):
@@ -550,6 +596,7 @@ __all__ = [
     "CTX_CYC",
     "CTX_DEVICE",
     "CTX_FLUSHES",
+    "CTX_NOPS",
     "CTX_PC",
     "CTX_SIZE",
     "ERR_FETCH_DATA",
@@ -567,5 +614,6 @@ __all__ = [
     "forget_if_changed",
     "forget_translations",
     "run_translated",
+    "set_table_copies",
     "set_tables",
 ]
