@@ -38,12 +38,9 @@ if TYPE_CHECKING:
 #: runs little.  Measured on the 10 s lockstep flight (2026-11-28, docs/translation.md), the EKF
 #: tile runs 0.49 instructions per cycle (float, no mul), 0.095 (float + mul), 0.078 (fixed, no
 #: mul) and 0.026 (fixed + mul), the other tile 0.005-0.05; `jit` flew the first three builds
-#: 15-60 % faster than `interp` and the fixed+mul build about 8 % slower.  Since the period close
-#: and the count flush got cheaper (2026-11-29), `jit` flies the fixed+mul build 3-4 % faster than
-#: `interp` and this share (0.04 before) lets auto translate its EKF tile: 3-5 % faster than with
-#: 0.04, the other builds the same within 1 %.  The sleeping 16x16 chip's tiles run about 0.002.
-#: A busy core runs 0.3..1 instruction per cycle.
-AUTO_BUSY_SHARE = 0.02
+#: 15-60 % faster than `interp` and the fixed+mul build about 8 % slower.  The sleeping 16x16
+#: chip's tiles run about 0.002.  A busy core runs 0.3..1 instruction per cycle.
+AUTO_BUSY_SHARE = 0.04
 AUTO_MIN_INSTRUCTIONS = 100_000
 #: auto: chip cycles between looks at the tiles that do not translate yet (a long step is cut into
 #: pieces of this length while there are such tiles: stopping the chip loop anywhere is exact)
