@@ -131,8 +131,8 @@ def kernel_signatures(mpsoc: MPSoC) -> dict[tuple[str, str], tuple[Any, ...]]:
         ("chip", "bad_pcs"): (st, cst),
         ("chip", "account_all"): (typeof(core), typeof(book)),
         ("chip", "_stop_address"): (i64, typeof(core)),
-        ("stop_queue", "push"): (tiles, tiles, i64, i64, i64),
-        ("stop_queue", "pop"): (tiles, tiles, i64),
+        ("stop_queue", "push"): (tiles, tiles, tiles, tiles, i64, i64),
+        ("stop_queue", "pop"): (tiles, tiles, tiles, tiles),
         ("jit_dispatch", "forget_if_changed"): (jit, typeof(core.m32[0]), typeof(core.dec[0])),
         ("jit_dispatch", "flush_counts"): (jit, typeof(core.opc[0]), typeof(core.ctr[0])),
     }
