@@ -43,3 +43,14 @@ def test_ahead_compiled_callees_have_the_main_loop_types() -> None:
     assert not set(CHILD_KERNELS) & set(PARENT_KERNELS)
     for (module, name), sig in signatures.items():
         assert _cached_signatures(module, name) == [tuple(sig)], f"{module}.{name}"
+
+
+def test_every_ahead_compiled_callee_is_given_as_many_types_as_it_takes() -> None:
+    # a callee whose arguments changed while its listed types did not fails the cold start's
+    # compilation (numba: "Signature mismatch"); this holds whatever numba's cache holds
+    import inspect
+
+    signatures = kernel_signatures(throwaway_chip(FirmwareConfig().seed_chip()))
+    for module, name in (*CHILD_KERNELS, *PARENT_KERNELS):
+        function = getattr(importlib.import_module(f"robosoc.kernels.{module}"), name).py_func
+        assert len(signatures[module, name]) == len(inspect.signature(function).parameters), f"{module}.{name}"
