@@ -86,10 +86,8 @@ def fly_command(
 ) -> None:
     """Fly a scenario: by default the firmware (fixed point, multiplier) on the seed's 2x2 chip in
     lockstep with the physics: take off to 1 m, hover, 10° roll/pitch/yaw steps, a gust; 10 s."""
-    from robosoc.cli import fly_decoupled
-
     console = make_console()
-    link = fly_decoupled.link_of(ctx, decoupled, flags, video=video, foxglove=foxglove, profile=profile)
+    link = link_options.link_of(ctx, decoupled, flags, video=video, foxglove=foxglove, profile=profile)
     if foxglove_keep and foxglove is None:
         raise options.fail("--foxglove-keep", "only with --foxglove PORT")
     resolved = resolve(flags)
@@ -108,7 +106,9 @@ def fly_command(
 
         out = files.output_dir(out, "--out", inputs=resolved.inputs, names=RUN_FILES)
     if link is not None:
-        fly_decoupled.fly_decoupled_run(console, config, out, link, bind)
+        from robosoc.cli.fly_decoupled import fly_decoupled_run
+
+        fly_decoupled_run(console, config, out, link, bind)
         return
     if video is not None:
         video = files.output_file(video, "--video", inputs=resolved.inputs) if video.suffix.lower() == ".mp4" else (

@@ -11,14 +11,12 @@ import tempfile
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-import typer
 from rich.console import Console
 
-from robosoc.cli import exit_codes, link_options, options
+from robosoc.cli import exit_codes, options
 from robosoc.cli.console import note, plain
 from robosoc.cli.errors import CliError
 from robosoc.cli.link_report import end_of_side, print_link_counts
-from robosoc.cli.scenario_flags import ScenarioFlags
 from robosoc.config.link import LinkConfig
 from robosoc.config.scenario import ScenarioConfig
 from robosoc.cosim.link import Address
@@ -26,46 +24,7 @@ from robosoc.cosim.link import Address
 if TYPE_CHECKING:
     from robosoc.outputs.decoupled_flight import DecoupledFlight
 
-__all__ = ["LINK_OPTIONS", "fly_decoupled_run", "link_of"]
-
-#: fly's options that only the decoupled mode takes (option -> parameter name).
-LINK_OPTIONS = {
-    "--pace": "pace",
-    "--hold": "hold",
-    "--faults": "faults",
-    "--resend": "resend",
-    "--peer-timeout": "peer_timeout",
-    "--bind": "bind",
-}
-
-
-def link_of(
-    ctx: typer.Context,
-    decoupled: bool,
-    flags: ScenarioFlags,
-    *,
-    video: Path | None,
-    foxglove: int | None,
-    profile: bool,
-) -> LinkConfig | None:
-    """The link of ``fly --decoupled`` from fly's link options (None without ``--decoupled``, when
-    those options are refused), and the options the decoupled mode cannot take refused."""
-    given = {name: options.given(ctx, name) for name in LINK_OPTIONS.values()}
-    if not decoupled:
-        for option, name in LINK_OPTIONS.items():
-            if given[name]:
-                raise options.fail(option, "only with --decoupled")
-        return None
-    controller = flags.values.get("controller")
-    if controller is not None and controller != "chip":
-        raise options.fail("--decoupled", "the decoupled mode flies the firmware on the chip (drop --controller host)")
-    for option, on in (("--video", video is not None), ("--foxglove", foxglove is not None)):
-        if on:
-            raise options.fail(option, "not with --decoupled (the physics runs in another process)")
-    if profile:
-        raise options.fail("--profile", "not with --decoupled (profile its run folder with robosoc profile)")
-    p = ctx.params
-    return link_options.link_config(p["pace"], p["hold"], p["faults"], p["resend"], p["peer_timeout"])
+__all__ = ["fly_decoupled_run"]
 
 
 def _number(value: float | None, scale: float, unit: str) -> str:

@@ -1,9 +1,11 @@
 """The decoupled mode's command-line options, shared by ``robosoc serve physics|chip`` and
-``robosoc fly --decoupled``, and the :class:`~robosoc.config.link.LinkConfig` they make."""
+``robosoc fly --decoupled``, the :class:`~robosoc.config.link.LinkConfig` they make, and fly's
+check of them (:func:`link_of`: a lockstep flight does not import the decoupled mode)."""
 
 from __future__ import annotations
 
-from typing import Annotated, Any
+from pathlib import Path
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
@@ -20,6 +22,9 @@ from robosoc.config.link import (
 )
 from robosoc.cosim.link import Address, parse_address
 
+if TYPE_CHECKING:
+    from robosoc.cli.scenario_flags import ScenarioFlags
+
 __all__ = [
     "DEFAULT_PORT",
     "Address",
@@ -32,6 +37,7 @@ __all__ = [
     "Resend",
     "address_option",
     "link_config",
+    "link_of",
 ]
 
 #: Where ``robosoc serve physics`` listens and ``robosoc serve chip`` sends by default.
@@ -143,3 +149,43 @@ def link_config(
         field = str(exc).split(":", 1)[0]
         option = {"peer_timeout_s": "--peer-timeout", "connect_timeout_s": "--connect-timeout"}
         raise options.fail(option.get(field, f"--{field}"), str(exc).split(": ", 1)[-1]) from None
+
+
+#: fly's options that only the decoupled mode takes (option -> parameter name).
+LINK_OPTIONS = {
+    "--pace": "pace",
+    "--hold": "hold",
+    "--faults": "faults",
+    "--resend": "resend",
+    "--peer-timeout": "peer_timeout",
+    "--bind": "bind",
+}
+
+
+def link_of(
+    ctx: typer.Context,
+    decoupled: bool,
+    flags: ScenarioFlags,
+    *,
+    video: Path | None,
+    foxglove: int | None,
+    profile: bool,
+) -> LinkConfig | None:
+    """The link of ``fly --decoupled`` from fly's link options (None without ``--decoupled``, when
+    those options are refused), and the options the decoupled mode cannot take refused."""
+    given = {name: options.given(ctx, name) for name in LINK_OPTIONS.values()}
+    if not decoupled:
+        for option, name in LINK_OPTIONS.items():
+            if given[name]:
+                raise options.fail(option, "only with --decoupled")
+        return None
+    controller = flags.values.get("controller")
+    if controller is not None and controller != "chip":
+        raise options.fail("--decoupled", "the decoupled mode flies the firmware on the chip (drop --controller host)")
+    for option, on in (("--video", video is not None), ("--foxglove", foxglove is not None)):
+        if on:
+            raise options.fail(option, "not with --decoupled (the physics runs in another process)")
+    if profile:
+        raise options.fail("--profile", "not with --decoupled (profile its run folder with robosoc profile)")
+    p = ctx.params
+    return link_config(p["pace"], p["hold"], p["faults"], p["resend"], p["peer_timeout"])
