@@ -22,7 +22,7 @@ LOADER = "config/project.py"
 NOT_A_TASK: dict[tuple[str, str], str] = {
     ("benchmarks/fly.py", "controller"): "the scenario's controller (chip or host), a table column",
     ("benchmarks/sweep.py", "controller"): "the scenario field controller",
-    ("cli/fly_decoupled.py", "controller"): "the --controller option's value",
+    ("cli/link_options.py", "controller"): "the --controller option's value",
     ("cli/scenario_flags.py", "controller"): "the --controller option and its field",
     ("config/scenario.py", "controller"): "the scenario field controller",
     ("outputs/decoupled_summary.py", "controller"): "the summary key controller",
