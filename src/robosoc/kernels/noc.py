@@ -539,14 +539,23 @@ def _clock_gate(cfg, port, tile, t, cycle):
     return False
 
 
-def gated_cycles(cfg: np.ndarray, glob: np.ndarray, tile: np.ndarray) -> np.ndarray:
-    """Per router, the cycles its clock has been stopped up to now (``glob[G_CYCLE]``): those counted
-    at its wake-ups and those of the stretch it is in (zeros without clock gating)."""
-    gate = int(cfg[C_GATE])
+@njit(cache=True, inline="always")
+def _gated(cfg, glob, tile, t: int) -> int:
+    """The cycles router ``t``'s clock has been stopped up to now (``glob[G_CYCLE]``): those counted
+    at its wake-ups and those of the stretch it is in (0 without clock gating)."""
+    gate = cfg[C_GATE]
     if gate == NONE:
-        return np.zeros(tile.shape[0], np.int64)
-    pending = np.maximum(0, glob[G_CYCLE] - 1 - tile[:, T_LAST_FLIT] - gate)
-    return tile[:, T_GATED] + pending
+        return 0
+    return tile[t, T_GATED] + max(0, glob[G_CYCLE] - 1 - tile[t, T_LAST_FLIT] - gate)
+
+
+@njit(cache=True)
+def gated_cycles(cfg: np.ndarray, glob: np.ndarray, tile: np.ndarray) -> np.ndarray:
+    """Per router, :func:`_gated`: the cycles its clock has been stopped up to now."""
+    out = np.zeros(tile.shape[0], np.int64)
+    for t in range(tile.shape[0]):
+        out[t] = _gated(cfg, glob, tile, t)
+    return out
 
 
 #: :func:`router_counts`' values, in order
@@ -562,14 +571,13 @@ def router_counts(cfg, glob, tile, port, off, out) -> None:
     counted, input-buffer and router cycles with a flit, stopped-clock cycles (:func:`gated_cycles`)
     of the routers not switched off (``off[t]`` zero), wake-ups, and the mesh's flit and packet
     counts (one call: numpy's sums cost a flight's period close some 15 µs)."""
-    gate = cfg[C_GATE]
     busy_ports = busy = gated = wakes = 0
     for t in range(tile.shape[0]):
         for p in range(port.shape[1]):
             busy_ports += port[t, p, P_BUSY]
         busy += tile[t, T_BUSY]
-        if gate != NONE and off[t] == 0:
-            gated += tile[t, T_GATED] + max(0, glob[G_CYCLE] - 1 - tile[t, T_LAST_FLIT] - gate)
+        if off[t] == 0:
+            gated += _gated(cfg, glob, tile, t)
         wakes += tile[t, T_WAKES]
     out[0] = glob[G_CYCLE] - glob[G_CYCLE0]
     out[1] = busy_ports
