@@ -158,8 +158,9 @@ class FirmwareRun:
         self._tile_rows = [self.chip.config.tile_index(xy) for xy in self.tiles]
         self._acc_tiles = np.array([self.chip.config.tile_index(self.tiles[i]) for i, _ in charged], dtype=np.int64)
         self._acc_tasks = np.array([task for _, task in charged], dtype=np.int64)
-        self._periods: list[_Period] = []  # per sample period: counters per (tile, task) and NoC energy
-        # the accounting rows at the last close (close_accounts keeps them), and the NoC's traffic energy
+        self._periods: list[_Period] = []  # per sample period: counters per (tile, task), routers' counters
+        # the accounting rows at the last close (close_accounts keeps them), and the routers' counters
+        # at the run's start (each period's NoC energy is taken from those at its two closes)
         self._previous = np.zeros((len(self._keys), self.chip.acc.shape[-1]), dtype=np.int64)
         self._routers_at_start = self._accounts(np.empty((len(self._keys), len(account_counter_map()[0])), np.int64))
         self._seen = dict.fromkeys(self.tiles, 0)
