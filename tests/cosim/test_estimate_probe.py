@@ -70,7 +70,7 @@ def test_the_probe_costs_no_cycle(rows: np.ndarray, monkeypatch: pytest.MonkeyPa
     probed = replay(short, FirmwareConfig())
     calls = []
     fake = {"est_height": 0.0}
-    monkeypatch.setattr(firmware_run, "read_telemetry", lambda *a, **k: calls.append(a) or fake)  # reads nothing
+    monkeypatch.setattr(firmware_run.TelemetryReader, "read", lambda *a, **k: calls.append(a) or fake)  # reads nothing
     unprobed = replay(short, FirmwareConfig())
     assert len(calls) == len(probed.telemetry) == len(short)
     assert [r.values for r in unprobed.telemetry] == [fake] * len(calls)

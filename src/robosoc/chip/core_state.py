@@ -255,10 +255,18 @@ class CoreState:
     def unpack(self, layout: struct.Struct, addr: int, tile: int = 0) -> tuple[Any, ...]:
         """``layout.unpack`` of the bytes at ``addr`` of a tile's SRAM, read in place (the host's
         reads of every sample period: job records, telemetry)."""
+        return layout.unpack_from(self.m8[tile], self.offset(addr, layout.size, tile))
+
+    def offset(self, addr: int, length: int, tile: int = 0) -> int:
+        """Where the ``length`` bytes at ``addr`` lie in a tile's row of :attr:`m8`.
+
+        Raises:
+            ValueError: they are not all in the tile's SRAM.
+        """
         off = addr - self.base
-        if off < 0 or off + layout.size > int(self.st[tile, S_MEM_SIZE]):
-            raise ValueError(f"address 0x{addr:08x}+{layout.size} is outside SRAM")
-        return layout.unpack_from(self.m8[tile], off)
+        if off < 0 or off + length > int(self.st[tile, S_MEM_SIZE]):
+            raise ValueError(f"address 0x{addr:08x}+{length} is outside SRAM")
+        return off
 
     def word(self, addr: int, tile: int = 0) -> int:
         return int.from_bytes(self.read(addr, 4, tile), "little")

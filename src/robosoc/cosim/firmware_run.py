@@ -47,7 +47,7 @@ from robosoc.config.chip import ChipConfig
 from robosoc.config.firmware import FirmwareConfig
 from robosoc.host import images, packets
 from robosoc.host.firmware_image import FIRST_SAMPLE_CYCLE, FirmwareImage
-from robosoc.host.telemetry import read_telemetry
+from robosoc.host.telemetry import TelemetryReader
 from robosoc.kernels.chip import K_EXITED, K_STATE, K_TASK, NTASKS
 from robosoc.kernels.noc import ROUTER_COUNTS
 from robosoc.program.elf import Program, load_elf
@@ -60,7 +60,7 @@ DEFAULT_FIRST_CYCLE = FIRST_SAMPLE_CYCLE
 @dataclass(frozen=True)
 class TelemetryRead:
     """The telemetry values read at the close of sample period ``sample`` (those of sleeping tiles:
-    :func:`robosoc.host.telemetry.read_telemetry`)."""
+    :class:`robosoc.host.telemetry.TelemetryReader`)."""
 
     sample: int
     values: dict[str, float]
@@ -164,9 +164,11 @@ class FirmwareRun:
         self._previous = np.zeros((len(self._keys), self.chip.acc.shape[-1]), dtype=np.int64)
         self._routers_at_start = self._accounts(np.empty((len(self._keys), len(account_counter_map()[0])), np.int64))
         self._seen = dict.fromkeys(self.tiles, 0)
+        self._job_logs: dict[tuple[int, int], images.JobLogReader] = {}  # made at the first close
         # (tile, record as logged: 32-bit stamps, period, chip cycle when read: see _full_cycle)
         self._logged: list[tuple[tuple[int, int], images.JobRecord, int, int]] = []
         self.telemetry: list[TelemetryRead] = []
+        self._telemetry = TelemetryReader(self.chip, image.telemetry) if image.telemetry else None
         #: the newest value of each telemetry name read so far
         self.latest: dict[str, float] = {}
         self._start = time.perf_counter()
@@ -272,7 +274,7 @@ class FirmwareRun:
     def close_period(self) -> None:
         """End the period of the last injected sample (the chip is at the next sample's cycle):
         snapshot the counters, collect the jobs the kernels logged, and read the telemetry of every
-        sleeping tile (:func:`robosoc.host.telemetry.read_telemetry`, a host read: no cycle).
+        sleeping tile (:class:`robosoc.host.telemetry.TelemetryReader`, a host read: no cycle).
 
         Raises:
             RuntimeError: a tile's job log overflowed since the last call.
@@ -286,8 +288,8 @@ class FirmwareRun:
                 raise ChipError(problem, None)
         counters = np.empty((len(self._keys), len(account_counter_map()[0])), np.int64)
         routers = self._accounts(counters)
-        if self.image.telemetry:
-            values = read_telemetry(self.chip, self.image.telemetry)
+        if self._telemetry is not None:
+            values = self._telemetry.read()
             if values:
                 self.telemetry.append(TelemetryRead(len(self.samples) - 1, values))
                 self.latest.update(values)
@@ -295,7 +297,10 @@ class FirmwareRun:
         now = self.chip.cycle
         for xy in self.tiles:
             try:
-                fresh, count = images.read_new_jobs(self.chip, xy, self._seen[xy])
+                log = self._job_logs.get(xy)
+                if log is None:
+                    log = self._job_logs[xy] = images.JobLogReader(self.chip, xy)
+                fresh, count = log.read_new(self._seen[xy])
             except ValueError as exc:
                 raise RuntimeError(f"{exc} (between two samples)") from exc
             for r in fresh:

@@ -13,6 +13,7 @@ Messages to and from the I/O tile use the kernel's on-chip header (docs/firmware
 
 from __future__ import annotations
 
+import functools
 import re
 import struct
 from collections.abc import Iterable, Mapping, Sequence
@@ -155,31 +156,46 @@ def read_job_log(chip: MPSoC, xy: tuple[int, int], since: int = 0) -> JobLog:
     return JobLog(records, count - kept, tick, first)
 
 
-def read_new_jobs(chip: MPSoC, xy: tuple[int, int], seen: int) -> tuple[list[JobRecord], int]:
-    """The job records tile ``xy`` logged after the first ``seen``, and how many it has logged in all
-    (reads only the header and the new records: a flight calls this every sample).
+class JobLogReader:
+    """The new job records of tile ``xy``'s log, reading only its header and those records; the tile's
+    index and the log's address are looked up once (a flight reads every tile's new records at each
+    sample period's close).
 
     Raises:
-        ValueError: the log is not initialised, or the ring overwrote records after ``seen`` unread.
+        ValueError: the tile has no program, or its program no job log.
     """
-    t = chip.config.tile_index(xy)
-    address = _address(chip, xy, t, JOB_LOG_SYMBOL)
-    magic, capacity, count, _ = chip.cores.unpack(_LOG_HEADER, address, t)
-    if magic != JOBLOG_MAGIC:
-        raise ValueError(f"tile {xy}: the job log is not initialised (os_start has not run)")
-    if count - seen > capacity:
-        raise ValueError(f"tile {xy}: the job log overflowed: {count - seen} new records, the ring keeps {capacity}")
-    base = address + _LOG_HEADER.size
-    records = []
-    for i in range(seen, count):
-        task, flags, job, release, deadline, start, completion, exec_cycles = chip.cores.unpack(
-            _RECORD, base + (i % capacity) * _RECORD.size, t
-        )
-        records.append(
-            JobRecord(task, job, release, deadline, start, completion, exec_cycles,
-                      bool(flags & JOB_MET), bool(flags & JOB_EVENT), bool(flags & JOB_DEPLETED))
-        )  # fmt: skip
-    return records, count
+
+    def __init__(self, chip: MPSoC, xy: tuple[int, int]) -> None:
+        self.chip = chip
+        self.xy = xy
+        self.t = chip.config.tile_index(xy)
+        self.address = _address(chip, xy, self.t, JOB_LOG_SYMBOL)
+
+    def read_new(self, seen: int) -> tuple[list[JobRecord], int]:
+        """The records logged after the first ``seen``, and how many the tile has logged in all.
+
+        Raises:
+            ValueError: the log is not initialised, or the ring overwrote records after ``seen`` unread.
+        """
+        cores, t, xy = self.chip.cores, self.t, self.xy
+        magic, capacity, count, _ = cores.unpack(_LOG_HEADER, self.address, t)
+        if magic != JOBLOG_MAGIC:
+            raise ValueError(f"tile {xy}: the job log is not initialised (os_start has not run)")
+        if count - seen > capacity:
+            raise ValueError(
+                f"tile {xy}: the job log overflowed: {count - seen} new records, the ring keeps {capacity}"
+            )
+        base = self.address + _LOG_HEADER.size
+        records = []
+        for i in range(seen, count):
+            task, flags, job, release, deadline, start, completion, exec_cycles = cores.unpack(
+                _RECORD, base + (i % capacity) * _RECORD.size, t
+            )
+            records.append(
+                JobRecord(task, job, release, deadline, start, completion, exec_cycles,
+                          bool(flags & JOB_MET), bool(flags & JOB_EVENT), bool(flags & JOB_DEPLETED))
+            )  # fmt: skip
+        return records, count
 
 
 @dataclass(frozen=True)
@@ -286,7 +302,7 @@ def message_packets(
     while True:
         chunk = data[offset : offset + per_packet]
         padded = chunk + b"\0" * (len(chunk) & 1)
-        flits = list(struct.unpack(f"<{len(padded) // 2}H", padded))
+        flits = list(_flits_struct(len(padded) // 2).unpack(padded))
         header = [(src_tile << 8) | src_port, (port << 8) | (frag & 0xFF), len(data), seq & 0xFFFF]
         out.append(header + flits)
         offset += len(chunk)
@@ -295,12 +311,19 @@ def message_packets(
             return out
 
 
+@functools.cache
+def _flits_struct(count: int) -> struct.Struct:
+    """The layout of ``count`` 16-bit flits, little-endian (made once per length: a flight packs a
+    sensor packet and parses a PWM packet per sample)."""
+    return struct.Struct(f"<{count}H")
+
+
 def parse_packet(flits: Sequence[int]) -> Packet:
     """A whole packet (wire flits included, as :meth:`MPSoC.received` gives them)."""
     if len(flits) < HEADER_FLITS:
         raise ValueError(f"a kernel packet has at least {HEADER_FLITS} flits, got {len(flits)}")
     tail = flits[HEADER_FLITS:]
-    body = struct.pack(f"<{len(tail)}H", *[v & 0xFFFF for v in tail])  # one pack: a third of a pack per flit
+    body = _flits_struct(len(tail)).pack(*[v & 0xFFFF for v in tail])  # one pack: a third of a pack per flit
     return Packet(
         dest=flits[0], size=flits[1], src_tile=flits[2] >> 8, src_port=flits[2] & 0xFF, port=flits[3] >> 8,
         frag=flits[3] & 0xFF, length=flits[4], seq=flits[5], data=body,
@@ -352,6 +375,7 @@ __all__ = [
     "KERNEL_TASK_ID",
     "STATS_SYMBOL",
     "JobLog",
+    "JobLogReader",
     "JobRecord",
     "KernelStats",
     "Message",
@@ -361,7 +385,6 @@ __all__ = [
     "message_packets",
     "parse_packet",
     "read_job_log",
-    "read_new_jobs",
     "read_stats",
     "reassemble",
     "tile_address",

@@ -89,7 +89,7 @@ class PacketFormat:
         if self.fields[:2] != HEAD_FIELDS:
             raise ValueError(f"{self.name}: must start with the kind and flags fields")
 
-    @property
+    @functools.cached_property
     def size(self) -> int:
         """Bytes."""
         return sum(f.size for f in self.fields)
@@ -117,6 +117,17 @@ class PacketFormat:
     @functools.cached_property
     def _struct(self) -> struct.Struct:
         return struct.Struct("<" + "".join(f"{f.count}{_STRUCT_CODE[f.type]}" for f in self.fields))
+
+    @functools.cached_property
+    def _decoders(self) -> tuple[tuple[str, int, int, bool], ...]:
+        """Per field: its name, where its values start in the struct's tuple, how many, and whether
+        they are q16 (worked out once: a flight unpacks a PWM packet per sample)."""
+        out = []
+        start = 0
+        for f in self.fields:
+            out.append((f.name, start, f.count, f.type == "q16"))
+            start += f.count
+        return tuple(out)
 
     @functools.cached_property
     def _names(self) -> frozenset[str]:
@@ -149,12 +160,14 @@ class PacketFormat:
         """
         if len(data) != self.size:
             raise ValueError(f"{self.name}: {len(data)} bytes, expected {self.size}")
-        raw = list(self._struct.unpack(data))
+        raw = self._struct.unpack(data)
         out: dict[str, Value] = {}
-        for f in self.fields:
-            items, raw = raw[: f.count], raw[f.count :]
-            decoded = [v / Q16_ONE for v in items] if f.type == "q16" else items
-            out[f.name] = decoded[0] if f.count == 1 else tuple(decoded)
+        for name, start, count, q16 in self._decoders:
+            if count == 1:
+                out[name] = raw[start] / Q16_ONE if q16 else raw[start]
+            else:
+                items = raw[start : start + count]
+                out[name] = tuple(v / Q16_ONE for v in items) if q16 else items
         if out["kind"] != self.kind:
             raise ValueError(f"{self.name}: kind 0x{out['kind']:04x}, expected 0x{self.kind:04x}")
         return out

@@ -18,6 +18,7 @@ from robosoc.program.dwarf import debug_index
 from robosoc.program.elf import load_elf
 
 if TYPE_CHECKING:
+    from robosoc.chip.core_state import CoreState
     from robosoc.chip.mpsoc import MPSoC
 
 __all__ = ["TCB_SYMBOL", "TaskTable"]
@@ -61,21 +62,25 @@ class TaskTable:
             active_offset=index.member_offset(TCB_TYPE, "job_active")[0],
         )
 
-    def _entries(self, chip: MPSoC, tile: Tile) -> bytes:
-        """The whole table as it stands on ``tile`` (one host read)."""
-        return chip.cores.read(self.address, self.entries * self.entry_bytes, tile=chip.config.tile_index(tile))
+    def _entries(self, cores: CoreState, t: int) -> bytes:
+        """The whole table as it stands on the tile of index ``t`` (one host read)."""
+        return cores.read(self.address, self.entries * self.entry_bytes, tile=t)
 
     def created(self, chip: MPSoC, tile: Tile) -> list[int]:
         """The TASK_IDs of the tasks created on ``tile`` (the idle task's excluded), in table order."""
         t = chip.config.tile_index(tile)
         used = int.from_bytes(chip.cores.read(self.count_address, 4, tile=t), "little")
-        table = self._entries(chip, tile)
+        table = self._entries(chip.cores, t)
         return [table[i * self.entry_bytes + self.id_offset] for i in range(1, min(used, self.entries))]
 
     def job_active(self, chip: MPSoC, tile: Tile, task_id: int) -> bool:
         """Whether task ``task_id`` has a job released and not completed on ``tile`` now (True for a
         task not created: there is nothing consistent to read of it)."""
-        table = self._entries(chip, tile)
+        return self.job_active_at(chip.cores, chip.config.tile_index(tile), task_id)
+
+    def job_active_at(self, cores: CoreState, t: int, task_id: int) -> bool:
+        """:meth:`job_active` on the tile of index ``t`` of ``cores``."""
+        table = self._entries(cores, t)
         for i in range(1, self.entries):  # [0] is the idle task
             entry = i * self.entry_bytes
             if table[entry + self.id_offset] == task_id:

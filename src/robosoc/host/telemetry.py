@@ -2,7 +2,7 @@
 
 A project declares them (``[[telemetry]]`` in its robosoc.toml: a name, the task, a C variable
 with members and an element, and a type); :func:`resolve_telemetry` finds each one's address in the
-built ELF through its symbol table and DWARF debug information, and :func:`read_telemetry` reads
+built ELF through its symbol table and DWARF debug information, and :class:`TelemetryReader` reads
 them from the simulated memory.  A host read costs the chip no cycle and changes nothing in it.
 
 When: at the close of each sensor period (:class:`robosoc.cosim.firmware_run.FirmwareRun`), the
@@ -49,11 +49,11 @@ __all__ = [
     "ESTIMATE_VERTICAL_SPEED",
     "TelemetryError",
     "TelemetryProbe",
+    "TelemetryReader",
     "declared_names",
     "estimate_of",
     "own_columns",
     "own_names",
-    "read_telemetry",
     "resolve_telemetry",
 ]
 
@@ -99,7 +99,11 @@ class TelemetryProbe:
 
     def read(self, chip: MPSoC, tile: int) -> float:
         """The value now on the chip (a host read, no cycle), ``tile`` the index of :attr:`tile`."""
-        (value,) = chip.cores.unpack(_LAYOUT[self.code], self.address, tile)
+        return self.value_in(chip.cores.m8[tile], chip.cores.offset(self.address, VALUE_BYTES, tile))
+
+    def value_in(self, memory: np.ndarray, offset: int) -> float:
+        """The value whose word is at ``offset`` of a tile's ``memory`` (its row of bytes)."""
+        (value,) = _LAYOUT[self.code].unpack_from(memory, offset)
         return float(value) * self.scale
 
 
@@ -149,23 +153,38 @@ def resolve_telemetry(
     return tuple(out)
 
 
-def read_telemetry(chip: MPSoC, probes: Sequence[TelemetryProbe]) -> dict[str, float]:
-    """The values of the probes whose task has no job active now (the others are not read: their
-    job may be half-way through updating them)."""
-    values: dict[str, float] = {}
-    quiet: dict[tuple[Tile, int], bool] = {}
-    index: dict[Tile, int] = {}  # each tile's index, looked up once (a flight reads every sample)
-    for probe in probes:
-        key = (probe.tile, probe.task_id)
-        readable = quiet.get(key)
-        if readable is None:
-            readable = quiet[key] = not probe.table.job_active(chip, probe.tile, probe.task_id)
-        if readable:
-            t = index.get(probe.tile)
-            if t is None:
-                t = index[probe.tile] = chip.config.tile_index(probe.tile)
-            values[probe.name] = probe.read(chip, t)
-    return values
+class TelemetryReader:
+    """Reads the values of ``probes`` from ``chip``'s memory: those whose task has no job active now
+    (the others are not read: their job may be half-way through updating them).  Each task's tile
+    index and each probe's place in its memory are looked up once: a flight reads at every sample
+    period's close.
+
+    Raises:
+        ValueError: a probe's word is outside its tile's SRAM.
+    """
+
+    def __init__(self, chip: MPSoC, probes: Sequence[TelemetryProbe]) -> None:
+        self.chip = chip
+        tasks = list(dict.fromkeys((probe.tile, probe.task_id, probe.table) for probe in probes))
+        #: per (tile, task): the tile's index, the task id and the kernel's task table
+        self._tasks = [(chip.config.tile_index(tile), task_id, table) for tile, task_id, table in tasks]
+        #: per probe, in order: the probe, its task's place in _tasks, its tile's index and its
+        #: word's offset in the tile's memory
+        self._probes = []
+        for p in probes:
+            task = tasks.index((p.tile, p.task_id, p.table))
+            t = self._tasks[task][0]
+            self._probes.append((p, task, t, chip.cores.offset(p.address, VALUE_BYTES, t)))
+
+    def read(self) -> dict[str, float]:
+        """The values readable now, by name, in the probes' order."""
+        cores = self.chip.cores
+        quiet = [not table.job_active_at(cores, t, task_id) for t, task_id, table in self._tasks]
+        values: dict[str, float] = {}
+        for probe, task, t, offset in self._probes:
+            if quiet[task]:
+                values[probe.name] = probe.value_in(cores.m8[t], offset)
+        return values
 
 
 def own_columns(names: Sequence[str]) -> tuple[str, ...]:
