@@ -11,6 +11,8 @@ import math
 
 import numpy as np
 
+from robosoc.physics.frames import euler_from_quat
+
 
 def multiply(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Hamilton product a ⊗ b."""
@@ -68,12 +70,9 @@ def from_matrix(m: np.ndarray) -> np.ndarray:
 
 
 def to_euler(q: np.ndarray) -> np.ndarray:
-    """(roll α, pitch β, yaw θ) [rad] of a unit quaternion."""
-    w, x, y, z = q
-    roll = math.atan2(2 * (w * x + y * z), 1 - 2 * (x * x + y * y))
-    pitch = math.asin(max(-1.0, min(1.0, 2 * (w * y - z * x))))
-    yaw = math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
-    return np.array([roll, pitch, yaw])
+    """(roll α, pitch β, yaw θ) [rad] of a unit quaternion (the physics' Z-Y-X convention,
+    :func:`robosoc.physics.frames.euler_from_quat`)."""
+    return euler_from_quat(q)
 
 
 def from_euler(roll: float, pitch: float, yaw: float) -> np.ndarray:
