@@ -406,7 +406,7 @@ def test_a_core_copying_the_tables_of_the_last_gets_those_made_afresh(
         assert np.array_equal(a, b), name
     assert np.array_equal(got[1], want[1])  # the interpreter stops before the same blocks
     mine_tr, made_tr = copied.translator, made.translator
-    assert (mine_tr.stats.reused, mine_tr._nslots) == (made_tr.stats.reused, made_tr._nslots)
+    assert (mine_tr.stats.reused, mine_tr._known_starts_in) == (made_tr.stats.reused, made_tr._known_starts_in)
     # a region is entered unless one of its words changed (word 2 starts no block of the first)
     entry_fn = want[0][0]
     assert (entry_fn[0] != 0) == (changed in (None, 30))

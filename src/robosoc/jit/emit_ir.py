@@ -431,9 +431,10 @@ class _Writer:
         self.put_label(ok)
 
     # --- counting -----------------------------------------------------------------------------
-    def count_end(self, taken: bool = False) -> None:
-        """Count the block's instructions on a way out at its end (a taken branch counts as such too)."""
-        self.count(self.kcs + ([TAKEN_INDEX] if taken else []))
+    def count_end(self) -> None:
+        """Count the block's instructions at its end, where no side exit can come (before a
+        branch's two ways: the taken one also counts ``ctr[C_TAKEN]``)."""
+        self.count(self.kcs)
 
     def prefix_chain(self, points: list[int]) -> None:
         """The side exits' counts of the block: the exit before instruction ``points[k]`` enters a
@@ -513,13 +514,13 @@ class _Writer:
             a, b, cond = self.reg(insn.rs1), self.reg(insn.rs2), self.tmp()
             self.emit(f"{cond} = icmp {_BRANCH[name]} i32 {a}, {b}")
             self.flush()
+            self.count_end()
             taken, fall = self.label("taken"), self.label("fall")
             self.emit(f"br i1 {cond}, label %{taken}, label %{fall}")
             self.put_label(taken)
-            self.count_end(taken=True)
+            self.count([TAKEN_INDEX])
             self.goto(pc + insn.imm, self.cycles(BRANCH_TAKEN_CYCLES))
             self.put_label(fall)
-            self.count_end()
             self.goto(pc + 4, self.cycles(BRANCH_NOT_TAKEN_CYCLES))
         elif name == "jal":
             self.set_reg(insn.rd, str(_i32(pc + 4)))
