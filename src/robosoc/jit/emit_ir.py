@@ -221,6 +221,50 @@ _FN_TYPE = "i32 (i64*, i32*, i8*, i64*, i64, i64, i64)"
 TAKEN_INDEX = OPC_SIZE + C_TAKEN
 
 
+def successors(block: Block, returns: list[int]) -> list[int]:
+    """The pcs a block continues at with a branch of the region function, if blocks start there:
+    its static targets, and for a return (``jalr x0, 0(ra)``) the region's return sites ``returns``."""
+    last = block.insns[-1]
+    match block.end:
+        case End.FALL:
+            return [block.next_pc]
+        case End.BRANCH:
+            return [(last.pc + last.imm) & M32, last.pc + 4]
+        case End.JUMP | End.CALL:
+            return [(last.pc + last.imm) & M32]
+        case End.JALR:
+            return list(returns) if (last.rd, last.rs1, last.imm) == (0, 1, 0) else []
+    return []
+
+
+#: Most blocks of a cycle whose blocks count through locals (:func:`looped_blocks`)
+MAX_LOOP_BLOCKS = 4
+
+
+def looped_blocks(region: Region, returns: list[int]) -> set[int]:
+    """Starts of the blocks that lie on a small cycle of the region's own branches: a strongly
+    connected set of at most MAX_LOOP_BLOCKS blocks (a loop inside a function).  They count their
+    executions through locals, written to the counters at the function's ways out (:class:`_Writer`)."""
+    succ = {pc: [t for t in successors(b, returns) if t in region.blocks] for pc, b in region.blocks.items()}
+    reach: dict[int, set[int]] = {}
+    for pc in region.blocks:
+        seen: set[int] = set()
+        todo = list(succ[pc])
+        while todo:
+            t = todo.pop()
+            if t not in seen:
+                seen.add(t)
+                todo.extend(succ[t])
+        reach[pc] = seen
+    looped = set()
+    for pc in region.blocks:
+        if pc in reach[pc]:
+            cycle = {q for q in reach[pc] if pc in reach[q]}
+            if len(cycle) <= MAX_LOOP_BLOCKS:
+                looped.add(pc)
+    return looped
+
+
 class _Writer:
     """Writes one region.  Register values and the cycles since the block started are tracked
     along each path, so an instruction is its operation plus one register store.
@@ -239,6 +283,9 @@ class _Writer:
         # when there are few (else returns go through the entry table)
         sites = {b.next_pc for b in region.blocks.values() if b.end is End.CALL and b.next_pc in self.index}
         self.returns = sorted(sites) if len(sites) <= MAX_SWITCH else []
+        #: blocks on a cycle of the region's own branches (block index -> its histogram): they count
+        #: their executions in a local (a register in a loop), added to the counters at the ways out
+        self.looped: dict[int, list[int]] = {self.index[pc]: [] for pc in looped_blocks(region, self.returns)}
         self.regs: dict[int, str] = {}  # register -> its current SSA value in this block
         self.dirty: dict[int, str] = {}  # registers written since the last store to the array
         self.pointers: dict[str, str] = {}  # SSA name -> its definition, written in the entry block
@@ -359,6 +406,7 @@ class _Writer:
         """
         if self.counted_exits:
             self.put_label("side")
+            self.write_locals()
             self.emit(f"ret i32 {X_SIDE}")
         if not self.exits:
             return
@@ -369,6 +417,7 @@ class _Writer:
         self.emit(f"%xcyc = phi i64 {', '.join(f'[ {cyc}, {lb} ]' for lb, _, _, cyc in incoming)}")
         self.emit(f"store i64 %xpc, i64* {self.field('%ctx', CTX_PC)}")
         self.emit(f"store i64 %xcyc, i64* {self.field('%ctx', CTX_CYC)}")
+        self.write_locals()
         self.emit("ret i32 %xcode")
 
     def branch(self, pc: int, cyc: str) -> None:
@@ -406,6 +455,7 @@ class _Writer:
             self.emit(f"{bl} = load i64, i64* {be}")
             self.emit(f"{f} = inttoptr i64 {fa} to {_FN_TYPE}*")
             args = f"i64* %ctx, i32* %regs, i8* %mem, i64* %opc, i64 %jcyc, i64 %limit, i64 {bl}"
+            self.write_locals()
             self.emit(f"{r} = musttail call i32 {f}({args})")
             self.emit(f"ret i32 {r}")
 
@@ -433,8 +483,58 @@ class _Writer:
     # --- counting -----------------------------------------------------------------------------
     def count_end(self) -> None:
         """Count the block's instructions at its end, where no side exit can come (before a
-        branch's two ways: the taken one also counts ``ctr[C_TAKEN]``)."""
-        self.count(self.kcs)
+        branch's two ways: the taken one also counts ``ctr[C_TAKEN]``, :meth:`count_taken`); a
+        block on a cycle counts one execution in its local instead."""
+        k = self.index[self.block_start]
+        if k in self.looped:
+            self.looped[k] = self.kcs
+            self.add_local(f"%bc{k}")
+        else:
+            self.count(self.kcs)
+
+    def count_taken(self) -> None:
+        if self.index[self.block_start] in self.looped:
+            self.add_local("%taken")
+        else:
+            self.count([TAKEN_INDEX])
+
+    def add_local(self, local: str) -> None:
+        a, b = self.tmp(), self.tmp()
+        self.emit(f"{a} = load i64, i64* {local}")
+        self.emit(f"{b} = add i64 {a}, 1")
+        self.emit(f"store i64 {b}, i64* {local}")
+
+    def write_locals(self) -> None:
+        """Add the executions the blocks on cycles counted in their locals, times their histograms,
+        to the counters (at each of the function's ways out: the shared returns and the tail call)."""
+        if not self.looped:
+            return
+        terms: dict[int, list[tuple[str, int]]] = {}
+        for k, hist in sorted(self.looped.items()):
+            v = self.tmp()
+            self.emit(f"{v} = load i64, i64* %bc{k}")
+            merged: dict[int, int] = {}
+            for kc in hist:
+                merged[kc] = merged.get(kc, 0) + 1
+            for kc, n in merged.items():
+                terms.setdefault(kc, []).append((v, n))
+        taken = self.tmp()
+        self.emit(f"{taken} = load i64, i64* %taken")
+        terms.setdefault(TAKEN_INDEX, []).append((taken, 1))
+        for kc, parts in sorted(terms.items()):
+            total = ""
+            for v, n in parts:
+                term = v
+                if n != 1:
+                    term = self.tmp()
+                    self.emit(f"{term} = mul i64 {v}, {n}")
+                if total:
+                    w = self.tmp()
+                    self.emit(f"{w} = add i64 {total}, {term}")
+                    term = w
+                total = term
+            base, at = ("%opc", kc) if kc < OPC_SIZE else (self.ctx_ptr(CTX_CTR), kc - OPC_SIZE)
+            self.add_i64(self.field(base, at), total)
 
     def prefix_chain(self, points: list[int]) -> None:
         """The side exits' counts of the block: the exit before instruction ``points[k]`` enters a
@@ -458,6 +558,7 @@ class _Writer:
         insns = block.insns
         worst = sum(WORST_CYCLES[i.ins.timing] for i in insns[:-1])
         self.put_label(f"blk{self.index[block.start]}")
+        self.block_start = block.start
         self.regs, self.cyc, self.pending = {}, self.tmp(), 0
         self.emit(f"{self.cyc} = load i64, i64* %cycp")
         e, ok, go, lim = self.tmp(), self.tmp(), self.label("go"), self.label("lim")
@@ -499,6 +600,12 @@ class _Writer:
         self.leave_block()  # after the jump block, which leaves through it too
         body, self.lines = self.lines, [f"define i32 @{self.name}({_PARAMS}) nounwind {{", "entry:"]
         self.emit("%cycp = alloca i64")
+        for k in sorted(self.looped):
+            self.emit(f"%bc{k} = alloca i64")
+            self.emit(f"store i64 0, i64* %bc{k}")
+        if self.looped:
+            self.emit("%taken = alloca i64")
+            self.emit("store i64 0, i64* %taken")
         self.emit("store i64 %cyc, i64* %cycp")
         for name, definition in self.pointers.items():
             self.emit(f"{name} = {definition}")
@@ -518,7 +625,7 @@ class _Writer:
             taken, fall = self.label("taken"), self.label("fall")
             self.emit(f"br i1 {cond}, label %{taken}, label %{fall}")
             self.put_label(taken)
-            self.count([TAKEN_INDEX])
+            self.count_taken()
             self.goto(pc + insn.imm, self.cycles(BRANCH_TAKEN_CYCLES))
             self.put_label(fall)
             self.goto(pc + 4, self.cycles(BRANCH_NOT_TAKEN_CYCLES))
