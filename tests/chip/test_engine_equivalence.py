@@ -952,3 +952,51 @@ def test_side_exits_mid_block_run_as_on_the_interpreter() -> None:
     words = side_exits_mid_block(60)
     for engine in ENGINES:
         assert_same(words, engine, 100_000, len(words))
+
+
+def small_and_large_loops() -> list[int]:
+    """A loop of three blocks (20 times), then one of five blocks (10 times)."""
+    return [
+        A.i("addi", 10, 0, 0),  # 0
+        A.i("addi", 6, 0, 20),  # 1
+        A.i("addi", 10, 10, 1),  # 2: small loop
+        A.i("andi", 5, 6, 1),  # 3
+        A.branch("beq", 5, 0, 8),  # 4: to 6
+        A.i("xori", 10, 10, 3),  # 5
+        A.i("addi", 6, 6, -1),  # 6
+        A.branch("bne", 6, 0, -20),  # 7: to 2
+        A.i("addi", 7, 0, 10),  # 8
+        A.i("addi", 10, 10, 5),  # 9: large loop, a block per branch
+        A.branch("blt", 10, 0, 4),  # 10
+        A.i("addi", 10, 10, 7),  # 11
+        A.branch("blt", 10, 0, 4),  # 12
+        A.i("addi", 10, 10, 9),  # 13
+        A.branch("blt", 10, 0, 4),  # 14
+        A.i("addi", 10, 10, 11),  # 15
+        A.branch("blt", 10, 0, 4),  # 16
+        A.i("addi", 7, 7, -1),  # 17
+        A.branch("bne", 7, 0, -36),  # 18: to 9
+        *exit_with(10),  # 19-21
+    ]
+
+
+def test_blocks_on_small_cycles_count_through_locals() -> None:
+    """The blocks of a cycle of at most MAX_LOOP_BLOCKS blocks count their executions in locals
+    (written to the counters at the region function's ways out), the others at each way out of
+    the block; the counters come out as the interpreter's either way."""
+    import re
+
+    from robosoc.jit.emit_ir import MAX_LOOP_BLOCKS, looped_blocks
+
+    assert MAX_LOOP_BLOCKS == 4  # (the small loop has three blocks, the large one five)
+    words = small_and_large_loops()
+    view = CodeView(lambda a: words[(a - SRAM_BASE) >> 2], SRAM_BASE, 4 * len(words), 64 * 1024, True)
+    region = discover(view, SRAM_BASE)
+    starts = [(pc - SRAM_BASE) >> 2 for pc in region.blocks]
+    assert starts == [0, 2, 5, 6, 8, 9, 11, 13, 15, 17, 19]
+    assert looped_blocks(region, []) == {SRAM_BASE + 4 * w for w in (2, 5, 6)}
+    ir = _region_ir(words)
+    assert re.findall(r"%bc(\d+) = alloca", ir) == ["1", "2", "3"]  # the blocks at words 2, 5 and 6
+    for engine in ENGINES:
+        soc = assert_same(words, engine, 100_000, len(words))
+    assert int(soc.state.opc[0].sum()) == 2 + 20 * 5 + 10 + 1 + 10 * 10 + 3  # (the xori every other time)

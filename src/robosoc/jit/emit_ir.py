@@ -18,8 +18,9 @@ outside its data part (devices, and the loaded code: self-modifying code) and mi
 leave the region before the instruction, for the interpreter.  Costs come from the timing classes
 of :mod:`robosoc.isa.table`.  Each way out of a block adds the instructions it executed to the
 tile's counters itself (``opc``, and ``ctr[C_TAKEN]`` for a taken branch): the block's ends its
-whole histogram (one add per operation), a side exit the prefix before it, so the counters are
-the interpreter's whenever a region returns.
+whole histogram (one add per operation), a side exit the prefix before it; the blocks of a small
+loop (:func:`looped_blocks`) count their executions in locals instead, added to the counters at the
+function's ways out.  So the counters are the interpreter's whenever a region returns.
 """
 
 from __future__ import annotations
