@@ -485,11 +485,11 @@ def test_the_tiles_holding_one_program_get_copies_of_the_first_tiles_tables(monk
     assert adopted == [tiles[(0, 1)], tiles[(1, 1)], tiles[(2, 1)]]
     got = {t: [a.copy() for a in chip._jit.translators[t].tables()] for t in tiles.values()}
     translators = {t: chip._jit.translators[t] for t in tiles.values()}
-    known = {t: (tr._known_seen, set(tr._known_starts_in), tr._nslots) for t, tr in translators.items() if tr}
+    known = {t: (tr._known_seen, set(tr._known_starts_in)) for t, tr in translators.items() if tr}
     marks = {t: chip.cores.dec[t] == OP_ENTRY for t in tiles.values()}
     first, copy = (chip._jit.translators[tiles[xy]].tables() for xy in ((1, 0), (0, 1)))
     other = chip._jit.translators[tiles[(2, 1)]].tables()  # copied in the same round as (0, 1)
-    for name in ("entry_fn", "entry_slot", "entry_blk", "hot", "tmap", "cnt", "ctx"):
+    for name in ("entry_fn", "entry_blk", "hot", "tmap", "ctx"):
         assert not np.shares_memory(getattr(first, name), getattr(copy, name)), name
         assert not np.shares_memory(getattr(copy, name), getattr(other, name)), name
     # what the chip loop reads for each tile is what its translator holds (one call set them all)
@@ -502,7 +502,7 @@ def test_the_tiles_holding_one_program_get_copies_of_the_first_tiles_tables(monk
     for t in tiles.values():
         afresh = TranslatingCore(chip.cores, tile=t, mode="jit")
         want = afresh.tables()  # made afresh, marks again
-        assert known[t] == (afresh._known_seen, afresh._known_starts_in, afresh._nslots)
+        assert known[t] == (afresh._known_seen, afresh._known_starts_in)
         for name, a, b in zip(want._fields, got[t], want, strict=True):
             assert np.array_equal(a, b), (t, name)
         assert np.array_equal(marks[t], chip.cores.dec[t] == OP_ENTRY)
@@ -566,7 +566,7 @@ def test_a_copys_translator_made_late_holds_the_tables_of_the_first_when_copied(
     for t in (b, c):
         want = TranslatingCore(chip.cores, tile=t, mode="jit").tables()  # made afresh
         for name, x, y in zip(want._fields, got[t], want, strict=True):
-            if name not in ("cnt", "ctx"):  # (slots are ordered as entered: compared through the run below)
+            if name != "ctx":  # (the dispatch loop's addresses and statistics: compared through the run below)
                 assert np.array_equal(x, y), (t, name)
     ran = outcome(chip, 100_000)
     assert ran == outcome(loaded_interp(prog, xys), 100_000)
@@ -578,3 +578,70 @@ def loaded_interp(prog: Program, xys: list[tuple[int, int]]) -> MPSoC:
     for xy in xys:
         chip.load(xy, prog)
     return chip
+
+
+def task_switching(outer: int, inner: int) -> list[int]:
+    """Each of ``outer`` rounds stores a TASK_ID (round & 3) and runs a loop of ``inner`` iterations
+    whose block loads, in its middle, from an SRAM word and from IRQ_MASK in turn (a side exit of
+    the translated block every other iteration)."""
+    data = 22  # a word of the program, loaded
+    return [
+        A.i("addi", A0, 0, 0),  # 0
+        A.i("addi", T1, 0, outer),  # 1
+        *A.li(T2, NI + 0x20),  # 2, 3: TASK_ID
+        *A.li(29, SRAM + 4 * data),  # 4, 5
+        *A.li(30, (SRAM + 4 * data) ^ 0xF0000020),  # 6, 7: base ^ IRQ_MASK
+        A.i("andi", T0, T1, 3),  # 8: round
+        A.store("sw", T0, T2, 0),  # 9: the task switch
+        A.i("addi", 28, 0, inner),  # 10
+        A.i("addi", A0, A0, 3),  # 11: loop
+        A.r("xor", 29, 29, 30),  # 12
+        A.shift("slli", 11, A0, 1),  # 13
+        A.load("lw", 12, 29, 0),  # 14: SRAM or IRQ_MASK
+        A.r("add", A0, A0, 12),  # 15
+        A.r("add", A0, A0, 11),  # 16
+        A.i("addi", 28, 28, -1),  # 17
+        A.branch("bne", 28, 0, -28),  # 18: back to word 11
+        A.i("addi", T1, T1, -1),  # 19
+        A.branch("bne", T1, 0, -48),  # 20: back to word 8
+        A.i("andi", A0, A0, 0xFF),  # 21
+        *exit_with(A0),  # 22 (the data word), 23, 24
+    ]
+
+
+@pytest.mark.usefixtures("no_records")
+@pytest.mark.parametrize("engine", ENGINES)
+def test_task_switches_between_translated_stretches_charge_each_task_as_the_interpreter(
+    engine: str, monkeypatch
+) -> None:
+    """Translated blocks add what they execute to the tile's counters themselves, so a TASK_ID
+    store (the chip loop's) charges the task that ran before it with exactly its instructions:
+    per operation, per tile and per task, the counters are the interpreter's, with side exits in
+    the middle of translated blocks between the switches."""
+    from robosoc.kernels.jit_dispatch import CTX_CALLS, CTX_DEVICE
+
+    monkeypatch.setattr(jit_tables, "_TRANSLATED", {})
+    prog = program(task_switching(12, 30))
+    xys = [(1, 0), (1, 1)]
+
+    def loaded(name: str) -> MPSoC:
+        chip = MPSoC(ChipConfig(), engine=name)
+        for xy in xys:
+            chip.load(xy, prog)
+        return chip
+
+    loaded(engine).run(max_cycles=2_000_000)  # the loops translated in this process
+    chip = loaded(engine)
+    got = outcome(chip, 2_000_000)
+    want = outcome(loaded("interp"), 2_000_000)
+    assert got == want
+    ran, _, tasks, _ = want
+    assert ran[2] == dict.fromkeys(xys, ran[2][xys[0]])  # every tile exited
+    for xy in xys:
+        assert sorted(tasks[xy]) == [0, 1, 2, 3]  # each task charged its rounds
+    if engine == "jit":  # (auto may leave such short runs to the interpreter)
+        for xy in xys:
+            translator = chip._jit.translators[chip.config.tile_index(xy)]
+            assert translator is not None
+            ctx = translator.tables().ctx
+            assert ctx[CTX_CALLS] > 50 and ctx[CTX_DEVICE] > 50  # translated, with side exits

@@ -34,7 +34,7 @@ from robosoc.jit.emit_ir import (
 from robosoc.jit.regions import CodeView, discover
 from robosoc.jit.target import Target
 from robosoc.kernels.core import _MUL_CHUNK, mul_latency
-from robosoc.kernels.core_layout import S_CYCLE
+from robosoc.kernels.core_layout import S_CYCLE, S_RUN
 from robosoc.kernels.jit_dispatch import CTX_FLUSHES, CTX_STEPS, JitArrays
 
 ENGINES = ["jit", "auto"]
@@ -406,7 +406,7 @@ def test_a_core_copying_the_tables_of_the_last_gets_those_made_afresh(
         assert np.array_equal(a, b), name
     assert np.array_equal(got[1], want[1])  # the interpreter stops before the same blocks
     mine_tr, made_tr = copied.translator, made.translator
-    assert (mine_tr.stats.reused, mine_tr._nslots) == (made_tr.stats.reused, made_tr._nslots)
+    assert (mine_tr.stats.reused, mine_tr._known_starts_in) == (made_tr.stats.reused, made_tr._known_starts_in)
     # a region is entered unless one of its words changed (word 2 starts no block of the first)
     entry_fn = want[0][0]
     assert (entry_fn[0] != 0) == (changed in (None, 30))
@@ -902,81 +902,101 @@ def test_compiled_or_cached_does_not_take_another_checkouts_kernel_for_this_ones
     assert not compiled_or_cached(two)  # the second checkout's kernel is not in numba's cache
 
 
-@pytest.mark.usefixtures("no_records")
-def test_a_flush_of_the_entered_regions_counts_as_a_flush_of_every_slot() -> None:
-    """The chip flushes only the slots of the regions entered since the last flush (their mark,
-    slot 0 of each region, set by the region function at every entry): at every stop of a run,
-    the counters come out as from a pass over every slot, a region whose mark is clear counted
-    nothing, and a second flush adds nothing."""
-    from robosoc.kernels.jit_dispatch import flush_counts, flush_entered_counts, run_translated
-
-    words = indirect_calls(300)
-    make_soc(words, engine="jit").run(max_cycles=1_000_000)  # every region translated
-    soc = make_soc(words, engine="jit")
-    tr = soc.translator
-    jt = tr.tables()
-    assert len(jt.slot_mark) >= 2 and jt.slot_mark[0] == 0  # the process's regions, each from its mark
-    assert (jt.slot_ptr[jt.slot_mark] == jt.slot_ptr[jt.slot_mark + 1]).all()  # marks have no histogram
-    starts = [*jt.slot_mark.tolist(), len(jt.slot_next)]  # (bank 0: a single core's)
-    left_out = flushed = 0
-    for until in (40, 333, 1_000, 2_501, 7_777, 1_000_000):
-        run_translated(soc.state.arrays(), tr._tiles, until, jt, 1, 0, False)  # the counts left in the slots
-        entered = jt.cnt[jt.slot_mark] != 0
-        flushed += int(entered.sum())
-        for r in np.flatnonzero(~entered):  # a region not entered since the last flush counted nothing
-            assert not jt.cnt[starts[r] : starts[r + 1]].any()
-            left_out += 1
-        full = (soc.state.opc[0].copy(), soc.state.ctr[0].copy(), jt.cnt.copy())
-        flush_counts(jt._replace(cnt=full[2]), full[0], full[1])
-        flush_entered_counts(jt, soc.state.opc[0], soc.state.ctr[0])
-        assert np.array_equal(soc.state.opc[0], full[0]) and np.array_equal(soc.state.ctr[0], full[1])
-        assert not jt.cnt.any() and not full[2].any()
-        again = soc.state.opc[0].copy()
-        flush_entered_counts(jt, soc.state.opc[0], soc.state.ctr[0])
-        assert np.array_equal(soc.state.opc[0], again)
-    assert left_out > 0 and flushed > 0  # flushes passed over regions, and flushed others
+def side_exits_mid_block(count: int) -> list[int]:
+    """A loop whose block loads, in its middle, from an SRAM word and from IRQ_MASK (a device) in
+    turn: every other iteration the translated block leaves before the load (a side exit counting
+    the block's prefix) and the rest of it runs on the interpreter; a taken branch closes each."""
+    data = 13  # the word loaded from SRAM
+    return [
+        A.i("addi", 10, 0, 0),  # 0: acc
+        A.i("addi", 28, 0, count),  # 1
+        *A.li(29, SRAM_BASE + 4 * data),  # 2, 3: the load's base
+        *A.li(30, (SRAM_BASE + 4 * data) ^ 0xF0000020),  # 4, 5: base ^ IRQ_MASK
+        A.i("addi", 10, 10, 3),  # 6: loop
+        A.r("xor", 29, 29, 30),  # 7: the other base
+        A.shift("slli", 11, 10, 2),  # 8
+        A.load("lw", 12, 29, 0),  # 9: SRAM or IRQ_MASK
+        A.r("add", 10, 10, 12),  # 10
+        A.i("addi", 28, 28, -1),  # 11
+        A.branch("bne", 28, 0, -24),  # 12: back to word 6
+        *exit_with(10),  # 13 (the data word), 14
+    ]
 
 
 @pytest.mark.usefixtures("no_records")
-def test_the_chips_flush_charges_each_tasks_bank_to_that_task() -> None:
-    """On the chip the blocks count into the bank of the tile's running task (``CTX_BANK``), so a
-    TASK_ID store needs no flush: :func:`flush_task_counts` adds every bank counted into to the counters and
-    the banks of the tasks not running to their accounting rows and to the snapshot (the running
-    task's are accounted for at its next TASK_ID store)."""
-    from robosoc.kernels.chip import ACC_SIZE, NTASKS
-    from robosoc.kernels.jit_dispatch import count_into_bank, flush_counts, flush_task_counts, run_translated
+def test_translated_code_leaves_the_interpreters_counters_at_every_stop() -> None:
+    """Translated blocks add what they execute to the counters themselves (a block's end its whole
+    histogram, a side exit in the middle of a block its prefix): wherever the dispatch loop stops,
+    the per-operation counters and ctr (taken branches included) are those of the interpreter
+    stopped at the same cycle."""
+    from robosoc.kernels.core import run_cores
+    from robosoc.kernels.jit_dispatch import CTX_CALLS, CTX_DEVICE, run_translated
 
-    words = indirect_calls(300)
+    words = side_exits_mid_block(200)
     make_soc(words, engine="jit").run(max_cycles=1_000_000)  # every region translated
-    soc = make_soc(words, engine="jit")
+    soc, ref = make_soc(words, engine="jit"), make_soc(words)
     tr = soc.translator
     jt = tr.tables()
-    n = len(jt.slot_next)
-    assert len(jt.cnt) == NTASKS * n
-    parts = []  # (task, counts of its stretch)
-    for task, until in ((0, 500), (3, 2_000), (0, 3_000), (5, 4_500)):
-        count_into_bank(jt.ctx, task)
-        before = jt.cnt.copy()
-        run_translated(soc.state.arrays(), tr._tiles, until, jt, 1, 0, False)
-        parts.append((task, jt.cnt - before))
-    opc, ctr = soc.state.opc[0].copy(), soc.state.ctr[0].copy()
-    acc = np.zeros((NTASKS, ACC_SIZE), dtype=np.int64)
-    snap = np.zeros(ACC_SIZE, dtype=np.int64)
-    running = 5
-    flush_task_counts(jt, soc.state.opc[0], soc.state.ctr[0], acc, snap, running)
-    assert not jt.cnt.any()
-    want_opc, want_ctr = opc.copy(), ctr.copy()
-    want_acc = np.zeros_like(acc)
-    for task, counts in parts:
-        assert not counts[: task * n].any() and not counts[(task + 1) * n :].any()  # its own bank only
-        assert counts.any()
-        o, c = np.zeros_like(opc), np.zeros_like(ctr)
-        flush_counts(jt._replace(cnt=counts.copy()), o, c)
-        want_opc += o
-        want_ctr += c
-        if task != running:
-            want_acc[task, : len(o)] += o
-            want_acc[task, len(o) : len(o) + len(c)] += c
-    assert np.array_equal(soc.state.opc[0], want_opc) and np.array_equal(soc.state.ctr[0], want_ctr)
-    assert np.array_equal(acc, want_acc)
-    assert np.array_equal(snap, want_acc.sum(axis=0))
+    for until in (40, 333, 1_000, 1_001, 1_777, 100_000):  # (the program exits near cycle 2,200)
+        run_translated(soc.state.arrays(), tr._tiles, until, jt, 1, 0)
+        run_cores(ref.state.arrays(), tr._tiles, until)
+        assert soc.state.st[0, S_CYCLE] == ref.state.st[0, S_CYCLE] >= min(until, 2_000)
+        assert soc.state.st[0, S_RUN] == ref.state.st[0, S_RUN]
+        assert np.array_equal(soc.state.opc[0], ref.state.opc[0]), until
+        assert np.array_equal(soc.state.ctr[0], ref.state.ctr[0]), until
+    assert jt.ctx[CTX_CALLS] > 10 and jt.ctx[CTX_DEVICE] > 10  # translated, leaving before the device loads
+    assert ref.state.opc[0].sum() == 6 + 7 * 200 + 3  # (set-up, loop, exit store)
+
+
+def test_side_exits_mid_block_run_as_on_the_interpreter() -> None:
+    words = side_exits_mid_block(60)
+    for engine in ENGINES:
+        assert_same(words, engine, 100_000, len(words))
+
+
+def small_and_large_loops() -> list[int]:
+    """A loop of three blocks (20 times), then one of five blocks (10 times)."""
+    return [
+        A.i("addi", 10, 0, 0),  # 0
+        A.i("addi", 6, 0, 20),  # 1
+        A.i("addi", 10, 10, 1),  # 2: small loop
+        A.i("andi", 5, 6, 1),  # 3
+        A.branch("beq", 5, 0, 8),  # 4: to 6
+        A.i("xori", 10, 10, 3),  # 5
+        A.i("addi", 6, 6, -1),  # 6
+        A.branch("bne", 6, 0, -20),  # 7: to 2
+        A.i("addi", 7, 0, 10),  # 8
+        A.i("addi", 10, 10, 5),  # 9: large loop, a block per branch
+        A.branch("blt", 10, 0, 4),  # 10
+        A.i("addi", 10, 10, 7),  # 11
+        A.branch("blt", 10, 0, 4),  # 12
+        A.i("addi", 10, 10, 9),  # 13
+        A.branch("blt", 10, 0, 4),  # 14
+        A.i("addi", 10, 10, 11),  # 15
+        A.branch("blt", 10, 0, 4),  # 16
+        A.i("addi", 7, 7, -1),  # 17
+        A.branch("bne", 7, 0, -36),  # 18: to 9
+        *exit_with(10),  # 19-21
+    ]
+
+
+def test_blocks_on_small_cycles_count_through_locals() -> None:
+    """The blocks of a cycle of at most MAX_LOOP_BLOCKS blocks count their executions in locals
+    (written to the counters at the region function's ways out), the others at each way out of
+    the block; the counters come out as the interpreter's either way."""
+    import re
+
+    from robosoc.jit.emit_ir import MAX_LOOP_BLOCKS, looped_blocks
+
+    assert MAX_LOOP_BLOCKS == 4  # (the small loop has three blocks, the large one five)
+    words = small_and_large_loops()
+    view = CodeView(lambda a: words[(a - SRAM_BASE) >> 2], SRAM_BASE, 4 * len(words), 64 * 1024, True)
+    region = discover(view, SRAM_BASE)
+    starts = [(pc - SRAM_BASE) >> 2 for pc in region.blocks]
+    assert starts == [0, 2, 5, 6, 8, 9, 11, 13, 15, 17, 19]
+    assert looped_blocks(region, []) == {SRAM_BASE + 4 * w for w in (2, 5, 6)}
+    ir = _region_ir(words)
+    assert re.findall(r"%bc(\d+) = alloca", ir) == ["1", "2", "3"]  # the blocks at words 2, 5 and 6
+    for engine in ENGINES:
+        soc = assert_same(words, engine, 100_000, len(words))
+    assert int(soc.state.opc[0].sum()) == 2 + 20 * 5 + 10 + 1 + 10 * 10 + 3  # (the xori every other time)

@@ -59,7 +59,6 @@ KERNEL_PARTS: tuple[tuple[str, int, int | None], ...] = (
     ("chip loop: NI accesses", kc.G_TK_NI, kc.G_N_NI),
     ("chip loop: wake-ups", kc.G_TK_WAKE, kc.G_N_WAKE),
     ("chip loop: NoC", kc.G_TK_NOC, None),
-    ("chip loop: count flush", kc.G_TK_FLUSH, None),
 )
 BOOKKEEPING = "chip loop: quanta"
 #: the functions timed, in the order printed: (owner, attribute, part)

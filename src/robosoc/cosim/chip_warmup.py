@@ -85,7 +85,6 @@ PARENT_KERNELS = (
     ("dev_irq", "trap"),
     # the dispatch loop's own callees, ready in the cache before the child reaches them
     ("jit_dispatch", "forget_if_changed"),
-    ("jit_dispatch", "flush_counts"),
 )
 
 
@@ -116,7 +115,7 @@ def kernel_signatures(mpsoc: MPSoC) -> dict[tuple[str, str], tuple[Any, ...]]:
     jit = typeof(empty_tables())  # a tile's translation tables
     return {
         ("core", "run_cores"): (typeof(core), tiles, i64),
-        ("jit_dispatch", "run_translated"): (typeof(core), tiles, i64, jit, i64, i64, types.boolean),
+        ("jit_dispatch", "run_translated"): (typeof(core), tiles, i64, jit, i64, i64),
         ("chip", "ni_access"): (i64, typeof(core), typeof(book), typeof(noc)),
         ("chip", "_take_deliveries"): (st, typeof(book), typeof(noc)),
         ("chip", "_wake_if_due"): (i64, st, cst, i64),
@@ -134,7 +133,6 @@ def kernel_signatures(mpsoc: MPSoC) -> dict[tuple[str, str], tuple[Any, ...]]:
         ("stop_queue", "push"): (tiles, tiles, tiles, tiles, i64, i64),
         ("stop_queue", "pop"): (tiles, tiles, tiles, tiles),
         ("jit_dispatch", "forget_if_changed"): (jit, typeof(core.m32[0]), typeof(core.dec[0])),
-        ("jit_dispatch", "flush_counts"): (jit, typeof(core.opc[0]), typeof(core.ctr[0])),
     }
 
 

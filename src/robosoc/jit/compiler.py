@@ -26,7 +26,7 @@ from numba.core.compiler_lock import global_compiler_lock
 from robosoc.cache import cache_root
 
 #: Bumped whenever the pipeline or the IR conventions change, to invalidate old objects.
-PIPELINE_VERSION = 5
+PIPELINE_VERSION = 7
 
 
 @dataclass

@@ -2,26 +2,30 @@
 
 The region function has the signature (all arrays distinct, hence ``noalias``)::
 
-    i32 @region(i64* ctx, i32* regs, i8* mem, i64* cnt, i64 cycle, i64 limit, i64 block)
+    i32 @region(i64* ctx, i32* regs, i8* mem, i64* opc, i64 cycle, i64 limit, i64 block)
 
 and starts with a switch over ``block``, the index of the block to enter: the dispatch loop and
-other regions may enter at any block start (the entry table holds each word's function, count-slot
-base and block index).  Each block checks that its worst-case cycles end before the next event,
-counts itself, runs its instructions and continues with a branch to the next block of the region,
-or through the entry table with a tail call to whichever region has a block at the target (an
-indirect jump; ``musttail``, as every region function has the same signature), or returns an X_*
-code of :mod:`robosoc.kernels.jit_dispatch` to the dispatch loop.  Guest registers stay in the
-register array (a load at first use in a block, a store per write); the cycle count is an SSA value
-(a stack slot SROA promotes); the state and counter arrays are reached through ``ctx``.  The IR is
+other regions may enter at any block start (the entry table holds each word's function and block
+index).  Each block checks that its worst-case cycles end before the next event, runs its
+instructions and continues with a branch to the next block of the region, or through the entry
+table with a tail call to whichever region has a block at the target (an indirect jump;
+``musttail``, as every region function has the same signature), or returns an X_* code of
+:mod:`robosoc.kernels.jit_dispatch` to the dispatch loop.  Guest registers stay in the register
+array (a load at first use in a block, a store per write); the cycle count is an SSA value (a
+stack slot SROA promotes); the state and counter arrays are reached through ``ctx``.  The IR is
 written as text (faster to produce than llvmlite's builder objects).  Loads outside SRAM, stores
 outside its data part (devices, and the loaded code: self-modifying code) and misaligned accesses
 leave the region before the instruction, for the interpreter.  Costs come from the timing classes
-of :mod:`robosoc.isa.table`; instruction counts are count slots (see the dispatch module).
+of :mod:`robosoc.isa.table`.  Each way out of a block adds the instructions it executed to the
+tile's counters itself (``opc``, and ``ctr[C_TAKEN]`` for a taken branch): the block's ends its
+whole histogram (one add per operation), a side exit the prefix before it; the blocks of a small
+loop (:func:`looped_blocks`) count their executions in locals instead, added to the counters at the
+function's ways out.  So the counters are the interpreter's whenever a region returns.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -40,12 +44,10 @@ from robosoc.jit.target import Target
 from robosoc.kernels.core import _MUL_CHUNK
 from robosoc.kernels.core_layout import C_MUL_STALL, C_TAKEN, OPC_SIZE, S_MUL_END, S_MULHSU_COUNT, S_MULHSU_PC
 from robosoc.kernels.jit_dispatch import (
-    CTX_CNT,
     CTX_CTR,
     CTX_CYC,
     CTX_ENTRY_BLK,
     CTX_ENTRY_FN,
-    CTX_ENTRY_SLOT,
     CTX_PC,
     CTX_ST,
     X_JUMP,
@@ -118,9 +120,6 @@ class EmittedRegion:
     ir: str
     function: str  # the region function's name (with the region's name placeholder)
     blocks: dict[int, int]  # block start pc -> block index (the function's ``block`` argument)
-    #: count slots: (histogram as (opc index, delta) pairs, next slot or -1); a slot's executions are
-    #: also added to its next slot's (the chain of a block's prefixes); index TAKEN_INDEX counts taken branches
-    slots: list[tuple[list[tuple[int, int]], int]] = field(default_factory=list)
 
 
 @dataclass(frozen=True)
@@ -217,10 +216,54 @@ def memory_checks(insns: list[Insn], target: Target) -> dict[int, MemoryCheck]:
     return checks
 
 
-_PARAMS = "i64* noalias %ctx, i32* noalias %regs, i8* noalias %mem, i64* noalias %cnt, i64 %cyc, i64 %limit, i64 %blk"
+_PARAMS = "i64* noalias %ctx, i32* noalias %regs, i8* noalias %mem, i64* noalias %opc, i64 %cyc, i64 %limit, i64 %blk"
 _FN_TYPE = "i32 (i64*, i32*, i8*, i64*, i64, i64, i64)"
-#: count-slot index of the taken-branch counter: past the per-operation counters (see flush_counts)
+#: histogram index of the taken-branch counter ``ctr[C_TAKEN]``: past the per-operation counters
 TAKEN_INDEX = OPC_SIZE + C_TAKEN
+
+
+def successors(block: Block, returns: list[int]) -> list[int]:
+    """The pcs a block continues at with a branch of the region function, if blocks start there:
+    its static targets, and for a return (``jalr x0, 0(ra)``) the region's return sites ``returns``."""
+    last = block.insns[-1]
+    match block.end:
+        case End.FALL:
+            return [block.next_pc]
+        case End.BRANCH:
+            return [(last.pc + last.imm) & M32, last.pc + 4]
+        case End.JUMP | End.CALL:
+            return [(last.pc + last.imm) & M32]
+        case End.JALR:
+            return list(returns) if (last.rd, last.rs1, last.imm) == (0, 1, 0) else []
+    return []
+
+
+#: Most blocks of a cycle whose blocks count through locals (:func:`looped_blocks`)
+MAX_LOOP_BLOCKS = 4
+
+
+def looped_blocks(region: Region, returns: list[int]) -> set[int]:
+    """Starts of the blocks that lie on a small cycle of the region's own branches: a strongly
+    connected set of at most MAX_LOOP_BLOCKS blocks (a loop inside a function).  They count their
+    executions through locals, written to the counters at the function's ways out (:class:`_Writer`)."""
+    succ = {pc: [t for t in successors(b, returns) if t in region.blocks] for pc, b in region.blocks.items()}
+    reach: dict[int, set[int]] = {}
+    for pc in region.blocks:
+        seen: set[int] = set()
+        todo = list(succ[pc])
+        while todo:
+            t = todo.pop()
+            if t not in seen:
+                seen.add(t)
+                todo.extend(succ[t])
+        reach[pc] = seen
+    looped = set()
+    for pc in region.blocks:
+        if pc in reach[pc]:
+            cycle = {q for q in reach[pc] if pc in reach[q]}
+            if len(cycle) <= MAX_LOOP_BLOCKS:
+                looped.add(pc)
+    return looped
 
 
 class _Writer:
@@ -232,8 +275,6 @@ class _Writer:
         self.t = target
         self.region = region
         self.name = name
-        #: slot 0 is the region's mark: set at every entry, it has no histogram (see ``function``)
-        self.slots: list[tuple[list[tuple[int, int]], int]] = [([], -1)]
         self.lines: list[str] = []
         self.n = 0
         self.uses_mul = False
@@ -243,6 +284,9 @@ class _Writer:
         # when there are few (else returns go through the entry table)
         sites = {b.next_pc for b in region.blocks.values() if b.end is End.CALL and b.next_pc in self.index}
         self.returns = sorted(sites) if len(sites) <= MAX_SWITCH else []
+        #: blocks on a cycle of the region's own branches (block index -> its histogram): they count
+        #: their executions in a local (a register in a loop), added to the counters at the ways out
+        self.looped: dict[int, list[int]] = {self.index[pc]: [] for pc in looped_blocks(region, self.returns)}
         self.regs: dict[int, str] = {}  # register -> its current SSA value in this block
         self.dirty: dict[int, str] = {}  # registers written since the last store to the array
         self.pointers: dict[str, str] = {}  # SSA name -> its definition, written in the entry block
@@ -250,7 +294,8 @@ class _Writer:
         self.pending = 0  # cycles of the instructions since then
         self.cur = "entry"  # the basic block being written
         self.jumps: list[tuple[str, str, str]] = []  # through the entry table: (from label, pc, cycle)
-        self.exits: list[tuple[str, int, str, int, str]] = []  # to the loop: (from label, code, pc, slot, cycle)
+        self.exits: list[tuple[str, int, str, str]] = []  # to the loop: (from label, code, pc, cycle)
+        self.counted_exits = False  # a side exit counted its block's prefix and returns through %side
 
     def tmp(self) -> str:
         self.n += 1
@@ -331,50 +376,49 @@ class _Writer:
         self.emit(f"{p} = getelementptr i64, i64* {base}, i64 {index}")
         return p
 
-    def slot(self, hist: list[tuple[int, int]], nxt: int = -1) -> int:
-        """A new count slot with histogram ``hist`` (the deltas of one counter merged: a flush's
-        work is a pass over the entries of the slots counted since the last)."""
+    def count(self, hist: list[int]) -> None:
+        """Add the histogram ``hist`` (indices below OPC_SIZE: per-operation counters ``opc``,
+        OPC_SIZE + k: ``ctr[k]``) to the tile's counters, one add per counter."""
         merged: dict[int, int] = {}
-        for kc, delta in hist:
-            merged[kc] = merged.get(kc, 0) + delta
-        self.slots.append((list(merged.items()), nxt))
-        return len(self.slots) - 1
+        for kc in hist:
+            merged[kc] = merged.get(kc, 0) + 1
+        for kc, n in sorted(merged.items()):
+            if kc < OPC_SIZE:
+                self.add_i64(self.field("%opc", kc), n)
+            else:
+                self.add_i64(self.field(self.ctx_ptr(CTX_CTR), kc - OPC_SIZE), n)
 
     # --- leaving a block ----------------------------------------------------------------------
-    def leave(self, code: int, pc: int | str, slot: int = -1, cyc: str | None = None) -> None:
-        """Return ``code`` to the dispatch loop with pc and cycle in ctx (and one count to ``slot``),
-        through the function's one way out (:meth:`leave_block`): an exit costs a branch here."""
+    def leave(self, code: int, pc: int | str, cyc: str | None = None) -> None:
+        """Return ``code`` to the dispatch loop with pc and cycle in ctx, through the function's one
+        way out (:meth:`leave_block`): an exit costs a branch here."""
         cyc = cyc or self.cycles()
         self.flush()
-        self.exits.append((self.cur, code, str(pc), slot, cyc))
+        self.exits.append((self.cur, code, str(pc), cyc))
         self.emit("br label %leave")
 
     def leave_block(self) -> None:
-        """The shared way out to the dispatch loop: pc and cycle into ctx, a count, the exit code.
+        """The shared way out to the dispatch loop: pc and cycle into ctx, the exit code.
 
         One block for every exit keeps the IR (and the code generator's time) small: the side
-        exits of memory accesses, limits and jumps are most of a region's ways out.
+        exits of memory accesses, limits and jumps are most of a region's ways out.  The side exits
+        inside a block, which count the block's prefix on their way (:meth:`prefix_chain`), store pc
+        and cycle themselves and return through ``%side``.
         """
+        if self.counted_exits:
+            self.put_label("side")
+            self.write_locals()
+            self.emit(f"ret i32 {X_SIDE}")
         if not self.exits:
             return
         self.put_label("leave")
         incoming = [(f"%{lb}", *rest) for lb, *rest in self.exits]
-        self.emit(f"%xcode = phi i32 {', '.join(f'[ {code}, {lb} ]' for lb, code, _, _, _ in incoming)}")
-        self.emit(f"%xpc = phi i64 {', '.join(f'[ {pc}, {lb} ]' for lb, _, pc, _, _ in incoming)}")
-        self.emit(f"%xcyc = phi i64 {', '.join(f'[ {cyc}, {lb} ]' for lb, _, _, _, cyc in incoming)}")
-        counts = any(slot >= 0 for _, _, _, slot, _ in self.exits)
-        if counts:
-            self.emit(f"%xslot = phi i64 {', '.join(f'[ {slot}, {lb} ]' for lb, _, _, slot, _ in incoming)}")
+        self.emit(f"%xcode = phi i32 {', '.join(f'[ {code}, {lb} ]' for lb, code, _, _ in incoming)}")
+        self.emit(f"%xpc = phi i64 {', '.join(f'[ {pc}, {lb} ]' for lb, _, pc, _ in incoming)}")
+        self.emit(f"%xcyc = phi i64 {', '.join(f'[ {cyc}, {lb} ]' for lb, _, _, cyc in incoming)}")
         self.emit(f"store i64 %xpc, i64* {self.field('%ctx', CTX_PC)}")
         self.emit(f"store i64 %xcyc, i64* {self.field('%ctx', CTX_CYC)}")
-        if counts:
-            counted = self.tmp()
-            self.emit(f"{counted} = icmp sge i64 %xslot, 0")
-            self.emit(f"br i1 {counted}, label %leave.count, label %leave.ret")
-            self.put_label("leave.count")
-            self.add_i64(self.field("%cnt", "%xslot"), 1)
-            self.emit("br label %leave.ret")
-            self.put_label("leave.ret")
+        self.write_locals()
         self.emit("ret i32 %xcode")
 
     def branch(self, pc: int, cyc: str) -> None:
@@ -405,19 +449,14 @@ class _Writer:
             self.emit(f"{none} = icmp eq i64 {fa}, 0")
             self.emit(f"br i1 {none}, label %jx, label %jgo")
             self.put_label("jx")
-            self.leave(X_JUMP, "%jpc", -1, "%jcyc")
+            self.leave(X_JUMP, "%jpc", "%jcyc")
             self.put_label("jgo")
-            se, sl, be, bl, ca, so, cn, cp, f, r = (self.tmp() for _ in range(10))
-            self.emit(f"{se} = getelementptr i64, i64* {self.ctx_ptr(CTX_ENTRY_SLOT)}, i64 {i}")
-            self.emit(f"{sl} = load i64, i64* {se}")
+            be, bl, f, r = (self.tmp() for _ in range(4))
             self.emit(f"{be} = getelementptr i64, i64* {self.ctx_ptr(CTX_ENTRY_BLK)}, i64 {i}")
             self.emit(f"{bl} = load i64, i64* {be}")
-            self.emit(f"{ca} = load i64, i64* {self.field('%ctx', CTX_CNT)}")
-            self.emit(f"{so} = shl i64 {sl}, 3")
-            self.emit(f"{cn} = add i64 {ca}, {so}")
-            self.emit(f"{cp} = inttoptr i64 {cn} to i64*")
             self.emit(f"{f} = inttoptr i64 {fa} to {_FN_TYPE}*")
-            args = f"i64* %ctx, i32* %regs, i8* %mem, i64* {cp}, i64 %jcyc, i64 %limit, i64 {bl}"
+            args = f"i64* %ctx, i32* %regs, i8* %mem, i64* %opc, i64 %jcyc, i64 %limit, i64 {bl}"
+            self.write_locals()
             self.emit(f"{r} = musttail call i32 {f}({args})")
             self.emit(f"ret i32 {r}")
 
@@ -429,24 +468,89 @@ class _Writer:
         else:
             self.jump(str(pc), cyc)
 
-    def cond_exit(self, cond: str, code: int, pc: int, slot: int, stem: str) -> None:
-        """Leave to the dispatch loop when ``cond``, else go on in a new label."""
+    def side_exit(self, cond: str, j: int, pc: int, stem: str) -> None:
+        """Leave before instruction ``j`` (at ``pc``) to the dispatch loop (X_SIDE) when ``cond``,
+        counting the instructions before it; else go on in a new label."""
         x, ok = self.label(f"{stem}.x"), self.label(stem)
         self.flush()
         self.emit(f"br i1 {cond}, label %{x}, label %{ok}")
         self.put_label(x)
-        self.leave(code, pc, slot)
+        self.emit(f"store i64 {pc}, i64* {self.field('%ctx', CTX_PC)}")
+        self.emit(f"store i64 {self.cycles()}, i64* {self.field('%ctx', CTX_CYC)}")
+        self.emit(f"br label %{self.prefix[j]}")
+        self.counted_exits = True
         self.put_label(ok)
 
     # --- counting -----------------------------------------------------------------------------
-    def count_end(self, taken: bool = False) -> None:
-        """Count the block's instructions on a way out at its end (a taken branch counts as such too)."""
-        last, prev = self.rest
-        hist = [(kc, 1) for kc in self.kcs[last:]] + ([(TAKEN_INDEX, 1)] if taken else [])
-        if hist:
-            self.add_i64(self.field("%cnt", self.slot(hist, prev)), 1)
-        elif prev >= 0:
-            self.add_i64(self.field("%cnt", prev), 1)
+    def count_end(self) -> None:
+        """Count the block's instructions at its end, where no side exit can come (before a
+        branch's two ways: the taken one also counts ``ctr[C_TAKEN]``, :meth:`count_taken`); a
+        block on a cycle counts one execution in its local instead."""
+        k = self.index[self.block_start]
+        if k in self.looped:
+            self.looped[k] = self.kcs
+            self.add_local(f"%bc{k}")
+        else:
+            self.count(self.kcs)
+
+    def count_taken(self) -> None:
+        if self.index[self.block_start] in self.looped:
+            self.add_local("%taken")
+        else:
+            self.count([TAKEN_INDEX])
+
+    def add_local(self, local: str) -> None:
+        a, b = self.tmp(), self.tmp()
+        self.emit(f"{a} = load i64, i64* {local}")
+        self.emit(f"{b} = add i64 {a}, 1")
+        self.emit(f"store i64 {b}, i64* {local}")
+
+    def write_locals(self) -> None:
+        """Add the executions the blocks on cycles counted in their locals, times their histograms,
+        to the counters (at each of the function's ways out: the shared returns and the tail call)."""
+        if not self.looped:
+            return
+        terms: dict[int, list[tuple[str, int]]] = {}
+        for k, hist in sorted(self.looped.items()):
+            v = self.tmp()
+            self.emit(f"{v} = load i64, i64* %bc{k}")
+            merged: dict[int, int] = {}
+            for kc in hist:
+                merged[kc] = merged.get(kc, 0) + 1
+            for kc, n in merged.items():
+                terms.setdefault(kc, []).append((v, n))
+        taken = self.tmp()
+        self.emit(f"{taken} = load i64, i64* %taken")
+        terms.setdefault(TAKEN_INDEX, []).append((taken, 1))
+        for kc, parts in sorted(terms.items()):
+            total = ""
+            for v, n in parts:
+                term = v
+                if n != 1:
+                    term = self.tmp()
+                    self.emit(f"{term} = mul i64 {v}, {n}")
+                if total:
+                    w = self.tmp()
+                    self.emit(f"{w} = add i64 {total}, {term}")
+                    term = w
+                total = term
+            base, at = ("%opc", kc) if kc < OPC_SIZE else (self.ctx_ptr(CTX_CTR), kc - OPC_SIZE)
+            self.add_i64(self.field(base, at), total)
+
+    def prefix_chain(self, points: list[int]) -> None:
+        """The side exits' counts of the block: the exit before instruction ``points[k]`` enters a
+        chain of labels at its segment (the instructions from the point before it), which counts
+        that segment and goes on to the one before, down to ``%side`` (one count per instruction
+        of the block however many exits it has)."""
+        down, last = "side", 0
+        for j in points:
+            if j > last:
+                label = self.label("pfx")
+                self.put_label(label)
+                self.count(self.kcs[last:j])
+                self.emit(f"br label %{down}")
+                down, last = label, j
+            self.prefix[j] = down
 
     def kc(self, insn: Insn) -> int:
         return 2 * insn.op + (((insn.pc - self.t.base) >> 2) & 1)
@@ -455,6 +559,7 @@ class _Writer:
         insns = block.insns
         worst = sum(WORST_CYCLES[i.ins.timing] for i in insns[:-1])
         self.put_label(f"blk{self.index[block.start]}")
+        self.block_start = block.start
         self.regs, self.cyc, self.pending = {}, self.tmp(), 0
         self.emit(f"{self.cyc} = load i64, i64* %cycp")
         e, ok, go, lim = self.tmp(), self.tmp(), self.label("go"), self.label("lim")
@@ -464,19 +569,17 @@ class _Writer:
         self.put_label(lim)
         self.leave(X_LIMIT, block.start)
         self.put_label(go)
-        # Each way out counts one slot for the instructions executed: a side exit at instruction j
-        # counts the prefix before j (a chain of slots, one per exit point), the block's ends the rest
-        # after the last exit point (and the taken branch) chained to that point's prefix.
+        # Each way out adds the instructions executed to the counters: the block's ends the whole
+        # block (and the taken branch), a side exit before instruction j the prefix before j
+        # (through the block's chain of prefix segments, written after it: prefix_chain).
         self.kcs = [self.kc(i) for i in insns]
         self.checks = memory_checks(insns, self.t)
         points = [j for j, i in enumerate(insns) if j in self.checks or i.name == "jalr"]
-        self.prefix: dict[int, int] = {}
-        last, nxt = 0, -1
-        for j in points:
-            nxt = self.slot([(kc, 1) for kc in self.kcs[last:j]], nxt)
-            self.prefix[j] = nxt
-            last = j
-        self.rest = (last, nxt)
+        self.prefix: dict[int, str] = {}
+        body, here = self.lines, self.cur
+        self.lines = []
+        self.prefix_chain(points)
+        chain, self.lines, self.cur = self.lines, body, here
         for j, insn in enumerate(insns):
             self.insn(j, insn)
         match block.end:
@@ -488,6 +591,7 @@ class _Writer:
                 self.leave(X_SIDE, block.next_pc)
             case End.BRANCH | End.JUMP | End.CALL | End.JALR:
                 self.control(len(insns) - 1, insns[-1])
+        self.lines += chain
 
     def function(self) -> None:
         """The region function: the entry switch over the block index, then every block."""
@@ -497,12 +601,15 @@ class _Writer:
         self.leave_block()  # after the jump block, which leaves through it too
         body, self.lines = self.lines, [f"define i32 @{self.name}({_PARAMS}) nounwind {{", "entry:"]
         self.emit("%cycp = alloca i64")
+        for k in sorted(self.looped):
+            self.emit(f"%bc{k} = alloca i64")
+            self.emit(f"store i64 0, i64* %bc{k}")
+        if self.looped:
+            self.emit("%taken = alloca i64")
+            self.emit("store i64 0, i64* %taken")
         self.emit("store i64 %cyc, i64* %cycp")
         for name, definition in self.pointers.items():
             self.emit(f"{name} = {definition}")
-        # the region's mark (slot 0): a flush passes only over the slots of regions entered since
-        # the last one (flush_entered_counts in kernels/jit_dispatch.py)
-        self.emit("store i64 1, i64* %cnt")
         cases = " ".join(f"i64 {k}, label %blk{k}" for k in range(1, len(self.index)))
         self.emit(f"switch i64 %blk, label %blk0 [ {cases} ]")
         self.lines += [*body, "}"]
@@ -515,13 +622,13 @@ class _Writer:
             a, b, cond = self.reg(insn.rs1), self.reg(insn.rs2), self.tmp()
             self.emit(f"{cond} = icmp {_BRANCH[name]} i32 {a}, {b}")
             self.flush()
+            self.count_end()
             taken, fall = self.label("taken"), self.label("fall")
             self.emit(f"br i1 {cond}, label %{taken}, label %{fall}")
             self.put_label(taken)
-            self.count_end(taken=True)
+            self.count_taken()
             self.goto(pc + insn.imm, self.cycles(BRANCH_TAKEN_CYCLES))
             self.put_label(fall)
-            self.count_end()
             self.goto(pc + 4, self.cycles(BRANCH_NOT_TAKEN_CYCLES))
         elif name == "jal":
             self.set_reg(insn.rd, str(_i32(pc + 4)))
@@ -537,7 +644,7 @@ class _Writer:
             self.emit(f"{off} = sub i32 {tgt}, {_i32(self.t.base)}")
             self.emit(f"{bad2} = icmp uge i32 {off}, {_i32(self.t.code_size)}")
             self.emit(f"{bad} = or i1 {bad1}, {bad2}")
-            self.cond_exit(bad, X_SIDE, pc, self.prefix[j], "jr")
+            self.side_exit(bad, j, pc, "jr")
             self.set_reg(insn.rd, str(_i32(pc + 4)))
             self.count_end()
             cyc = self.cycles(JUMP_CYCLES)
@@ -664,7 +771,7 @@ class _Writer:
             skew = (check.anchor - insn.imm) & check.align
             self.emit(f"{mis} = icmp ne i32 {low}, {(-skew) & check.align}")
             self.emit(f"{bad} = or i1 {out}, {mis}")
-        self.cond_exit(bad, X_SIDE, insn.pc, self.prefix[j], "m")
+        self.side_exit(bad, j, insn.pc, "m")
 
     def multiply(self, insn: Insn) -> None:
         self.uses_mul = True
@@ -745,10 +852,9 @@ _FSHR_DECLARATION = "declare i32 @llvm.fshr.i32(i32, i32, i32)"
 def emit_region(target: Target, region: Region, name: str = NAME_PLACEHOLDER) -> EmittedRegion:
     """The IR module of ``region``: one function named ``name``, its blocks numbered in address order.
 
-    Count slots are numbered from 0: the dispatch loop passes the region's first slot as ``cnt``.
-    Slot 0 is the region's mark, set to 1 at every entry (no histogram).
+    The dispatch loop passes the tile's per-operation counters as ``opc``.
     """
     w = _Writer(target, region, name)
     w.function()
     text = "\n".join([_MUL_LATENCY_IR if w.uses_mul else "", _FSHR_DECLARATION if w.uses_fshr else "", *w.lines, ""])
-    return EmittedRegion(ir=text, function=name, blocks=dict(w.index), slots=w.slots)
+    return EmittedRegion(ir=text, function=name, blocks=dict(w.index))

@@ -30,7 +30,6 @@ from robosoc.kernels.jit_dispatch import (
     NEVER_TRANSLATE,
     RUN_TRANSLATE,
     JitArrays,
-    flush_entered_counts,
     run_translated,
 )
 
@@ -321,10 +320,8 @@ class TranslatingCore(CoreTables):
             stop = until
             if self._compiling:  # come back soon to enter them; ask nothing the queue has no room for
                 stop, threshold = self.policy.while_compiling(until, int(st[S_CYCLE]), threshold)
-            run_translated(arrays, self._tiles, stop, jt, threshold, self.stretch, True)
+            run_translated(arrays, self._tiles, stop, jt, threshold, self.stretch)
             status = int(st[S_RUN])
-            if status == RUN_CHUNK:  # the loop leaves the block counts in jt only then
-                flush_entered_counts(jt, arrays.opc[self.tile], arrays.ctr[self.tile])
             if not loading:
                 seconds = time.perf_counter() - start
                 self.stats.run_seconds += seconds

@@ -3,7 +3,7 @@
 ``$ROBOSOC_CACHE/jit/manifests/<key>.txt`` holds one JSON line per region compiled for one program
 (its code bytes, the core's build, the policy and its region caps, LLVM and the host:
 :func:`manifest_key`): a :class:`RegionRecord`, everything a core needs to enter the region in its
-tables (its translated words, count slots, block starts and indices, side exits) and the cache key
+tables (its translated words, block starts and indices, side exits) and the cache key
 of its object.  A later run of the same program (another flight in the process, a new process)
 enters these regions when it makes its tables, loading their objects from the object cache,
 without finding or writing them again (``discover`` and ``emit_region`` cost a flight's first
@@ -28,9 +28,6 @@ from robosoc.jit.compiler import PIPELINE_VERSION
 #: the arrays of a record, with their dtypes (as in :class:`robosoc.jit.tables.Translated`)
 _ARRAYS = {
     "pcs": np.int64,
-    "slot_rows": np.int64,
-    "slot_lens": np.int64,
-    "slot_next": np.int64,
     "block_starts": np.int64,
     "block_indices": np.int64,
     "side_exits": np.int64,
@@ -76,7 +73,6 @@ class RegionRecord:
     def of_line(line: str) -> RegionRecord:
         fields = json.loads(line)
         arrays = {name: np.array(fields[name], dtype=dtype) for name, dtype in _ARRAYS.items()}
-        arrays["slot_rows"] = arrays["slot_rows"].reshape(-1, 2)
         start, instructions = int(fields["start"]), int(fields["instructions"])
         return RegionRecord(start, instructions, fields["key"], fields["function"], arrays)
 

@@ -1,8 +1,8 @@
 """The tables of one translating core: entering translated regions, copying them between cores.
 
 The compiled dispatch loop (:mod:`robosoc.kernels.jit_dispatch`) reads a core's tables: per code
-word its entry (region function, count-slot base, block), the arrivals counted towards a
-translation, the instructions left in a translated block; per count slot its histogram.
+word its entry (region function, block), the arrivals counted towards a translation, the
+instructions left in a translated block.
 :class:`CoreTables` makes them for the code a tile holds and enters regions in them: those the
 core translates and those any core of the process translated for the same build (the regions of
 a process are kept here, :data:`_TRANSLATED`, and entered wherever their words are unchanged).  The
@@ -14,7 +14,7 @@ tile's tables for every tile holding the same code (:meth:`CoreTables.clones`). 
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Generic, Protocol, Self, TypeVar
 
@@ -23,7 +23,7 @@ import numpy as np
 from robosoc.isa.table import OP_ENTRY
 from robosoc.jit.target import Target
 from robosoc.kernels.core_layout import ERRATA_RTL, S_CODE_SIZE, S_ERRATA, S_MEM_BASE, S_MEM_SIZE, S_MUL
-from robosoc.kernels.jit_dispatch import COUNT_BANKS, CTX_WORDS, NEVER_TRANSLATE, JitArrays, empty_tables
+from robosoc.kernels.jit_dispatch import CTX_WORDS, NEVER_TRANSLATE, JitArrays, empty_tables
 
 if TYPE_CHECKING:
     from robosoc.jit.emit_ir import EmittedRegion
@@ -79,11 +79,6 @@ class Translated:
     address: int  # of the region function (0: nothing translated)
     pcs: np.ndarray  # word indices of the translated instructions
     words: np.ndarray  # their contents when translated
-    #: its count slots: (operation or counter, delta) rows, rows per slot, next slot (region-relative,
-    #: -1: none); slot 0 is the region's mark (no histogram)
-    slot_rows: np.ndarray
-    slot_lens: np.ndarray
-    slot_next: np.ndarray
     #: addresses of its blocks' starts and the blocks' indices; addresses its side exits continue at
     block_starts: np.ndarray
     block_indices: np.ndarray
@@ -100,23 +95,19 @@ class Translated:
     ) -> Translated:
         from robosoc.jit.regions import End
 
-        slots = emitted.slots if region.blocks else []
-        rows = np.array([row for h, _ in slots for row in h], dtype=np.int64).reshape(-1, 2)
-        lens = np.array([len(h) for h, _ in slots], dtype=np.int64)
-        nxt = np.array([n for _, n in slots], dtype=np.int64)
         starts = np.array(list(emitted.blocks), dtype=np.int64)
         indices = np.array(list(emitted.blocks.values()), dtype=np.int64)
         sides = np.array([b.next_pc for b in region.blocks.values() if b.end is End.SIDE], dtype=np.int64)
         left = {(i.pc - base) >> 2: len(b.insns) - k for b in region.blocks.values() for k, i in enumerate(b.insns)}
         rest = np.array([min(left.get(int(w), 1), 255) for w in pcs], dtype=np.uint8)
-        arrays = (rows, lens, nxt, starts, indices, sides, rest)
+        arrays = (starts, indices, sides, rest)
         return Translated(region.start, region.instructions, address, pcs, words, *arrays, region)
 
     def record(self, object_key: str, function: str) -> RegionRecord:
         """What a later run of the same program needs to enter this region (:mod:`robosoc.jit.manifest`)."""
         from robosoc.jit.manifest import RegionRecord
 
-        names = ("pcs", "slot_rows", "slot_lens", "slot_next", "block_starts", "block_indices", "side_exits", "rest")
+        names = ("pcs", "block_starts", "block_indices", "side_exits", "rest")
         return RegionRecord(self.start, self.instructions, object_key, function, {n: getattr(self, n) for n in names})
 
     @staticmethod
@@ -130,9 +121,6 @@ class Translated:
             address,
             a["pcs"],
             words,
-            a["slot_rows"],
-            a["slot_lens"],
-            a["slot_next"],
             a["block_starts"],
             a["block_indices"],
             a["side_exits"],
@@ -154,10 +142,6 @@ class _FreshTables:
     code_bytes: bytes  # ... as bytes (compared faster)
     tables: JitArrays
     mark_rows: np.ndarray  # the predecode rows of the words with an entry (OP_ENTRY there)
-    slot_hist: tuple[np.ndarray, ...]
-    slot_len: tuple[np.ndarray, ...]
-    slot_next: tuple[np.ndarray, ...]
-    nslots: int
     starts_in: frozenset[int]
 
 
@@ -166,7 +150,7 @@ _FRESH_TABLES: dict[Build, _FreshTables] = {}
 
 #: the tables a core writes in place (the dispatch loop, entering regions, forgetting them); the
 #: others are replaced whole when they change, so cores copying one core's tables share them
-_WRITTEN_IN_PLACE = ("entry_fn", "entry_slot", "entry_blk", "hot", "tmap", "cnt", "ctx")
+_WRITTEN_IN_PLACE = ("entry_fn", "entry_blk", "hot", "tmap", "ctx")
 
 
 def _own_copy(jt: JitArrays) -> JitArrays:
@@ -178,13 +162,7 @@ def stacked_copies(jt: JitArrays, n: int) -> dict[str, np.ndarray]:
     """``n`` copies of each array of ``jt`` written in place, as the rows of one array per name
     (row ``k`` of each: the ``k``-th copy; a row of a C-contiguous array is one, as the dispatch
     loop takes it)."""
-    rows = {name: np.repeat(getattr(jt, name)[None, :], n, axis=0) for name in _WRITTEN_IN_PLACE if name != "cnt"}
-    if jt.cnt.any():
-        rows["cnt"] = np.repeat(jt.cnt[None, :], n, axis=0)
-    else:  # (zeros the system maps at a first write: a 16x16 chip's copied counts, 16 banks each, are
-        # 3 MB, and writing them cost 1.5 ms at each run's start; a sleeping tile writes one bank)
-        rows["cnt"] = np.zeros((n, len(jt.cnt)), dtype=jt.cnt.dtype)
-    return rows
+    return {name: np.repeat(getattr(jt, name)[None, :], n, axis=0) for name in _WRITTEN_IN_PLACE}
 
 
 _ENTERED = 0  # regions entered as translated in this process (any core): see entered_regions()
@@ -214,10 +192,6 @@ def note_translated(build: Build, done: Translated) -> list[Translated]:
 class Adoption:
     """What a copy of a core's tables goes with, as it was when copied (:meth:`CoreTables.clones`)."""
 
-    slot_hist: tuple[np.ndarray, ...]
-    slot_len: tuple[np.ndarray, ...]
-    slot_next: tuple[np.ndarray, ...]
-    nslots: int
     seen: int
     starts_in: frozenset[int]
     code_size: int
@@ -325,10 +299,6 @@ class CoreTables:
             self._before_install()
             if not self._install_as_before():
                 self._jt = empty_tables(code // 4 + 1)  # the word after the code: its fetch error is the interpreter's
-                self._slot_hist: list[np.ndarray] = []  # per region: (kc, delta) rows of its slots
-                self._slot_len: list[np.ndarray] = []
-                self._slot_next: list[np.ndarray] = []
-                self._nslots = 0
                 self._install_known()
                 self._remember_install()
             self._new_code()
@@ -400,7 +370,7 @@ class CoreTables:
             return False
         if self.state.m32[self.tile, : len(made.code)].tobytes() != made.code_bytes:
             return False
-        self._take(made.tables, made.slot_hist, made.slot_len, made.slot_next, made.nslots, made.seen, made.starts_in)
+        self._take(made.tables, made.seen, made.starts_in)
         self.state.dec[self.tile, made.mark_rows] = OP_ENTRY  # as _mark(): a 16x16 chip does it 255 times
         if made.seen != len(done_list):
             self._install_new_known()  # translated since
@@ -414,7 +384,6 @@ class CoreTables:
         start of every run; copied here, the checks, the predecode marks and the copies are made
         once for all, and a tile's translator when it is asked for."""
         jt = self._tables()
-        assert not jt.cnt.any(), "copying the tables of a core that has run would copy its counts"
         st, m32, dec = self.state.st, self.state.m32, self.state.dec
         idx = np.asarray(tiles, dtype=np.int64)
         words = self._code_size // 4
@@ -436,10 +405,6 @@ class CoreTables:
     def _adoption(self) -> Adoption:
         """What a copy of this core's tables goes with, as it is now (:meth:`clones`)."""
         return Adoption(
-            tuple(self._slot_hist),
-            tuple(self._slot_len),
-            tuple(self._slot_next),
-            self._nslots,
             self._known_seen,
             frozenset(self._known_starts_in),
             self._code_size,
@@ -450,7 +415,7 @@ class CoreTables:
     def _adopt(self, adoption: Adoption, copy: JitArrays) -> None:
         """Take ``copy``, a copy of another core's tables, and what goes with them (:meth:`clones`)."""
         a = adoption
-        self._take(copy, a.slot_hist, a.slot_len, a.slot_next, a.nslots, a.seen, a.starts_in, copied=True)
+        self._take(copy, a.seen, a.starts_in, copied=True)
         self._code_size = a.code_size
         self._flushes_seen = 0
         self._key_raw, self._key_made = a.key_raw, a.key_made
@@ -458,10 +423,6 @@ class CoreTables:
     def _take(
         self,
         jt: JitArrays,
-        slot_hist: Sequence[np.ndarray],
-        slot_len: Sequence[np.ndarray],
-        slot_next: Sequence[np.ndarray],
-        nslots: int,
         seen: int,
         starts_in: Iterable[int],
         copied: bool = False,
@@ -470,8 +431,6 @@ class CoreTables:
         (``copied``: ``jt`` is a copy already, its arrays written in place this core's own, and
         its regions counted as reused by :meth:`clones`)."""
         self._jt = jt if copied else _own_copy(jt)
-        self._slot_hist, self._slot_len, self._slot_next = list(slot_hist), list(slot_len), list(slot_next)
-        self._nslots = nslots
         self._known_seen = seen
         self._known_starts_in = set(starts_in)
         if not copied:
@@ -492,10 +451,6 @@ class CoreTables:
             code_bytes=code.tobytes(),
             tables=_own_copy(jt),
             mark_rows=2 * np.flatnonzero(jt.entry_fn),
-            slot_hist=tuple(self._slot_hist),
-            slot_len=tuple(self._slot_len),
-            slot_next=tuple(self._slot_next),
-            nslots=self._nslots,
             starts_in=frozenset(self._known_starts_in),
         )
 
@@ -504,25 +459,20 @@ class CoreTables:
         self._install_many([done])
 
     def _install_many(self, dones: list[Translated]) -> None:
-        """Enter translated regions in the tables (their count slots and words added in one go)."""
+        """Enter translated regions in the tables (their words added in one go)."""
         jt = self._jt
         assert jt is not None
         base = self._target().base
         n = int(jt.ctx[CTX_WORDS])
         pcs, words = [jt.tpcs[:n]], [jt.twords[:n]]
-        slots_added = False
         for done in dones:
             if done.address == 0:  # nothing translatable there
                 jt.hot[(done.start - base) >> 2] = NEVER_TRANSLATE
                 continue
-            slot_base = self._nslots
-            self._queue_slots(done, slot_base)
-            slots_added = True
             at = (done.block_starts - base) >> 2
             free = jt.entry_fn[at] == 0  # a block already entered by an earlier region keeps its entry
             jt.entry_fn[at[free]] = done.address
             self._mark(at[free])
-            jt.entry_slot[at[free]] = slot_base
             jt.entry_blk[at[free]] = done.block_indices[free]
             jt.tmap[done.pcs] = done.rest
             pcs.append(done.pcs)
@@ -531,34 +481,5 @@ class CoreTables:
             jt.hot[sides[jt.entry_fn[sides] == 0]] = NEVER_TRANSLATE
             if jt.entry_fn[(done.start - base) >> 2] == 0:
                 jt.hot[(done.start - base) >> 2] = NEVER_TRANSLATE
-        if slots_added:
-            self._commit_slots()
-        jt = self._jt
-        assert jt is not None
         self._jt = jt = jt._replace(tpcs=np.concatenate(pcs), twords=np.concatenate(words))
         jt.ctx[CTX_WORDS] = len(jt.tpcs)
-
-    def _queue_slots(self, done: Translated, slot_base: int) -> None:
-        self._slot_hist.append(done.slot_rows)
-        self._slot_len.append(done.slot_lens)
-        self._slot_next.append(np.where(done.slot_next >= 0, done.slot_next + slot_base, -1))
-        self._nslots += len(done.slot_lens)
-
-    def _commit_slots(self) -> None:
-        """The count-slot arrays of every queued slot (counts zero: they are flushed between calls),
-        with each region's mark (its first slot: the region sets it when entered)."""
-        rows = np.concatenate(self._slot_hist)
-        ptr = np.zeros(self._nslots + 1, dtype=np.int64)
-        np.cumsum(np.concatenate(self._slot_len), out=ptr[1:])
-        marks = np.zeros(len(self._slot_len), dtype=np.int64)  # each region's first slot, its mark
-        np.cumsum([len(lens) for lens in self._slot_len[:-1]], out=marks[1:])
-        jt = self._jt
-        assert jt is not None
-        self._jt = jt._replace(
-            cnt=np.zeros(self._nslots * COUNT_BANKS, dtype=np.int64),  # a bank per task (flush_task_counts)
-            slot_ptr=ptr,
-            slot_next=np.concatenate(self._slot_next),
-            slot_kc=rows[:, 0].copy(),
-            slot_delta=rows[:, 1].copy(),
-            slot_mark=marks,
-        )

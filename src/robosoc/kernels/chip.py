@@ -83,8 +83,6 @@ from robosoc.kernels.dev_irq import (
 from robosoc.kernels.host_ticks import ticks
 from robosoc.kernels.jit_dispatch import (
     RUN_TRANSLATE,
-    count_into_bank,
-    flush_task_counts,
     forget_if_changed,
     run_translated,
 )
@@ -140,13 +138,12 @@ G_TK_JIT = 19  # in the dispatch loop (translated code and its interpreter steps
 G_TK_NI = 20  # network-interface accesses (ni_access)
 G_TK_WAKE = 21  # waking sleeping cores (_wake_if_due)
 G_TK_NOC = 22  # the NoC: running it, taking its deliveries
-G_TK_FLUSH = 23  # adding the translated blocks' counts to the counters
-G_N_INTERP = 24  # run_cores calls
-G_N_JIT = 25  # dispatch-loop calls
-G_N_NI = 26  # network-interface accesses
-G_N_WAKE = 27  # cores woken
-G_N_SLEEP = 28  # SLEEP stores
-GST_SIZE = 29
+G_N_INTERP = 23  # run_cores calls
+G_N_JIT = 24  # dispatch-loop calls
+G_N_NI = 25  # network-interface accesses
+G_N_WAKE = 26  # cores woken
+G_N_SLEEP = 27  # SLEEP stores
+GST_SIZE = 28
 
 # timeline events (rec rows: kind, tile, cycle, then five values; cosim/chip_timeline.py reads them)
 R_TASK = 1  # a TASK_ID store took effect in `cycle`: new id, old id, pc, sleep cycles so far
@@ -646,10 +643,7 @@ def _run_awake(core, tiles, until, jit_tables, jit_on, jit_params, one, rest, gs
             one[0] = t
             k0 = ticks() if prof else 0
             jt = item(jit_tables, t)
-            count_into_bank(jt.ctx, cst[t, K_TASK])  # its blocks count into the running task's bank
-            # flush: np.bool_(False), not the literal False, for which numba would compile the dispatch
-            # loop a second time (the single-core engine passes a bool)
-            run_translated(core, one, mine, jt, jit_params[J_THRESHOLD], jit_params[J_STRETCH], np.bool_(False))
+            run_translated(core, one, mine, jt, jit_params[J_THRESHOLD], jit_params[J_STRETCH])
             if prof:
                 gst[G_TK_JIT] += ticks() - k0
                 gst[G_N_JIT] += 1
@@ -919,8 +913,6 @@ def run_chip(core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int, jit
                     lo, hi = rt, rt + 1
                     continue
                 k0 = ticks() if prof else 0
-                # (a TASK_ID store accounts the counters without the translated blocks' counts since
-                # the last flush: those are in the old task's bank, flush_task_counts charges them)
                 if not ni_access(t, core, book, noc):
                     failed = t
                     break
@@ -1012,17 +1004,10 @@ def run_chip(core: CoreArrays, noc: nk.NocState, book: ChipBook, until: int, jit
         if full:
             status = CHIP_OUTPUT
             break
-    k0 = ticks() if prof else 0
-    for t in range(n):
-        if jit_on[t] != 0:  # the translated blocks' counts, per task (flush_task_counts)
-            jt = item(jit_tables, t)
-            flush_task_counts(jt, row(core.opc, t), row(core.ctr, t), book.acc[t], row(book.snap, t), cst[t, K_TASK])
     gst[G_TIME] = T
     gst[G_STATUS] = status
     if prof:
-        done = ticks()
-        gst[G_TK_FLUSH] += done - k0
-        gst[G_TK_CALL] += done - entered
+        gst[G_TK_CALL] += ticks() - entered
     return status
 
 

@@ -13,13 +13,12 @@ holds OP_ENTRY in its predecode row, so the interpreter, wherever it runs, stops
 code (RUN_ENTRY) and the loop calls it; to run such a word itself the loop takes the mark off until
 the core has left the word (CTX_UNMARKED).
 
-A region returns one of the X_* codes with the pc and cycle in ``ctx``.  Instruction counts are
-kept per block (``cnt``: one slot per block and per side exit, each with a signed histogram over the
-interpreter's per-operation counters) and added to ``opc`` by :func:`flush_counts`, so the counters
-equal the interpreter's: on one core the loop flushes when it returns for anything but the end of
-the slice, and the caller when it reads the counters; on the chip the chip loop, once per call and
-before a TASK_ID store (a slice is a quantum there, often a few cycles, a stop comes at every SLEEP
-store, and a flush costs a pass over every slot).  Stores into the
+A region returns one of the X_* codes with the pc and cycle in ``ctx``.  A region adds the
+instructions it executes to the core's counters itself (``opc``, passed to it, and the taken
+branches' ``ctr[C_TAKEN]``; :mod:`robosoc.jit.emit_ir`), so the counters equal the interpreter's
+whenever a region returns: the chip's accounting at a TASK_ID store (the interpreter's, in the
+chip loop) charges the running task with what its translated blocks executed, as with the
+interpreter.  Stores into the
 loaded code are always the interpreter's, which counts them (``S_CODE_STORES``); when the count
 moved, the loop compares the translated words with memory and forgets every translation if one
 changed (a pass over those words, so not after every interpreted stretch).
@@ -40,7 +39,6 @@ from robosoc.kernels.borrowed import UNCOUNTED, row
 from robosoc.kernels.core import ADDI, SINK, CoreArrays, decode_word, device_step, fetch_error, run_cores
 from robosoc.kernels.core_layout import (
     ERR_FETCH_DATA,
-    OPC_SIZE,
     OUT_CAPACITY,
     RUN_CHUNK,
     RUN_ENTRY,
@@ -65,7 +63,6 @@ from robosoc.kernels.core_layout import (
     S_RUN,
 )
 from robosoc.kernels.dev_irq import irq_event
-from robosoc.kernels.ni_registers import NTASKS
 
 # region exit codes
 X_JUMP = 0  # control left the region for a pc without a translation: continue at ctx[CTX_PC]
@@ -82,28 +79,18 @@ CTX_LIMITS = 7  # region exits because a block could reach the next event (stati
 # addresses of the tables a region reads to jump straight into the next region (JitArrays), and
 # of the core's state and counter rows
 CTX_ENTRY_FN = 8
-CTX_ENTRY_SLOT = 9
-CTX_CNT = 10
-CTX_ST = 11
-CTX_CTR = 12
-CTX_WORDS = 13  # entries of tpcs/twords that hold translated words (0 after forgetting them)
-CTX_ENTRY_BLK = 14
-CTX_MIDBLOCK = 15  # interpreter steps at translated words that start no block (statistics)
+CTX_ST = 9
+CTX_CTR = 10
+CTX_WORDS = 11  # entries of tpcs/twords that hold translated words (0 after forgetting them)
+CTX_ENTRY_BLK = 12
+CTX_MIDBLOCK = 13  # interpreter steps at translated words that start no block (statistics)
 #: 1 + the word whose OP_ENTRY row the loop took off for the interpreter to run it, while the core
 #: is still there (0: none); it goes back when the core has left the word (a core stopped there for
 #: the chip loop, RUN_NI, must hold its decoded row)
-CTX_UNMARKED = 16
-#: the bank of count slots the regions count into (the chip: the tile's task, see flush_task_counts)
-CTX_BANK = 17
-#: the banks counted into since the chip loop's last flush, one bit each (set with CTX_BANK; a flush
-#: looks at those banks only: a look at every bank's region marks cost each translated tile about
-#: 15 µs per chip-loop call, its 16 banks' marks being 16 cache lines apart)
-CTX_BANKS = 18
-CTX_DEVICE = 19  # device-register loads and stores the loop made itself, of the CTX_STEPS (statistics)
-CTX_NOPS = 20  # `nop`s the loop executed itself after a region's limit exit, of the CTX_STEPS (statistics)
-CTX_SIZE = 21
-#: banks of count slots of a core's tables: one per task id of the chip (a single core uses bank 0)
-COUNT_BANKS = NTASKS
+CTX_UNMARKED = 14
+CTX_DEVICE = 15  # device-register loads and stores the loop made itself, of the CTX_STEPS (statistics)
+CTX_NOPS = 16  # `nop`s the loop executed itself after a region's limit exit, of the CTX_STEPS (statistics)
+CTX_SIZE = 17
 
 # dispatcher results beyond the interpreter's RUN_* codes
 RUN_TRANSLATE = 100  # the pc in st[S_PC] turned hot: translate a region there and call again
@@ -122,30 +109,19 @@ class JitArrays(NamedTuple):
     """The translator's tables, one entry per word of the loaded code plus one (the word after it).
 
     ``entry_fn`` native address of the region function with a block starting at the word (0: none),
-    ``entry_slot`` its region's first count slot, ``entry_blk`` the block's index in it, ``hot``
-    arrivals at a word without an entry (NEVER_TRANSLATE: none can start there), ``tmap`` for
-    words some region translated the instructions from there to the end of the block (1..255; 0:
-    not translated), ``tpcs``/``twords`` those words' indices and contents when
-    translated, ``cnt`` executions per count slot, ``slot_ptr``/``slot_kc``/``slot_delta`` each
-    slot's histogram (CSR), ``slot_next`` the slot whose count a slot's executions are also added
-    to (-1: none; always an earlier slot of the same region), ``slot_mark`` each region's first
-    slot, in slot order (its mark: the region function sets it at every entry, it has no
-    histogram), ``ctx`` the region call's in/out slots.
+    ``entry_blk`` the block's index in it, ``hot`` arrivals at a word without an entry
+    (NEVER_TRANSLATE: none can start there), ``tmap`` for words some region translated the
+    instructions from there to the end of the block (1..255; 0: not translated),
+    ``tpcs``/``twords`` those words' indices and contents when translated, ``ctx`` the region
+    call's in/out slots.
     """
 
     entry_fn: np.ndarray
-    entry_slot: np.ndarray
     entry_blk: np.ndarray
     hot: np.ndarray
     tmap: np.ndarray
     tpcs: np.ndarray
     twords: np.ndarray
-    cnt: np.ndarray
-    slot_ptr: np.ndarray
-    slot_next: np.ndarray
-    slot_kc: np.ndarray
-    slot_delta: np.ndarray
-    slot_mark: np.ndarray
     ctx: np.ndarray
 
 
@@ -155,18 +131,11 @@ def empty_tables(words: int = 1) -> JitArrays:
     hot[-1] = NEVER_TRANSLATE
     return JitArrays(
         entry_fn=np.zeros(words, dtype=np.int64),
-        entry_slot=np.zeros(words, dtype=np.int64),
         entry_blk=np.zeros(words, dtype=np.int64),
         hot=hot,
         tmap=np.zeros(words, dtype=np.uint8),
         tpcs=np.zeros(0, dtype=np.int64),
         twords=np.zeros(0, dtype=np.int32),
-        cnt=np.zeros(0, dtype=np.int64),
-        slot_ptr=np.zeros(1, dtype=np.int64),
-        slot_next=np.zeros(0, dtype=np.int64),
-        slot_kc=np.zeros(0, dtype=np.int64),
-        slot_delta=np.zeros(0, dtype=np.int64),
-        slot_mark=np.zeros(0, dtype=np.int64),
         ctx=np.zeros(CTX_SIZE, dtype=np.int64),
     )
 
@@ -179,7 +148,7 @@ if TYPE_CHECKING:
         ctx: int | np.integer,
         regs: int | np.integer,
         mem: int | np.integer,
-        cnt: int | np.integer,
+        opc: int | np.integer,
         cyc: int | np.integer,
         limit: int | np.integer,
         blk: int | np.integer,
@@ -188,7 +157,7 @@ if TYPE_CHECKING:
 else:
 
     @intrinsic
-    def call_region(typingctx, fn, ctx, regs, mem, cnt, cyc, limit, blk):
+    def call_region(typingctx, fn, ctx, regs, mem, opc, cyc, limit, blk):
         """Call the region function at native address ``fn`` (array addresses, cycle, limit, block); its X_* code."""
         sig = types.int32(types.int64, *([types.int64] * 7))
 
@@ -201,103 +170,6 @@ else:
             return builder.call(f, [*call_args, *args[5:8]])
 
         return sig, codegen
-
-
-@njit(cache=True)
-def flush_counts(jt: JitArrays, opc_t: np.ndarray, ctr_t: np.ndarray) -> None:
-    """Add every slot's executions (in every bank) times its histogram to the counters; zero the slots.
-
-    A histogram index below OPC_SIZE is a per-operation counter, OPC_SIZE + k is ``ctr[k]``.
-    """
-    cnt = jt.cnt
-    n = jt.slot_next.shape[0]
-    for b in range(cnt.shape[0] // max(n, 1)):
-        off = b * n
-        for s in range(n - 1, -1, -1):  # a slot's next is an earlier slot
-            c = cnt[off + s]
-            if c != 0:
-                for e in range(jt.slot_ptr[s], jt.slot_ptr[s + 1]):
-                    k = jt.slot_kc[e]
-                    if k < OPC_SIZE:
-                        opc_t[k] += c * jt.slot_delta[e]
-                    else:
-                        ctr_t[k - OPC_SIZE] += c * jt.slot_delta[e]
-                nxt = jt.slot_next[s]
-                if nxt >= 0:
-                    cnt[off + nxt] += c
-                cnt[off + s] = 0
-
-
-@njit(cache=True, inline="always")
-def _flush_bank(
-    jt: JitArrays, b: int, opc_t: np.ndarray, ctr_t: np.ndarray, acc_b: np.ndarray, snap_t: np.ndarray, charge: bool
-) -> None:
-    """Flush bank ``b``'s slots of the regions entered since its last flush (their mark set); with
-    ``charge`` also add them to ``acc_b`` and ``snap_t`` (indexed like the histograms)."""
-    cnt = jt.cnt
-    marks = jt.slot_mark
-    n = jt.slot_next.shape[0]
-    off = b * n
-    end = n
-    for r in range(marks.shape[0] - 1, -1, -1):
-        m = marks[r]
-        if cnt[off + m] != 0:
-            for s in range(end - 1, m - 1, -1):  # a slot's next is an earlier slot of its region
-                c = cnt[off + s]
-                if c != 0:
-                    for e in range(jt.slot_ptr[s], jt.slot_ptr[s + 1]):
-                        k = jt.slot_kc[e]
-                        v = c * jt.slot_delta[e]
-                        if k < OPC_SIZE:
-                            opc_t[k] += v
-                        else:
-                            ctr_t[k - OPC_SIZE] += v
-                        if charge:
-                            acc_b[k] += v
-                            snap_t[k] += v
-                    nxt = jt.slot_next[s]
-                    if nxt >= 0:
-                        cnt[off + nxt] += c
-                    cnt[off + s] = 0
-        end = m
-
-
-@njit(**UNCOUNTED)
-def flush_entered_counts(jt: JitArrays, opc_t: np.ndarray, ctr_t: np.ndarray) -> None:
-    """:func:`flush_counts` over the slots of the regions entered since the last flush only (their
-    mark set): a slot counts only in a call of its region, which sets the region's mark, so the
-    counters come out as from a pass over every slot."""
-    for b in range(jt.cnt.shape[0] // max(jt.slot_next.shape[0], 1)):
-        _flush_bank(jt, b, opc_t, ctr_t, opc_t, opc_t, False)
-
-
-@njit(cache=True, inline="always")
-def count_into_bank(ctx: np.ndarray, bank: int) -> None:
-    """The dispatch loop counts into bank ``bank`` from now on (the chip: the tile's running task),
-    and :func:`flush_task_counts` flushes it."""
-    ctx[CTX_BANK] = bank
-    ctx[CTX_BANKS] |= np.int64(1) << bank
-
-
-@njit(**UNCOUNTED)
-def flush_task_counts(
-    jt: JitArrays, opc_t: np.ndarray, ctr_t: np.ndarray, acc_t: np.ndarray, snap_t: np.ndarray, task: int
-) -> None:
-    """The chip's flush: bank ``b`` counted the translated blocks run while the tile's task was
-    ``b`` (the dispatch loop counts into bank ``ctx[CTX_BANK]``, which the chip loop sets to the
-    tile's task), so a TASK_ID store needs no flush: here each bank's counts go to the counters
-    and, for a task other than the running ``task``, to that task's accounting row ``acc_t[b]``
-    (and to ``snap_t``, the counters' values already accounted for); the running task's are
-    accounted for at its next TASK_ID store or when the host accounts every tile.  (A flush of
-    every slot before each TASK_ID store cost the fixed+mul flight 20 µs per physics step, more
-    than its translated blocks saved; of the entered regions' slots only, 9 µs.)  Only the banks
-    named in ``ctx[CTX_BANKS]`` hold counts: the chip loop sets a bank's bit when it makes it
-    ``ctx[CTX_BANK]``."""
-    used = jt.ctx[CTX_BANKS]
-    jt.ctx[CTX_BANKS] = 0
-    for b in range(jt.cnt.shape[0] // max(jt.slot_next.shape[0], 1)):
-        if (used >> b) & 1:
-            _flush_bank(jt, b, opc_t, ctr_t, row(acc_t, b), snap_t, b != task)
 
 
 @njit(cache=True)
@@ -326,18 +198,11 @@ def set_table_copies(tables, tiles: np.ndarray, rows: JitArrays) -> None:
     for k in range(tiles.shape[0]):
         tables[tiles[k]] = JitArrays(
             rows.entry_fn[k],
-            rows.entry_slot[k],
             rows.entry_blk[k],
             rows.hot[k],
             rows.tmap[k],
             rows.tpcs,
             rows.twords,
-            rows.cnt[k],
-            rows.slot_ptr,
-            rows.slot_next,
-            rows.slot_kc,
-            rows.slot_delta,
-            rows.slot_mark,
             rows.ctx[k],
         )
 
@@ -350,7 +215,6 @@ def forget_translations(jt: JitArrays, dec_t: np.ndarray) -> None:
         if jt.entry_fn[i] != 0 and dec_t[2 * i] == OP_ENTRY:
             dec_t[2 * i] = 0  # decoded again when executed
     jt.entry_fn[:] = 0
-    jt.entry_slot[:] = 0
     jt.entry_blk[:] = 0
     jt.hot[:] = 0
     jt.tmap[:] = 0
@@ -370,18 +234,14 @@ def forget_if_changed(jt: JitArrays, m32_t: np.ndarray, dec_t: np.ndarray) -> No
 
 @njit(nogil=True, **UNCOUNTED)
 def run_translated(
-    core: CoreArrays, tiles: np.ndarray, until: int, jt: JitArrays, threshold: int, stretch: int, flush: bool
+    core: CoreArrays, tiles: np.ndarray, until: int, jt: JitArrays, threshold: int, stretch: int
 ) -> None:
     """Run core ``tiles[0]`` until cycle ``until`` like ``run_cores``, with translated regions.
 
     Leaves the RUN_* status in st[t, S_RUN], or RUN_TRANSLATE with the pc of a word that turned
     hot (``threshold`` arrivals without an entry) for the caller to translate.  At a word without a
     translation the interpreter runs one instruction (``stretch`` 0), or ``stretch`` cycles at its
-    own speed.  Returning at the end of the slice (RUN_CHUNK), or for any reason unless ``flush``,
-    it leaves the block counts in ``jt.cnt``: the caller flushes them (:func:`flush_entered_counts`) before
-    it reads the counters.  The chip loop passes False: it flushes before a TASK_ID store and when
-    it returns, and a flush at every stop (each SLEEP store, a pass over every slot of the core)
-    cost a translated tile more than its blocks saved.
+    own speed.
     """
     st, ctr, opc, regs, m8, _m16, m32, dec, out = core
     t = tiles[0]
@@ -402,13 +262,11 @@ def run_translated(
     p_ctx = np.int64(ctx.ctypes.data)
     p_regs = np.int64(regs_t.ctypes.data)
     p_mem = np.int64(row(m8, t).ctypes.data)
-    p_cnt = np.int64(jt.cnt.ctypes.data) + 8 * jt.slot_next.shape[0] * ctx[CTX_BANK]  # the bank counted into
+    p_opc = np.int64(opc_t.ctypes.data)
     p_st = np.int64(st_t.ctypes.data)
     p_ctr = np.int64(ctr_t.ctypes.data)
     ctx[CTX_ENTRY_FN] = np.int64(jt.entry_fn.ctypes.data)
-    ctx[CTX_ENTRY_SLOT] = np.int64(jt.entry_slot.ctypes.data)
     ctx[CTX_ENTRY_BLK] = np.int64(jt.entry_blk.ctypes.data)
-    ctx[CTX_CNT] = p_cnt
     ctx[CTX_ST] = p_st
     ctx[CTX_CTR] = p_ctr
     status = RUN_CHUNK
@@ -441,7 +299,7 @@ def run_translated(
         step_to = -1  # where the interpreter runs to next (-1: one instruction, below)
         limited = False  # a region stopped short of the next event: the interpreter runs up to it
         if fn != 0:
-            x = call_region(fn, p_ctx, p_regs, p_mem, p_cnt + 8 * jt.entry_slot[i], cyc, next_event, jt.entry_blk[i])
+            x = call_region(fn, p_ctx, p_regs, p_mem, p_opc, cyc, next_event, jt.entry_blk[i])
             ctx[CTX_CALLS] += 1
             pc = ctx[CTX_PC]
             cyc = ctx[CTX_CYC]
@@ -575,8 +433,6 @@ def run_translated(
         if status == RUN_ENTRY:
             status = RUN_CHUNK  # at a translated block: the loop calls it
         if status != RUN_CHUNK:
-            if flush:
-                flush_entered_counts(jt, opc_t, ctr_t)
             return
     if err != 0:
         status = RUN_ERROR
@@ -588,8 +444,6 @@ def run_translated(
     st_t[S_PC] = pc & M32
     st_t[S_CYCLE] = cyc
     st_t[S_RUN] = status
-    if status != RUN_CHUNK and flush:
-        flush_entered_counts(jt, opc_t, ctr_t)
 
 
 __all__ = [
@@ -606,11 +460,7 @@ __all__ = [
     "X_LIMIT",
     "X_SIDE",
     "JitArrays",
-    "count_into_bank",
     "empty_tables",
-    "flush_counts",
-    "flush_entered_counts",
-    "flush_task_counts",
     "forget_if_changed",
     "forget_translations",
     "run_translated",
