@@ -99,11 +99,12 @@ class TelemetryProbe:
 
     def read(self, chip: MPSoC, tile: int) -> float:
         """The value now on the chip (a host read, no cycle), ``tile`` the index of :attr:`tile`."""
-        return self.value_in(chip.cores.m8[tile], chip.cores.offset(self.address, VALUE_BYTES, tile))
+        return self.value_in(chip.cores.m8, tile, chip.cores.offset(self.address, VALUE_BYTES, tile))
 
-    def value_in(self, memory: np.ndarray, offset: int) -> float:
-        """The value whose word is at ``offset`` of a tile's ``memory`` (its row of bytes)."""
-        (value,) = _LAYOUT[self.code].unpack_from(memory, offset)
+    def value_in(self, memory: np.ndarray, tile: int, offset: int) -> float:
+        """The value whose word is at ``offset`` of tile ``tile``'s row of ``memory`` (the tiles'
+        bytes, :attr:`robosoc.chip.core_state.CoreState.m8`)."""
+        (value,) = _LAYOUT[self.code].unpack_from(memory[tile], offset)
         return float(value) * self.scale
 
 
@@ -183,7 +184,7 @@ class TelemetryReader:
         values: dict[str, float] = {}
         for probe, task, t, offset in self._probes:
             if quiet[task]:
-                values[probe.name] = probe.value_in(cores.m8[t], offset)
+                values[probe.name] = probe.value_in(cores.m8, t, offset)
         return values
 
 

@@ -4,8 +4,8 @@ A light pass pipeline (SROA, instcombine, simplifycfg, dead-store elimination) a
 generation: the trade-off between compile time and speed the issue's prototype found best.  The
 compiled object of a module is cached under ``$ROBOSOC_CACHE/jit/`` keyed by the IR text (which
 holds the code words, the multiplier, the memory and code size and the errata mode it was written
-for), the LLVM version, the host CPU and its features, and the pipeline version; a hit skips
-optimisation and code generation and loads the object into the JIT.
+for), the LLVM version, the host CPU and its features, and the translator's sources
+(:data:`PIPELINE`); a hit skips optimisation and code generation and loads the object into the JIT.
 """
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ import queue
 import tempfile
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -24,9 +24,28 @@ import llvmlite.binding as llvm
 from numba.core.compiler_lock import global_compiler_lock
 
 from robosoc.cache import cache_root
+from robosoc.kernels import kernel_digest
 
-#: Bumped whenever the pipeline or the IR conventions change, to invalidate old objects.
-PIPELINE_VERSION = 7
+_JIT_SOURCES = sorted(Path(__file__).parent.glob("*.py"))
+
+
+def pipeline_digest(sources: Iterable[Path] = _JIT_SOURCES, kernels: str | None = None) -> str:
+    """Digest of what a cached object and a region record depend on besides their IR: the
+    translator's ``sources`` (the IR it writes, the regions it finds, the tables and records) and
+    the kernels that call the regions (``kernels``: :func:`robosoc.kernels.kernel_digest`, their
+    conventions and the instruction table).  Any change there keys new objects and records.  (A
+    version number bumped by hand did not: an abandoned branch had used the same number, and its
+    objects, written for other conventions, crashed the chip loop of a later checkout.)"""
+    h = hashlib.sha256((kernels if kernels is not None else kernel_digest()).encode())
+    for path in sources:
+        h.update(path.name.encode())
+        h.update(path.read_bytes())
+    return h.hexdigest()[:16]
+
+
+#: The digest of this checkout's translator (:func:`pipeline_digest`), in every object's and
+#: manifest's key.
+PIPELINE = pipeline_digest()
 
 
 @dataclass
@@ -123,7 +142,7 @@ class Compiler:
         self.main = _Backend()
         self.engine = llvm.create_mcjit_compiler(llvm.parse_assembly(""), self.main.tm)
         self.cache_dir = cache_root() / "jit" if cache else None
-        self.env = f"{self.main.host} pipeline{PIPELINE_VERSION}"
+        self.env = f"{self.main.host} pipeline {PIPELINE}"
         self.stats = CompileStats()
         self.loaded: dict[str, int] = {}
         self.stems: set[str] = set()  # modules loaded into the engine

@@ -23,7 +23,7 @@ import llvmlite.binding as llvm
 import numpy as np
 
 from robosoc.cache import cache_root
-from robosoc.jit.compiler import PIPELINE_VERSION
+from robosoc.jit.compiler import PIPELINE
 
 #: the arrays of a record, with their dtypes (as in :class:`robosoc.jit.tables.Translated`)
 _ARRAYS = {
@@ -43,7 +43,7 @@ def _manifest_path(key: str) -> Path:
 def _manifest_host() -> str:
     """LLVM and the host, asked once: each LLVM call waits for llvmlite's process-wide lock, which
     the compiling thread holds while it generates code."""
-    return f"llvm{llvm.llvm_version_info} {llvm.get_default_triple()} {llvm.get_host_cpu_name()} {PIPELINE_VERSION}"
+    return f"llvm{llvm.llvm_version_info} {llvm.get_default_triple()} {llvm.get_host_cpu_name()} {PIPELINE}"
 
 
 def manifest_key(code: bytes, options: str) -> str:
