@@ -48,3 +48,20 @@ def test_bench_fly_breakdown_prints_the_parts_and_their_sum() -> None:
     assert "chip fixed+mul: 0.1 s simulated" in result.output
     assert "sum of the parts" in result.output and "measured flight" in result.output
     assert "chip loop: interpreter" in result.output and "physics" in result.output
+
+
+def test_bench_fly_breakdown_on_the_engine_asked_for_shows_its_translated_code() -> None:
+    """``--engine jit``: the EKF tile's code runs translated, so the breakdown has a translated part
+    and the interpreter keeps only what regions leave to it; ``interp`` has no translated part."""
+    parts = {}
+    for engine in ("jit", "interp"):
+        result = CliRunner().invoke(
+            app, ["bench", "fly", "--breakdown", "--duration", "0.1", "--arith", "fixed", "--mul", "--engine", engine]
+        )
+        assert result.exit_code == 0, result.output
+        assert f"chip engine {engine}" in result.output
+        parts[engine] = {
+            line.split("│")[0].strip(): float(line.split("│")[1]) for line in result.output.splitlines() if "│" in line
+        }
+    assert parts["jit"]["chip loop: translated"] > 0 and parts["interp"]["chip loop: translated"] == 0
+    assert parts["jit"]["chip loop: interpreter"] < parts["interp"]["chip loop: interpreter"]

@@ -115,6 +115,7 @@ OPTIONS: dict[tuple[str, str], Spec] = {
     ("bench fly", "--duration"): Spec("float", 0.01, 3600.0),
     ("bench fly", "--breakdown"): Spec("flag"),
     ("bench fly", "--vehicles"): Spec("int", 1, 16),
+    ("bench fly", "--engine"): Spec("choice", choices=("interp", "jit", "auto")),
     ("scenario show", "FILE"): Spec("in_file"),
     ("fly", "--foxglove"): Spec("int", 0, 65535),
     ("fly", "--foxglove-keep"): Spec("flag"),  # 0: any free port (never tried: it would serve a flight)

@@ -8,6 +8,7 @@ import re
 import tomllib
 from pathlib import Path
 
+import pytest
 from typer.testing import CliRunner
 
 from robosoc.cli import app
@@ -101,6 +102,25 @@ def test_bench_fly_prints_its_last_line() -> None:
     last = result.output.strip().splitlines()[-1]
     assert re.fullmatch(r"fly: [0-9]+\.[0-9]{2}× real time", last), last
     assert "chip fixed+mul" in result.output and "float" not in result.output
+
+
+def test_bench_fly_flies_every_build_on_the_engine_asked_for(monkeypatch: pytest.MonkeyPatch) -> None:
+    from robosoc.benchmarks import fly as bench
+
+    engines = []
+    real = bench.fly_scenario
+
+    def flown(scenario, *args, **kwargs):
+        engines.append((scenario.controller, scenario.chip.engine))
+        return real(scenario, *args, **kwargs)
+
+    monkeypatch.setattr(bench, "fly_scenario", flown)
+    result = runner.invoke(app, ["bench", "fly", "--duration", "0.1", "--arith", "fixed", "--engine", "interp"])
+    assert result.exit_code == 0, result.output
+    assert "chip engine interp" in result.output
+    assert engines == [("chip", "interp")] * 4  # two builds, each a warm-up flight and the timed one
+    bad = runner.invoke(app, ["bench", "fly", "--engine", "fast"])
+    assert bad.exit_code == 2 and "--engine: must be one of interp, jit, auto, got 'fast'" in bad.output
 
 
 def test_fly_gives_the_same_flight_with_every_engine(tmp_path: Path) -> None:

@@ -27,6 +27,20 @@ from robosoc.config.scenario import ScenarioConfig
 from robosoc.control.flight import column
 from robosoc.outputs.flight_session import fly_scenario
 
+
+def with_engine(scenario: ScenarioConfig, engine: str | None) -> ScenarioConfig:
+    """``scenario`` with its chip on ``engine`` (None: as it is).
+
+    Raises:
+        ValueError: ``engine`` names none (:data:`robosoc.config.chip.ENGINE_CHOICES`).
+    """
+    return (
+        scenario
+        if engine is None
+        else dataclasses.replace(scenario, chip=dataclasses.replace(scenario.chip, engine=engine))
+    )
+
+
 #: The builds flown when none is chosen, the reference build (fixed + multiplier) last.
 ALL_BUILDS = (
     FirmwareConfig(arith="float", multiplier=False),
@@ -42,23 +56,27 @@ def run_fly_benchmark(
     host: bool = True,
     console: Console | None = None,
     vehicles: int = 1,
+    engine: str | None = None,
 ) -> float:
     """Fly the default scenario for ``duration_s`` with each build (and the host controller first if
     ``host``); print the figures and the last line; the last build's real-time factor.  With
     ``vehicles`` > 1 every flight flies that many vehicles in one world (their chips on the host's
     cores at once, :func:`robosoc.cosim.lockstep.fly_lockstep_fleet`): the real-time factor is the
-    fleet's, the chip cycles all chips', the flight figures the first vehicle's.
+    fleet's, the chip cycles all chips', the flight figures the first vehicle's.  ``engine``: the
+    chips' engine (default: the default scenario's chip's).
 
     Raises:
-        ValueError: ``duration_s`` is not a whole number of ms of at least one sensor period, or no build.
+        ValueError: ``duration_s`` is not a whole number of ms of at least one sensor period, no
+            build, or ``engine`` names none.
     """
     if not builds:
         raise ValueError("builds: at least one firmware build")
     console = console or Console()
-    base = ScenarioConfig(duration_s=duration_s, vehicles=vehicles)
+    base = with_engine(ScenarioConfig(duration_s=duration_s, vehicles=vehicles), engine)
     fleet = f", {vehicles} vehicles per flight" if vehicles > 1 else ""
     console.print(
-        f"lockstep flight of the default scenario, {duration_s:g} s simulated per build{fleet}, seed {base.seed}"
+        f"lockstep flight of the default scenario, {duration_s:g} s simulated per build{fleet}, seed {base.seed}, "
+        f"chip engine {base.chip.engine}"
     )
     table = Table(show_edge=False, pad_edge=False)
     headers = (

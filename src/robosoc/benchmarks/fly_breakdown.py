@@ -36,6 +36,7 @@ from rich.console import Console
 from rich.table import Table
 
 import robosoc.cosim.lockstep as lockstep
+from robosoc.benchmarks.fly import with_engine
 from robosoc.chip.mpsoc import MPSoC
 from robosoc.chip.translation import ChipTranslation
 from robosoc.config.firmware import FirmwareConfig
@@ -245,18 +246,26 @@ def print_breakdown(breakdown: FlightBreakdown, console: Console) -> None:
 
 
 def run_fly_breakdown(
-    builds: tuple[FirmwareConfig, ...], duration_s: float = 10.0, console: Console | None = None
+    builds: tuple[FirmwareConfig, ...],
+    duration_s: float = 10.0,
+    console: Console | None = None,
+    engine: str | None = None,
 ) -> list[FlightBreakdown]:
-    """Per build: a short flight to compile, then the breakdown of a ``duration_s`` flight, printed.
+    """Per build: a short flight to compile, then the breakdown of a ``duration_s`` flight, printed
+    (``engine``: the chip's engine; default: the default scenario's chip's).
 
     Raises:
-        ValueError: no build, or ``duration_s`` is not a whole number of ms of at least one sensor period.
+        ValueError: no build, ``duration_s`` is not a whole number of ms of at least one sensor
+            period, or ``engine`` names none.
     """
     if not builds:
         raise ValueError("builds: at least one firmware build")
     console = console or Console()
-    base = ScenarioConfig(duration_s=duration_s)
-    console.print(f"where the host time of a lockstep flight goes, {duration_s:g} s simulated per build")
+    base = with_engine(ScenarioConfig(duration_s=duration_s), engine)
+    console.print(
+        f"where the host time of a lockstep flight goes, {duration_s:g} s simulated per build, "
+        f"chip engine {base.chip.engine}"
+    )
     out = []
     for fw in builds:
         scenario = dataclasses.replace(base, firmware=fw)

@@ -231,6 +231,15 @@ def bench_fly(
             callback=options.int_range(1, MAX_VEHICLES),
         ),
     ] = 1,
+    engine: Annotated[
+        str | None,
+        typer.Option(
+            help="The chip's engine for every build: interp, jit or auto (docs/translation.md; default: the "
+            "chip's own, auto).",
+            show_default=False,
+            callback=check_engine,
+        ),
+    ] = None,
 ) -> None:
     """Real-time factor of the lockstep flight (physics + firmware on the chip), per firmware build,
     the host controller as reference, and each build's speed as a share of the host controller's
@@ -249,9 +258,11 @@ def bench_fly(
             raise options.fail("--vehicles", "the breakdown flies one vehicle: leave --vehicles out with --breakdown")
         from robosoc.benchmarks.fly_breakdown import run_fly_breakdown
 
-        run_fly_breakdown(builds, duration_s=duration, console=make_console())
+        run_fly_breakdown(builds, duration_s=duration, console=make_console(), engine=engine)
         return
-    run_fly_benchmark(builds, duration_s=duration, host=not chosen, console=make_console(), vehicles=vehicles)
+    run_fly_benchmark(
+        builds, duration_s=duration, host=not chosen, console=make_console(), vehicles=vehicles, engine=engine
+    )
 
 
 @bench_app.command("sweep", epilog=exit_codes.EPILOG)
