@@ -136,6 +136,13 @@ def _address(chip: MPSoC, xy: tuple[int, int], t: int, symbol: str) -> int:
         raise ValueError(f"tile {xy}: {program.path} has no symbol {symbol} (not a kernel image?)") from exc
 
 
+def _job_record(fields: tuple[int, ...]) -> JobRecord:
+    """A record of the log as ``_RECORD`` unpacks it (``os_job_record_t``)."""
+    task, flags, job, release, deadline, start, completion, exec_cycles = fields
+    return JobRecord(task, job, release, deadline, start, completion, exec_cycles,
+                     bool(flags & JOB_MET), bool(flags & JOB_EVENT), bool(flags & JOB_DEPLETED))  # fmt: skip
+
+
 def read_job_log(chip: MPSoC, xy: tuple[int, int], since: int = 0) -> JobLog:
     """The job records of tile ``xy``, oldest first (the ring keeps the last ``capacity``); only
     those numbered ``since`` or later (a reader that has seen ``since`` records parses no more)."""
@@ -148,11 +155,7 @@ def read_job_log(chip: MPSoC, xy: tuple[int, int], since: int = 0) -> JobLog:
     first = max(count - kept, min(since, count))
     for i in range(first, count):
         off = _LOG_HEADER.size + (i % capacity) * _RECORD.size
-        task, flags, job, release, deadline, start, completion, exec_cycles = _RECORD.unpack_from(raw, off)
-        records.append(
-            JobRecord(task, job, release, deadline, start, completion, exec_cycles,
-                      bool(flags & JOB_MET), bool(flags & JOB_EVENT), bool(flags & JOB_DEPLETED))
-        )  # fmt: skip
+        records.append(_job_record(_RECORD.unpack_from(raw, off)))
     return JobLog(records, count - kept, tick, first)
 
 
@@ -188,13 +191,7 @@ class JobLogReader:
         base = self.address + _LOG_HEADER.size
         records = []
         for i in range(seen, count):
-            task, flags, job, release, deadline, start, completion, exec_cycles = cores.unpack(
-                _RECORD, base + (i % capacity) * _RECORD.size, t
-            )
-            records.append(
-                JobRecord(task, job, release, deadline, start, completion, exec_cycles,
-                          bool(flags & JOB_MET), bool(flags & JOB_EVENT), bool(flags & JOB_DEPLETED))
-            )  # fmt: skip
+            records.append(_job_record(cores.unpack(_RECORD, base + (i % capacity) * _RECORD.size, t)))
         return records, count
 
 

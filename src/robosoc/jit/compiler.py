@@ -24,7 +24,7 @@ import llvmlite.binding as llvm
 from numba.core.compiler_lock import global_compiler_lock
 
 from robosoc.cache import cache_root
-from robosoc.kernels import kernel_digest
+from robosoc.kernels import kernel_digest, sources_digest
 
 _JIT_SOURCES = sorted(Path(__file__).parent.glob("*.py"))
 
@@ -36,11 +36,7 @@ def pipeline_digest(sources: Iterable[Path] = _JIT_SOURCES, kernels: str | None 
     conventions and the instruction table).  Any change there keys new objects and records.  (A
     version number bumped by hand did not: an abandoned branch had used the same number, and its
     objects, written for other conventions, crashed the chip loop of a later checkout.)"""
-    h = hashlib.sha256((kernels if kernels is not None else kernel_digest()).encode())
-    for path in sources:
-        h.update(path.name.encode())
-        h.update(path.read_bytes())
-    return h.hexdigest()[:16]
+    return sources_digest(kernels if kernels is not None else kernel_digest(), sources)
 
 
 #: The digest of this checkout's translator (:func:`pipeline_digest`), in every object's and

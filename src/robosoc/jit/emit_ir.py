@@ -25,6 +25,7 @@ function's ways out.  So the counters are the interpreter's whenever a region re
 
 from __future__ import annotations
 
+from collections import Counter
 from dataclasses import dataclass
 
 import numpy as np
@@ -376,17 +377,16 @@ class _Writer:
         self.emit(f"{p} = getelementptr i64, i64* {base}, i64 {index}")
         return p
 
+    def counter(self, kc: int) -> str:
+        """The address of histogram index ``kc``'s counter: below OPC_SIZE a per-operation counter
+        ``opc[kc]``, OPC_SIZE + k ``ctr[k]``."""
+        return self.field("%opc", kc) if kc < OPC_SIZE else self.field(self.ctx_ptr(CTX_CTR), kc - OPC_SIZE)
+
     def count(self, hist: list[int]) -> None:
-        """Add the histogram ``hist`` (indices below OPC_SIZE: per-operation counters ``opc``,
-        OPC_SIZE + k: ``ctr[k]``) to the tile's counters, one add per counter."""
-        merged: dict[int, int] = {}
-        for kc in hist:
-            merged[kc] = merged.get(kc, 0) + 1
-        for kc, n in sorted(merged.items()):
-            if kc < OPC_SIZE:
-                self.add_i64(self.field("%opc", kc), n)
-            else:
-                self.add_i64(self.field(self.ctx_ptr(CTX_CTR), kc - OPC_SIZE), n)
+        """Add the histogram ``hist`` (indices of :meth:`counter`) to the tile's counters, one add
+        per counter."""
+        for kc, n in sorted(Counter(hist).items()):
+            self.add_i64(self.counter(kc), n)
 
     # --- leaving a block ----------------------------------------------------------------------
     def leave(self, code: int, pc: int | str, cyc: str | None = None) -> None:
@@ -514,10 +514,7 @@ class _Writer:
         for k, hist in sorted(self.looped.items()):
             v = self.tmp()
             self.emit(f"{v} = load i64, i64* %bc{k}")
-            merged: dict[int, int] = {}
-            for kc in hist:
-                merged[kc] = merged.get(kc, 0) + 1
-            for kc, n in merged.items():
+            for kc, n in Counter(hist).items():
                 terms.setdefault(kc, []).append((v, n))
         taken = self.tmp()
         self.emit(f"{taken} = load i64, i64* %taken")
@@ -534,8 +531,7 @@ class _Writer:
                     self.emit(f"{w} = add i64 {total}, {term}")
                     term = w
                 total = term
-            base, at = ("%opc", kc) if kc < OPC_SIZE else (self.ctx_ptr(CTX_CTR), kc - OPC_SIZE)
-            self.add_i64(self.field(base, at), total)
+            self.add_i64(self.counter(kc), total)
 
     def prefix_chain(self, points: list[int]) -> None:
         """The side exits' counts of the block: the exit before instruction ``points[k]`` enters a

@@ -10,6 +10,7 @@ any change there compiles afresh, and unchanged sources start in about a second.
 
 import hashlib
 import os
+from collections.abc import Iterable
 from pathlib import Path
 
 import numba
@@ -19,13 +20,18 @@ from robosoc.cache import cache_root
 _SOURCES = [*sorted(Path(__file__).parent.glob("*.py")), Path(__file__).parent.parent / "isa" / "table.py"]
 
 
-def kernel_digest() -> str:
-    """Digest of the sources whose compiled form numba caches."""
-    h = hashlib.sha256(numba.__version__.encode())
-    for path in _SOURCES:
+def sources_digest(seed: str, sources: Iterable[Path]) -> str:
+    """Digest of ``seed`` and the names and bytes of ``sources`` (what a compiled form depends on)."""
+    h = hashlib.sha256(seed.encode())
+    for path in sources:
         h.update(path.name.encode())
         h.update(path.read_bytes())
     return h.hexdigest()[:16]
+
+
+def kernel_digest() -> str:
+    """Digest of the sources whose compiled form numba caches."""
+    return sources_digest(numba.__version__, _SOURCES)
 
 
 def _numba_cache_dir() -> Path:
