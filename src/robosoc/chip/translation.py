@@ -12,6 +12,7 @@ the loop goes on where it stopped.  The translators of one chip share their stat
 
 from __future__ import annotations
 
+import time
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -22,7 +23,7 @@ from robosoc.kernels.core_layout import RUN_CHUNK, S_CODE_SIZE, S_PC, S_RUN
 from robosoc.kernels.jit_dispatch import JitArrays, empty_tables, set_table_copies, set_tables, tables_list
 
 if TYPE_CHECKING:
-    from collections.abc import Iterator
+    from collections.abc import Callable, Iterator
 
     from robosoc.chip.engines import Engine
     from robosoc.chip.mpsoc import MPSoC
@@ -48,6 +49,12 @@ AUTO_LOOK_CYCLES = 1 << 20
 #: ... doubled after each look that gave no tile a translator, up to this (a mostly sleeping chip
 #: runs millions of cycles per millisecond of host time: a stop per 2**20 cycles halved its speed)
 AUTO_LOOK_MAX_CYCLES = 1 << 24
+#: auto: host seconds between looks at the dispatch loop's threshold while nothing else changed
+#: (it moves with the run time only: the budget grows, the warm-up passes)
+THRESHOLD_LOOK_SECONDS = 0.005
+#: auto: host seconds between looks at the whole-code translations (:mod:`robosoc.chip.whole_code`):
+#: a tile that ran enough starts one, a finished one gives its code's tiles their regions
+WHOLE_CODE_LOOK_SECONDS = 0.1
 
 
 class TileTranslators:
@@ -117,6 +124,16 @@ class ChipTranslation:
         self._prepared: tuple[int, int, bytes] | None = None
         self._changes = 0  # tiles whose code was loaded since the chip was made
         self._run_seconds = 0.0  # host seconds in the chip loop
+        # auto's whole-code translations (robosoc.chip.whole_code)
+        self._keys: dict[int, str] = {}  # tile -> its code's manifest key (made once per load)
+        self._key_memo: dict[tuple[int, bytes], str] = {}  # (program id, build fields) -> key
+        self._whole: set[str] = set()  # keys whose whole code is translated
+        self._asked: set[int] = set()  # tiles whose code's translation was started (or failed)
+        self._entered: set[int] = set()  # tiles whose code is whole and that were given its regions
+        self._ready: set[int] = set()  # tiles to get their translator at the next look: their code is whole
+        self._whole_look = 0.0  # host time of the next look
+        self._threshold_look = 0.0  # host time auto's threshold is looked at next, if nothing else changed
+        self._entered_regions: Callable[[], int] | None = None  # robosoc.jit.tables.entered_regions, once imported
 
     def arguments(self) -> tuple[np.ndarray, List, np.ndarray]:
         """``run_chip``'s jit_on, jit_tables and jit_params (the same types whatever the engine: the
@@ -129,15 +146,25 @@ class ChipTranslation:
             return
         situation = self._situation(chip)
         due = bool(self._watched) and chip.cycle - self._looked >= self._look  # auto's look at watched tiles
+        now = time.perf_counter()
+        if self.engine.waits_for_busy_tiles and now >= self._whole_look:
+            self._look_whole_code(chip)
+            due = due or bool(self._ready)
         busy = self._busy(chip) if self.engine.waits_for_busy_tiles and due else None
+        if busy is not None and self._ready:
+            busy[sorted(self._ready)] = True  # their regions are all compiled: nothing left to wait for
+            self._ready.clear()
         turned = busy is not None and bool(busy[sorted(self._watched)].any())  # a watched tile turned busy
         if situation is not None and situation == self._prepared and not turned:
             # nothing new for any tile (a per-tile look cost a sleeping 16x16 chip 1 ms per step,
             # and auto's flight 0.2 ms per step while it watched its other tile): only auto's
-            # threshold moves with the run time, and the next look at watched tiles comes later
-            live = self.translators.made()
-            if live:
-                self._set_threshold(live[0])
+            # threshold moves with the run time (looked at every THRESHOLD_LOOK_SECONDS: 15 us a
+            # step), and the next look at watched tiles comes later
+            if now >= self._threshold_look:
+                self._threshold_look = now + THRESHOLD_LOOK_SECONDS
+                live = self.translators.made()
+                if live:
+                    self._set_threshold(live[0])
             if busy is not None:
                 self._look = min(2 * self._look, AUTO_LOOK_MAX_CYCLES)
             return
@@ -182,11 +209,7 @@ class ChipTranslation:
         its tables away."""
         if any(tr.compiling() for tr in self.translators.made()):  # (a copy not made compiles nothing)
             return None
-        entered = 0
-        if self.stats is not None:  # a translator was made: the engine is imported
-            from robosoc.jit.tables import entered_regions
-
-            entered = entered_regions()
+        entered = 0 if self._entered_regions is None else self._entered_regions()
         return entered, self._changes, chip.cores.st[:, S_CODE_SIZE].tobytes()
 
     def _make_translators(self, chip: MPSoC, tiles: list[int]) -> None:
@@ -215,7 +238,10 @@ class ChipTranslation:
         from robosoc.jit.tables import TranslationStats
 
         if self.stats is None:
+            from robosoc.jit.tables import entered_regions
+
             self.stats = TranslationStats(run_seconds=self._run_seconds)
+            self._entered_regions = entered_regions
         translator = self.engine.translator(chip.cores, t, self.stats)
         assert translator is not None, f"engine {self.engine} made no translator"
         return translator
@@ -233,6 +259,74 @@ class ChipTranslation:
     def watching(self) -> bool:
         """auto: whether some loaded tile may still get a translator (the chip is looked at again)."""
         return bool(self._watched)  # only an engine that waits for busy tiles watches any
+
+    def _look_whole_code(self, chip: MPSoC) -> None:
+        """auto: the whole-code translations (:mod:`robosoc.chip.whole_code`) of the tiles that
+        executed :data:`~robosoc.chip.whole_code.WHOLE_CODE_MIN_INSTRUCTIONS` once the chip loop
+        ran :data:`~robosoc.chip.whole_code.WHOLE_CODE_MIN_SECONDS` (a short run imports nothing
+        of the translator for them).  Such a tile whose code is translated whole gets its
+        translator at the next look (or, having one, enters the regions); after the warm-up, the
+        first whose code is not has it translated whole in a second process."""
+        from robosoc.chip.whole_code import WHOLE_CODE_MIN_INSTRUCTIONS, WHOLE_CODE_MIN_SECONDS
+
+        self._whole_look = time.perf_counter() + WHOLE_CODE_LOOK_SECONDS
+        if self._run_seconds < WHOLE_CODE_MIN_SECONDS:
+            return
+        executed = chip.cores.opc.sum(axis=1)
+        tiles = np.array(sorted(chip.programs), dtype=np.int64)
+        tiles = tiles[
+            ~self._stopped[tiles]
+            & (chip.cores.st[tiles, S_CODE_SIZE] != 0)
+            & (executed[tiles] >= WHOLE_CODE_MIN_INSTRUCTIONS)
+        ]
+        if not len(tiles):
+            return
+        from robosoc.chip.whole_code import whole_code_translations
+        from robosoc.jit.manifest import whole_code_translated
+        from robosoc.jit.policy import AUTO_WARMUP_SECONDS
+
+        translations = whole_code_translations()
+        running = translations.running()
+        loaded = tiles.tolist()
+        for t in loaded:
+            if t not in self._keys:
+                self._keys[t] = self._key_of(chip, t)
+        for key in {self._keys[t] for t in loaded} - self._whole:
+            if key in translations.done or (key != running and whole_code_translated(key)):
+                self._whole.add(key)
+        for t in loaded:
+            if self._keys[t] not in self._whole or t in self._entered:
+                continue
+            self._entered.add(t)
+            if not self.translators.has(t):
+                self._ready.add(t)
+                continue
+            translator = self.translators[t]
+            assert translator is not None
+            if translator.enter_recorded():
+                self._give(t)
+        if self._run_seconds < AUTO_WARMUP_SECONDS or running is not None:
+            return
+        for t in loaded:
+            key = self._keys[t]
+            if t in self._asked or key in self._whole:
+                continue
+            if translations.start(chip.cores, t, key):
+                self._asked.update(u for u in loaded if self._keys[u] == key)
+                return  # one at a time
+            if translations.running() is None and key in translations.failed:
+                self._asked.add(t)
+
+    def _key_of(self, chip: MPSoC, t: int) -> str:
+        """The manifest key of tile ``t``'s code for auto (made once per program and build)."""
+        from robosoc.jit.engine import code_manifest_key
+        from robosoc.jit.tables import BUILD_FIELDS
+
+        memo = (id(chip.programs[t]), chip.cores.st[t, BUILD_FIELDS].tobytes())
+        key = self._key_memo.get(memo)
+        if key is None:
+            key = self._key_memo[memo] = code_manifest_key(chip.cores, t, self.engine.name)
+        return key
 
     def _busy(self, chip: MPSoC) -> np.ndarray:
         """auto: per tile, whether it worked enough since the last look to be worth translating."""
@@ -274,6 +368,11 @@ class ChipTranslation:
     def forget(self, t: int) -> None:
         """Tile ``t``'s code was (re)loaded from outside: its translations no longer hold."""
         self._changes += 1
+        self._keys.pop(t, None)
+        self._asked.discard(t)
+        self._entered.discard(t)
+        self._ready.discard(t)
+        self._whole_look = 0.0
         translator = self.translators[t]
         if translator is not None:
             translator.forget()

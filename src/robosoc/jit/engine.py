@@ -22,7 +22,16 @@ import numpy as np
 from robosoc.jit import policy as policies
 from robosoc.jit.compiler import Compiler, Pending, shared_compiler
 from robosoc.jit.manifest import Manifest, manifest_key
-from robosoc.jit.tables import Adoption, Build, Cores, CoreTables, Translated, TranslationStats, note_translated
+from robosoc.jit.tables import (
+    Adoption,
+    Build,
+    Cores,
+    CoreTables,
+    Translated,
+    TranslationStats,
+    build_of,
+    note_translated,
+)
 from robosoc.kernels.core import run_cores
 from robosoc.kernels.core_layout import RUN_CHUNK, S_CODE_SIZE, S_CYCLE, S_MEM_BASE, S_MEM_SIZE, S_MUL, S_PC, S_RUN
 from robosoc.kernels.jit_dispatch import (
@@ -45,8 +54,9 @@ __all__ = ["TranslatingCore", "TranslationStats"]
 
 M32 = 0xFFFFFFFF
 
-#: manifest key -> the process's list of regions its records were added to
-_RECORDS_IN: dict[str, list[Translated]] = {}
+#: manifest key -> the process's list of regions its records were added to, and how many records
+#: the manifest held then (a manifest that grew since, a whole-code translation's, is entered again)
+_RECORDS_IN: dict[str, tuple[list[Translated], int]] = {}
 
 #: the translators of this process (those of ``auto``: whether a region still compiling is wanted)
 _LIVE: weakref.WeakSet[TranslatingCore] = weakref.WeakSet()
@@ -65,6 +75,14 @@ def _wanted(key: Build, pcs: np.ndarray, words: np.ndarray) -> Callable[[], bool
         return any(c._key() == key and np.array_equal(c.state.m32[c.tile][pcs], words) for c in cores)
 
     return wanted
+
+
+def code_manifest_key(state: Cores, tile: int, mode: str) -> str:
+    """The manifest key of the code tile ``tile`` of ``state`` holds (its code bytes, build and the
+    policy ``mode`` with its region cap: :func:`robosoc.jit.manifest.manifest_key`)."""
+    code = state.m8[tile, : int(state.st[tile, S_CODE_SIZE])].tobytes()
+    cap = policies.POLICIES[mode].region_cap()
+    return manifest_key(code, f"{build_of(state.st[tile])!r} {mode} cap{cap}")
 
 
 class TranslatingCore(CoreTables):
@@ -133,8 +151,10 @@ class TranslatingCore(CoreTables):
         build = self._key()
         done_list = _TRANSLATED.get(build)
         self._records_missing = set()
-        if done_list is not None and _RECORDS_IN.get(key) is done_list:
-            return  # entered already (a test may replace the process's list: entered again then)
+        # entered already (a test may replace the process's list: entered again then)
+        entered, count = _RECORDS_IN.get(key, (None, -1))
+        if done_list is not None and entered is done_list and count == len(manifest.records):
+            return
         m32 = self.state.m32[self.tile]
         have = {d.start for d in done_list or [] if np.array_equal(m32[d.pcs], d.words)}
         for record in manifest.records.values():
@@ -147,7 +167,21 @@ class TranslatingCore(CoreTables):
             pcs = record.arrays["pcs"]
             note_translated(build, Translated.of_record(record, addresses[0], m32[pcs].copy()))
             self.stats.recorded += 1
-        _RECORDS_IN[key] = _TRANSLATED.get(build, [])
+        _RECORDS_IN[key] = (_TRANSLATED.get(build, []), len(manifest.records))
+
+    def enter_recorded(self) -> int:
+        """Enter the regions recorded for this core's code since its tables were made (another
+        process translated its whole code meanwhile: :meth:`translate_code`); how many."""
+        if self._jt is None:
+            return 0  # its tables, once made, hold them
+        key = self.manifest.key or self._manifest_key()
+        manifest = Manifest(key)
+        before = self.stats.recorded
+        self._enter_records(key, manifest)
+        self.manifest.key = key
+        self.manifest.known |= set(manifest.records)
+        self._install_new_known()
+        return self.stats.recorded - before
 
     def _new_code(self) -> None:
         self.policy.new_code()
@@ -165,10 +199,9 @@ class TranslatingCore(CoreTables):
         self.manifest = adoption.extra.copy()
 
     def _manifest_key(self) -> str:
-        """The loaded code, build options, policy and region cap: the key of the list of regions
-        compiled for them before (made once per load of the code: hashing it cost each region 0.1 ms)."""
-        code = self.state.m8[self.tile, : self._code_size].tobytes()
-        return manifest_key(code, f"{self._key()!r} {self.mode} cap{self.policy.region_cap()}")
+        """The key of the list of regions compiled for this core's code before (made once per load
+        of the code: hashing it cost each region 0.1 ms)."""
+        return code_manifest_key(self.state, self.tile, self.mode)
 
     def _view(self) -> CodeView:
         from robosoc.jit.regions import CodeView
@@ -248,6 +281,42 @@ class TranslatingCore(CoreTables):
             emitted, address = EmittedRegion(ir="", function="", blocks={}), 0
             pcs = np.array([(pc - base) >> 2], dtype=np.int64)
         return self._enter(region, emitted, address, pcs, m32[pcs].copy())
+
+    def translate_code(self, stop: Callable[[], bool] = lambda: False) -> tuple[int, int]:
+        """Translate the whole loaded code ahead of its run: from the code's first word, a region
+        of ``jit``'s size (:data:`robosoc.jit.regions.MAX_REGION_INSTRUCTIONS`) at each word no
+        region holds yet, compiled in line and noted in the code's manifest (regions recorded
+        before are entered, not made again).  ``stop`` is asked before each region (True: stop
+        there; what was done stays recorded).  Returns (regions made, their guest instructions).
+
+        This is what a second process does for ``auto`` (:mod:`robosoc.chip.whole_code`): a later
+        run enters every region from the records at once, as ``jit`` would have made them."""
+        from robosoc.jit.emit_ir import NAME_PLACEHOLDER, emit_region
+        from robosoc.jit.regions import MAX_REGION_INSTRUCTIONS, discover
+
+        jt = self._tables()  # (with the records of earlier runs entered)
+        target = self._target()
+        base = target.base
+        view = self._view()
+        m32 = self.state.m32[self.tile]
+        held = jt.tmap != 0  # words some region translated
+        made = instructions = 0
+        for w in range(len(jt.entry_fn) - 1):
+            if held[w] or jt.entry_fn[w] != 0:
+                continue
+            if stop():
+                break
+            region = discover(view, base + 4 * w, MAX_REGION_INSTRUCTIONS, lambda a: jt.entry_fn[(a - base) >> 2] != 0)
+            if not region.blocks:
+                continue  # not an instruction the translator takes (the interpreter's, if ever reached)
+            emitted = emit_region(target, region)
+            pcs = np.array(sorted((p - base) >> 2 for p in region.words()), dtype=np.int64)
+            address = self.compiler.add(emitted.ir, NAME_PLACEHOLDER, [emitted.function], region.instructions)[0]
+            self._enter(region, emitted, address, pcs, m32[pcs].copy())
+            held[pcs] = True
+            made += 1
+            instructions += region.instructions
+        return made, instructions
 
     def _enter(
         self, region: Region, emitted: EmittedRegion, address: int, pcs: np.ndarray, words: np.ndarray

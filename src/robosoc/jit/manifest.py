@@ -15,6 +15,7 @@ from __future__ import annotations
 import functools
 import hashlib
 import json
+import os
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -104,6 +105,27 @@ def read_manifest(key: str) -> dict[int, RegionRecord]:
         records.setdefault(record.start, record)
     _READ[path] = ((stat.st_size, stat.st_mtime_ns), records)
     return records
+
+
+def whole_code_path(key: str) -> Path:
+    """The mark that a program's whole code was translated (:meth:`robosoc.jit.engine.TranslatingCore.translate_code`:
+    its manifest lists a region at every word the translator takes); it holds the records' count."""
+    return _manifest_path(key).with_suffix(".whole")
+
+
+def whole_code_translated(key: str) -> bool:
+    """Whether the program with manifest key ``key`` had its whole code translated (and the
+    manifest is still there)."""
+    return whole_code_path(key).is_file() and _manifest_path(key).is_file()
+
+
+def mark_whole_code(key: str, records: int) -> None:
+    """Mark the program's whole code translated (written whole or not at all)."""
+    path = whole_code_path(key)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_suffix(f".{os.getpid()}.tmp")
+    tmp.write_text(f"{records}\n")
+    tmp.replace(path)
 
 
 def add_to_manifest(key: str, record: RegionRecord) -> None:

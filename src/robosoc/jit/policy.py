@@ -108,7 +108,8 @@ class JitPolicy:
         #: compile regions in the background thread: the core interprets them meanwhile
         self.background = False
 
-    def region_cap(self) -> int:
+    @classmethod
+    def region_cap(cls) -> int:
         """The most instructions of a region."""
         from robosoc.jit import regions
 
@@ -161,7 +162,8 @@ class AutoPolicy(JitPolicy):
         self._parked: dict[int, int] = {}  # word index -> pc of a deferred region (not sampled for now)
         self._sizes: dict[int, int] = {}  # pc -> instructions of the region found there
 
-    def region_cap(self) -> int:
+    @classmethod
+    def region_cap(cls) -> int:
         return AUTO_MAX_REGION_INSTRUCTIONS
 
     def ask_threshold(self, cached: bool | None = None) -> int:

@@ -54,7 +54,14 @@ _T = TypeVar("_T")
 
 #: A build: the target a core's code is translated for, and whether the core multiplies.
 Build = tuple[Target, bool]
-_KEY_FIELDS = [S_MEM_BASE, S_MEM_SIZE, S_CODE_SIZE, S_ERRATA, S_MUL]  # the state fields of a build
+BUILD_FIELDS = [S_MEM_BASE, S_MEM_SIZE, S_CODE_SIZE, S_ERRATA, S_MUL]  # the state fields of a build
+
+
+def build_of(st: np.ndarray) -> Build:
+    """The build of the core whose state row is ``st``."""
+    base, mem_size, code_size, errata, mul = st[BUILD_FIELDS].tolist()
+    target = Target(base=base, mem_size=mem_size, code_size=code_size, rtl_errata=errata == ERRATA_RTL)
+    return target, mul != 0
 
 
 @dataclass
@@ -308,11 +315,9 @@ class CoreTables:
     def _key(self) -> Build:
         """The build this core's code is translated for: its target and whether it multiplies
         (made again only when the state fields it comes from changed: a chip's tiles ask often)."""
-        raw = self.state.st[self.tile, _KEY_FIELDS].tobytes()
+        raw = self.state.st[self.tile, BUILD_FIELDS].tobytes()
         if raw != self._key_raw:
-            base, mem_size, code_size, errata, mul = self.state.st[self.tile, _KEY_FIELDS].tolist()
-            target = Target(base=base, mem_size=mem_size, code_size=code_size, rtl_errata=errata == ERRATA_RTL)
-            self._key_raw, self._key_made = raw, (target, mul != 0)
+            self._key_raw, self._key_made = raw, build_of(self.state.st[self.tile])
         return self._key_made
 
     def _target(self) -> Target:
@@ -387,7 +392,7 @@ class CoreTables:
         st, m32, dec = self.state.st, self.state.m32, self.state.dec
         idx = np.asarray(tiles, dtype=np.int64)
         words = self._code_size // 4
-        same = (st[idx][:, _KEY_FIELDS] == st[self.tile, _KEY_FIELDS]).all(axis=1)
+        same = (st[idx][:, BUILD_FIELDS] == st[self.tile, BUILD_FIELDS]).all(axis=1)
         same &= (m32[idx, :words] == m32[self.tile, :words]).all(axis=1)
         idx = idx[same]
         if not len(idx):
