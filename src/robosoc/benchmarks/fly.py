@@ -9,7 +9,9 @@ in the same run (``of host``, when the host controller flies: a loaded machine s
 the simulated chip cycles per host second, the hover error, the slowest roll/pitch step (to 90 %),
 the RMS difference of the true height from the host controller's flight with the same seed (from
 take-off on), the deadline misses, and last the line ``fly: <x>× real time`` of the last build
-flown (fixed point with the multiplier by default).
+flown (fixed point with the multiplier by default).  A build flown while ``auto`` was translating
+its whole code in a second process (:mod:`robosoc.chip.whole_code`: once per build and host) is
+marked with ``*`` and a note: its figure is not yet the steady one.
 """
 
 from __future__ import annotations
@@ -22,6 +24,7 @@ import numpy as np
 from rich.console import Console
 from rich.table import Table
 
+from robosoc.chip.whole_code import whole_code_translations
 from robosoc.config.firmware import FirmwareConfig
 from robosoc.config.scenario import ScenarioConfig
 from robosoc.control.flight import column
@@ -90,12 +93,17 @@ def run_fly_benchmark(
     factor = math.nan
     host_factor = math.nan
     host_z = None
+    unsteady = False
     for name, scenario in flights:
         # first call: build and compile outside the timing (a one-sample flight)
         fly_scenario(dataclasses.replace(scenario, duration_s=0.01), None, on_status=console.print, plot=False)
+        translating = whole_code_translations().running() is not None
         cpu = time.process_time()
         flight = fly_scenario(scenario, None, plot=False)
         cpu = time.process_time() - cpu
+        if translating or whole_code_translations().running() is not None:
+            name += " *"
+            unsteady = True
         summary = flight.summary
         first = summary["vehicles"][0] if vehicles > 1 else summary
         z = column(flight.rows[0], "z")
@@ -125,5 +133,10 @@ def run_fly_benchmark(
             str(summary["deadline_misses"]) if summary["deadline_misses"] is not None else "-",
         )
     console.print(table)
+    if unsteady:
+        console.print(
+            "* auto was still translating the firmware's whole code in a second process during this flight "
+            "(once per build and host, docs/translation.md): run again for its steady speed"
+        )
     print(f"fly: {factor:.2f}× real time")
     return factor
