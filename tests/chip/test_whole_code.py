@@ -12,6 +12,7 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 import robosoc.jit.tables as jit_tables
@@ -127,12 +128,14 @@ def test_auto_starts_the_second_process_itself_and_takes_its_regions_mid_run(mon
     monkeypatch.setattr("robosoc.jit.policy.AUTO_WARMUP_SECONDS", 0.0)
     monkeypatch.setattr("robosoc.chip.translation.WHOLE_CODE_LOOK_SECONDS", 0.0)
     translations = whole_code_translations()
+    translations.stop()  # one an earlier test's chip started (one runs at a time)
     states = {}
     for engine in ("interp", "auto"):
         chip = loaded_chip(engine)
         key = code_manifest_key(chip.cores, chip.config.tile_index((1, 0)), "auto")
         chip.step(300_000)
         chip.step(600_000)  # its look: the tiles ran enough
+        ran = chip.cores.op_rows(chip.config.tile_index((1, 0))) != 0  # (what the interpreter ran by then)
         if engine == "auto":
             assert translations.running() == key
             translations.wait(WAIT)
@@ -146,7 +149,8 @@ def test_auto_starts_the_second_process_itself_and_takes_its_regions_mid_run(mon
         translator = chip._jit.translators[chip.config.tile_index(xy)]
         assert translator is not None
         view, jt = translator._view(), translator.tables()
-        words = range(view.code_size // 4)
+        words = np.flatnonzero(ran).tolist()  # the second process translated what the tiles had run
+        assert len(words) > 50
         assert all(jt.tmap[w] != 0 for w in words if translatable(decode(view.word(view.base + 4 * w), 0), view))
     assert states["auto"] == states["interp"]
 
@@ -187,10 +191,10 @@ def test_a_lock_held_by_a_live_process_is_respected_and_a_dead_ones_taken_over()
     assert whole_code_translated(key) and not lock.exists()
 
 
-def test_the_second_process_stops_when_the_process_that_started_it_dies() -> None:
-    """A crash (no exit handlers) leaves no process behind: the second process sees it has lost its
-    parent between two regions and stops."""
-    script = (
+def starting_script(end: str) -> str:
+    """A process that starts a translation of the matrix benchmark's code, prints the second
+    process's pid and ends with ``end``."""
+    return (
         "import os, sys\n"
         "from robosoc.chip.mpsoc import MPSoC\n"
         "from robosoc.chip.whole_code import whole_code_translations\n"
@@ -201,15 +205,38 @@ def test_the_second_process_stops_when_the_process_that_started_it_dies() -> Non
         "chip.load((1, 0), _build('matrix_bench.c', True, {'BENCH_ITERATIONS': 100000, 'BENCH_QUIET': None}))\n"
         "key = code_manifest_key(chip.cores, 1, 'auto')\n"
         "assert whole_code_translations().start(chip.cores, 1, key)\n"
-        "print(whole_code_translations()._child.process.pid, flush=True)\n"
-        "os._exit(0)\n"
+        "print(whole_code_translations()._child.process.pid, key, flush=True)\n"
+        f"{end}\n"
     )
-    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=WAIT, check=True)
-    pid = int(done.stdout.split()[0])
-    deadline = time.monotonic() + WAIT
+
+
+def gone_within(pid: int, seconds: float) -> bool:
+    deadline = time.monotonic() + seconds
     while whole_code._alive(pid) and time.monotonic() < deadline:
         time.sleep(0.1)
-    assert not whole_code._alive(pid)
+    return not whole_code._alive(pid)
+
+
+def test_the_second_process_stops_when_the_process_that_started_it_dies() -> None:
+    """A crash (no exit handlers) leaves no process behind: the second process sees it has lost its
+    parent between two regions without a release and stops, keeping what it did."""
+    done = subprocess.run(
+        [sys.executable, "-c", starting_script("os._exit(0)")], capture_output=True, text=True, timeout=WAIT, check=True
+    )
+    pid, key = done.stdout.split()
+    assert gone_within(int(pid), WAIT)
+    assert not whole_code_translated(key)  # (the benchmark's code takes a few seconds)
+    assert "without releasing it" in whole_code_path(key).with_suffix(".log").read_text()
+
+
+def test_a_process_that_ends_normally_lets_the_second_process_finish() -> None:
+    done = subprocess.run(
+        [sys.executable, "-c", starting_script("sys.exit(0)")], capture_output=True, text=True, timeout=WAIT, check=True
+    )
+    pid, key = done.stdout.split()
+    assert gone_within(int(pid), WAIT)
+    assert whole_code_translated(key)
+    assert not list(manifests().glob("*.lock")) and not list(manifests().glob("*.release"))
 
 
 def test_the_second_process_refuses_a_payload_that_is_not_the_keys_code(tmp_path: Path) -> None:

@@ -265,8 +265,8 @@ class ChipTranslation:
         executed :data:`~robosoc.chip.whole_code.WHOLE_CODE_MIN_INSTRUCTIONS` once the chip loop
         ran :data:`~robosoc.chip.whole_code.WHOLE_CODE_MIN_SECONDS` (a short run imports nothing
         of the translator for them).  Such a tile whose code is translated whole gets its
-        translator at the next look (or, having one, enters the regions); after the warm-up, the
-        first whose code is not has it translated whole in a second process."""
+        translator at the next look (or, having one, enters the regions); the first whose code
+        is not has it translated whole in a second process."""
         from robosoc.chip.whole_code import WHOLE_CODE_MIN_INSTRUCTIONS, WHOLE_CODE_MIN_SECONDS
 
         self._whole_look = time.perf_counter() + WHOLE_CODE_LOOK_SECONDS
@@ -283,7 +283,6 @@ class ChipTranslation:
             return
         from robosoc.chip.whole_code import whole_code_translations
         from robosoc.jit.manifest import whole_code_translated
-        from robosoc.jit.policy import AUTO_WARMUP_SECONDS
 
         translations = whole_code_translations()
         running = translations.running()
@@ -305,7 +304,7 @@ class ChipTranslation:
             assert translator is not None
             if translator.enter_recorded():
                 self._give(t)
-        if self._run_seconds < AUTO_WARMUP_SECONDS or running is not None:
+        if running is not None:
             return
         for t in loaded:
             key = self._keys[t]

@@ -4,7 +4,7 @@
 out of a share of the run (:mod:`robosoc.jit.policy`).  On the chip that does not reach ``jit``'s
 speed: partial translation leaves the tile entering and leaving native code, and a tile that works
 in short bursts between sleeps never looks busy enough.  So once a tile has executed
-:data:`WHOLE_CODE_MIN_INSTRUCTIONS` and the chip has run :data:`robosoc.jit.policy.AUTO_WARMUP_SECONDS`,
+:data:`WHOLE_CODE_MIN_INSTRUCTIONS` and the chip loop has run :data:`WHOLE_CODE_MIN_SECONDS`,
 its program's whole code is translated in a second process (``python -m robosoc.chip.whole_code``,
 at a lower priority: on a host with a spare core the run goes on at its own speed), region by
 region into the object cache and the code's manifest, then marked whole
@@ -12,11 +12,21 @@ region into the object cache and the code's manifest, then marked whole
 ``auto`` gives that code's tiles their translators at once and enters every region from the
 records: ``jit``'s speed without ``jit``'s compile at the start.
 
+It translates the words the run had executed first (those the interpreter decoded), then the
+rest: a flight runs about half its code only after take-off, so the words executed by then are
+not enough (the fixed + mul flight with only those translated flew at 0.68-0.70 s against
+0.57-0.60 s with all, and 0.74-0.75 s interpreted), but the first regions made are those that
+matter if it is stopped early.
+
 At most one such process runs per simulating process, and one per program across processes
 (a lock file beside the manifest, holding its pid: a sweep's workers do not translate the same
-code twice).  It stops when the process that started it ends (terminated at exit; it also stops
-by itself when its parent is gone), keeping the regions done so far; the next run goes on from
-there.  Its output goes to a log beside the manifest.
+code twice).  When the process that started it ends normally it lets it finish, as ``git`` lets
+its automatic garbage collection finish in the background (a few seconds; at most
+:data:`RELEASED_SECONDS`): a short ``robosoc fly`` or ``robosoc bench fly`` would otherwise stop
+it before it got anywhere, run after run.  After a crash (no release) it stops by itself before
+its next region; Ctrl-C reaches it with its parent's process group; :meth:`WholeCodeTranslations.stop`
+stops it.  Stopped, it keeps the regions done so far, and the next run goes on from there.  Its
+output goes to a log beside the manifest.
 """
 
 from __future__ import annotations
@@ -27,6 +37,7 @@ import os
 import subprocess
 import sys
 import tempfile
+import time
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -43,16 +54,25 @@ if TYPE_CHECKING:
 WHOLE_CODE_MIN_INSTRUCTIONS = 100_000
 #: ... and the chip loop ran this many host seconds: before, no tile is looked at (a warm
 #: ``robosoc fly --duration 0.01`` imports nothing of the translator and enters no region: looking
-#: up and entering a program's hundred-odd regions takes about 0.1 s once per process)
+#: up and entering a program's hundred-odd regions takes about 0.1 s once per process).  Not
+#: ``auto``'s warm-up of 0.2 s: the fixed + mul flight's chip loop runs about that long in all, so
+#: its second process started at the flight's end and was stopped with it, flight after flight.
 WHOLE_CODE_MIN_SECONDS = 0.02
 #: seconds the process that was asked to stop gets before it is killed
 STOP_SECONDS = 2.0
+#: seconds a released second process (its parent ended normally) may go on before it stops
+RELEASED_SECONDS = 120.0
 
 
 def _lock_path(key: str) -> Path:
     from robosoc.jit.manifest import whole_code_path
 
     return whole_code_path(key).with_suffix(".lock")
+
+
+def _release_path(key: str) -> Path:
+    """The note a process that ended normally leaves its child (its pid): finish, do not stop."""
+    return _lock_path(key).with_suffix(".release")
 
 
 def _alive(pid: int) -> bool:
@@ -134,7 +154,7 @@ class WholeCodeTranslations:
             log = lock.with_suffix(".log").open("wb")
             with log:
                 process = subprocess.Popen(
-                    [sys.executable, "-m", "robosoc.chip.whole_code", str(payload), key],
+                    [sys.executable, "-m", "robosoc.chip.whole_code", str(payload), key, str(lock)],
                     stdin=subprocess.DEVNULL,
                     stdout=log,
                     stderr=subprocess.STDOUT,
@@ -149,7 +169,7 @@ class WholeCodeTranslations:
             lock.write_text(f"{process.pid}\n")
         self._child = _Child(key, process, lock, payload)
         if not self._registered:
-            atexit.register(self.stop)
+            atexit.register(self.release)
             self._registered = True
         return True
 
@@ -158,9 +178,10 @@ class WholeCodeTranslations:
         st = state.st[tile]
         fields = np.array([st[S_MEM_BASE], st[S_MEM_SIZE], st[S_CODE_SIZE], st[S_ERRATA], st[S_MUL]], dtype=np.int64)
         code = state.m8[tile, : int(st[S_CODE_SIZE])].copy()
+        executed = np.flatnonzero(state.op_rows(tile) != 0)  # words the interpreter decoded: it ran them
         fd, name = tempfile.mkstemp(dir=folder, prefix=key[:16], suffix=".npz")
         with os.fdopen(fd, "wb") as f:
-            np.savez(f, fields=fields, code=code)
+            np.savez(f, fields=fields, code=code, executed=executed, parent=os.getpid())
         return Path(name)
 
     def _collect(self, child: _Child, code: int) -> None:
@@ -183,6 +204,18 @@ class WholeCodeTranslations:
         if child is not None:
             child.process.wait(timeout)
             self._collect(child, child.process.returncode)
+
+    def release(self) -> None:
+        """At this process's normal end: let the child finish its translation (a few seconds, at
+        most :data:`RELEASED_SECONDS`) rather than stop it, as ``git`` lets its automatic garbage
+        collection finish in the background (after a crash, or ``os._exit``, it finds itself
+        without its parent and no release, and stops; Ctrl-C reaches it with its process group)."""
+        child = self._child
+        if child is None or child.process.poll() is not None:
+            return
+        with contextlib.suppress(OSError):
+            _release_path(child.key).write_text(f"{child.process.pid}\n")
+        self._child = None
 
     def stop(self) -> None:
         """Stop the child (what it translated so far stays recorded) and wait for it."""
@@ -207,10 +240,23 @@ def whole_code_translations() -> WholeCodeTranslations:
     return _TRANSLATIONS
 
 
-def translate_whole_code(payload: Path, key: str) -> int:
-    """The second process: translate the code in ``payload`` (its build's state fields and code
-    bytes) whose manifest key is ``key``, until done or until the parent is gone; 0 when done,
-    1 when the payload does not give ``key``."""
+def translate_whole_code(payload: Path, key: str, lock: Path | None = None) -> int:
+    """The second process: translate the code in ``payload`` (its build's state fields, code bytes
+    and the words a run executed, those first) whose manifest key is ``key``; 0 when done or
+    stopped (its parent gone without a release, or released too long ago), 1 when the payload does
+    not give ``key``.  At the end it removes ``lock`` if it still holds this process's pid, and the
+    release note."""
+    try:
+        return _translate(payload, key)
+    finally:
+        mine = str(os.getpid())
+        for path in (lock, _release_path(key)):
+            with contextlib.suppress(OSError):
+                if path is not None and path.read_text().strip() == mine:
+                    path.unlink()
+
+
+def _translate(payload: Path, key: str) -> int:
     from robosoc.chip.core_state import CoreState
     from robosoc.jit.engine import TranslatingCore, code_manifest_key
     from robosoc.jit.manifest import mark_whole_code, read_manifest
@@ -218,6 +264,8 @@ def translate_whole_code(payload: Path, key: str) -> int:
     with np.load(payload) as data:
         base, mem_size, code_size, errata, mul = (int(v) for v in data["fields"])
         code = data["code"]
+        executed = data["executed"]
+        parent = int(data["parent"])
     with contextlib.suppress(OSError):  # read: not left behind if this process is stopped
         payload.unlink()
     state = CoreState.new(mul=bool(mul), sram_size=mem_size, base=base, errata=errata, code_size=code_size)
@@ -225,25 +273,54 @@ def translate_whole_code(payload: Path, key: str) -> int:
     if code_manifest_key(state, 0, "auto") != key:
         print(f"whole_code: {payload} does not hold the code of manifest {key}", file=sys.stderr)
         return 1
-    parent = os.getppid()
-    orphaned = lambda: os.getppid() != parent  # noqa: E731
-    made, instructions = TranslatingCore(state, 0, "auto").translate_code(stop=orphaned)
-    if orphaned():
+    stop = _StopRule(key, parent)
+    words = np.concatenate([executed, np.arange(code_size // 4)])  # what the run executed first
+    made, instructions = TranslatingCore(state, 0, "auto").translate_code(stop, words)
+    if stop():
+        print(f"whole_code: stopped after {made} regions ({stop.why})", file=sys.stderr)
         return 0
     mark_whole_code(key, len(read_manifest(key)))
     print(f"whole_code: {made} regions, {instructions} instructions translated", file=sys.stderr)
     return 0
 
 
+class _StopRule:
+    """Whether the second process stops before its next region: its parent is gone without
+    releasing it, or released it more than :data:`RELEASED_SECONDS` ago."""
+
+    def __init__(self, key: str, parent: int) -> None:
+        self.parent = parent  # (not this process's parent when it starts: that one may have ended already)
+        self.release = _release_path(key)
+        self.released_at: float | None = None
+        self.why = ""
+
+    def __call__(self) -> bool:
+        if os.getppid() == self.parent:
+            return False
+        if self.released_at is None:
+            try:
+                released = self.release.read_text().strip() == str(os.getpid())
+            except OSError:
+                released = False
+            if not released:
+                self.why = "its parent ended without releasing it"
+                return True
+            self.released_at = time.monotonic()
+        if time.monotonic() - self.released_at > RELEASED_SECONDS:
+            self.why = f"released more than {RELEASED_SECONDS:g} s ago"
+            return True
+        return False
+
+
 def main(argv: list[str] | None = None) -> int:
     args = sys.argv[1:] if argv is None else argv
-    if len(args) != 2:
-        print("usage: python -m robosoc.chip.whole_code PAYLOAD KEY", file=sys.stderr)
+    if len(args) not in (2, 3):
+        print("usage: python -m robosoc.chip.whole_code PAYLOAD KEY [LOCK]", file=sys.stderr)
         return 2
     with contextlib.suppress(OSError):
         os.nice(10)  # background work: the run it serves goes first
     try:
-        return translate_whole_code(Path(args[0]), args[1])
+        return translate_whole_code(Path(args[0]), args[1], Path(args[2]) if len(args) == 3 else None)
     except KeyboardInterrupt:  # Ctrl-C reaches the whole process group: the regions done stay
         return 130
 

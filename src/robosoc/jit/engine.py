@@ -181,6 +181,7 @@ class TranslatingCore(CoreTables):
         self.manifest.key = key
         self.manifest.known |= set(manifest.records)
         self._install_new_known()
+        self.policy.records_grew()
         return self.stats.recorded - before
 
     def _new_code(self) -> None:
@@ -282,12 +283,15 @@ class TranslatingCore(CoreTables):
             pcs = np.array([(pc - base) >> 2], dtype=np.int64)
         return self._enter(region, emitted, address, pcs, m32[pcs].copy())
 
-    def translate_code(self, stop: Callable[[], bool] = lambda: False) -> tuple[int, int]:
-        """Translate the whole loaded code ahead of its run: from the code's first word, a region
-        of ``jit``'s size (:data:`robosoc.jit.regions.MAX_REGION_INSTRUCTIONS`) at each word no
-        region holds yet, compiled in line and noted in the code's manifest (regions recorded
-        before are entered, not made again).  ``stop`` is asked before each region (True: stop
-        there; what was done stays recorded).  Returns (regions made, their guest instructions).
+    def translate_code(
+        self, stop: Callable[[], bool] = lambda: False, words: np.ndarray | None = None
+    ) -> tuple[int, int]:
+        """Translate the loaded code ahead of its run: from the code's first word, a region of
+        ``jit``'s size (:data:`robosoc.jit.regions.MAX_REGION_INSTRUCTIONS`) at each word no region
+        holds yet (of ``words``, word indices in the code, if given: those a run executed),
+        compiled in line and noted in the code's manifest (regions recorded before are entered,
+        not made again).  ``stop`` is asked before each region (True: stop there; what was done
+        stays recorded).  Returns (regions made, their guest instructions).
 
         This is what a second process does for ``auto`` (:mod:`robosoc.chip.whole_code`): a later
         run enters every region from the records at once, as ``jit`` would have made them."""
@@ -301,7 +305,7 @@ class TranslatingCore(CoreTables):
         m32 = self.state.m32[self.tile]
         held = jt.tmap != 0  # words some region translated
         made = instructions = 0
-        for w in range(len(jt.entry_fn) - 1):
+        for w in range(len(jt.entry_fn) - 1) if words is None else words.tolist():
             if held[w] or jt.entry_fn[w] != 0:
                 continue
             if stop():

@@ -138,6 +138,9 @@ class JitPolicy:
     def new_code(self) -> None:
         """The core's tables were made for new code."""
 
+    def records_grew(self) -> None:
+        """Regions of the code's manifest were entered mid-run (:meth:`TranslatingCore.enter_recorded`)."""
+
     def flushed(self) -> None:
         """Self-modifying code made the core forget its translations."""
 
@@ -161,6 +164,8 @@ class AutoPolicy(JitPolicy):
         self.background = AUTO_BACKGROUND
         self._parked: dict[int, int] = {}  # word index -> pc of a deferred region (not sampled for now)
         self._sizes: dict[int, int] = {}  # pc -> instructions of the region found there
+        #: whether the core's code was translated whole (robosoc.chip.whole_code; None: not looked yet)
+        self._whole: bool | None = None
 
     @classmethod
     def region_cap(cls) -> int:
@@ -171,6 +176,16 @@ class AutoPolicy(JitPolicy):
         samples), unless regions compiled by an earlier run (``cached``; default: this core's) can
         be installed."""
         core = self.core
+        if self._whole is None:
+            from robosoc.jit.manifest import whole_code_translated
+
+            key = core.manifest.key
+            self._whole = key is not None and whole_code_translated(key)
+        if self._whole:
+            # every region is entered: what is left (words resumed inside a block after an
+            # interrupt, side exits) is cheaper interpreted than translated region by region (the
+            # fixed + mul flight compiled 3-8 such regions of 2 instructions in each process)
+            return NEVER_ASK
         self.unpark()
         if cached is None:
             cached = core.has_cached_regions()
@@ -211,6 +226,11 @@ class AutoPolicy(JitPolicy):
 
     def new_code(self) -> None:
         self._parked.clear()
+        self._whole = None
+
+    def records_grew(self) -> None:
+        """Regions of the code's manifest were entered mid-run: it may be whole now."""
+        self._whole = None
 
     def flushed(self) -> None:
         self._sizes.clear()
