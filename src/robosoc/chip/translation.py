@@ -19,7 +19,7 @@ import numpy as np
 from numba.typed import List
 
 from robosoc.kernels import chip as kc
-from robosoc.kernels.core_layout import RUN_CHUNK, S_CODE_SIZE, S_PC, S_RUN
+from robosoc.kernels.core_layout import BUILD_FIELDS, RUN_CHUNK, S_CODE_SIZE, S_PC, S_RUN
 from robosoc.kernels.jit_dispatch import JitArrays, empty_tables, set_table_copies, set_tables, tables_list
 
 if TYPE_CHECKING:
@@ -55,6 +55,14 @@ THRESHOLD_LOOK_SECONDS = 0.005
 #: auto: host seconds between looks at the whole-code translations (:mod:`robosoc.chip.whole_code`):
 #: a tile that ran enough starts one, a finished one gives its code's tiles their regions
 WHOLE_CODE_LOOK_SECONDS = 0.1
+
+
+#: (program object id, build fields) of the programs this process saw translated whole: a later
+#: chip holding them gives their tiles translators at its first step, not after the warm-up of a
+#: look (a short run of a sleeping 16x16 chip, 40 ms, had half of it interpreted).  A program whose
+#: object's id was reused by another only gets its translators early: their tables hold what the
+#: manifest of its own code holds.
+_WHOLE_PROGRAMS: set[tuple[int, bytes]] = set()
 
 
 class TileTranslators:
@@ -261,42 +269,51 @@ class ChipTranslation:
         return bool(self._watched)  # only an engine that waits for busy tiles watches any
 
     def _look_whole_code(self, chip: MPSoC) -> None:
-        """auto: the whole-code translations (:mod:`robosoc.chip.whole_code`) of the tiles that
-        executed :data:`~robosoc.chip.whole_code.WHOLE_CODE_MIN_INSTRUCTIONS` once the chip loop
-        ran :data:`~robosoc.chip.whole_code.WHOLE_CODE_MIN_SECONDS` (a short run imports nothing
-        of the translator for them).  Such a tile whose code is translated whole gets its
-        translator at the next look (or, having one, enters the regions); the first whose code
-        is not has it translated whole in a second process."""
+        """auto: the whole-code translations (:mod:`robosoc.chip.whole_code`) of the tiles whose
+        program executed :data:`~robosoc.chip.whole_code.WHOLE_CODE_MIN_INSTRUCTIONS` (on all the
+        tiles holding it) once the chip loop ran :data:`~robosoc.chip.whole_code.WHOLE_CODE_MIN_SECONDS`
+        (a short run imports nothing of the translator for them), or at once for a program this
+        process knows is translated whole.  Such a tile gets its translator at the next look (or,
+        having one, enters the regions); the first whose code is not translated whole has it
+        translated in a second process."""
         from robosoc.chip.whole_code import WHOLE_CODE_MIN_INSTRUCTIONS, WHOLE_CODE_MIN_SECONDS
 
-        self._whole_look = time.perf_counter() + WHOLE_CODE_LOOK_SECONDS
-        if self._run_seconds < WHOLE_CODE_MIN_SECONDS:
-            return
-        executed = chip.cores.opc.sum(axis=1)
         tiles = np.array(sorted(chip.programs), dtype=np.int64)
-        tiles = tiles[
-            ~self._stopped[tiles]
-            & (chip.cores.st[tiles, S_CODE_SIZE] != 0)
-            & (executed[tiles] >= WHOLE_CODE_MIN_INSTRUCTIONS)
-        ]
-        if not len(tiles):
-            return
+        tiles = tiles[~self._stopped[tiles] & (chip.cores.st[tiles, S_CODE_SIZE] != 0)]
+        if _WHOLE_PROGRAMS:
+            self._enter_whole(chip, [t for t in tiles.tolist() if self._memo(chip, t) in _WHOLE_PROGRAMS])
+        if self._run_seconds < WHOLE_CODE_MIN_SECONDS:
+            return  # (looked at again at the next step: a short run ran 0.02 s after 0.04 s)
+        self._whole_look = time.perf_counter() + WHOLE_CODE_LOOK_SECONDS
+        # the instructions executed by all tiles holding the same program: its translation serves
+        # them all (a sleeping 16x16 chip's tiles run a few thousand each)
+        executed = chip.cores.opc[tiles].sum(axis=1)
+        programs = np.array([id(chip.programs[t]) for t in tiles.tolist()], dtype=np.int64)
+        group = np.unique(programs, return_inverse=True)[1]
+        tiles = tiles[np.bincount(group, weights=executed)[group] >= WHOLE_CODE_MIN_INSTRUCTIONS]
+        if len(tiles):
+            self._enter_whole(chip, tiles.tolist())
+            self._start_whole(chip, tiles.tolist())
+
+    def _enter_whole(self, chip: MPSoC, tiles: list[int]) -> None:
+        """Of ``tiles``, those whose code is translated whole get their translators at the next look
+        (or, having one, enter the regions)."""
         from robosoc.chip.whole_code import whole_code_translations
         from robosoc.jit.manifest import whole_code_translated
 
         translations = whole_code_translations()
         running = translations.running()
-        loaded = tiles.tolist()
-        for t in loaded:
+        for t in tiles:
             if t not in self._keys:
                 self._keys[t] = self._key_of(chip, t)
-        for key in {self._keys[t] for t in loaded} - self._whole:
+        for key in {self._keys[t] for t in tiles} - self._whole:
             if key in translations.done or (key != running and whole_code_translated(key)):
                 self._whole.add(key)
-        for t in loaded:
+        for t in tiles:
             if self._keys[t] not in self._whole or t in self._entered:
                 continue
             self._entered.add(t)
+            _WHOLE_PROGRAMS.add(self._memo(chip, t))
             if not self.translators.has(t):
                 self._ready.add(t)
                 continue
@@ -304,24 +321,35 @@ class ChipTranslation:
             assert translator is not None
             if translator.enter_recorded():
                 self._give(t)
-        if running is not None:
+
+    def _start_whole(self, chip: MPSoC, tiles: list[int]) -> None:
+        """The code of the first of ``tiles`` not translated whole (nor started) is translated in a
+        second process, if none runs."""
+        from robosoc.chip.whole_code import whole_code_translations
+
+        translations = whole_code_translations()
+        if translations.running() is not None:
             return
-        for t in loaded:
+        for t in tiles:
             key = self._keys[t]
             if t in self._asked or key in self._whole:
                 continue
             if translations.start(chip.cores, t, key):
-                self._asked.update(u for u in loaded if self._keys[u] == key)
+                self._asked.update(u for u in tiles if self._keys[u] == key)
                 return  # one at a time
             if translations.running() is None and key in translations.failed:
                 self._asked.add(t)
 
+    @staticmethod
+    def _memo(chip: MPSoC, t: int) -> tuple[int, bytes]:
+        """What tile ``t``'s code is known by in this process: its program object and build."""
+        return id(chip.programs[t]), chip.cores.st[t, BUILD_FIELDS].tobytes()
+
     def _key_of(self, chip: MPSoC, t: int) -> str:
         """The manifest key of tile ``t``'s code for auto (made once per program and build)."""
         from robosoc.jit.engine import code_manifest_key
-        from robosoc.jit.tables import BUILD_FIELDS
 
-        memo = (id(chip.programs[t]), chip.cores.st[t, BUILD_FIELDS].tobytes())
+        memo = self._memo(chip, t)
         key = self._key_memo.get(memo)
         if key is None:
             key = self._key_memo[memo] = code_manifest_key(chip.cores, t, self.engine.name)

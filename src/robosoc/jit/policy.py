@@ -11,6 +11,7 @@ tables and its manifest (docs/translation.md, "Tiers and cache").
 
 from __future__ import annotations
 
+import math
 import weakref
 from typing import TYPE_CHECKING
 
@@ -176,16 +177,8 @@ class AutoPolicy(JitPolicy):
         samples), unless regions compiled by an earlier run (``cached``; default: this core's) can
         be installed."""
         core = self.core
-        if self._whole is None:
-            from robosoc.jit.manifest import whole_code_translated
-
-            key = core.manifest.key
-            self._whole = key is not None and whole_code_translated(key)
-        if self._whole:
-            # every region is entered: what is left (words resumed inside a block after an
-            # interrupt, side exits) is cheaper interpreted than translated region by region (the
-            # fixed + mul flight compiled 3-8 such regions of 2 instructions in each process)
-            return NEVER_ASK
+        if self.whole():
+            return THRESHOLDS["jit"]
         self.unpark()
         if cached is None:
             cached = core.has_cached_regions()
@@ -236,8 +229,26 @@ class AutoPolicy(JitPolicy):
         self._sizes.clear()
         self._parked.clear()
 
+    def whole(self) -> bool:
+        """Whether the core's code was translated whole (:mod:`robosoc.chip.whole_code`, looked up
+        once per code): its regions are entered, and what is left (a word where an interrupt
+        resumed inside a block, a word first executed later) is translated as ``jit`` would, at
+        its first arrival and whatever the budget, compiled in the background and recorded: a few
+        small regions, once per program.  (Interpreted instead, the sleeping 16x16 chip's resumed
+        words cost it 1.8x real time against 3x on ``jit``; left to the budget, the fixed + mul
+        flight compiled 3-8 of them anew in each process, its sampled words differing.)"""
+        if self._whole is None:
+            from robosoc.jit.manifest import whole_code_translated
+
+            key = self.core.manifest.key
+            self._whole = key is not None and whole_code_translated(key)
+        return self._whole
+
     def budget(self) -> float:
-        """Seconds of compiling still allowed (AUTO_COMPILE_SHARE of the run so far, less what was spent)."""
+        """Seconds of compiling still allowed (AUTO_COMPILE_SHARE of the run so far, less what was
+        spent; no limit for code translated whole)."""
+        if self.whole():
+            return math.inf
         stats = self.core.stats
         return AUTO_COMPILE_SHARE * stats.run_seconds - stats.translate_seconds
 

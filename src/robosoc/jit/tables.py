@@ -22,7 +22,7 @@ import numpy as np
 
 from robosoc.isa.table import OP_ENTRY
 from robosoc.jit.target import Target
-from robosoc.kernels.core_layout import ERRATA_RTL, S_CODE_SIZE, S_ERRATA, S_MEM_BASE, S_MEM_SIZE, S_MUL
+from robosoc.kernels.core_layout import BUILD_FIELDS, ERRATA_RTL, S_CODE_SIZE
 from robosoc.kernels.jit_dispatch import CTX_WORDS, NEVER_TRANSLATE, JitArrays, empty_tables
 
 if TYPE_CHECKING:
@@ -54,7 +54,6 @@ _T = TypeVar("_T")
 
 #: A build: the target a core's code is translated for, and whether the core multiplies.
 Build = tuple[Target, bool]
-BUILD_FIELDS = [S_MEM_BASE, S_MEM_SIZE, S_CODE_SIZE, S_ERRATA, S_MUL]  # the state fields of a build
 
 
 def build_of(st: np.ndarray) -> Build:

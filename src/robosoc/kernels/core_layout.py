@@ -140,3 +140,7 @@ NEVER = 1 << 62  # a cycle that never comes (event times, wake-ups)
 
 PIPELINE_FILL = 3  # the first instruction after reset executes in cycle 3
 OUT_CAPACITY = 1 << 16
+
+#: The state fields a core's build is made of (what translated code is specialised for:
+#: robosoc.jit.tables.build_of): memory base and size, code size, errata mode, multiplier.
+BUILD_FIELDS = [S_MEM_BASE, S_MEM_SIZE, S_CODE_SIZE, S_ERRATA, S_MUL]
