@@ -246,3 +246,24 @@ def test_the_second_process_refuses_a_payload_that_is_not_the_keys_code(tmp_path
     assert whole_code.main([str(payload), "0" * 64]) == 1
     assert not whole_code_translated("0" * 64)
     assert whole_code.main(["only-one-argument"]) == 2
+
+
+def test_a_lock_being_written_is_respected_and_a_cache_it_cannot_write_starts_nothing(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    chip = loaded_chip("interp", tiles=((1, 0),))
+    t = chip.config.tile_index((1, 0))
+    key = code_manifest_key(chip.cores, t, "auto")
+    lock = whole_code_path(key).with_suffix(".lock")
+    lock.parent.mkdir(parents=True, exist_ok=True)
+    lock.write_text("")  # just taken: its pid comes next
+    assert not WholeCodeTranslations().start(chip.cores, t, key)
+    assert lock.exists()
+
+    blocked = tmp_path / "blocked"
+    blocked.mkdir()
+    (blocked / "jit").write_text("a file where the translator's folder would be\n")
+    monkeypatch.setenv("ROBOSOC_CACHE", str(blocked))
+    translations = WholeCodeTranslations()
+    assert not translations.start(chip.cores, t, key)  # no exception: the run goes on interpreting
+    assert key in translations.failed and translations.running() is None

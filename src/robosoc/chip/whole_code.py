@@ -62,6 +62,8 @@ WHOLE_CODE_MIN_SECONDS = 0.02
 STOP_SECONDS = 2.0
 #: seconds a released second process (its parent ended normally) may go on before it stops
 RELEASED_SECONDS = 120.0
+#: seconds a lock without a pid yet counts as being written by the process that took it
+LOCK_WRITE_SECONDS = 5.0
 
 
 def _lock_path(key: str) -> Path:
@@ -100,9 +102,10 @@ def _take_lock(key: str) -> Path | None:
         except FileExistsError:
             try:
                 pid = int(path.read_text().strip() or "0")
+                young = time.time() - path.stat().st_mtime < LOCK_WRITE_SECONDS
             except (OSError, ValueError):
-                pid = 0
-            if pid > 0 and _alive(pid):
+                pid, young = 0, False
+            if (pid > 0 and _alive(pid)) or (pid == 0 and young):  # (0: its taker writes it now)
                 return None
             with contextlib.suppress(OSError):  # a process that died holding it: taken over
                 path.unlink()
@@ -146,7 +149,11 @@ class WholeCodeTranslations:
         process; False when one runs already (this process's or another's for the same code)."""
         if self.running() is not None or key in self.failed or key in self.done:
             return False
-        lock = _take_lock(key)
+        try:
+            lock = _take_lock(key)
+        except OSError:  # (a cache folder it may not write: the run goes on without)
+            self.failed.add(key)
+            return False
         if lock is None:
             return False
         try:
