@@ -36,7 +36,7 @@ from rich.console import Console
 from rich.table import Table
 
 import robosoc.cosim.lockstep as lockstep
-from robosoc.benchmarks.fly import with_engine
+from robosoc.benchmarks.fly import WARM_UP_S, with_engine
 from robosoc.chip.mpsoc import MPSoC
 from robosoc.chip.translation import ChipTranslation
 from robosoc.config.firmware import FirmwareConfig
@@ -269,7 +269,8 @@ def run_fly_breakdown(
     out = []
     for fw in builds:
         scenario = dataclasses.replace(base, firmware=fw)
-        fly_breakdown(dataclasses.replace(scenario, duration_s=0.01))  # build and compile outside the timing
+        # build, compile and enter auto's translations outside the timing (as bench fly does)
+        fly_breakdown(dataclasses.replace(scenario, duration_s=min(WARM_UP_S, duration_s)))
         breakdown = fly_breakdown(scenario)
         print_breakdown(breakdown, console)
         out.append(breakdown)
