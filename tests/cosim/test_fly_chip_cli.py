@@ -123,6 +123,37 @@ def test_bench_fly_flies_every_build_on_the_engine_asked_for(monkeypatch: pytest
     assert bad.exit_code == 2 and "--engine: must be one of interp, jit, auto, got 'fast'" in bad.output
 
 
+def test_bench_fly_warms_up_and_marks_a_build_flown_while_its_code_was_translated(monkeypatch) -> None:
+    """The warm-up flight lasts WARM_UP_S (at most the timed one's duration), so that auto enters
+    its translations before the timing; a build flown while the second process translated its
+    firmware (robosoc.chip.whole_code) is marked, with a note, as not yet at its steady speed."""
+    from robosoc.benchmarks import fly as bench
+
+    durations = []
+    real = bench.fly_scenario
+
+    def flown(scenario, *args, **kwargs):
+        durations.append(scenario.duration_s)
+        return real(scenario, *args, **kwargs)
+
+    class Translating:
+        def running(self) -> str:
+            return "a key"
+
+    monkeypatch.setattr(bench, "fly_scenario", flown)
+    monkeypatch.setattr(bench, "WARM_UP_S", 0.05)
+    monkeypatch.setattr(bench, "whole_code_translations", lambda: Translating())
+    result = runner.invoke(app, ["bench", "fly", "--arith", "fixed", "--mul", "--duration", "0.1"])
+    assert result.exit_code == 0, result.output
+    assert durations == [0.05, 0.1]
+    assert "chip fixed+mul *" in result.output and "still translating" in result.output
+    runner.invoke(app, ["bench", "fly", "--arith", "fixed", "--mul", "--duration", "0.03"])
+    assert durations[2:] == [0.03, 0.03]  # (a warm-up no longer than the timed flight)
+    monkeypatch.setattr(bench, "whole_code_translations", lambda: type("Idle", (), {"running": lambda self: None})())
+    quiet = runner.invoke(app, ["bench", "fly", "--arith", "fixed", "--mul", "--duration", "0.1"])
+    assert quiet.exit_code == 0 and "*" not in quiet.output
+
+
 def test_fly_gives_the_same_flight_with_every_engine(tmp_path: Path) -> None:
     """The engine is a matter of host speed only: flight, jobs and figures are bit-identical."""
     folders = {}
