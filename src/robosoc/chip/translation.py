@@ -139,6 +139,7 @@ class ChipTranslation:
         self._asked: set[int] = set()  # tiles whose code's translation was started (or failed)
         self._entered: set[int] = set()  # tiles whose code is whole and that were given its regions
         self._ready: set[int] = set()  # tiles to get their translator at the next look: their code is whole
+        self._seen_before: dict[str, bool] = {}  # key -> whether an earlier chip ran that code (whole_code.seen_before)
         self._whole_look = 0.0  # host time of the next look
         self._threshold_look = 0.0  # host time auto's threshold is looked at next, if nothing else changed
         self._entered_regions: Callable[[], int] | None = None  # robosoc.jit.tables.entered_regions, once imported
@@ -323,9 +324,9 @@ class ChipTranslation:
                 self._give(t)
 
     def _start_whole(self, chip: MPSoC, tiles: list[int]) -> None:
-        """The code of the first of ``tiles`` not translated whole (nor started) is translated in a
-        second process, if none runs."""
-        from robosoc.chip.whole_code import whole_code_translations
+        """The code of the first of ``tiles`` not translated whole (nor started) that an earlier
+        chip ran too is translated in a second process, if none runs."""
+        from robosoc.chip.whole_code import seen_before, whole_code_translations
 
         translations = whole_code_translations()
         if translations.running() is not None:
@@ -334,6 +335,10 @@ class ChipTranslation:
             key = self._keys[t]
             if t in self._asked or key in self._whole:
                 continue
+            if key not in self._seen_before:
+                self._seen_before[key] = seen_before(key)
+            if not self._seen_before[key]:
+                continue  # its first run: the next chip running it starts the translation
             if translations.start(chip.cores, t, key):
                 self._asked.update(u for u in tiles if self._keys[u] == key)
                 return  # one at a time

@@ -5,7 +5,8 @@ out of a share of the run (:mod:`robosoc.jit.policy`).  On the chip that does no
 speed: partial translation leaves the tile entering and leaving native code, and a tile that works
 in short bursts between sleeps never looks busy enough.  So once a tile has executed
 :data:`WHOLE_CODE_MIN_INSTRUCTIONS` and the chip loop has run :data:`WHOLE_CODE_MIN_SECONDS`,
-its program's whole code is translated in a second process (``python -m robosoc.chip.whole_code``,
+on the code's second run or later (:func:`seen_before`), its program's whole code is translated
+in a second process (``python -m robosoc.chip.whole_code``,
 at a lower priority: on a host with a spare core the run goes on at its own speed), region by
 region into the object cache and the code's manifest, then marked whole
 (:func:`robosoc.jit.manifest.mark_whole_code`).  From then on, in this run and every later one,
@@ -75,6 +76,21 @@ def _lock_path(key: str) -> Path:
 def _release_path(key: str) -> Path:
     """The note a process that ended normally leaves its child (its pid): finish, do not stop."""
     return _lock_path(key).with_suffix(".release")
+
+
+def seen_before(key: str) -> bool:
+    """Whether a chip ran the code with manifest key ``key`` before (in this process or another,
+    as far as a look at its tiles); the first asking notes it.  Its whole code is translated only
+    from its second run on: a firmware author flies each version of their code once or twice, and
+    a translation that runs beside the only flight of a version slows it (the second host core is
+    not free) for nothing."""
+    path = _lock_path(key).with_suffix(".seen")
+    if path.is_file():
+        return True
+    with contextlib.suppress(OSError):
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.touch()
+    return False
 
 
 def _alive(pid: int) -> bool:
