@@ -251,6 +251,10 @@ def test_the_second_process_refuses_a_payload_that_is_not_the_keys_code(tmp_path
     assert whole_code.main([str(payload), "0" * 64]) == 1
     assert not whole_code_translated("0" * 64)
     assert whole_code.main(["only-one-argument"]) == 2
+    for bad in (tmp_path / "missing.npz", tmp_path / "garbage.npz"):
+        if bad.name == "garbage.npz":
+            bad.write_text("not a payload\n")
+        assert whole_code.main([str(bad), "0" * 64]) == 1  # a message, not a traceback
 
 
 def test_a_lock_being_written_is_respected_and_a_cache_it_cannot_write_starts_nothing(

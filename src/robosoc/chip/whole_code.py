@@ -39,6 +39,7 @@ import subprocess
 import sys
 import tempfile
 import time
+import zipfile
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -284,20 +285,26 @@ def _translate(payload: Path, key: str) -> int:
     from robosoc.jit.engine import TranslatingCore, code_manifest_key
     from robosoc.jit.manifest import mark_whole_code, read_manifest
 
-    with np.load(payload) as data:
-        base, mem_size, code_size, errata, mul = (int(v) for v in data["fields"])
-        code = data["code"]
-        executed = data["executed"]
-        parent = int(data["parent"])
+    try:
+        with np.load(payload) as data:
+            base, mem_size, code_size, errata, mul = (int(v) for v in data["fields"])
+            code = data["code"]
+            executed = data["executed"].astype(np.int64)
+            parent = int(data["parent"])
+        state = CoreState.new(mul=bool(mul), sram_size=mem_size, base=base, errata=errata, code_size=code_size)
+        state.m8[0, :code_size] = code
+    except (OSError, ValueError, KeyError, TypeError, IndexError, zipfile.BadZipFile) as exc:
+        print(f"whole_code: cannot read the payload {payload}: {exc}", file=sys.stderr)
+        return 1
     with contextlib.suppress(OSError):  # read: not left behind if this process is stopped
         payload.unlink()
-    state = CoreState.new(mul=bool(mul), sram_size=mem_size, base=base, errata=errata, code_size=code_size)
-    state.m8[0, :code_size] = code
     if code_manifest_key(state, 0, "auto") != key:
         print(f"whole_code: {payload} does not hold the code of manifest {key}", file=sys.stderr)
         return 1
     stop = _StopRule(key, parent)
-    words = np.concatenate([executed, np.arange(code_size // 4)])  # what the run executed first
+    words = np.arange(code_size // 4)
+    executed = executed[(executed >= 0) & (executed < len(words))]
+    words = np.concatenate([executed, words])  # what the run executed first
     made, instructions = TranslatingCore(state, 0, "auto").translate_code(stop, words)
     if stop():
         print(f"whole_code: stopped after {made} regions ({stop.why})", file=sys.stderr)
