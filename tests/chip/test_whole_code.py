@@ -251,7 +251,8 @@ def test_the_second_process_refuses_a_payload_that_is_not_the_keys_code(tmp_path
     assert whole_code.main([str(payload), "0" * 64]) == 1
     assert not whole_code_translated("0" * 64)
     assert whole_code.main(["only-one-argument"]) == 2
-    for bad in (tmp_path / "missing.npz", tmp_path / "garbage.npz"):
+    assert whole_code.main([str(payload), "../../elsewhere"]) == 2  # not a manifest key: no path built from it
+    for bad in (tmp_path / "missing.npz", tmp_path / "garbage.npz", tmp_path, Path("/dev/null")):
         if bad.name == "garbage.npz":
             bad.write_text("not a payload\n")
         assert whole_code.main([str(bad), "0" * 64]) == 1  # a message, not a traceback

@@ -279,12 +279,16 @@ class ChipTranslation:
         translated in a second process."""
         from robosoc.chip.whole_code import WHOLE_CODE_MIN_INSTRUCTIONS, WHOLE_CODE_MIN_SECONDS
 
+        warm = self._run_seconds >= WHOLE_CODE_MIN_SECONDS
+        if not warm and not _WHOLE_PROGRAMS:
+            return  # (looked at again at the next step: a short run ran 0.02 s after 0.04 s)
         tiles = np.array(sorted(chip.programs), dtype=np.int64)
         tiles = tiles[~self._stopped[tiles] & (chip.cores.st[tiles, S_CODE_SIZE] != 0)]
         if _WHOLE_PROGRAMS:
-            self._enter_whole(chip, [t for t in tiles.tolist() if self._memo(chip, t) in _WHOLE_PROGRAMS])
-        if self._run_seconds < WHOLE_CODE_MIN_SECONDS:
-            return  # (looked at again at the next step: a short run ran 0.02 s after 0.04 s)
+            known = [t for t in tiles.tolist() if t not in self._entered and self._memo(chip, t) in _WHOLE_PROGRAMS]
+            self._enter_whole(chip, known)
+        if not warm:
+            return
         self._whole_look = time.perf_counter() + WHOLE_CODE_LOOK_SECONDS
         # the instructions executed by all tiles holding the same program: its translation serves
         # them all (a sleeping 16x16 chip's tiles run a few thousand each)

@@ -35,6 +35,7 @@ from __future__ import annotations
 import atexit
 import contextlib
 import os
+import re
 import subprocess
 import sys
 import tempfile
@@ -293,7 +294,7 @@ def _translate(payload: Path, key: str) -> int:
             parent = int(data["parent"])
         state = CoreState.new(mul=bool(mul), sram_size=mem_size, base=base, errata=errata, code_size=code_size)
         state.m8[0, :code_size] = code
-    except (OSError, ValueError, KeyError, TypeError, IndexError, zipfile.BadZipFile) as exc:
+    except (OSError, EOFError, ValueError, KeyError, TypeError, IndexError, zipfile.BadZipFile) as exc:
         print(f"whole_code: cannot read the payload {payload}: {exc}", file=sys.stderr)
         return 1
     with contextlib.suppress(OSError):  # read: not left behind if this process is stopped
@@ -346,6 +347,9 @@ def main(argv: list[str] | None = None) -> int:
     args = sys.argv[1:] if argv is None else argv
     if len(args) not in (2, 3):
         print("usage: python -m robosoc.chip.whole_code PAYLOAD KEY [LOCK]", file=sys.stderr)
+        return 2
+    if re.fullmatch(r"[0-9a-f]{64}", args[1]) is None:
+        print(f"whole_code: KEY must be a manifest key (64 hex digits), got {args[1]!r}", file=sys.stderr)
         return 2
     with contextlib.suppress(OSError):
         os.nice(10)  # background work: the run it serves goes first

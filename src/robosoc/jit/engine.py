@@ -232,8 +232,8 @@ class TranslatingCore(CoreTables):
             self.stats.translate_seconds += time.perf_counter() - start
 
     def _translate(self, pc: int) -> Region:
-        from robosoc.jit.emit_ir import NAME_PLACEHOLDER, EmittedRegion, emit_region
-        from robosoc.jit.regions import Region, discover
+        from robosoc.jit.emit_ir import NAME_PLACEHOLDER, EmittedRegion
+        from robosoc.jit.regions import Region
 
         jt = self._tables()
         verdict = self.policy.before(pc)
@@ -250,18 +250,14 @@ class TranslatingCore(CoreTables):
         self._install_new_known()  # another core may have translated it meanwhile
         if jt.entry_fn[(pc - self._target().base) >> 2] != 0:
             return Region(pc, {})
-        target = self._target()
-        base = target.base
-        view = self._view()
+        base = self._target().base
         m32 = self.state.m32[self.tile]
-        cap = self.policy.region_cap()
-        region = discover(view, pc, cap, translated=lambda a: jt.entry_fn[(a - base) >> 2] != 0)
+        region = self._found(pc, self.policy.region_cap())
         if verdict == policies.RENT and not self.policy.pays_for(pc, region.instructions):
             self.policy.defer(pc)
             return Region(pc, {})
         if region.blocks:
-            emitted = emit_region(target, region)
-            pcs = np.array(sorted((p - base) >> 2 for p in region.words()), dtype=np.int64)
+            emitted, pcs = self._written(region)
             if self.background and not self.compiler.ready(emitted.ir):
                 # compiled in the background thread; installed by finish_compiles() (the word waits)
                 words = m32[pcs].copy()
@@ -283,6 +279,22 @@ class TranslatingCore(CoreTables):
             pcs = np.array([(pc - base) >> 2], dtype=np.int64)
         return self._enter(region, emitted, address, pcs, m32[pcs].copy())
 
+    def _found(self, pc: int, cap: int) -> Region:
+        """The region from ``pc`` of at most ``cap`` instructions, leaving the blocks entered already
+        to their regions."""
+        from robosoc.jit.regions import discover
+
+        entry_fn, base = self._tables().entry_fn, self._target().base
+        return discover(self._view(), pc, cap, translated=lambda a: entry_fn[(a - base) >> 2] != 0)
+
+    def _written(self, region: Region) -> tuple[EmittedRegion, np.ndarray]:
+        """A found region's IR, and the word indices of its instructions."""
+        from robosoc.jit.emit_ir import emit_region
+
+        target = self._target()
+        pcs = np.array(sorted((p - target.base) >> 2 for p in region.words()), dtype=np.int64)
+        return emit_region(target, region), pcs
+
     def translate_code(
         self, stop: Callable[[], bool] = lambda: False, words: np.ndarray | None = None
     ) -> tuple[int, int]:
@@ -295,13 +307,11 @@ class TranslatingCore(CoreTables):
 
         This is what a second process does for ``auto`` (:mod:`robosoc.chip.whole_code`): a later
         run enters every region from the records at once, as ``jit`` would have made them."""
-        from robosoc.jit.emit_ir import NAME_PLACEHOLDER, emit_region
-        from robosoc.jit.regions import MAX_REGION_INSTRUCTIONS, discover
+        from robosoc.jit.emit_ir import NAME_PLACEHOLDER
+        from robosoc.jit.regions import MAX_REGION_INSTRUCTIONS
 
         jt = self._tables()  # (with the records of earlier runs entered)
-        target = self._target()
-        base = target.base
-        view = self._view()
+        base = self._target().base
         m32 = self.state.m32[self.tile]
         held = jt.tmap != 0  # words some region translated
         made = instructions = 0
@@ -310,11 +320,10 @@ class TranslatingCore(CoreTables):
                 continue
             if stop():
                 break
-            region = discover(view, base + 4 * w, MAX_REGION_INSTRUCTIONS, lambda a: jt.entry_fn[(a - base) >> 2] != 0)
+            region = self._found(base + 4 * w, MAX_REGION_INSTRUCTIONS)
             if not region.blocks:
                 continue  # not an instruction the translator takes (the interpreter's, if ever reached)
-            emitted = emit_region(target, region)
-            pcs = np.array(sorted((p - base) >> 2 for p in region.words()), dtype=np.int64)
+            emitted, pcs = self._written(region)
             address = self.compiler.add(emitted.ir, NAME_PLACEHOLDER, [emitted.function], region.instructions)[0]
             self._enter(region, emitted, address, pcs, m32[pcs].copy())
             held[pcs] = True

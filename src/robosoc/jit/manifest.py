@@ -15,7 +15,6 @@ from __future__ import annotations
 import functools
 import hashlib
 import json
-import os
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -25,6 +24,7 @@ import numpy as np
 
 from robosoc.cache import cache_root
 from robosoc.jit.compiler import PIPELINE
+from robosoc.output_files import write_atomic
 
 #: the arrays of a record, with their dtypes (as in :class:`robosoc.jit.tables.Translated`)
 _ARRAYS = {
@@ -123,9 +123,7 @@ def mark_whole_code(key: str, records: int) -> None:
     """Mark the program's whole code translated (written whole or not at all)."""
     path = whole_code_path(key)
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_suffix(f".{os.getpid()}.tmp")
-    tmp.write_text(f"{records}\n")
-    tmp.replace(path)
+    write_atomic(path, f"{records}\n")
 
 
 def add_to_manifest(key: str, record: RegionRecord) -> None:
