@@ -6,7 +6,7 @@ This is the data half of a core; the behaviour is :func:`robosoc.kernels.core.ru
 from __future__ import annotations
 
 import struct
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -62,6 +62,7 @@ class CoreState:
     m32: np.ndarray
     dec: np.ndarray
     out: np.ndarray
+    _bundle: CoreArrays | None = field(default=None, init=False, repr=False, compare=False)
 
     @classmethod
     def new(
@@ -211,8 +212,26 @@ class CoreState:
         return int(self.st[tile, S_CODE_SIZE])
 
     def arrays(self) -> CoreArrays:
-        """The arrays as the numba kernels take them (a named bundle, no copies)."""
-        return CoreArrays(self.st, self.ctr, self.opc, self.regs, self.m8, self.m16, self.m32, self.dec, self.out)
+        """The arrays as the numba kernels take them (a named bundle, no copies): the same bundle
+        until one of them is replaced (:class:`robosoc.chip.kernel_entry.KernelEntry` types a kernel's
+        arguments once for the same objects)."""
+        b = self._bundle
+        if (
+            b is None
+            or b.st is not self.st
+            or b.ctr is not self.ctr
+            or b.opc is not self.opc
+            or b.regs is not self.regs
+            or b.m8 is not self.m8
+            or b.m16 is not self.m16
+            or b.m32 is not self.m32
+            or b.dec is not self.dec
+            or b.out is not self.out
+        ):
+            b = self._bundle = CoreArrays(
+                self.st, self.ctr, self.opc, self.regs, self.m8, self.m16, self.m32, self.dec, self.out
+            )
+        return b
 
     @property
     def tiles(self) -> int:

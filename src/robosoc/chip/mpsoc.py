@@ -22,6 +22,7 @@ import numpy as np
 from robosoc.chip.core_state import SRAM_BASE, CoreState
 from robosoc.chip.counters import counters_dict
 from robosoc.chip.engines import Engine, resolve_engine
+from robosoc.chip.kernel_entry import KernelEntry
 from robosoc.chip.single import (
     ERRATUM_WARNINGS,
     check_budget,
@@ -39,6 +40,7 @@ from robosoc.isa.disasm import disassemble
 from robosoc.isa.table import MEMORY_CYCLES
 from robosoc.kernels import chip as kc
 from robosoc.kernels import noc as nk
+from robosoc.kernels import period_accounts
 from robosoc.kernels.core_layout import (
     CTR_SIZE,
     ERRATA_MODES,
@@ -52,7 +54,7 @@ from robosoc.kernels.core_layout import (
     S_PROF_BASE,
     S_RUN,
 )
-from robosoc.kernels.period_accounts import close_accounts, sparse_rows
+from robosoc.kernels.period_accounts import sparse_rows
 from robosoc.program.elf import Program, Region
 
 XOUT_CAPACITY = 1 << 20
@@ -122,6 +124,7 @@ def account_counter_map() -> tuple[tuple[str, ...], np.ndarray]:
     return names, np.array([[c[name] for c in columns] for name in names], dtype=np.int64)
 
 
+@functools.cache
 @functools.cache
 def _account_counter_rows() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """:func:`account_counter_map`'s matrix as the period close takes it (sparse, row by row)."""
@@ -200,6 +203,7 @@ class MPSoC:
         self._work = np.zeros((kc.WORK_ROWS, n), dtype=np.int64)
         self.programs: dict[int, Program] = {}
         self._queue_next = 0
+        self._reachable: set[tuple[int, int]] = set()  # destinations inject has checked
         self._io_received: list[tuple[int, list[int]]] = []
         self.rec = np.zeros((0, kc.REC_COLS), dtype=np.int64)
         self._timeline: list[np.ndarray | tuple[int, ...]] = []  # rows of events, or one event (the I/O tile's)
@@ -207,6 +211,11 @@ class MPSoC:
         self._timeline_dropped = 0
         # translated code (engine jit or auto): per tile its translator, created at the first step
         self._jit = ChipTranslation(n, self.engine)
+        self._book = kc.ChipBook(self.cst, self.acc, self.snap, self.gst, self.xout, self.io_out, self.rec, self._work)
+        # the kernels called at every step and period close, typed once (chip/kernel_entry.py)
+        self._run_chip = KernelEntry(kc, "run_chip")
+        self._bad_pcs = KernelEntry(kc, "bad_pcs")
+        self._close_accounts = KernelEntry(period_accounts, "close_accounts")
 
     # --- the timeline recorder -------------------------------------------------------------
     def record_timeline(self, rows: int = TIMELINE_ROWS, keep: int = TIMELINE_KEEP) -> None:
@@ -288,12 +297,15 @@ class MPSoC:
     # --- the I/O tile ----------------------------------------------------------------------
     def inject(self, dest: tuple[int, int], payload: Sequence[int], at_cycle: int) -> None:
         """Send a packet from the I/O tile to ``dest`` (payload: 16-bit flits) leaving at ``at_cycle``."""
-        if at_cycle < self.cycle:
+        if at_cycle < self.gst[kc.G_TIME]:
             raise ValueError(f"at_cycle {at_cycle} is in the past (the chip is at cycle {self.cycle})")
-        if not self.config.contains(dest):
-            raise ValueError(f"destination {dest} is outside the mesh")
-        if not self.powered[self.config.tile_index(dest)]:
-            raise ValueError(f"destination {dest} is powered off")
+        x, y = dest
+        if (x, y) not in self._reachable:
+            if not self.config.contains(dest):
+                raise ValueError(f"destination {dest} is outside the mesh")
+            if not self.powered[self.config.tile_index(dest)]:
+                raise ValueError(f"destination {dest} is powered off")
+            self._reachable.add((x, y))
         if len(payload) + 2 > self.config.noc.max_packet_flits:
             raise ValueError(f"payload of {len(payload)} flits exceeds the maximum packet")
         if len(payload) + 2 < MIN_PACKET_FLITS:
@@ -304,28 +316,25 @@ class MPSoC:
         # The rows are a ring used in order and sent in order: the row IO_ROWS injections back is
         # free unless it is still the oldest one waiting (the queue's head) or being sent.
         row = self._queue_next % IO_ROWS
-        io_tile = self.noc.tile[self.io]
+        io_tile = self.noc.tile[self.io]  # (a view: written through)
         if self._queue_next >= IO_ROWS and row in (io_tile[nk.T_Q_HEAD], io_tile[nk.T_SEND_ROW]):
             raise ValueError(f"too many injected packets pending ({IO_ROWS} not yet sent)")
-        q = self.noc.queue
-        flits = [(dest[0] << 4) | dest[1], len(payload), *payload]
-        q[row, nk.Q_TILE] = self.io
-        q[row, nk.Q_READY] = at_cycle
-        q[row, nk.Q_LEN] = len(flits)
-        q[row, nk.Q_NEXT] = nk.NONE
-        q[row, nk.Q_START] = nk.NONE
-        q[row, nk.Q_END] = nk.NONE
-        q[row, nk.Q_FLITS : nk.Q_FLITS + len(flits)] = np.array(flits, dtype=np.int64) & 0xFFFF
-        tail = self.noc.tile[self.io, nk.T_Q_TAIL]
+        flits = [(x << 4) | y, len(payload), *payload]
+        head = [nk.NONE] * nk.Q_FLITS  # the row's own columns, then its flits: one write
+        head[nk.Q_TILE] = self.io
+        head[nk.Q_READY] = at_cycle
+        head[nk.Q_LEN] = len(flits)
+        self.noc.queue[row, : nk.Q_FLITS + len(flits)] = head + [f & 0xFFFF for f in flits]
+        tail = io_tile[nk.T_Q_TAIL]
         if tail == nk.NONE:
-            self.noc.tile[self.io, nk.T_Q_HEAD] = row
+            io_tile[nk.T_Q_HEAD] = row
         else:
-            q[tail, nk.Q_NEXT] = row
-            if self.noc.tile[self.io, nk.T_Q_HEAD] == nk.NONE:
-                self.noc.tile[self.io, nk.T_Q_HEAD] = row
-        self.noc.tile[self.io, nk.T_Q_TAIL] = row
+            self.noc.queue[tail, nk.Q_NEXT] = row
+            if io_tile[nk.T_Q_HEAD] == nk.NONE:
+                io_tile[nk.T_Q_HEAD] = row
+        io_tile[nk.T_Q_TAIL] = row
         self._queue_next += 1
-        if self.recording:
+        if self.rec.shape[0]:  # recording
             head = [flits[k] if k < len(flits) else 0 for k in (2, 3, 5)]
             self._keep_event((kc.R_SEND, self.io, at_cycle, flits[0], len(flits), *head))
 
@@ -347,8 +356,11 @@ class MPSoC:
 
     # --- running ---------------------------------------------------------------------------
     def book(self) -> kc.ChipBook:
-        """The chip loop's own arrays, as the kernels take them."""
-        return kc.ChipBook(self.cst, self.acc, self.snap, self.gst, self.xout, self.io_out, self.rec, self._work)
+        """The chip loop's own arrays, as the kernels take them: the same bundle until the timeline's
+        buffer is replaced (:meth:`record_timeline`; the others are made once)."""
+        if self._book.rec is not self.rec:
+            self._book = self._book._replace(rec=self.rec)
+        return self._book
 
     def step(self, until: int) -> int:
         """Advance the chip to ``until`` (or a host event); returns the CHIP_* reason.
@@ -364,7 +376,7 @@ class MPSoC:
         status and host seconds; the step's Python runs here.  Its value is :meth:`step`'s."""
         # the awake and sleeping cores' pcs, all at once (a Python call per tile per step cost a
         # sleeping 16x16 chip a tenth of its run time); check_pc words the error of the first bad one
-        for t in kc.bad_pcs(self.cores.st, self.cst):
+        for t in self._bad_pcs(self.cores.st, self.cst):
             xy = self.config.tile_xy(int(t))
             check_pc(self.cores, int(t), functools.partial(self.symbolize, xy), f"tile {xy}: ")
         jit = self._jit
@@ -374,7 +386,7 @@ class MPSoC:
             to = min(until, self.cycle + jit.look_cycles()) if jit.watching() else until
             while True:
                 status, seconds = yield functools.partial(
-                    kc.run_chip, self.cores.arrays(), self.noc, self.book(), to, *jit.arguments()
+                    self._run_chip, self.cores.arrays(), self.noc, self.book(), to, *jit.arguments()
                 )
                 jit.ran(seconds)
                 if status != kc.CHIP_TRANSLATE:
@@ -559,7 +571,7 @@ class MPSoC:
         the rows into ``previous``, and the routers' counters now into ``routers`` (for
         :meth:`noc_counters_of`): one call (:mod:`robosoc.kernels.period_accounts`)."""
         noc = self.noc
-        close_accounts(
+        self._close_accounts(
             self.cores.arrays(), self.book(), tiles, tasks, previous, *_account_counter_rows(), out,
             noc.cfg, noc.glob, noc.tile, noc.port, self._routers_off, routers,
         )  # fmt: skip

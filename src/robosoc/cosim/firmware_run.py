@@ -162,11 +162,18 @@ class FirmwareRun:
         # the accounting rows at the last close (close_accounts keeps them), and the routers' counters
         # at the run's start (each period's NoC energy is taken from those at its two closes)
         self._previous = np.zeros((len(self._keys), self.chip.acc.shape[-1]), dtype=np.int64)
-        self._routers_at_start = self._accounts(np.empty((len(self._keys), len(account_counter_map()[0])), np.int64))
+        # where each close's call writes (the same arrays at every call: chip/kernel_entry.py)
+        self._close_out = np.empty((len(self._keys), len(account_counter_map()[0])), np.int64)
+        self._close_routers = np.empty(len(ROUTER_COUNTS), np.int64)
+        self._routers_at_start = self._accounts()[1]
         self._seen = dict.fromkeys(self.tiles, 0)
         self._job_logs: dict[tuple[int, int], images.JobLogReader] = {}  # made at the first close
-        # (tile, record as logged: 32-bit stamps, period, chip cycle when read: see _full_cycle)
-        self._logged: list[tuple[tuple[int, int], images.JobRecord, int, int]] = []
+        # (tile, record as logged: 32-bit stamps, period, chip cycle when read: see _full_cycle), of
+        # the records parsed so far (:attr:`_logged`)
+        self._parsed: list[tuple[tuple[int, int], images.JobRecord, int, int]] = []
+        # (tile, bytes of new records, chip cycle when read, samples injected then) at each close, not
+        # parsed yet: a close only copies them (a flight closes a period per sample)
+        self._unparsed: list[tuple[tuple[int, int], bytes, int, int]] = []
         self.telemetry: list[TelemetryRead] = []
         self._telemetry = TelemetryReader(self.chip, image.telemetry) if image.telemetry else None
         #: the newest value of each telemetry name read so far
@@ -286,8 +293,7 @@ class FirmwareRun:
             problem = self.image.missing_tasks({xy: t.created(self.chip, xy) for xy, t in tables.items() if t})
             if problem:
                 raise ChipError(problem, None)
-        counters = np.empty((len(self._keys), len(account_counter_map()[0])), np.int64)
-        routers = self._accounts(counters)
+        counters, routers = self._accounts()
         if self._telemetry is not None:
             values = self._telemetry.read()
             if values:
@@ -300,13 +306,26 @@ class FirmwareRun:
                 log = self._job_logs.get(xy)
                 if log is None:
                     log = self._job_logs[xy] = images.JobLogReader(self.chip, xy)
-                fresh, count = log.read_new(self._seen[xy])
+                raw, count = log.new_records(self._seen[xy])
             except ValueError as exc:
                 raise RuntimeError(f"{exc} (between two samples)") from exc
-            for r in fresh:
-                release = self._chip_cycle(xy, r.release, now)
-                self._logged.append((xy, r, _period_of(self._sample_cycles, release), now))
+            if raw:
+                self._unparsed.append((xy, raw, now, len(self._sample_cycles)))
             self._seen[xy] = count
+
+    @property
+    def _logged(self) -> list[tuple[tuple[int, int], images.JobRecord, int, int]]:
+        """(tile, record as logged, its release's sample period, chip cycle when read) of every job
+        record collected so far, in the order collected (those of the closes since the last look
+        parsed now; a record's period is found among the samples injected before it was read)."""
+        cycles, parsed = self._sample_cycles, self._parsed
+        for xy, raw, now, samples in self._unparsed:
+            d = self.chip.divider(xy)  # (_chip_cycle, per chunk of records)
+            for r in images.job_records(raw):
+                release = _full_cycle(r.release, now // d) * d
+                parsed.append((xy, r, _period_of(cycles, release, samples), now))
+        self._unparsed.clear()
+        return self._parsed
 
     def energy_pj(self) -> dict[str, float]:
         """The chip's energy so far, per application tile (``"tile (x, y)"``) and for the NoC
@@ -333,12 +352,12 @@ class FirmwareRun:
             out.append((name, self._chip_cycle(xy, r.release, now), self._chip_cycle(xy, r.completion, now)))
         return out
 
-    def _accounts(self, values: np.ndarray) -> np.ndarray:
-        """Into ``values``, the counters of the accounting rows jobs are charged to (one per key) since
-        the last call; the routers' counters now (:meth:`robosoc.chip.mpsoc.MPSoC.noc_counters_of`)."""
-        routers = np.empty(len(ROUTER_COUNTS), np.int64)
-        self.chip.close_accounts(self._acc_tiles, self._acc_tasks, self._previous, values, routers)
-        return routers
+    def _accounts(self) -> tuple[np.ndarray, np.ndarray]:
+        """The counters of the accounting rows jobs are charged to (one row per key) since the last
+        call; the routers' counters now (:meth:`robosoc.chip.mpsoc.MPSoC.noc_counters_of`)."""
+        out, routers = self._close_out, self._close_routers
+        self.chip.close_accounts(self._acc_tiles, self._acc_tasks, self._previous, out, routers)
+        return out.copy(), routers.copy()
 
     def _periods_noc_pj(self) -> list[float]:
         """Each period's NoC traffic energy: the traffic energy at its close less that at the
@@ -430,10 +449,10 @@ def _full_cycle(stamp: int, now: int) -> int:
     return now - ((now - stamp) & 0xFFFFFFFF)
 
 
-def _period_of(sample_cycles: Sequence[int], cycle: int) -> int:
+def _period_of(sample_cycles: Sequence[int], cycle: int, samples: int) -> int:
     """Index of the sample period [cycle_k, cycle_k+1) holding ``cycle`` (0 before the first), given
-    the samples' injection cycles."""
-    return max(0, bisect.bisect_right(sample_cycles, cycle) - 1)
+    the injection cycles of the first ``samples`` samples."""
+    return max(0, bisect.bisect_right(sample_cycles, cycle, 0, samples) - 1)
 
 
 def _pj(model: EnergyModel, counters: dict[str, int]) -> float:

@@ -174,8 +174,9 @@ class JobLogReader:
         self.t = chip.config.tile_index(xy)
         self.address = _address(chip, xy, self.t, JOB_LOG_SYMBOL)
 
-    def read_new(self, seen: int) -> tuple[list[JobRecord], int]:
-        """The records logged after the first ``seen``, and how many the tile has logged in all.
+    def new_records(self, seen: int) -> tuple[bytes, int]:
+        """The bytes of the records logged after the first ``seen``, oldest first (parse them with
+        :func:`job_records`), and how many the tile has logged in all.
 
         Raises:
             ValueError: the log is not initialised, or the ring overwrote records after ``seen`` unread.
@@ -188,11 +189,22 @@ class JobLogReader:
             raise ValueError(
                 f"tile {xy}: the job log overflowed: {count - seen} new records, the ring keeps {capacity}"
             )
-        base = self.address + _LOG_HEADER.size
-        records = []
-        for i in range(seen, count):
-            records.append(_job_record(cores.unpack(_RECORD, base + (i % capacity) * _RECORD.size, t)))
-        return records, count
+        if count <= seen:
+            return b"", count
+        ring = cores.offset(self.address + _LOG_HEADER.size, capacity * _RECORD.size, t)
+        memory = cores.m8[t]
+        first, last = seen % capacity, count % capacity or capacity
+        if first < last:  # (the records in one piece of the ring)
+            return memory[ring + first * _RECORD.size : ring + last * _RECORD.size].tobytes(), count
+        return (
+            memory[ring + first * _RECORD.size : ring + capacity * _RECORD.size].tobytes()
+            + memory[ring : ring + last * _RECORD.size].tobytes()
+        ), count
+
+
+def job_records(raw: bytes) -> list[JobRecord]:
+    """The records in ``raw``, bytes of a log's records as :meth:`JobLogReader.new_records` gives them."""
+    return [_job_record(fields) for fields in _RECORD.iter_unpack(raw)]
 
 
 @dataclass(frozen=True)
@@ -379,6 +391,7 @@ __all__ = [
     "Packet",
     "build",
     "c_header_constants",
+    "job_records",
     "message_packets",
     "parse_packet",
     "read_job_log",

@@ -78,6 +78,17 @@ class TaskTable:
         task not created: there is nothing consistent to read of it)."""
         return self.job_active_at(chip.cores, chip.config.tile_index(tile), task_id)
 
+    def flag_offsets(self, cores: CoreState, t: int) -> tuple[list[int], list[int]]:
+        """Where the ``id`` and the ``job_active`` byte of each entry but the idle task's lie in the
+        tile of index ``t``'s row of ``cores.m8`` (a reader that looks at every sample period).
+
+        Raises:
+            ValueError: the table is not all in the tile's SRAM.
+        """
+        base = cores.offset(self.address, self.entries * self.entry_bytes, t)
+        entries = [base + i * self.entry_bytes for i in range(1, self.entries)]
+        return [e + self.id_offset for e in entries], [e + self.active_offset for e in entries]
+
     def job_active_at(self, cores: CoreState, t: int, task_id: int) -> bool:
         """:meth:`job_active` on the tile of index ``t`` of ``cores``."""
         table = self._entries(cores, t)

@@ -74,6 +74,7 @@ _DECODE: dict[str, tuple[str, float]] = {
     "f32": ("<f", 1.0), "q16": ("<i", _Q16), "i32": ("<i", 1.0), "u32": ("<I", 1.0)
 }  # fmt: skip
 _LAYOUT = {code: struct.Struct(code) for code, _ in _DECODE.values()}
+_F32_CODE, _U32_CODE = _DECODE["f32"][0], _DECODE["u32"][0]
 
 
 class TelemetryError(ToolchainError):
@@ -158,33 +159,66 @@ class TelemetryReader:
     """Reads the values of ``probes`` from ``chip``'s memory: those whose task has no job active now
     (the others are not read: their job may be half-way through updating them).  Each task's tile
     index and each probe's place in its memory are looked up once: a flight reads at every sample
-    period's close.
+    period's close, every task's flags in one read of the tiles' bytes and every value in one of
+    their words.
 
     Raises:
-        ValueError: a probe's word is outside its tile's SRAM.
+        ValueError: a probe's word, or a task's table, is outside its tile's SRAM.
     """
 
     def __init__(self, chip: MPSoC, probes: Sequence[TelemetryProbe]) -> None:
         self.chip = chip
+        cores = chip.cores
         tasks = list(dict.fromkeys((probe.tile, probe.task_id, probe.table) for probe in probes))
-        #: per (tile, task): the tile's index, the task id and the kernel's task table
-        self._tasks = [(chip.config.tile_index(tile), task_id, table) for tile, task_id, table in tasks]
-        #: per probe, in order: the probe, its task's place in _tasks, its tile's index and its
-        #: word's offset in the tile's memory
-        self._probes = []
+        #: per (tile, task): the task id, and where its table's ids start in the flags read
+        self._tasks: list[tuple[int, int, int]] = []
+        flag_tiles: list[int] = []
+        flag_places: list[int] = []
+        for tile, task_id, table in tasks:
+            t = chip.config.tile_index(tile)
+            ids, active = table.flag_offsets(cores, t)
+            self._tasks.append((task_id, len(flag_places), len(ids)))
+            flag_tiles += [t] * (len(ids) + len(active))
+            flag_places += ids + active
+        self._flags = (np.array(flag_tiles, dtype=np.intp), np.array(flag_places, dtype=np.intp))
+        #: per probe, in order: its name, its task's place in _tasks, its word's decoding and scale
+        self._values: list[tuple[str, int, str, float]] = []
+        word_tiles, offsets = [], []
         for p in probes:
             task = tasks.index((p.tile, p.task_id, p.table))
-            t = self._tasks[task][0]
-            self._probes.append((p, task, t, chip.cores.offset(p.address, VALUE_BYTES, t)))
+            t = chip.config.tile_index(p.tile)
+            self._values.append((p.name, task, p.code, p.scale))
+            word_tiles.append(t)
+            offsets.append(cores.offset(p.address, VALUE_BYTES, t))
+        #: where the words lie in cores.m32 (None: one is not word-aligned, read each on its own)
+        self._words = (
+            (np.array(word_tiles, dtype=np.intp), np.array(offsets, dtype=np.intp) // VALUE_BYTES)
+            if all(o % VALUE_BYTES == 0 for o in offsets)
+            else None
+        )
+        self._probes = [(p, t, o) for p, t, o in zip(probes, word_tiles, offsets, strict=True)]
 
     def read(self) -> dict[str, float]:
         """The values readable now, by name, in the probes' order."""
         cores = self.chip.cores
-        quiet = [not table.job_active_at(cores, t, task_id) for t, task_id, table in self._tasks]
+        flags = cores.m8[self._flags].tolist()
+        quiet = []
+        for task_id, start, n in self._tasks:
+            ids = flags[start : start + n]
+            # a task the table does not hold counts as active: nothing consistent to read of it
+            quiet.append(task_id in ids and flags[start + n + ids.index(task_id)] == 0)
         values: dict[str, float] = {}
-        for probe, task, t, offset in self._probes:
+        if self._words is None:
+            for (probe, t, offset), (name, task, _, _) in zip(self._probes, self._values, strict=True):
+                if quiet[task]:
+                    values[name] = probe.value_in(cores.m8, t, offset)
+            return values
+        words = cores.m32[self._words]
+        signed, reals = words.tolist(), words.view(np.float32).tolist()
+        for i, (name, task, code, scale) in enumerate(self._values):
             if quiet[task]:
-                values[probe.name] = probe.value_in(cores.m8, t, offset)
+                word = reals[i] if code == _F32_CODE else signed[i] & 0xFFFFFFFF if code == _U32_CODE else signed[i]
+                values[name] = float(word) * scale
         return values
 
 
