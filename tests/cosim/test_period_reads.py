@@ -91,3 +91,26 @@ def test_telemetry_in_one_read_is_each_word_decoded_on_its_own(booted) -> None:
         assert TelemetryReader(chip, [*mine, odd]).read() == {}
     finally:
         chip.cores.write(table.address + entry * table.entry_bytes + table.active_offset, b"\x00", tile=t)
+
+
+def test_the_live_view_of_jobs_is_the_results_jobs_from_any_point() -> None:
+    from robosoc.cosim.replay import built_in_rows, samples_from_rows
+
+    fw = FirmwareConfig()
+    run = FirmwareRun(fw, firmware_image(fw))
+    samples = samples_from_rows(built_in_rows(0.3), run.clock_ns)
+    period = samples[1].cycle - samples[0].cycle
+    live = []
+    for k, sample in enumerate(samples):
+        run.inject(sample)
+        run.run_to(samples[k + 1].cycle if k + 1 < len(samples) else sample.cycle + period)
+        run.close_period()
+        live += run.jobs_logged(len(live))  # as the ROS chip node asks: the jobs since it last looked
+    jobs = run.result().jobs
+    assert len(jobs) >= 2 * (len(samples) - 2)  # both tasks ran (nearly) every sample
+    assert live == [(j.task, j.release_cycle, j.completion_cycle) for j in jobs]
+    assert run.jobs_logged(len(live) - 3) == live[-3:]
+    # the 32-bit stamps placed on the chip's timeline: after the first sample, in their order
+    cycles = [s.cycle for s in samples]
+    for j in jobs:
+        assert j.start_cycle >= j.release_cycle >= cycles[0] and j.completion_cycle > j.start_cycle

@@ -28,7 +28,6 @@ release period's counters, and the record says so (``spans_periods``).
 
 from __future__ import annotations
 
-import bisect
 import time
 from collections import Counter
 from collections.abc import Sequence
@@ -155,7 +154,7 @@ class FirmwareRun:
             | {(i, task) for i in range(len(self.tiles)) for task in (images.KERNEL_TASK_ID, images.IDLE_TASK_ID)}
         )
         self._keys = np.array([i * NTASKS + task for i, task in charged], dtype=np.int64)
-        self._tile_rows = [self.chip.config.tile_index(xy) for xy in self.tiles]
+        self._tile_rows = np.array([self.chip.config.tile_index(xy) for xy in self.tiles], dtype=np.intp)
         self._acc_tiles = np.array([self.chip.config.tile_index(self.tiles[i]) for i, _ in charged], dtype=np.int64)
         self._acc_tasks = np.array([task for _, task in charged], dtype=np.int64)
         self._periods: list[_Period] = []  # per sample period: counters per (tile, task), routers' counters
@@ -168,12 +167,12 @@ class FirmwareRun:
         self._routers_at_start = self._accounts()[1]
         self._seen = dict.fromkeys(self.tiles, 0)
         self._job_logs: dict[tuple[int, int], images.JobLogReader] = {}  # made at the first close
-        # (tile, record as logged: 32-bit stamps, period, chip cycle when read: see _full_cycle), of
-        # the records parsed so far (:attr:`_logged`)
-        self._parsed: list[tuple[tuple[int, int], images.JobRecord, int, int]] = []
-        # (tile, bytes of new records, chip cycle when read, samples injected then) at each close, not
-        # parsed yet: a close only copies them (a flight closes a period per sample)
-        self._unparsed: list[tuple[tuple[int, int], bytes, int, int]] = []
+        # (tile's position, bytes of its new records, chip cycle when read, samples injected then) at
+        # each close, not parsed yet: a close only copies them (a flight closes a period per sample)
+        self._unparsed: list[tuple[int, bytes, int, int]] = []
+        #: the records parsed so far, in the order collected, a list per column (:meth:`_jobs`)
+        self._job_columns: dict[str, list[int]] = {name: [] for name in _JOB_COLUMNS}
+        self._dividers = np.array([self.chip.divider(xy) for xy in self.tiles], dtype=np.int64)
         self.telemetry: list[TelemetryRead] = []
         self._telemetry = TelemetryReader(self.chip, image.telemetry) if image.telemetry else None
         #: the newest value of each telemetry name read so far
@@ -236,19 +235,23 @@ class FirmwareRun:
         except (ChipError, CoreError) as exc:
             exc.args = (f"{exc.args[0]}{self._running_task(exc)}", *exc.args[1:])  # the task, by its name
             raise
-        cst = self.chip.cst
-        if any(cst[t, K_STATE] == K_EXITED for t in self._tile_rows):
+        if K_EXITED in self.chip.cst[self._tile_rows, K_STATE].tolist():
             for xy in self.tiles:
                 if self.chip.state(xy) == "exited":  # main returned, or refused a task: no task runs there
                     raise ChipError(f"tile {xy}: {self.image.exit_reason(self.chip.exit_code(xy))}", xy)
+        received = self.chip.received()
+        if not received:
+            return []
         fresh = []
         # a PWM message fits one NoC packet, so no message straddles two calls
-        for message in images.reassemble(self.chip.received()):
+        for message in images.reassemble(received):
             if message.port != self.image.actuator_port:
                 continue
             values = self._pwm_values(message.data)
-            m0, m1, m2, m3 = (int(v) for v in packets.array(values, "pwm"))
-            fresh.append(PwmCommand(int(packets.scalar(values, "seq")), (m0, m1, m2, m3), message.cycle))
+            m0, m1, m2, m3 = packets.array(values, "pwm")
+            fresh.append(
+                PwmCommand(int(packets.scalar(values, "seq")), (int(m0), int(m1), int(m2), int(m3)), message.cycle)
+            )
         self.commands += fresh
         return fresh
 
@@ -301,7 +304,7 @@ class FirmwareRun:
                 self.latest.update(values)
         self._periods.append(_Period(self._keys, counters, routers))
         now = self.chip.cycle
-        for xy in self.tiles:
+        for i, xy in enumerate(self.tiles):
             try:
                 log = self._job_logs.get(xy)
                 if log is None:
@@ -310,22 +313,43 @@ class FirmwareRun:
             except ValueError as exc:
                 raise RuntimeError(f"{exc} (between two samples)") from exc
             if raw:
-                self._unparsed.append((xy, raw, now, len(self._sample_cycles)))
+                self._unparsed.append((i, raw, now, len(self._sample_cycles)))
             self._seen[xy] = count
 
-    @property
-    def _logged(self) -> list[tuple[tuple[int, int], images.JobRecord, int, int]]:
-        """(tile, record as logged, its release's sample period, chip cycle when read) of every job
-        record collected so far, in the order collected (those of the closes since the last look
-        parsed now; a record's period is found among the samples injected before it was read)."""
-        cycles, parsed = self._sample_cycles, self._parsed
-        for xy, raw, now, samples in self._unparsed:
-            d = self.chip.divider(xy)  # (_chip_cycle, per chunk of records)
-            for r in images.job_records(raw):
-                release = _full_cycle(r.release, now // d) * d
-                parsed.append((xy, r, _period_of(cycles, release, samples), now))
-        self._unparsed.clear()
-        return self._parsed
+    def _jobs(self) -> dict[str, list[int]]:
+        """Every job record collected so far, in the order collected, a list per column
+        (:data:`_JOB_COLUMNS`): the tile's position in :attr:`tiles`, the task, the job's number, the
+        flags, the release, start and completion as chip cycles (:func:`_full_cycle` of the 32-bit
+        stamps, the record read at the close's cycle), the execution cycles in chip cycles, and the
+        sample period of the release among the samples injected before the record was read.  The
+        closes since the last call are parsed now, all at once."""
+        if not self._unparsed:
+            return self._job_columns
+        chunks = self._unparsed
+        records = images.job_record_columns(b"".join(raw for _, raw, _, _ in chunks))
+        counts = [len(raw) // images.JOB_RECORD_DTYPE.itemsize for _, raw, _, _ in chunks]
+        tile = np.repeat(np.array([i for i, _, _, _ in chunks], dtype=np.int64), counts)
+        now = np.repeat(np.array([now for _, _, now, _ in chunks], dtype=np.int64), counts)
+        known = np.repeat(np.array([samples for _, _, _, samples in chunks], dtype=np.int64), counts)
+        d = self._dividers[tile]
+        mine = now // d  # the read's cycle in the tile's core cycles
+
+        def chip_cycles(stamps: np.ndarray) -> np.ndarray:  # for every record at once
+            return _full_cycle(stamps.astype(np.int64), mine) * d
+
+        release = chip_cycles(records["release"])
+        # _period_of: the last sample injected at or before the release, of those known then
+        after = np.minimum(np.searchsorted(np.array(self._sample_cycles, dtype=np.int64), release, "right"), known)
+        columns = {
+            "tile": tile, "task": records["task"], "job": records["job"], "flags": records["flags"],
+            "release": release, "start": chip_cycles(records["start"]),
+            "completion": chip_cycles(records["completion"]),
+            "exec_cycles": records["exec_cycles"].astype(np.int64) * d, "period": np.maximum(after - 1, 0),
+        }  # fmt: skip
+        for name, values in columns.items():
+            self._job_columns[name] += values.tolist()
+        self._unparsed = []
+        return self._job_columns
 
     def energy_pj(self) -> dict[str, float]:
         """The chip's energy so far, per application tile (``"tile (x, y)"``) and for the NoC
@@ -336,20 +360,16 @@ class FirmwareRun:
         total["noc"] = sum(model.noc_pj(chip_.noc_counters()).values())
         return total
 
-    def _chip_cycle(self, xy: tuple[int, int], stamp: int, now: int) -> int:
-        """A job record's 32-bit TIMER0 stamp of tile ``xy`` (its core's cycles) as a chip cycle,
-        the record read at chip cycle ``now``."""
-        d = self.chip.divider(xy)
-        return _full_cycle(stamp, now // d) * d
-
     def jobs_logged(self, since: int = 0) -> list[tuple[str, int, int]]:
         """(task, release cycle, completion cycle) of the jobs collected so far by
         :meth:`close_period`, from the ``since``-th on, in the order the kernels logged them (a
         live view; :meth:`result` gives the full records with their energy)."""
+        jobs = self._jobs()
         out = []
-        for xy, r, _, now in self._logged[since:]:
-            name = self.names.get((xy, r.task), f"task {r.task}")
-            out.append((name, self._chip_cycle(xy, r.release, now), self._chip_cycle(xy, r.completion, now)))
+        for i, task, release, completion in zip(
+            jobs["tile"][since:], jobs["task"][since:], jobs["release"][since:], jobs["completion"][since:], strict=True
+        ):
+            out.append((self.names.get((self.tiles[i], task), f"task {task}"), release, completion))
         return out
 
     def _accounts(self) -> tuple[np.ndarray, np.ndarray]:
@@ -383,34 +403,33 @@ class FirmwareRun:
         """Job records with their energy, the PWM commands, and the run's totals."""
         seconds = time.perf_counter() - self._start
         chip_, samples = self.chip, self.samples
-        per_period = Counter(p for _, _, p, _ in self._logged)
-        per_tile_period = Counter((xy, p) for xy, _, p, _ in self._logged)
-        per_task_period = Counter((xy, r.task, p) for xy, r, p, _ in self._logged)
+        jobs_logged = self._jobs()
+        tiles_of, tasks_of, periods = jobs_logged["tile"], jobs_logged["task"], jobs_logged["period"]
+        per_period = Counter(periods)
+        per_tile_period = Counter(zip(tiles_of, periods, strict=True))
+        per_task_period = Counter(zip(tiles_of, tasks_of, periods, strict=True))
         seen: Counter[tuple] = Counter()  # jobs of each (tile, task, period) charged so far
         jobs = []
-        position = {xy: i for i, xy in enumerate(self.tiles)}
-        dividers = {xy: chip_.divider(xy) for xy in self.tiles}
         values = _period_values(self._periods, len(self._keys))
         energy = _rows_pj(values, [self.tile_models[self.tiles[i]] for i in self._keys // NTASKS])
         instructions = values[:, :, account_counter_map()[0].index("instructions")].tolist()
         energy_of = energy.tolist()  # [period][accounting row] in pJ, Python floats
         noc_pj = self._periods_noc_pj()
         row_of = {int(key): r for r, key in enumerate(self._keys)}
+        sample_cycles = self._sample_cycles
 
-        def stamp(xy: tuple[int, int], value: int, now: int) -> int:  # _chip_cycle, the divider known
-            d = dividers[xy]
-            return (now // d - ((now // d - value) & 0xFFFFFFFF)) * d
-
-        for xy, r, p, now in self._logged:
-            name = self.names.get((xy, r.task))
+        for i, task, job, flags, release, start, completion, exec_cycles, p in zip(
+            *(jobs_logged[name] for name in _JOB_COLUMNS), strict=True
+        ):
+            xy = self.tiles[i]
+            name = self.names.get((xy, task))
             if name is None:
                 continue
-            i = position[xy]
-            own = row_of[i * NTASKS + r.task]
-            shared = per_tile_period[(xy, p)]
+            own = row_of[i * NTASKS + task]
+            shared = per_tile_period[(i, p)]
             # jobs of one task released in one period (periodic release) share its counters
-            alike, k = per_task_period[(xy, r.task, p)], seen[(xy, r.task, p)]
-            seen[(xy, r.task, p)] += 1
+            alike, k = per_task_period[(i, task, p)], seen[(i, task, p)]
+            seen[(i, task, p)] += 1
             quotient, remainder = divmod(instructions[p][own], alike)
             period_pj = energy_of[p]
             energy_pj = {
@@ -419,15 +438,12 @@ class FirmwareRun:
                 "idle": period_pj[row_of[i * NTASKS + images.IDLE_TASK_ID]] / shared,
                 "noc": noc_pj[p] / per_period[p],
             }
-            completion = stamp(xy, r.completion, now)
             jobs.append(
                 JobRecord(
-                    task=name, tile=xy, job=r.job, release_cycle=stamp(xy, r.release, now),
-                    start_cycle=stamp(xy, r.start, now), completion_cycle=completion,
-                    exec_cycles=r.exec_cycles * dividers[xy],
-                    deadline_met=r.met,
+                    task=name, tile=xy, job=job, release_cycle=release, start_cycle=start,
+                    completion_cycle=completion, exec_cycles=exec_cycles, deadline_met=bool(flags & images.JOB_MET),
                     instructions=quotient + int(k < remainder), energy_pj=energy_pj,
-                    spans_periods=p + 1 < len(samples) and completion > samples[p + 1].cycle,
+                    spans_periods=p + 1 < len(sample_cycles) and completion > sample_cycles[p + 1],
                 )
             )  # fmt: skip
         total = self.energy_pj()
@@ -443,16 +459,15 @@ class FirmwareRun:
         )  # fmt: skip
 
 
-def _full_cycle(stamp: int, now: int) -> int:
+#: the columns of the job records collected (FirmwareRun._jobs), in the order result() takes them
+_JOB_COLUMNS = ("tile", "task", "job", "flags", "release", "start", "completion", "exec_cycles", "period")
+
+
+def _full_cycle(stamp: Any, now: Any) -> Any:
     """A 32-bit TIMER0 stamp of a job record placed on the chip's 64-bit timeline (it is at most
-    2**32 cycles, 17 s at 4 ns, before ``now``, the chip's cycle when the record was read)."""
+    2**32 cycles, 17 s at 4 ns, before ``now``, the chip's cycle when the record was read); ints,
+    or int64 arrays element by element."""
     return now - ((now - stamp) & 0xFFFFFFFF)
-
-
-def _period_of(sample_cycles: Sequence[int], cycle: int, samples: int) -> int:
-    """Index of the sample period [cycle_k, cycle_k+1) holding ``cycle`` (0 before the first), given
-    the injection cycles of the first ``samples`` samples."""
-    return max(0, bisect.bisect_right(sample_cycles, cycle, 0, samples) - 1)
 
 
 def _pj(model: EnergyModel, counters: dict[str, int]) -> float:

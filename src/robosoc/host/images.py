@@ -21,6 +21,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+import numpy as np
+
 from robosoc.config.packet_layout import MAX_PACKET_FLITS, MESSAGE_HEADER_FLITS, NOC_HEADER_FLITS
 from robosoc.firmware import KERNEL_DIR, PORT_DIR, kernel_runtime_sources
 from robosoc.toolchain import DEFAULT_SRAM_SIZE, build_elf
@@ -40,7 +42,14 @@ JOB_MET, JOB_EVENT, JOB_DEPLETED = 1, 2, 4
 #: Message header: flits 0..5 (wire destination and size, then four flits of the kernel's own).
 HEADER_FLITS = NOC_HEADER_FLITS + MESSAGE_HEADER_FLITS
 
-_RECORD = struct.Struct("<BBHIIIII")  # os_job_record_t
+#: os_job_record_t, field by field (its struct code)
+_RECORD_FIELDS = (
+    ("task", "B"), ("flags", "B"), ("job", "H"), ("release", "I"), ("deadline", "I"), ("start", "I"),
+    ("completion", "I"), ("exec_cycles", "I"),
+)  # fmt: skip
+_RECORD = struct.Struct("<" + "".join(code for _, code in _RECORD_FIELDS))
+#: the same record as a numpy structured type (a flight's records read as columns at its end)
+JOB_RECORD_DTYPE = np.dtype([(name, "<" + {"B": "u1", "H": "u2", "I": "u4"}[code]) for name, code in _RECORD_FIELDS])
 _LOG_HEADER = struct.Struct("<IIII")  # magic, capacity, count, tick_cycles
 _STATS_FIELDS = (
     "magic", "tick_cycles", "start_cycle", "first_tick", "ticks", "ticks_late", "switches", "msg_sent",
@@ -205,6 +214,12 @@ class JobLogReader:
 def job_records(raw: bytes) -> list[JobRecord]:
     """The records in ``raw``, bytes of a log's records as :meth:`JobLogReader.new_records` gives them."""
     return [_job_record(fields) for fields in _RECORD.iter_unpack(raw)]
+
+
+def job_record_columns(raw: bytes) -> np.ndarray:
+    """The records in ``raw`` (as :func:`job_records` takes them) as one structured array,
+    :data:`JOB_RECORD_DTYPE`, a column per field of ``os_job_record_t``."""
+    return np.frombuffer(raw, dtype=JOB_RECORD_DTYPE)
 
 
 @dataclass(frozen=True)
@@ -381,6 +396,8 @@ __all__ = [
     "HEADER_FLITS",
     "IDLE_TASK_ID",
     "JOB_LOG_SYMBOL",
+    "JOB_MET",
+    "JOB_RECORD_DTYPE",
     "KERNEL_TASK_ID",
     "STATS_SYMBOL",
     "JobLog",
@@ -391,6 +408,7 @@ __all__ = [
     "Packet",
     "build",
     "c_header_constants",
+    "job_record_columns",
     "job_records",
     "message_packets",
     "parse_packet",

@@ -247,7 +247,9 @@ def declared_names(fw: FirmwareConfig) -> tuple[str, ...]:
 def estimate_of(values: Mapping[str, float]) -> Estimate:
     """The state estimate that telemetry ``values`` publish (NaN for what they do not name: the
     Euler angles too, unless the whole quaternion is known)."""
-    q = np.array([values.get(name, math.nan) for name in ESTIMATE_QUATERNION])
+    q = [values.get(name, math.nan) for name in ESTIMATE_QUATERNION]
+    known = not any(map(math.isnan, q))  # (Python floats: a flight takes an estimate per sample)
+    attitude = np.array(q)
+    euler = quaternion.to_euler(attitude) if known else np.full(3, math.nan)
     height = values.get(ESTIMATE_HEIGHT, math.nan)
-    euler = quaternion.to_euler(q) if not np.isnan(q).any() else np.full(3, math.nan)
-    return Estimate(q, euler, height, values.get(ESTIMATE_VERTICAL_SPEED, math.nan))
+    return Estimate(attitude, euler, height, values.get(ESTIMATE_VERTICAL_SPEED, math.nan))
