@@ -10,7 +10,6 @@ I/O tile, and one record per job of each task.
 from __future__ import annotations
 
 import math
-import struct
 from collections.abc import Callable
 
 import numpy as np
@@ -44,12 +43,9 @@ _SENSOR_COLUMNS = {
 _ARMED, _T, _BARO = (ROW_FIELDS.index(name) for name in ("armed", "t", "baro_altitude"))
 
 
-#: the q16 fields' flight-row columns in the packet's field order, and the header's layout before them
+#: the q16 fields' flight-row columns in the packet's field order (they follow its five header fields)
 _Q16_OF_FIELD = {**_SENSOR_COLUMNS, "baro_altitude": [_BARO]}
-_Q16_COLUMNS = np.array(
-    [c for f in packets.SENSOR.fields if f.type == "q16" for c in _Q16_OF_FIELD[f.name]], dtype=np.intp
-)
-_HEADER = struct.Struct("<HHIII")
+_Q16_COLUMNS = [c for f in packets.SENSOR.fields if f.type == "q16" for c in _Q16_OF_FIELD[f.name]]
 _U32 = 0xFFFFFFFF
 
 
@@ -57,21 +53,26 @@ def sensor_packet(row: np.ndarray, seq: int, dt_us: int, low_battery: bool = Fal
     """The sensor packet of one flight row (columns :data:`ROW_FIELDS`): its sample and setpoint
     (``low_battery``: the pack is below its reserve, :data:`packets.FLAG_LOW_BATTERY`).
 
-    The bytes of :meth:`packets.PacketFormat.pack` (:func:`packed_sensor_packet`), made in one
-    array step (a flight packs one per sample): a value times 2**16 is exact in float64 and
-    ``np.rint`` rounds half to even as ``round`` does.  A value the packet cannot hold goes the
-    long way, which names it."""
-    t = float(row[_T])
+    The bytes of :meth:`packets.PacketFormat.pack` (:func:`packed_sensor_packet`), made from the
+    row's Python floats in one pass (a flight packs one per sample, and small numpy steps cost it
+    more): a value times 2**16 is exact in float64 and ``round`` rounds half to even.  A value the
+    packet cannot hold goes the long way, which names it."""
+    col = row.tolist()
+    t = col[_T]
     time_us = round(t * 1e6) if math.isfinite(t) else -1
-    scaled = np.rint(row[_Q16_COLUMNS] * packets.Q16_ONE)
+    try:
+        scaled = [round(col[c] * packets.Q16_ONE) for c in _Q16_COLUMNS]
+    except (ValueError, OverflowError):  # NaN, infinite
+        return packed_sensor_packet(row, seq, dt_us, low_battery)
     if (
         0 <= seq <= _U32
         and 0 <= time_us <= _U32
         and 0 <= dt_us <= _U32
-        and bool(((scaled >= packets.Q16_MIN) & (scaled <= packets.Q16_MAX)).all())  # NaN fails too
+        and min(scaled) >= packets.Q16_MIN
+        and max(scaled) <= packets.Q16_MAX
     ):
-        flags = (packets.FLAG_ARMED if row[_ARMED] > 0.5 else 0) | (packets.FLAG_LOW_BATTERY if low_battery else 0)
-        return _HEADER.pack(packets.SENSOR.kind, flags, seq, time_us, dt_us) + scaled.astype("<i4").tobytes()
+        flags = (packets.FLAG_ARMED if col[_ARMED] > 0.5 else 0) | (packets.FLAG_LOW_BATTERY if low_battery else 0)
+        return packets.SENSOR.pack_words((packets.SENSOR.kind, flags, seq, time_us, dt_us, *scaled))
     return packed_sensor_packet(row, seq, dt_us, low_battery)
 
 

@@ -152,6 +152,15 @@ class PacketFormat:
             raw.extend(_encode(f, v) for v in items)
         return self._struct.pack(*raw)
 
+    def pack_words(self, words: Sequence[int]) -> bytes:
+        """The packet's bytes from every value already encoded (``kind`` included), in the fields'
+        order: what :meth:`pack` makes of them, for a caller that checked their ranges itself.
+
+        Raises:
+            struct.error: a wrong number of values, or one out of its type's range.
+        """
+        return self._struct.pack(*words)
+
     def unpack(self, data: bytes) -> dict[str, Value]:
         """The fields of a packet's bytes (q16 fields as floats, arrays as tuples).
 

@@ -249,7 +249,6 @@ def estimate_of(values: Mapping[str, float]) -> Estimate:
     Euler angles too, unless the whole quaternion is known)."""
     q = [values.get(name, math.nan) for name in ESTIMATE_QUATERNION]
     known = not any(map(math.isnan, q))  # (Python floats: a flight takes an estimate per sample)
-    attitude = np.array(q)
-    euler = quaternion.to_euler(attitude) if known else np.full(3, math.nan)
+    euler = quaternion.to_euler(q) if known else np.full(3, math.nan)
     height = values.get(ESTIMATE_HEIGHT, math.nan)
-    return Estimate(attitude, euler, height, values.get(ESTIMATE_VERTICAL_SPEED, math.nan))
+    return Estimate(np.array(q), euler, height, values.get(ESTIMATE_VERTICAL_SPEED, math.nan))

@@ -8,6 +8,7 @@ two check something.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -30,8 +31,9 @@ def quat_to_matrix(w: float, x: float, y: float, z: float) -> tuple[float, ...]:
     )
 
 
-def euler_from_quat(q: np.ndarray) -> np.ndarray:
-    """Roll, pitch, yaw [rad] (Z-Y-X convention: R = Rz(yaw)·Ry(pitch)·Rx(roll))."""
+def euler_from_quat(q: np.ndarray | Sequence[float]) -> np.ndarray:
+    """Roll, pitch, yaw [rad] (Z-Y-X convention: R = Rz(yaw)·Ry(pitch)·Rx(roll)) of the unit
+    quaternion (w, x, y, z)."""
     w, x, y, z = (float(c) for c in q)
     roll = math.atan2(2.0 * (w * x + y * z), 1.0 - 2.0 * (x * x + y * y))
     pitch = math.asin(max(-1.0, min(1.0, 2.0 * (w * y - z * x))))
