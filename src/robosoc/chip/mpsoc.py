@@ -319,12 +319,12 @@ class MPSoC:
         io_tile = self.noc.tile[self.io]  # (a view: written through)
         if self._queue_next >= IO_ROWS and row in (io_tile[nk.T_Q_HEAD], io_tile[nk.T_SEND_ROW]):
             raise ValueError(f"too many injected packets pending ({IO_ROWS} not yet sent)")
-        flits = [(x << 4) | y, len(payload), *payload]
+        n = len(payload) + 2  # the flits: the destination, the size, the payload
         head = [nk.NONE] * nk.Q_FLITS  # the row's own columns, then its flits: one write
         head[nk.Q_TILE] = self.io
         head[nk.Q_READY] = at_cycle
-        head[nk.Q_LEN] = len(flits)
-        self.noc.queue[row, : nk.Q_FLITS + len(flits)] = head + [f & 0xFFFF for f in flits]
+        head[nk.Q_LEN] = n
+        self.noc.queue[row, : nk.Q_FLITS + n] = [*head, ((x << 4) | y) & 0xFFFF, n - 2, *[f & 0xFFFF for f in payload]]
         tail = io_tile[nk.T_Q_TAIL]
         if tail == nk.NONE:
             io_tile[nk.T_Q_HEAD] = row
@@ -334,9 +334,9 @@ class MPSoC:
                 io_tile[nk.T_Q_HEAD] = row
         io_tile[nk.T_Q_TAIL] = row
         self._queue_next += 1
-        if self.rec.shape[0]:  # recording
-            head = [flits[k] if k < len(flits) else 0 for k in (2, 3, 5)]
-            self._keep_event((kc.R_SEND, self.io, at_cycle, flits[0], len(flits), *head))
+        if self.rec.shape[0]:  # recording: the header flits 2, 3 and 5 as given
+            head = [payload[k - 2] if k < n else 0 for k in (2, 3, 5)]
+            self._keep_event((kc.R_SEND, self.io, at_cycle, (x << 4) | y, n, *head))
 
     def received(self) -> list[tuple[int, list[int]]]:
         """Packets that reached the I/O tile since the last call: (cycle of the last flit, flits)."""

@@ -182,6 +182,7 @@ class JobLogReader:
         self.xy = xy
         self.t = chip.config.tile_index(xy)
         self.address = _address(chip, xy, self.t, JOB_LOG_SYMBOL)
+        self._header: int | None = None  # where the log's header lies in the tile's row of memory
 
     def new_records(self, seen: int) -> tuple[bytes, int]:
         """The bytes of the records logged after the first ``seen``, oldest first (parse them with
@@ -191,7 +192,9 @@ class JobLogReader:
             ValueError: the log is not initialised, or the ring overwrote records after ``seen`` unread.
         """
         cores, t, xy = self.chip.cores, self.t, self.xy
-        magic, capacity, count, _ = cores.unpack(_LOG_HEADER, self.address, t)
+        if self._header is None:
+            self._header = cores.offset(self.address, _LOG_HEADER.size, t)
+        magic, capacity, count, _ = _LOG_HEADER.unpack_from(cores.m8[t], self._header)
         if magic != JOBLOG_MAGIC:
             raise ValueError(f"tile {xy}: the job log is not initialised (os_start has not run)")
         if count - seen > capacity:
@@ -368,6 +371,9 @@ def reassemble(received: Iterable[tuple[int, Sequence[int]]]) -> list[Message]:
         if p.frag == 0:
             if p.src_tile in pending:
                 raise ValueError(f"packet from tile 0x{p.src_tile:02x}: new message before the last completed")
+            if len(p.data) >= p.length:  # the whole message in one packet (a PWM command's, every sample)
+                out.append(Message(p.src_tile, p.src_port, p.dest, p.port, p.seq, p.data[: p.length], cycle))
+                continue
             head, buf = p, bytearray()
         else:
             if p.src_tile not in pending:
