@@ -295,8 +295,9 @@ class MPSoC:
             self.load(xy, program)
 
     # --- the I/O tile ----------------------------------------------------------------------
-    def inject(self, dest: tuple[int, int], payload: Sequence[int], at_cycle: int) -> None:
-        """Send a packet from the I/O tile to ``dest`` (payload: 16-bit flits) leaving at ``at_cycle``."""
+    def inject(self, dest: tuple[int, int], payload: Sequence[int] | np.ndarray, at_cycle: int) -> None:
+        """Send a packet from the I/O tile to ``dest`` (payload: 16-bit flits, a sequence or an int
+        array) leaving at ``at_cycle``."""
         if at_cycle < self.gst[kc.G_TIME]:
             raise ValueError(f"at_cycle {at_cycle} is in the past (the chip is at cycle {self.cycle})")
         x, y = dest
@@ -324,7 +325,17 @@ class MPSoC:
         head[nk.Q_TILE] = self.io
         head[nk.Q_READY] = at_cycle
         head[nk.Q_LEN] = n
-        self.noc.queue[row, : nk.Q_FLITS + n] = [*head, ((x << 4) | y) & 0xFFFF, n - 2, *[f & 0xFFFF for f in payload]]
+        if isinstance(payload, np.ndarray):
+            q = self.noc.queue[row]
+            q[: nk.Q_FLITS + 2] = [*head, ((x << 4) | y) & 0xFFFF, n - 2]
+            np.bitwise_and(payload, 0xFFFF, out=q[nk.Q_FLITS + 2 : nk.Q_FLITS + n])
+        else:
+            self.noc.queue[row, : nk.Q_FLITS + n] = [
+                *head,
+                ((x << 4) | y) & 0xFFFF,
+                n - 2,
+                *[f & 0xFFFF for f in payload],
+            ]
         tail = io_tile[nk.T_Q_TAIL]
         if tail == nk.NONE:
             io_tile[nk.T_Q_HEAD] = row
@@ -335,7 +346,7 @@ class MPSoC:
         io_tile[nk.T_Q_TAIL] = row
         self._queue_next += 1
         if self.rec.shape[0]:  # recording: the header flits 2, 3 and 5 as given
-            head = [payload[k - 2] if k < n else 0 for k in (2, 3, 5)]
+            head = [int(payload[k - 2]) if k < n else 0 for k in (2, 3, 5)]
             self._keep_event((kc.R_SEND, self.io, at_cycle, (x << 4) | y, n, *head))
 
     def received(self) -> list[tuple[int, list[int]]]:

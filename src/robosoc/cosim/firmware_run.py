@@ -29,7 +29,6 @@ release period's counters, and the record says so (``spans_periods``).
 from __future__ import annotations
 
 import time
-from collections import Counter
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -49,7 +48,7 @@ from robosoc.host.firmware_image import FIRST_SAMPLE_CYCLE, FirmwareImage
 from robosoc.host.telemetry import TelemetryReader
 from robosoc.kernels.chip import K_EXITED, K_STATE, K_TASK, NTASKS
 from robosoc.kernels.noc import ROUTER_COUNTS
-from robosoc.program.elf import Program, load_elf
+from robosoc.program.elf import Program, load_elf_once
 from robosoc.records import JobRecord, PwmCommand, SampleInput
 
 #: Cycle of the first sample's injection: the firmware has booted by then.
@@ -140,7 +139,7 @@ class FirmwareRun:
         for xy in self.tiles:
             elf = image.elf_for(xy)  # a tile on a divided clock: its kernel's tick in its own cycles
             if elf not in programs:
-                programs[elf] = load_elf(elf, self.chip.regions())
+                programs[elf] = load_elf_once(elf, self.chip.regions())
             self.chip.load(xy, programs[elf])
         if profile:
             self.chip.enable_profile()  # exact counts per function: function_profile() reads them
@@ -403,46 +402,51 @@ class FirmwareRun:
         """Job records with their energy, the PWM commands, and the run's totals."""
         seconds = time.perf_counter() - self._start
         chip_, samples = self.chip, self.samples
-        jobs_logged = self._jobs()
-        tiles_of, tasks_of, periods = jobs_logged["tile"], jobs_logged["task"], jobs_logged["period"]
-        per_period = Counter(periods)
-        per_tile_period = Counter(zip(tiles_of, periods, strict=True))
-        per_task_period = Counter(zip(tiles_of, tasks_of, periods, strict=True))
-        seen: Counter[tuple] = Counter()  # jobs of each (tile, task, period) charged so far
-        jobs = []
+        logged = {name: np.array(values, dtype=np.int64) for name, values in self._jobs().items()}
+        tile, task, period = logged["tile"], logged["task"], logged["period"]
         values = _period_values(self._periods, len(self._keys))
         energy = _rows_pj(values, [self.tile_models[self.tiles[i]] for i in self._keys // NTASKS])
-        instructions = values[:, :, account_counter_map()[0].index("instructions")].tolist()
-        energy_of = energy.tolist()  # [period][accounting row] in pJ, Python floats
-        noc_pj = self._periods_noc_pj()
-        row_of = {int(key): r for r, key in enumerate(self._keys)}
+        instructions = values[:, :, account_counter_map()[0].index("instructions")]
+        noc_pj = np.array(self._periods_noc_pj())
+        # every record's accounting rows: its task's, its tile's kernel's and idle's
+        row_of = np.full(len(self.tiles) * NTASKS, -1, dtype=np.int64)
+        row_of[self._keys] = np.arange(len(self._keys))
+        own = row_of[tile * NTASKS + task]
+        kernel = row_of[tile * NTASKS + images.KERNEL_TASK_ID]
+        idle = row_of[tile * NTASKS + images.IDLE_TASK_ID]
+        # how many records each period, each tile in each period and each task in each period has, and
+        # each record's place among its task's in its period (jobs of one task released in one period,
+        # by periodic release, share its counters: the first ones get the remainder's instructions)
+        periods = len(self._periods)
+        per_period = np.bincount(period, minlength=periods)[period]
+        shared = _group_sizes(tile * periods + period)
+        group = (tile * NTASKS + task) * periods + period
+        alike = _group_sizes(group)
+        order = np.argsort(group, kind="stable")
+        first = np.searchsorted(group[order], group[order])  # where each record's group starts, in order
+        place = np.empty_like(group)
+        place[order] = np.arange(len(group)) - first
+        quotient, remainder = np.divmod(instructions[period, own], alike)
+        charged = (quotient + (place < remainder)).tolist()
+        task_pj = (energy[period, own] / alike).tolist()
+        kernel_pj = (energy[period, kernel] / shared).tolist()
+        idle_pj = (energy[period, idle] / shared).tolist()
+        noc_share = (noc_pj[period] / per_period).tolist()
         sample_cycles = self._sample_cycles
-
-        for i, task, job, flags, release, start, completion, exec_cycles, p in zip(
-            *(jobs_logged[name] for name in _JOB_COLUMNS), strict=True
-        ):
+        jobs = []
+        for i, t, job, flags, release, start, completion, exec_cycles, p, n, e_task, e_kernel, e_idle, e_noc in zip(
+            *(logged[name].tolist() for name in _JOB_COLUMNS), charged, task_pj, kernel_pj, idle_pj, noc_share,
+            strict=True,
+        ):  # fmt: skip
             xy = self.tiles[i]
-            name = self.names.get((xy, task))
+            name = self.names.get((xy, t))
             if name is None:
                 continue
-            own = row_of[i * NTASKS + task]
-            shared = per_tile_period[(i, p)]
-            # jobs of one task released in one period (periodic release) share its counters
-            alike, k = per_task_period[(i, task, p)], seen[(i, task, p)]
-            seen[(i, task, p)] += 1
-            quotient, remainder = divmod(instructions[p][own], alike)
-            period_pj = energy_of[p]
-            energy_pj = {
-                "task": period_pj[own] / alike,
-                "kernel": period_pj[row_of[i * NTASKS + images.KERNEL_TASK_ID]] / shared,
-                "idle": period_pj[row_of[i * NTASKS + images.IDLE_TASK_ID]] / shared,
-                "noc": noc_pj[p] / per_period[p],
-            }
             jobs.append(
                 JobRecord(
                     task=name, tile=xy, job=job, release_cycle=release, start_cycle=start,
                     completion_cycle=completion, exec_cycles=exec_cycles, deadline_met=bool(flags & images.JOB_MET),
-                    instructions=quotient + int(k < remainder), energy_pj=energy_pj,
+                    instructions=n, energy_pj={"task": e_task, "kernel": e_kernel, "idle": e_idle, "noc": e_noc},
                     spans_periods=p + 1 < len(sample_cycles) and completion > sample_cycles[p + 1],
                 )
             )  # fmt: skip
@@ -457,6 +461,12 @@ class FirmwareRun:
             task_energy_pj=task_energy, energy_pj=total, cycles=chip_.cycle, host_seconds=seconds,
             telemetry=list(self.telemetry), profile=self.function_profile() if chip_.cores.profiling else None,
         )  # fmt: skip
+
+
+def _group_sizes(keys: np.ndarray) -> np.ndarray:
+    """For each element of ``keys``, how many elements have its value."""
+    _, inverse, counts = np.unique(keys, return_inverse=True, return_counts=True)
+    return counts[inverse]
 
 
 #: the columns of the job records collected (FirmwareRun._jobs), in the order result() takes them

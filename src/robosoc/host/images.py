@@ -298,10 +298,17 @@ class Message(NamedTuple):
     cycle: int
 
 
-def io_packets(data: bytes, port: int, io_tile: tuple[int, int], seq: int) -> list[list[int]]:
+def io_packets(data: bytes, port: int, io_tile: tuple[int, int], seq: int) -> list[np.ndarray]:
     """The payloads carrying one message from the I/O tile at ``io_tile`` to ``port`` (its source
-    port the same), for :meth:`MPSoC.inject`."""
-    return message_packets(data, port, src_tile=tile_address(io_tile), src_port=port, seq=seq)
+    port the same), for :meth:`MPSoC.inject`: those of :func:`message_packets`, as int64 arrays (a
+    flight injects a sensor message per sample, and an array goes into the chip's queue at once)."""
+    out = []
+    for header, chunk in _message_parts(data, port, tile_address(io_tile), port, seq, MAX_PACKET_FLITS):
+        payload = np.empty(len(header) + len(chunk) // 2, dtype=np.int64)
+        payload[: len(header)] = header
+        payload[len(header) :] = np.frombuffer(chunk, dtype="<u2")
+        out.append(payload)
+    return out
 
 
 def message_packets(
@@ -317,6 +324,21 @@ def message_packets(
 
     Pass each to :meth:`MPSoC.inject`; ``src_tile`` is normally the I/O tile's address.
     """
+    return [
+        header + list(_flits_struct(len(chunk) // 2).unpack(chunk))
+        for header, chunk in _message_parts(data, port, src_tile, src_port, seq, max_flits)
+    ]
+
+
+def _message_parts(
+    data: bytes, port: int, src_tile: int, src_port: int, seq: int, max_flits: int
+) -> list[tuple[list[int], bytes]]:
+    """Per packet of a message: the kernel's header flits and the data's bytes it carries (padded to
+    whole flits).
+
+    Raises:
+        ValueError: a port or tile that is not one byte, a message too long, ``max_flits`` out of range.
+    """
     if not 0 <= port <= 255 or not 0 <= src_port <= 255 or not 0 <= src_tile <= 255:
         raise ValueError("port, src_port and src_tile are one byte each")
     if len(data) > 0xFFFF:
@@ -329,10 +351,8 @@ def message_packets(
     offset = 0
     while True:
         chunk = data[offset : offset + per_packet]
-        padded = chunk + b"\0" * (len(chunk) & 1)
-        flits = list(_flits_struct(len(padded) // 2).unpack(padded))
         header = [(src_tile << 8) | src_port, (port << 8) | (frag & 0xFF), len(data), seq & 0xFFFF]
-        out.append(header + flits)
+        out.append((header, chunk + b"\0" * (len(chunk) & 1)))
         offset += len(chunk)
         frag += 1
         if offset >= len(data):

@@ -6,6 +6,7 @@ point, and the symbol table to turn a pc into ``symbol+0xoffset`` in messages an
 """
 
 import bisect
+import functools
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -207,6 +208,29 @@ def load_elf(path: Path | str, regions: Sequence[Region | tuple[int, int]] | Non
             raise ElfError(f"{path}: malformed ELF: {exc}") from exc
 
 
+def load_elf_once(path: Path | str, regions: Sequence[Region]) -> Program:
+    """:func:`load_elf`, read once per process for the same file as it is on disk (its size and
+    modification time) and the same regions: a sweep or ``robosoc bench fly`` builds a chip, and
+    loads its firmware, for every flight, and pyelftools takes some 5 ms to read it.  The program is
+    shared: do not change it.
+
+    Raises:
+        ElfError: as :func:`load_elf`, and a file that cannot be looked at.
+    """
+    path = Path(path)
+    try:
+        status = path.stat()
+    except OSError as exc:
+        raise ElfError(f"{path}: cannot open: {exc.strerror}") from exc
+    return _load_elf_version(path, status.st_size, status.st_mtime_ns, tuple(regions))
+
+
+@functools.lru_cache(maxsize=32)
+def _load_elf_version(path: Path, size: int, mtime_ns: int, regions: tuple[Region, ...]) -> Program:
+    """:func:`load_elf` of one version of a file (``size`` and ``mtime_ns`` key the memo)."""
+    return load_elf(path, regions)
+
+
 def _read_program(path: Path, elf: ELFFile, allowed: list[Region] | None) -> Program:
     if elf.elfclass != 32:
         raise ElfError(f"{path}: ELF class is {elf.elfclass}-bit, expected 32-bit (RV32)")
@@ -298,4 +322,4 @@ def _read_symbols(elf: ELFFile) -> list[Symbol]:
     return symbols
 
 
-__all__ = ["ElfError", "Program", "Region", "Segment", "Symbol", "load_elf"]
+__all__ = ["ElfError", "Program", "Region", "Segment", "Symbol", "load_elf", "load_elf_once"]
