@@ -178,3 +178,20 @@ def test_a_stopped_flight_leaves_its_rows_and_an_incomplete_summary(tmp_path: Pa
     assert summary["tasks"]["estimator"]["jobs"] == 41
     with (tmp_path / "jobs.csv").open() as handle:
         assert sum(1 for j in csv.DictReader(handle) if j["task"] == "estimator") == 41
+
+
+def test_the_chip_records_its_timeline_only_for_a_trace_that_is_written(tmp_path: Path, monkeypatch) -> None:
+    from robosoc.chip.mpsoc import MPSoC
+
+    recorded = []
+    record = MPSoC.record_timeline
+    monkeypatch.setattr(MPSoC, "record_timeline", lambda self, *a, **k: recorded.append(self) or record(self, *a, **k))
+    scenario = dataclasses.replace(SHORT, duration_s=0.3)
+    bare = fly_scenario(scenario, None, plot=False)
+    assert recorded == []  # nothing is written: no timeline
+    kept = fly_scenario(scenario, tmp_path / "run", plot=False)
+    assert len(recorded) == 1 and (tmp_path / "run" / "chip-trace.json").is_file()
+    assert np.array_equal(bare.rows[0], kept.rows[0], equal_nan=True)
+    assert bare.results[0].jobs == kept.results[0].jobs
+    fly_scenario(scenario, tmp_path / "no-logs", plot=False, logs=False)
+    assert len(recorded) == 1 and not (tmp_path / "no-logs" / "chip-trace.json").exists()

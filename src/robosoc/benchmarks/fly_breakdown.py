@@ -181,7 +181,7 @@ def fly_breakdown(scenario: ScenarioConfig, vehicle: VehicleConfig | None = None
     first (a short flight) for a breakdown of a warm flight.
     """
     vehicle = vehicle or vehicle_preset(scenario.vehicle)
-    controller = ChipController(scenario, vehicle)
+    controller = ChipController(scenario, vehicle, timeline=False)  # as robosoc bench fly flies it
     sections = _Sections()
     ticks: dict[int, int] = {}
     with _wrapped(sections, ticks):

@@ -108,6 +108,8 @@ class FirmwareRun:
         energy: the energy model (default: the packaged coefficients).
         first_cycle: cycle of the first sample's injection.
         profile: count every instruction per function, tile and task (:meth:`function_profile`).
+        timeline: record the chip's timeline for its trace (:mod:`robosoc.cosim.chip_timeline`); a
+            run whose trace nobody writes leaves it off (about 2 % of a flight's host time).
 
     Raises:
         ValueError: the mapping does not fit the chip.
@@ -122,6 +124,7 @@ class FirmwareRun:
         energy: EnergyModel | None = None,
         first_cycle: int = DEFAULT_FIRST_CYCLE,
         profile: bool = False,
+        timeline: bool = True,
     ) -> None:
         self.fw = fw
         self.image = image
@@ -131,7 +134,8 @@ class FirmwareRun:
         self.model = base.for_chip(self.chip_config)  # DVFS: at its operating point
         self.first_cycle = first_cycle
         self.chip = MPSoC(self.chip_config)
-        self.chip.record_timeline()  # for the chip trace (cosim/chip_timeline.py)
+        if timeline:
+            self.chip.record_timeline()  # for the chip trace (cosim/chip_timeline.py)
         self.tiles = image.tiles
         #: each tile's core coefficients (a tile on its own clock has its own operating point)
         self.tile_models = {xy: base.for_tile(self.chip_config, xy) for xy in self.tiles}

@@ -106,6 +106,8 @@ class ChipController:
         energy: the energy model for the job records (default: the packaged coefficients).
         first_cycle: the cycle of simulated time 0 (the firmware boots before it).
         profile: count every instruction per function, tile and task (``result.profile``).
+        timeline: record the chip's timeline for its trace (:class:`FirmwareRun`; off when no trace
+            is written).
 
     Raises:
         ValueError: the mapping does not fit the chip; a controller parameter does not fit Q16.16.
@@ -121,9 +123,11 @@ class ChipController:
         energy: EnergyModel | None = None,
         first_cycle: int = DEFAULT_FIRST_CYCLE,
         profile: bool = False,
+        timeline: bool = True,
     ) -> None:
         self.scenario = scenario
         self.profile = profile
+        self.timeline = timeline
         self.vehicle = vehicle
         self.fw = scenario.firmware
         self.chip = scenario.chip
@@ -153,6 +157,7 @@ class ChipController:
             energy=self.energy,
             first_cycle=self.first_cycle,
             profile=self.profile,
+            timeline=self.timeline,
         )
         self.result = None
         self.low_battery = False

@@ -122,7 +122,10 @@ class ScenarioFlight:
     telemetry: list[dict[str, np.ndarray]] = field(default_factory=list)
 
 
-def _controllers(scenario: ScenarioConfig, on_status: Callable[[str], None], profile: bool) -> list[LockstepController]:
+def _controllers(
+    scenario: ScenarioConfig, on_status: Callable[[str], None], profile: bool, timeline: bool
+) -> list[LockstepController]:
+    """The scenario's controllers, one per vehicle (``timeline``: their chips record it for a trace)."""
     canonical = vehicle_preset(scenario.vehicle)  # the control parameters do not depend on name or spawn
     if scenario.controller == "host":
         return [
@@ -133,7 +136,10 @@ def _controllers(scenario: ScenarioConfig, on_status: Callable[[str], None], pro
     from robosoc.host.scenario_image import scenario_image
 
     image = prepare_chip(scenario.chip, lambda: scenario_image(scenario, canonical), on_status)
-    return [ChipController(scenario, canonical, image=image, profile=profile) for _ in range(scenario.vehicles)]
+    return [
+        ChipController(scenario, canonical, image=image, profile=profile, timeline=timeline)
+        for _ in range(scenario.vehicles)
+    ]
 
 
 def min_separation(rows: list[np.ndarray]) -> float:
@@ -195,7 +201,7 @@ def fly_scenario(
     folders = [vehicle_folder(out, i, count) for i in range(count)] if out is not None else []
     for folder in {*folders, *([out] if out is not None else [])}:  # an earlier run's summary must not
         (folder / SUMMARY_JSON).unlink(missing_ok=True)  # speak for this one, even if it stops at once
-    controllers = _controllers(scenario, say, profile)
+    controllers = _controllers(scenario, say, profile, timeline=out is not None and logs)  # (the trace's)
     battery = scenario.power.battery_on
     names = [c.telemetry_names if isinstance(c, ChipController) else () for c in controllers]
     csv_logs: list[CsvFlightLog] = []
