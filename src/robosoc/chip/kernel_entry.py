@@ -21,7 +21,6 @@ loop so) is called as it is.
 
 from __future__ import annotations
 
-import operator
 from collections.abc import Callable
 from types import ModuleType
 from typing import Any
@@ -47,20 +46,19 @@ class KernelEntry:
     def __init__(self, module: ModuleType, name: str) -> None:
         self._module = module
         self._name = name
-        #: the kernel and the argument objects (None in place of an int) the entry was found for
+        #: the kernel, the number of arguments, the places of those that were not ints and those
+        #: objects, which the entry was found for
         self._kernel: object = None
+        self._count = -1
+        self._places: tuple[int, ...] = ()
         self._objects: tuple[Any, ...] = ()
+        self._ints: tuple[int, ...] = ()
         self._entry: Callable[..., Any] | None = None
         self._lookups = 0
 
     def __call__(self, *args: Any) -> Any:
         kernel = getattr(self._module, self._name)
-        if (
-            kernel is self._kernel
-            and len(args) == len(self._objects)
-            and all(map(_same, args, self._objects))
-            and self._entry is not None
-        ):
+        if kernel is self._kernel and len(args) == self._count and self._entry is not None and self._known(args):
             return self._entry(*args)
         result = kernel(*args)
         if isinstance(kernel, Dispatcher) and self._lookups < RETYPE_LIMIT:
@@ -68,15 +66,23 @@ class KernelEntry:
             self._learn(kernel, args)
         return result
 
+    def _known(self, args: tuple[Any, ...]) -> bool:
+        """Whether ``args`` are the objects the entry was found for, ints where ints were."""
+        for i, known in zip(self._places, self._objects, strict=True):
+            if args[i] is not known:
+                return False
+        for i in self._ints:  # noqa: SIM110 - a loop: all() of a generator takes twice as long here
+            if type(args[i]) is not int:
+                return False
+        return True
+
     def _learn(self, kernel: Dispatcher, args: tuple[Any, ...]) -> None:
         """Keep the compiled version the dispatcher just called for ``args``' types, if it has one."""
         types = tuple(kernel.typeof_pyval(a) for a in args)
         compiled: Any = kernel.overloads.get(types)  # numba's CompileResult: its entry_point is the compiled call
         self._kernel = kernel
         self._entry = None if compiled is None else compiled.entry_point
-        self._objects = tuple(None if type(a) is int else a for a in args)
-
-
-def _same(arg: Any, known: Any) -> bool:
-    """Whether ``arg`` has the type of ``known`` for sure: the same object, or an int where one was."""
-    return operator.is_(arg, known) or (known is None and type(arg) is int)
+        self._count = len(args)
+        self._ints = tuple(i for i, a in enumerate(args) if type(a) is int)
+        self._places = tuple(i for i, a in enumerate(args) if type(a) is not int)
+        self._objects = tuple(args[i] for i in self._places)

@@ -387,14 +387,15 @@ class MPSoC:
         status and host seconds; the step's Python runs here.  Its value is :meth:`step`'s."""
         # the awake and sleeping cores' pcs, all at once (a Python call per tile per step cost a
         # sleeping 16x16 chip a tenth of its run time); check_pc words the error of the first bad one
-        for t in self._bad_pcs(self.cores.st, self.cst):
-            xy = self.config.tile_xy(int(t))
-            check_pc(self.cores, int(t), functools.partial(self.symbolize, xy), f"tile {xy}: ")
+        bad = self._bad_pcs(self.cores.st, self.cst)
+        for t in bad.tolist() if len(bad) else ():
+            xy = self.config.tile_xy(t)
+            check_pc(self.cores, t, functools.partial(self.symbolize, xy), f"tile {xy}: ")
         jit = self._jit
         while True:
             jit.prepare(self)
             # auto looks at the tiles that do not translate yet every jit.look_cycles()
-            to = min(until, self.cycle + jit.look_cycles()) if jit.watching() else until
+            to = min(until, int(self.gst[kc.G_TIME]) + jit.look_cycles()) if jit.watching() else until
             while True:
                 status, seconds = yield functools.partial(
                     self._run_chip, self.cores.arrays(), self.noc, self.book(), to, *jit.arguments()
@@ -403,10 +404,12 @@ class MPSoC:
                 if status != kc.CHIP_TRANSLATE:
                     break
                 jit.translate(int(self.gst[kc.G_BREAK_TILE]))
-            if status != kc.CHIP_UNTIL or self.cycle >= until:
+            if status != kc.CHIP_UNTIL or self.gst[kc.G_TIME] >= until:
                 break
-        self._drain_io()
-        self._drain_rec()
+        if self.gst[kc.G_IO_COUNT]:
+            self._drain_io()
+        if self.gst[kc.G_REC_COUNT]:
+            self._drain_rec()
         return int(self.gst[kc.G_STATUS])
 
     def raise_failure(self, status: int) -> None:
