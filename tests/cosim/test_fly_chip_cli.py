@@ -117,10 +117,33 @@ def test_bench_fly_flies_every_build_on_the_engine_asked_for(monkeypatch: pytest
     monkeypatch.setattr(bench, "fly_scenario", flown)
     result = runner.invoke(app, ["bench", "fly", "--duration", "0.1", "--arith", "fixed", "--engine", "interp"])
     assert result.exit_code == 0, result.output
-    assert "chip engine interp" in result.output
-    assert engines == [("chip", "interp")] * 4  # two builds, each a warm-up flight and the timed one
+    assert "chip engine interp, the median of 3 flights each" in result.output
+    assert engines == [("chip", "interp")] * 8  # two builds, each a warm-up flight and three timed ones
     bad = runner.invoke(app, ["bench", "fly", "--engine", "fast"])
     assert bad.exit_code == 2 and "--engine: must be one of interp, jit, auto, got 'fast'" in bad.output
+    for runs in ("0", "101", "two"):
+        refused = runner.invoke(app, ["bench", "fly", "--runs", runs])
+        assert refused.exit_code == 2 and "--runs" in refused.output, refused.output
+
+
+def test_bench_fly_reports_each_builds_median_flight(monkeypatch: pytest.MonkeyPatch) -> None:
+    from robosoc.benchmarks import fly as bench
+
+    factors = iter([9.0, 30.0, 10.0, 20.0, 9.0, 11.0, 12.0, 50.0])  # host: warm-up, 3 timed; chip: the same
+    real = bench.fly_scenario
+
+    def flown(scenario, *args, **kwargs):
+        flight = real(scenario, *args, **kwargs)
+        flight.summary["real_time_factor"] = next(factors)
+        return flight
+
+    monkeypatch.setattr(bench, "fly_scenario", flown)
+    monkeypatch.setattr(bench, "ALL_BUILDS", (bench.ALL_BUILDS[-1],))
+    result = runner.invoke(app, ["bench", "fly", "--duration", "0.03"])
+    assert result.exit_code == 0, result.output
+    assert re.search(r"host\s+│\s+20\.00×", result.output), result.output  # of 30, 10 and 20
+    assert re.search(r"chip fixed\+mul\s+│\s+12\.00×\s+│\s+0\.60", result.output), result.output  # of 11, 12, 50
+    assert result.output.strip().splitlines()[-1] == "fly: 12.00× real time"
 
 
 def test_bench_fly_warms_up_and_marks_a_build_flown_while_its_code_was_translated(monkeypatch) -> None:
@@ -143,12 +166,12 @@ def test_bench_fly_warms_up_and_marks_a_build_flown_while_its_code_was_translate
     monkeypatch.setattr(bench, "fly_scenario", flown)
     monkeypatch.setattr(bench, "WARM_UP_S", 0.05)
     monkeypatch.setattr(bench, "whole_code_translations", lambda: Translating())
-    result = runner.invoke(app, ["bench", "fly", "--arith", "fixed", "--mul", "--duration", "0.1"])
+    result = runner.invoke(app, ["bench", "fly", "--arith", "fixed", "--mul", "--duration", "0.1", "--runs", "1"])
     assert result.exit_code == 0, result.output
     assert durations == [0.05, 0.1]
     assert "chip fixed+mul *" in result.output and "still translating" in result.output
-    runner.invoke(app, ["bench", "fly", "--arith", "fixed", "--mul", "--duration", "0.03"])
-    assert durations[2:] == [0.03, 0.03]  # (a warm-up no longer than the timed flight)
+    runner.invoke(app, ["bench", "fly", "--arith", "fixed", "--mul", "--duration", "0.03", "--runs", "2"])
+    assert durations[2:] == [0.03, 0.03, 0.03]  # (a warm-up no longer than the timed flights)
     monkeypatch.setattr(bench, "whole_code_translations", lambda: type("Idle", (), {"running": lambda self: None})())
     quiet = runner.invoke(app, ["bench", "fly", "--arith", "fixed", "--mul", "--duration", "0.1"])
     assert quiet.exit_code == 0 and "*" not in quiet.output

@@ -240,10 +240,19 @@ def bench_fly(
             callback=check_engine,
         ),
     ] = None,
+    runs: Annotated[
+        int,
+        typer.Option(
+            help="Timed flights per build (and of the host controller) after the warm-up, 1..100; the figures "
+            "are those of the median one.",
+            callback=options.int_range(1, 100),
+        ),
+    ] = 3,
 ) -> None:
     """Real-time factor of the lockstep flight (physics + firmware on the chip), per firmware build,
     the host controller as reference, and each build's speed as a share of the host controller's
-    flight in the same run; last line: fly: <x>× real time (fixed + multiplier by default)."""
+    flight in the same run (the median of --runs flights each); last line: fly: <x>× real time (fixed
+    + multiplier by default)."""
     from robosoc.benchmarks.fly import ALL_BUILDS, run_fly_benchmark
 
     if round(duration * 1000) != round(duration * 1000, 6):
@@ -261,7 +270,13 @@ def bench_fly(
         run_fly_breakdown(builds, duration_s=duration, console=make_console(), engine=engine)
         return
     run_fly_benchmark(
-        builds, duration_s=duration, host=not chosen, console=make_console(), vehicles=vehicles, engine=engine
+        builds,
+        duration_s=duration,
+        host=not chosen,
+        console=make_console(),
+        vehicles=vehicles,
+        engine=engine,
+        runs=runs,
     )
 
 
