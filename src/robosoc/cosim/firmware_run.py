@@ -32,7 +32,7 @@ import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -55,10 +55,9 @@ from robosoc.records import JobRecord, PwmCommand, SampleInput
 DEFAULT_FIRST_CYCLE = FIRST_SAMPLE_CYCLE
 
 
-@dataclass(frozen=True)
-class TelemetryRead:
+class TelemetryRead(NamedTuple):
     """The telemetry values read at the close of sample period ``sample`` (those of sleeping tiles:
-    :class:`robosoc.host.telemetry.TelemetryReader`)."""
+    :class:`robosoc.host.telemetry.TelemetryReader`; a named tuple: a flight makes one per sample)."""
 
     sample: int
     values: dict[str, float]
@@ -522,8 +521,7 @@ def noc_traffic_pj(model: EnergyModel, noc: dict[str, Any]) -> Any:
     return sum(model.noc_pj(noc).values()) - sum(model.noc_pj(idle).values())
 
 
-@dataclass(frozen=True)
-class _Period:
+class _Period(NamedTuple):
     """What one sample period spent: per (tile, task) that jobs are charged to (the named tasks, the
     kernel, idle), its named counters (:func:`robosoc.chip.mpsoc.account_counters`) over the period,
     taken with the period's close in one call (:meth:`robosoc.chip.mpsoc.MPSoC.close_accounts`);

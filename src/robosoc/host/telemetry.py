@@ -180,7 +180,9 @@ class TelemetryReader:
             self._tasks.append((task_id, len(flag_places), len(ids)))
             flag_tiles += [t] * (len(ids) + len(active))
             flag_places += ids + active
-        self._flags = (np.array(flag_tiles, dtype=np.intp), np.array(flag_places, dtype=np.intp))
+        # (places in the tiles' memory as one flat array: one gather per read)
+        row = cores.m8.shape[1]
+        self._flags = np.array(flag_tiles, dtype=np.intp) * row + np.array(flag_places, dtype=np.intp)
         #: per probe, in order: its name, its task's place in _tasks, its word's decoding and scale
         self._values: list[tuple[str, int, str, float]] = []
         word_tiles, offsets = [], []
@@ -192,7 +194,7 @@ class TelemetryReader:
             offsets.append(cores.offset(p.address, VALUE_BYTES, t))
         #: where the words lie in cores.m32 (None: one is not word-aligned, read each on its own)
         self._words = (
-            (np.array(word_tiles, dtype=np.intp), np.array(offsets, dtype=np.intp) // VALUE_BYTES)
+            (np.array(word_tiles, dtype=np.intp) * row + np.array(offsets, dtype=np.intp)) // VALUE_BYTES
             if all(o % VALUE_BYTES == 0 for o in offsets)
             else None
         )
@@ -201,7 +203,7 @@ class TelemetryReader:
     def read(self) -> dict[str, float]:
         """The values readable now, by name, in the probes' order."""
         cores = self.chip.cores
-        flags = cores.m8[self._flags].tolist()
+        flags = cores.m8.reshape(-1)[self._flags].tolist()
         quiet = []
         for task_id, start, n in self._tasks:
             ids = flags[start : start + n]
@@ -213,7 +215,7 @@ class TelemetryReader:
                 if quiet[task]:
                     values[name] = probe.value_in(cores.m8, t, offset)
             return values
-        words = cores.m32[self._words]
+        words = cores.m32.reshape(-1)[self._words]
         signed, reals = words.tolist(), words.view(np.float32).tolist()
         for i, (name, task, code, scale) in enumerate(self._values):
             if quiet[task]:
