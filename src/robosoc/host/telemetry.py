@@ -30,10 +30,10 @@ import numpy as np
 from robosoc.cache import dwarf_dir
 from robosoc.config.firmware import FirmwareConfig
 from robosoc.config.project import TelemetrySpec
-from robosoc.control import quaternion
 from robosoc.control.flight import ROW_FIELDS
 from robosoc.control.host import Estimate
 from robosoc.host.task_table import TaskTable
+from robosoc.physics.frames import euler_angles
 from robosoc.program.dwarf import debug_index
 from robosoc.program.elf import ElfError, load_elf
 from robosoc.records import POWER_FIELDS
@@ -249,8 +249,9 @@ def declared_names(fw: FirmwareConfig) -> tuple[str, ...]:
 def estimate_of(values: Mapping[str, float]) -> Estimate:
     """The state estimate that telemetry ``values`` publish (NaN for what they do not name: the
     Euler angles too, unless the whole quaternion is known)."""
-    q = [values.get(name, math.nan) for name in ESTIMATE_QUATERNION]
-    known = not any(map(math.isnan, q))  # (Python floats: a flight takes an estimate per sample)
-    euler = quaternion.to_euler(q) if known else np.full(3, math.nan)
+    q = [float(values.get(name, math.nan)) for name in ESTIMATE_QUATERNION]
+    # (from Python floats, in one array: a flight takes an estimate per sample)
+    euler = euler_angles(*q) if not any(map(math.isnan, q)) else (math.nan,) * 3
+    both = np.array([*q, *euler])
     height = values.get(ESTIMATE_HEIGHT, math.nan)
-    return Estimate(np.array(q), euler, height, values.get(ESTIMATE_VERTICAL_SPEED, math.nan))
+    return Estimate(both[:4], both[4:], height, values.get(ESTIMATE_VERTICAL_SPEED, math.nan))

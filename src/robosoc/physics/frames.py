@@ -35,7 +35,12 @@ def euler_from_quat(q: np.ndarray | Sequence[float]) -> np.ndarray:
     """Roll, pitch, yaw [rad] (Z-Y-X convention: R = Rz(yaw)·Ry(pitch)·Rx(roll)) of the unit
     quaternion (w, x, y, z)."""
     w, x, y, z = (float(c) for c in q)
+    return np.array(euler_angles(w, x, y, z))
+
+
+def euler_angles(w: float, x: float, y: float, z: float) -> tuple[float, float, float]:
+    """:func:`euler_from_quat` of the quaternion's Python floats, as Python floats."""
     roll = math.atan2(2.0 * (w * x + y * z), 1.0 - 2.0 * (x * x + y * y))
     pitch = math.asin(max(-1.0, min(1.0, 2.0 * (w * y - z * x))))
     yaw = math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
-    return np.array([roll, pitch, yaw])
+    return roll, pitch, yaw
