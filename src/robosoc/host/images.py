@@ -300,15 +300,13 @@ class Message(NamedTuple):
 
 def io_packets(data: bytes, port: int, io_tile: tuple[int, int], seq: int) -> list[np.ndarray]:
     """The payloads carrying one message from the I/O tile at ``io_tile`` to ``port`` (its source
-    port the same), for :meth:`MPSoC.inject`: those of :func:`message_packets`, as int64 arrays (a
-    flight injects a sensor message per sample, and an array goes into the chip's queue at once)."""
-    out = []
-    for header, chunk in _message_parts(data, port, tile_address(io_tile), port, seq, MAX_PACKET_FLITS):
-        payload = np.empty(len(header) + len(chunk) // 2, dtype=np.int64)
-        payload[: len(header)] = header
-        payload[len(header) :] = np.frombuffer(chunk, dtype="<u2")
-        out.append(payload)
-    return out
+    port the same), for :meth:`MPSoC.inject`: those of :func:`message_packets`, as arrays of 16-bit
+    flits (a flight injects a sensor message per sample, and an array goes into the chip's queue at
+    once)."""
+    return [
+        np.frombuffer(_flits_struct(len(header)).pack(*header) + chunk, dtype="<u2")
+        for header, chunk in _message_parts(data, port, tile_address(io_tile), port, seq, MAX_PACKET_FLITS)
+    ]
 
 
 def message_packets(
