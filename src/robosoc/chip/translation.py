@@ -73,6 +73,7 @@ class TileTranslators:
     def __init__(self, tiles: int) -> None:
         self._made: list[TranslatingCore | None] = [None] * tiles
         self._lazy: dict[int, Clones[TranslatingCore]] = {}
+        self._listed: list[TranslatingCore] | None = None  # made()'s list, until a translator changes
 
     def __len__(self) -> int:
         return len(self._made)
@@ -81,11 +82,13 @@ class TileTranslators:
         clones = self._lazy.pop(t, None)
         if clones is not None:
             self._made[t] = clones.translator(t)
+            self._listed = None
         return self._made[t]
 
     def __setitem__(self, t: int, translator: TranslatingCore | None) -> None:
         self._lazy.pop(t, None)
         self._made[t] = translator
+        self._listed = None
 
     def __iter__(self) -> Iterator[TranslatingCore | None]:
         return (self[t] for t in range(len(self._made)))
@@ -95,6 +98,7 @@ class TileTranslators:
         for t in clones.tiles.tolist():
             self._made[t] = None
             self._lazy[t] = clones
+        self._listed = None
 
     def has(self, t: int) -> bool:
         """Whether tile ``t`` has a translator (made or not yet)."""
@@ -106,8 +110,11 @@ class TileTranslators:
 
     def made(self) -> list[TranslatingCore]:
         """The translators made so far (a copy's, once asked for; the first of a program's tiles
-        always: the others' are copies of its tables)."""
-        return [tr for tr in self._made if tr is not None]
+        always: the others' are copies of its tables).  The same list until one changes (the chip
+        asks before every step): do not change it."""
+        if self._listed is None:
+            self._listed = [tr for tr in self._made if tr is not None]
+        return self._listed
 
 
 class ChipTranslation:

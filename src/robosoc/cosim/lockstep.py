@@ -166,6 +166,7 @@ class ChipController:
         self._ahead: list[PwmCommand] = []  # commands received ahead of the physics
         self._caught_up = False  # the chip ran this step's part already (catch_up_calls)
         self._home = (0.0, 0.0)  # the take-off point, from the first row
+        self._clock_ns = self.run.clock_ns
 
     def _run(self) -> FirmwareRun:
         if self.run is None:
@@ -174,7 +175,7 @@ class ChipController:
 
     def cycle_of(self, t_ns: int) -> int:
         """The chip cycle at simulated time ``t_ns``."""
-        return self.first_cycle + round(t_ns / self._run().clock_ns)
+        return self.first_cycle + round(t_ns / self._clock_ns)
 
     def sense(self, k: int, t_ns: int, sample: SensorSample, setpoint: Setpoint, row: np.ndarray) -> None:
         run = self._run()

@@ -369,7 +369,11 @@ def parse_packet(flits: Sequence[int]) -> Packet:
     if len(flits) < HEADER_FLITS:
         raise ValueError(f"a kernel packet has at least {HEADER_FLITS} flits, got {len(flits)}")
     tail = flits[HEADER_FLITS:]
-    body = _flits_struct(len(tail)).pack(*[v & 0xFFFF for v in tail])  # one pack: a third of a pack per flit
+    layout = _flits_struct(len(tail))  # one pack: a third of a pack per flit
+    try:
+        body = layout.pack(*tail)  # (the chip's flits are 16-bit already)
+    except struct.error:
+        body = layout.pack(*[v & 0xFFFF for v in tail])
     return Packet(
         dest=flits[0], size=flits[1], src_tile=flits[2] >> 8, src_port=flits[2] & 0xFF, port=flits[3] >> 8,
         frag=flits[3] & 0xFF, length=flits[4], seq=flits[5], data=body,
