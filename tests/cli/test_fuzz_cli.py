@@ -116,6 +116,7 @@ OPTIONS: dict[tuple[str, str], Spec] = {
     ("bench fly", "--breakdown"): Spec("flag"),
     ("bench fly", "--vehicles"): Spec("int", 1, 16),
     ("bench fly", "--engine"): Spec("choice", choices=("interp", "jit", "auto")),
+    ("bench fly", "--runs"): Spec("int", 1, 100),
     ("scenario show", "FILE"): Spec("in_file"),
     ("fly", "--foxglove"): Spec("int", 0, 65535),
     ("fly", "--foxglove-keep"): Spec("flag"),  # 0: any free port (never tried: it would serve a flight)
@@ -301,7 +302,8 @@ def base_command(command: str, option: str, elves: dict[str, Path], tmp: Path) -
         length = [] if option in ("--duration", "--seconds") else ["--duration", "0.01"]
         return ["fly", *length, *([] if option in ("--out", "--no-out") else ["--no-out"])]
     if command == "bench fly":
-        return ["bench", "fly", *([] if option == "--duration" else ["--duration", "0.01"]), "--arith", "fixed"]
+        runs = [] if option == "--runs" else ["--runs", "1"]
+        return ["bench", "fly", *([] if option == "--duration" else ["--duration", "0.01"]), "--arith", "fixed", *runs]
     if command.startswith("serve "):  # a bad value let through would wait 0.5 s for the peer and exit with 5
         base = {"--seconds": "0.01", "--connect-timeout": "0.5", "--bind": "127.0.0.1:0"}
         if command == "serve chip":
