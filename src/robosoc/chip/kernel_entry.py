@@ -9,9 +9,10 @@ about 3 µs per physics step (5 % of its host time).
 
 :class:`KernelEntry` calls a kernel through numba's dispatcher while it learns the argument
 types, then through the compiled entry point of those types directly, as long as every argument
-that is not a Python ``int`` is the very object it was typed with (an array's type, its dtype,
-rank and layout, cannot change while it is the same object; a named bundle of arrays is a tuple,
-which cannot change at all; an ``int`` is always a 64-bit integer to numba).  Any other object
+that is not a Python ``int`` is the very object it was typed with (an array's dtype, rank and
+layout cannot change while it is the same object, and nothing clears the writeable flag of the
+chip's arrays; a named bundle of arrays is a tuple, which cannot change at all; an ``int`` is a
+64-bit integer to numba, and one too large for it is refused by the compiled code's unboxing).  Any other object
 goes through the dispatcher, which types it, and the entry is looked up again for the new
 objects; a caller that hands a new object at every call gets the dispatcher's speed, no less:
 after :data:`RETYPE_LIMIT` such changes the entry stops looking.  The kernel is looked up in its

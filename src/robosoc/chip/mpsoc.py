@@ -125,7 +125,6 @@ def account_counter_map() -> tuple[tuple[str, ...], np.ndarray]:
 
 
 @functools.cache
-@functools.cache
 def _account_counter_rows() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """:func:`account_counter_map`'s matrix as the period close takes it (sparse, row by row)."""
     return sparse_rows(account_counter_map()[1])
