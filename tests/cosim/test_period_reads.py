@@ -46,10 +46,9 @@ def test_new_records_are_those_after_seen_in_order_across_the_rings_end(booted, 
     reader, _ = _write_log(booted, xy, count, {i: _fields(i) for i in range(max(0, count - capacity), count)})
     raw, total = reader.new_records(seen)
     assert total == count
-    records = images.job_records(raw)
-    assert [(r.task, r.job, r.release, r.completion, r.exec_cycles, r.met) for r in records] == [
-        (f[0], f[2], f[3], f[6], f[7], bool(f[1] & 1)) for f in map(_fields, range(seen, count))
-    ]
+    records = images.job_record_columns(raw)
+    columns = ("task", "flags", "job", "release", "deadline", "start", "completion", "exec_cycles")
+    assert [tuple(int(r[c]) for c in columns) for r in records] == [_fields(i) for i in range(seen, count)]
 
 
 def test_a_log_that_overwrote_unread_records_is_refused(booted) -> None:

@@ -324,16 +324,12 @@ class MPSoC:
         head[nk.Q_TILE] = self.io
         head[nk.Q_READY] = at_cycle
         head[nk.Q_LEN] = n
-        wire = [*head, ((x << 4) | y) & 0xFFFF, n - 2]
-        if isinstance(payload, np.ndarray):  # (an array goes in at once; 16-bit flits need no mask)
-            q = self.noc.queue[row]
-            q[: nk.Q_FLITS + 2] = wire
-            if payload.dtype == np.uint16:
-                q[nk.Q_FLITS + 2 : nk.Q_FLITS + n] = payload
-            else:
-                np.bitwise_and(payload, 0xFFFF, out=q[nk.Q_FLITS + 2 : nk.Q_FLITS + n])
-        else:
-            self.noc.queue[row, : nk.Q_FLITS + n] = wire + [f & 0xFFFF for f in payload]
+        q = self.noc.queue[row]
+        q[: nk.Q_FLITS + 2] = [*head, ((x << 4) | y) & 0xFFFF, n - 2]
+        flits = np.asarray(payload)
+        if flits.dtype != np.uint16:  # (16-bit flits, as images.io_packets makes them, need no mask)
+            flits = np.asarray(payload, dtype=np.int64) & 0xFFFF
+        q[nk.Q_FLITS + 2 : nk.Q_FLITS + n] = flits
         tail = io_tile[nk.T_Q_TAIL]
         if tail == nk.NONE:
             io_tile[nk.T_Q_HEAD] = row

@@ -8,7 +8,6 @@ about y, yaw θ about z, with R = Rz(θ)·Ry(β)·Rx(α).
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
 
 import numpy as np
 
@@ -70,9 +69,9 @@ def from_matrix(m: np.ndarray) -> np.ndarray:
     return -q if q[0] < 0 else q
 
 
-def to_euler(q: np.ndarray | Sequence[float]) -> np.ndarray:
-    """(roll α, pitch β, yaw θ) [rad] of a unit quaternion (w, x, y, z: an array or Python floats;
-    the physics' Z-Y-X convention, :func:`robosoc.physics.frames.euler_from_quat`)."""
+def to_euler(q: np.ndarray) -> np.ndarray:
+    """(roll α, pitch β, yaw θ) [rad] of a unit quaternion (the physics' Z-Y-X convention,
+    :func:`robosoc.physics.frames.euler_from_quat`)."""
     return euler_from_quat(q)
 
 

@@ -421,7 +421,7 @@ class FirmwareRun:
         # each record's place among its task's in its period (jobs of one task released in one period,
         # by periodic release, share its counters: the first ones get the remainder's instructions)
         periods = len(self._periods)
-        per_period = np.bincount(period, minlength=periods)[period]
+        per_period = _group_sizes(period)
         shared = _group_sizes(tile * periods + period)
         group = (tile * NTASKS + task) * periods + period
         alike = _group_sizes(group)

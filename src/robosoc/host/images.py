@@ -186,7 +186,7 @@ class JobLogReader:
 
     def new_records(self, seen: int) -> tuple[bytes, int]:
         """The bytes of the records logged after the first ``seen``, oldest first (parse them with
-        :func:`job_records`), and how many the tile has logged in all.
+        :func:`job_record_columns`), and how many the tile has logged in all.
 
         Raises:
             ValueError: the log is not initialised, or the ring overwrote records after ``seen`` unread.
@@ -214,14 +214,9 @@ class JobLogReader:
         ), count
 
 
-def job_records(raw: bytes) -> list[JobRecord]:
-    """The records in ``raw``, bytes of a log's records as :meth:`JobLogReader.new_records` gives them."""
-    return [_job_record(fields) for fields in _RECORD.iter_unpack(raw)]
-
-
 def job_record_columns(raw: bytes) -> np.ndarray:
-    """The records in ``raw`` (as :func:`job_records` takes them) as one structured array,
-    :data:`JOB_RECORD_DTYPE`, a column per field of ``os_job_record_t``."""
+    """The records in ``raw``, bytes of a log's records as :meth:`JobLogReader.new_records` gives
+    them, as one structured array (:data:`JOB_RECORD_DTYPE`, a column per field of ``os_job_record_t``)."""
     return np.frombuffer(raw, dtype=JOB_RECORD_DTYPE)
 
 
@@ -438,7 +433,6 @@ __all__ = [
     "build",
     "c_header_constants",
     "job_record_columns",
-    "job_records",
     "message_packets",
     "parse_packet",
     "read_job_log",

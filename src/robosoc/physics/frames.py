@@ -8,7 +8,6 @@ two check something.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
 
 import numpy as np
 
@@ -31,7 +30,7 @@ def quat_to_matrix(w: float, x: float, y: float, z: float) -> tuple[float, ...]:
     )
 
 
-def euler_from_quat(q: np.ndarray | Sequence[float]) -> np.ndarray:
+def euler_from_quat(q: np.ndarray) -> np.ndarray:
     """Roll, pitch, yaw [rad] (Z-Y-X convention: R = Rz(yaw)·Ry(pitch)·Rx(roll)) of the unit
     quaternion (w, x, y, z)."""
     w, x, y, z = (float(c) for c in q)
