@@ -286,3 +286,13 @@ def test_a_sweep_resume_with_a_gutted_record_names_it(tmp_path: Path) -> None:
     result = CliRunner().invoke(app, ["sweep", str(sweep), "--out", str(out), "--workers", "1"])
     assert result.exit_code == 2 and "Traceback" not in result.output
     assert f"{store.results_dir / f'{key}.json'}: index: missing" in result.output
+
+
+def test_a_summary_key_with_a_line_break_is_named_quoted_on_one_line() -> None:
+    from robosoc.outputs.run_summary import SummaryError, check_summary
+
+    with pytest.raises(SummaryError) as refused:
+        check_summary({"energy": {"tiles_uj": {"0,1\n": False}}}, "run/summary.json")
+    assert str(refused.value) == 'run/summary.json: energy.tiles_uj["0,1\\n"]: expected a number or null, got false'
+    with pytest.raises(SummaryError, match=r"^run/summary\.json: energy\.tiles_uj\.0,1: expected"):
+        check_summary({"energy": {"tiles_uj": {"0,1": "x"}}}, "run/summary.json")

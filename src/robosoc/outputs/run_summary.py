@@ -635,10 +635,19 @@ def _check(value: object, kind: _Kind, where: str, field: str) -> None:
         for key, item in value.items():
             inner = kind.fields.get(key) if kind.fields is not None else kind.each
             if inner is not None:
-                _check(item, inner, where, f"{field}.{key}" if field else key)
+                _check(item, inner, where, _field_of(field, key))
     elif isinstance(value, list) and kind.each is not None:
         for i, item in enumerate(value):
             _check(item, kind.each, where, f"{field}[{i}]")
+
+
+def _field_of(field: str, key: str) -> str:
+    """The dotted name of member ``key`` of ``field``; a key that would not read as one part of it
+    (a dot, a bracket, a line break or another unprintable character) as a quoted JSON string in
+    brackets, so the message stays on one line and says which key."""
+    if key and key.isprintable() and not any(c in key for c in '.[]"'):
+        return f"{field}.{key}" if field else key
+    return f"{field}[{json.dumps(key)}]"
 
 
 def _depth(value: object) -> int:
